@@ -1,0 +1,50 @@
+# All third-party look-ups in one place. Each failure names the Debian package to install;
+# scripts/install-deps installs them all.
+macro(wbm_require found package)
+  if(NOT ${found})
+    message(FATAL_ERROR "${ARGN} not found: install ${package} (or run scripts/install-deps as root)")
+  endif()
+endmacro()
+
+find_package(Eigen3 3.4 QUIET NO_MODULE)
+wbm_require(Eigen3_FOUND libeigen3-dev "Eigen 3.4")
+
+find_package(PkgConfig QUIET)
+wbm_require(PKG_CONFIG_FOUND pkg-config "pkg-config")
+pkg_check_modules(FFTW3 QUIET IMPORTED_TARGET fftw3)
+wbm_require(FFTW3_FOUND libfftw3-dev "FFTW 3")
+
+find_package(GSL QUIET)
+wbm_require(GSL_FOUND libgsl-dev "GSL")
+
+if(WBM_BUILD_REPRODUCE OR WBM_BUILD_TESTS)
+  find_package(tomlplusplus QUIET)
+  wbm_require(tomlplusplus_FOUND libtomlplusplus-dev "toml++")
+  find_package(nlohmann_json 3.10 QUIET)
+  wbm_require(nlohmann_json_FOUND nlohmann-json3-dev "nlohmann-json")
+endif()
+if(WBM_BUILD_REPRODUCE)
+  # An interpreter that imports matplotlib: the first python3 on PATH may not be Debian's.
+  set(WBM_PYTHON "" CACHE FILEPATH "Python interpreter with matplotlib, for reproduce/plot.py")
+  if(NOT WBM_PYTHON)
+    find_package(Python3 QUIET COMPONENTS Interpreter)
+    foreach(candidate ${Python3_EXECUTABLE} /usr/bin/python3)
+      execute_process(COMMAND ${candidate} -c "import matplotlib"
+                      RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+      if(rc EQUAL 0)
+        set(WBM_PYTHON ${candidate} CACHE FILEPATH "" FORCE)
+        break()
+      endif()
+    endforeach()
+  endif()
+  wbm_require(WBM_PYTHON python3-matplotlib "A python3 that imports matplotlib")
+endif()
+
+if(WBM_BUILD_TESTS)
+  find_package(GTest QUIET)
+  wbm_require(GTest_FOUND libgtest-dev "GoogleTest")
+endif()
+if(WBM_BUILD_BENCH)
+  find_package(benchmark QUIET)
+  wbm_require(benchmark_FOUND libbenchmark-dev "Google Benchmark")
+endif()

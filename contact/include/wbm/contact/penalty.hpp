@@ -1,0 +1,87 @@
+#pragma once
+/// Penalty contact laws against a rigid stop [JL14 Eq. (5)]. Units: m, N, N/m, J.
+///
+/// Sign convention (all laws): u is the displacement of the contact DOF along the direction
+/// towards the stop, g0 the initial gap (g0 < 0 is a prestressed, initially penetrated
+/// contact). The law returns the magnitude f_c(u) ≥ 0 of the force the stop exerts, which
+/// pushes the DOF back: the equation of motion reads M ü + C u̇ + K u = f_ext(t) − e_c f_c(u_c).
+/// stiffness(u) = df_c/du ≥ 0; potential(u) = ∫_{−∞}^{u} f_c(s) ds ≥ 0, the energy stored in
+/// the stop (E_contact of [JL14 Eq. (35)]).
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace wbm::contact {
+
+/// Interface of a contact law; implementations are immutable and cheap to evaluate.
+class ContactLaw {
+ public:
+  virtual ~ContactLaw() = default;
+  [[nodiscard]] virtual double force(double u) const = 0;      // f_c(u) [N]
+  [[nodiscard]] virtual double stiffness(double u) const = 0;  // df_c/du [N/m]
+  [[nodiscard]] virtual double potential(double u) const = 0;  // ∫ f_c du [J]
+  [[nodiscard]] virtual double gap() const = 0;                // g0 [m]
+  /// One-line description with the parameters, for reports ("exponential a_c = ...").
+  [[nodiscard]] virtual std::string describe() const = 0;
+
+  /// Batched evaluation over samples: force(q) = f_c(u(q)), stiffness(q) = f_c'(u(q)).
+  /// Writes into `force` and `stiffness`, which must have the size of `u`.
+  void evaluate(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
+                Eigen::Ref<Eigen::VectorXd> stiffness) const;
+};
+
+/// Exponential penalty [JL14 Eq. (5)]:
+///   f_c(u) = a_c (e^{x} − 1) for x = α (u − g0) > 0, and 0 otherwise,
+/// C¹ at contact onset only in value (f_c' jumps from 0 to a_c α there, as in the paper).
+/// Overflow guard: beyond x > x_lin (`linear_beyond`, default 30, i.e. a force of a_c·1.1e13)
+/// the law continues along its tangent, f_c = a_c (e^{x_lin}(1 + x − x_lin) − 1), so that
+/// no Newton iterate produces inf; converged solutions that reach this branch are flagged by
+/// the solvers. The potential is integrated consistently on both branches.
+struct ExponentialPenaltyParameters {
+  double coefficient;           // a_c [N] > 0
+  double exponent;              // α [1/m] > 0
+  double gap;                   // g0 [m], any finite value (< 0: prestress)
+  double linear_beyond = 30.0;  // x_lin [-] in (0, 700]
+  void validate() const;        // throws std::invalid_argument naming the field and range
+};
+
+class ExponentialPenalty final : public ContactLaw {
+ public:
+  explicit ExponentialPenalty(const ExponentialPenaltyParameters& parameters);
+  [[nodiscard]] double force(double u) const override;
+  [[nodiscard]] double stiffness(double u) const override;
+  [[nodiscard]] double potential(double u) const override;
+  [[nodiscard]] double gap() const override { return p_.gap; }
+  [[nodiscard]] std::string describe() const override;
+  /// Penetration u − g0 [m] beyond which the linear continuation applies (x_lin / α).
+  [[nodiscard]] double linear_onset() const { return p_.linear_beyond / p_.exponent; }
+  [[nodiscard]] const ExponentialPenaltyParameters& parameters() const { return p_; }
+
+ private:
+  ExponentialPenaltyParameters p_;
+};
+
+/// Piecewise-linear penalty spring used by other harmonic-balance codes:
+///   f_c(u) = k_pen · max(u − g0, 0).
+struct LinearPenaltyParameters {
+  double stiffness;  // k_pen [N/m] > 0
+  double gap;        // g0 [m], any finite value
+  void validate() const;
+};
+
+class LinearPenalty final : public ContactLaw {
+ public:
+  explicit LinearPenalty(const LinearPenaltyParameters& parameters);
+  [[nodiscard]] double force(double u) const override;
+  [[nodiscard]] double stiffness(double u) const override;
+  [[nodiscard]] double potential(double u) const override;
+  [[nodiscard]] double gap() const override { return p_.gap; }
+  [[nodiscard]] std::string describe() const override;
+
+ private:
+  LinearPenaltyParameters p_;
+};
+
+}  // namespace wbm::contact

@@ -1,0 +1,59 @@
+#pragma once
+/// Periodic steady state by time stepping from rest: the reference solution of [JL14 Sec. 4].
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/status.hpp>
+
+namespace wbm::solvers {
+
+struct TimeIntegrationOptions {
+  int samples_per_period = 1024;       // P output samples per period, τ_p = p/P
+  double relative_tolerance = 1e-10;   // GSL local error control (epsrel)
+  double absolute_tolerance = 1e-13;   // [m] on u and on du/dτ (both in metres)
+  double periodicity_tolerance = 1e-7; // stop when δ_i < this [JL14 Sec. 4]
+  int max_periods = 5000;
+  void validate() const;               // throws std::invalid_argument naming the field
+};
+
+struct TimeIntegrationReport {
+  SolveStatus status = SolveStatus::MaxIterations;  // Converged, MaxIterations or NonFinite
+  int periods = 0;                      // periods integrated from rest
+  long steps = 0;                       // BDF steps attempted (gsl evolve count)
+  std::vector<double> periodicity;      // δ_i for i = 2..periods
+  double wall_time_s = 0.0;
+  std::string message;
+  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
+};
+
+/// One period of the steady state. displacement and velocity are n × P (row = DOF,
+/// column = sample at τ_p = p/P, p = 0..P−1); velocity in physical time [m/s].
+struct PeriodicResponse {
+  Eigen::VectorXd tau;
+  Eigen::MatrixXd displacement;  // [m]
+  Eigen::MatrixXd velocity;      // [m/s]
+  double frequency_hz = 0.0;
+  TimeIntegrationReport report;
+};
+
+/// Integrates M ü + C u̇ + K u = F cos(2π f t) e_f − Σ_c e_c f_c(u_c) from rest (u = u̇ = 0 at
+/// t = 0) with GSL's variable-order multistep BDF (gsl_odeiv2_step_msbdf, orders 1–5, the
+/// analogue of the NDF solver of [JL14 Sec. 4]) and its analytic Jacobian, in normalized
+/// time τ = f t with state y = (u, du/dτ) so that both halves are in metres:
+///   du/dτ = w,  M dw/dτ = T² (F cos 2πτ e_f − Σ e_c f_c(u_c) − K u) − T C w,  T = 1/f.
+/// Periods are integrated one after another; with u_i the tip (forced-DOF) displacement of
+/// period i sampled at the P output times, the run stops at the first i with
+///   δ_i = rms(u_i − u_{i−1}) / rms(u_i) < periodicity_tolerance
+/// ("rms of the relative error between the tip displacements for the i and i − 1 periods",
+/// [JL14 Sec. 4]) and returns period i. Throws std::invalid_argument for invalid inputs;
+/// a run that hits max_periods or a GSL failure is reported in `report`, never thrown.
+[[nodiscard]] PeriodicResponse integrate_to_periodic(const MechanicalSystem& system,
+                                                     const HarmonicForcing& forcing,
+                                                     const std::vector<ContactPoint>& contacts,
+                                                     const TimeIntegrationOptions& options = {});
+
+}  // namespace wbm::solvers

@@ -1,0 +1,99 @@
+#include <wbm/solvers/mechanical_system.hpp>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/SparseLU>
+
+namespace wbm::solvers {
+
+void MechanicalSystem::validate() const {
+  const auto n = mass.rows();
+  auto check = [n](const Eigen::SparseMatrix<double>& x, const char* name) {
+    if (x.rows() != n || x.cols() != n) {
+      std::ostringstream os;
+      os << "MechanicalSystem." << name << " is " << x.rows() << " x " << x.cols()
+         << ": all three matrices must be n x n with n = mass.rows() = " << n;
+      throw std::invalid_argument(os.str());
+    }
+    for (int k = 0; k < x.outerSize(); ++k) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(x, k); it; ++it) {
+        if (!std::isfinite(it.value())) {
+          throw std::invalid_argument(std::string("MechanicalSystem.") + name +
+                                      " has a non-finite entry at (" + std::to_string(it.row()) +
+                                      ", " + std::to_string(it.col()) + ")");
+        }
+      }
+    }
+  };
+  if (n < 1) throw std::invalid_argument("MechanicalSystem: mass matrix is empty, need n >= 1 DOF");
+  check(mass, "mass");
+  check(damping, "damping");
+  check(stiffness, "stiffness");
+}
+
+MechanicalSystem beta_damped(const fem::Rod& rod, double beta) {
+  if (!(beta >= 0.0) || !std::isfinite(beta)) {
+    std::ostringstream os;
+    os << "damping factor beta = " << beta << " s: must be finite and >= 0 (C = beta K)";
+    throw std::invalid_argument(os.str());
+  }
+  return {rod.mass(), beta * rod.stiffness(), rod.stiffness()};
+}
+
+void HarmonicForcing::validate(int dofs) const {
+  if (dof < 0 || dof >= dofs) {
+    throw std::invalid_argument("HarmonicForcing.dof = " + std::to_string(dof) +
+                                ": must lie in [0, " + std::to_string(dofs) + ")");
+  }
+  if (!std::isfinite(amplitude)) {
+    throw std::invalid_argument("HarmonicForcing.amplitude is not finite");
+  }
+  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
+    std::ostringstream os;
+    os << "HarmonicForcing.frequency_hz = " << frequency_hz << " Hz: must be finite and > 0";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs) {
+  std::set<int> seen;
+  for (const auto& c : contacts) {
+    if (c.dof < 0 || c.dof >= dofs) {
+      throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
+                                  ": must lie in [0, " + std::to_string(dofs) + ")");
+    }
+    if (!c.law) throw std::invalid_argument("ContactPoint.law is null for DOF " + std::to_string(c.dof));
+    if (!seen.insert(c.dof).second) {
+      throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
+                                  " appears twice: combine the laws into one per DOF");
+    }
+  }
+}
+
+Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const HarmonicForcing& forcing) {
+  system.validate();
+  forcing.validate(system.dofs());
+  const double w = 2.0 * std::numbers::pi * forcing.frequency_hz;
+  using Complex = std::complex<double>;
+  const Eigen::SparseMatrix<Complex> d =
+      (system.stiffness - w * w * system.mass).cast<Complex>() +
+      Complex(0.0, w) * system.damping.cast<Complex>();
+  Eigen::SparseLU<Eigen::SparseMatrix<Complex>> lu(d);
+  if (lu.info() != Eigen::Success) {
+    std::ostringstream os;
+    os << "frequency_response: K - w^2 M + i w C is singular at f = " << forcing.frequency_hz
+       << " Hz (undamped natural frequency?); add damping or move the frequency";
+    throw std::runtime_error(os.str());
+  }
+  Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(system.dofs());
+  rhs(forcing.dof) = forcing.amplitude;
+  return lu.solve(rhs);
+}
+
+}  // namespace wbm::solvers

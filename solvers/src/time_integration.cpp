@@ -1,0 +1,169 @@
+#include <wbm/solvers/time_integration.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include <Eigen/LU>
+
+namespace wbm::solvers {
+
+void TimeIntegrationOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("TimeIntegrationOptions." + what); };
+  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
+  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0)) fail("relative_tolerance: must lie in (0, 1)");
+  if (!(absolute_tolerance > 0.0)) fail("absolute_tolerance: must be > 0 [m]");
+  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
+  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
+}
+
+namespace {
+
+// Right-hand side data, dense (n is small for the systems this reference is for).
+struct Ode {
+  int n;
+  double period;                 // T [s]
+  Eigen::MatrixXd minv_k;        // T² M⁻¹ K
+  Eigen::MatrixXd minv_c;        // T M⁻¹ C
+  Eigen::MatrixXd minv_cols;     // T² M⁻¹ restricted to the columns of forced/contact DOFs
+  int forced_col;                // column of minv_cols for the forcing
+  double amplitude;
+  std::vector<ContactPoint> contacts;  // contact c uses column c + 1 of minv_cols
+};
+
+int rhs(double tau, const double y[], double dydt[], void* params) {
+  const auto& o = *static_cast<const Ode*>(params);
+  const int n = o.n;
+  Eigen::Map<const Eigen::VectorXd> u(y, n), w(y + n, n);
+  Eigen::Map<Eigen::VectorXd> du(dydt, n), dw(dydt + n, n);
+  du = w;
+  dw.noalias() = -o.minv_k * u - o.minv_c * w;
+  dw += o.amplitude * std::cos(2.0 * std::numbers::pi * tau) * o.minv_cols.col(o.forced_col);
+  for (size_t c = 0; c < o.contacts.size(); ++c) {
+    dw -= o.contacts[c].law->force(u(o.contacts[c].dof)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+  }
+  return dw.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+}
+
+int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* params) {
+  const auto& o = *static_cast<const Ode*>(params);
+  const int n = o.n;
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(dfdy, 2 * n, 2 * n);
+  j.setZero();
+  j.topRightCorner(n, n).setIdentity();
+  j.bottomLeftCorner(n, n) = -o.minv_k;
+  j.bottomRightCorner(n, n) = -o.minv_c;
+  for (size_t c = 0; c < o.contacts.size(); ++c) {
+    const int dof = o.contacts[c].dof;
+    j.bottomRows(n).col(dof) -= o.contacts[c].law->stiffness(y[dof]) *
+                                o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+  }
+  Eigen::Map<Eigen::VectorXd> dt(dfdt, 2 * n);
+  dt.setZero();
+  dt.tail(n) = -2.0 * std::numbers::pi * o.amplitude * std::sin(2.0 * std::numbers::pi * tau) *
+               o.minv_cols.col(o.forced_col);
+  return GSL_SUCCESS;
+}
+
+struct DriverDeleter {
+  void operator()(gsl_odeiv2_driver* d) const { gsl_odeiv2_driver_free(d); }
+};
+
+}  // namespace
+
+PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
+                                       const std::vector<ContactPoint>& contacts,
+                                       const TimeIntegrationOptions& options) {
+  system.validate();
+  forcing.validate(system.dofs());
+  ContactPoint::validate(contacts, system.dofs());
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+
+  Ode ode;
+  ode.n = system.dofs();
+  ode.period = 1.0 / forcing.frequency_hz;
+  const double t = ode.period;
+  const Eigen::MatrixXd mass(system.mass);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
+  ode.minv_k = t * t * mlu.solve(Eigen::MatrixXd(system.stiffness));
+  ode.minv_c = t * mlu.solve(Eigen::MatrixXd(system.damping));
+  ode.minv_cols.resize(ode.n, static_cast<Eigen::Index>(contacts.size()) + 1);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(ode.n);
+  e(forcing.dof) = 1.0;
+  ode.minv_cols.col(0) = t * t * mlu.solve(e);
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    e.setZero();
+    e(contacts[c].dof) = 1.0;
+    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t * t * mlu.solve(e);
+  }
+  ode.forced_col = 0;
+  ode.amplitude = forcing.amplitude;
+  ode.contacts = contacts;
+
+  gsl_set_error_handler_off();  // report GSL failures through return codes, never abort
+  gsl_odeiv2_system sys{rhs, jacobian, static_cast<size_t>(2 * ode.n), &ode};
+  const int p_count = options.samples_per_period;
+  const double h0 = 1.0 / (16.0 * p_count);
+  std::unique_ptr<gsl_odeiv2_driver, DriverDeleter> driver(gsl_odeiv2_driver_alloc_y_new(
+      &sys, gsl_odeiv2_step_msbdf, h0, options.absolute_tolerance, options.relative_tolerance));
+  gsl_odeiv2_driver_set_nmax(driver.get(), 0);  // no per-interval step limit
+
+  PeriodicResponse out;
+  out.frequency_hz = forcing.frequency_hz;
+  out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(2 * ode.n);
+  Eigen::MatrixXd disp(ode.n, p_count), vel(ode.n, p_count);
+  Eigen::VectorXd previous_tip;
+  double tau = 0.0;
+  auto& rep = out.report;
+  for (int period = 1; period <= options.max_periods; ++period) {
+    for (int p = 0; p < p_count; ++p) {
+      // Sample at the start of each sub-interval: sample p of period i is τ = (i−1) + p/P.
+      disp.col(p) = y.head(ode.n);
+      vel.col(p) = y.tail(ode.n) / t;
+      const double target = (period - 1) + static_cast<double>(p + 1) / p_count;
+      const int status = gsl_odeiv2_driver_apply(driver.get(), &tau, target, y.data());
+      if (status != GSL_SUCCESS || !y.allFinite()) {
+        rep.status = SolveStatus::NonFinite;
+        std::ostringstream os;
+        os << "GSL msbdf failed (" << gsl_strerror(status) << ") in period " << period << " at tau = " << tau;
+        rep.message = os.str();
+        rep.periods = period;
+        rep.steps = static_cast<long>(driver->e->count);
+        rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return out;
+      }
+    }
+    rep.periods = period;
+    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
+    if (previous_tip.size() == tip.size()) {
+      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
+      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
+      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
+      rep.periodicity.push_back(delta);
+      if (delta < options.periodicity_tolerance) {
+        rep.status = SolveStatus::Converged;
+        break;
+      }
+    }
+    previous_tip = tip;
+  }
+  rep.steps = static_cast<long>(driver->e->count);
+  out.displacement = std::move(disp);
+  out.velocity = std::move(vel);
+  std::ostringstream os;
+  os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods
+     << " periods, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
+  rep.message = os.str();
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace wbm::solvers

@@ -1,0 +1,84 @@
+#include <wbm/spectral/fourier_basis.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace wbm::spectral {
+
+FourierBasis::FourierBasis(int dimension) : dimension_(dimension) {
+  if (dimension < 2 || !is_power_of_two(dimension)) {
+    throw std::invalid_argument("FourierBasis(M = " + std::to_string(dimension) +
+                                "): M must be a power of two >= 2 (M = 2^J, J >= 1)");
+  }
+}
+
+int FourierBasis::harmonic(int k) const {
+  if (k < 0 || k >= dimension_) {
+    throw std::out_of_range("FourierBasis::harmonic(k = " + std::to_string(k) +
+                            "): k must lie in [0, " + std::to_string(dimension_) + ")");
+  }
+  if (k == dimension_ - 1) return dimension_ / 2;
+  return (k + 1) / 2;
+}
+
+double FourierBasis::value(int k, double tau, int derivative) const {
+  if (derivative < 0) {
+    throw std::invalid_argument("FourierBasis::value: derivative order " +
+                                std::to_string(derivative) + " must be >= 0");
+  }
+  const int m = harmonic(k);
+  if (m == 0) return derivative == 0 ? 1.0 : 0.0;
+  const bool is_sine = (k != dimension_ - 1) && (k % 2 == 0);
+  const double w = 2.0 * std::numbers::pi * m;
+  // d^d/dτ^d of cos(wτ) = w^d cos(wτ + dπ/2); of sin(wτ) = w^d sin(wτ + dπ/2).
+  const double phase = w * tau + derivative * std::numbers::pi / 2.0;
+  return std::pow(w, derivative) * (is_sine ? std::sin(phase) : std::cos(phase));
+}
+
+Eigen::MatrixXd FourierBasis::values(const Eigen::VectorXd& tau, int derivative) const {
+  Eigen::MatrixXd v(tau.size(), dimension_);
+  for (Eigen::Index p = 0; p < tau.size(); ++p) {
+    for (int k = 0; k < dimension_; ++k) v(p, k) = value(k, tau(p), derivative);
+  }
+  return v;
+}
+
+Eigen::SparseMatrix<double> FourierBasis::galerkin_operator(int derivative) const {
+  if (derivative < 0 || derivative > 2) {
+    throw std::invalid_argument("FourierBasis::galerkin_operator: derivative order " +
+                                std::to_string(derivative) + " must be 0, 1 or 2");
+  }
+  const int big_m = dimension_;
+  std::vector<Eigen::Triplet<double>> t;
+  const double pi = std::numbers::pi;
+  if (derivative == 0) t.emplace_back(0, 0, 1.0);
+  for (int m = 1; m < big_m / 2; ++m) {
+    const int c = 2 * m - 1, s = 2 * m;
+    const double w = 2.0 * pi * m;
+    switch (derivative) {
+      case 0:  // ∫cos² = ∫sin² = ½
+        t.emplace_back(c, c, 0.5);
+        t.emplace_back(s, s, 0.5);
+        break;
+      case 1:  // ∫cos·(w cos) = w/2, ∫sin·(−w sin) = −w/2
+        t.emplace_back(c, s, 0.5 * w);
+        t.emplace_back(s, c, -0.5 * w);
+        break;
+      default:  // ∫cos·(−w² cos) = −w²/2
+        t.emplace_back(c, c, -0.5 * w * w);
+        t.emplace_back(s, s, -0.5 * w * w);
+    }
+  }
+  const int last = big_m - 1;
+  const double w_last = pi * big_m;
+  if (derivative == 0) t.emplace_back(last, last, 0.5);
+  if (derivative == 2) t.emplace_back(last, last, -0.5 * w_last * w_last);
+  Eigen::SparseMatrix<double> a(big_m, big_m);
+  a.setFromTriplets(t.begin(), t.end());
+  return a;
+}
+
+}  // namespace wbm::spectral

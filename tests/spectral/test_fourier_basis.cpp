@@ -1,0 +1,73 @@
+#include <wbm/spectral/fourier_basis.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "testing.hpp"
+
+using wbm::spectral::FourierBasis;
+
+// Ordering of [JL14 Sec. 3.1] as fixed in fourier_basis.hpp: 1, cos 2πτ, sin 2πτ, ..., cos πMτ.
+TEST(FourierBasis, FunctionsFollowTheDocumentedOrdering) {
+  const FourierBasis basis(8);
+  const double tau = 0.1234;
+  const double pi = std::numbers::pi;
+  EXPECT_DOUBLE_EQ(basis.value(0, tau), 1.0);
+  EXPECT_NEAR(basis.value(1, tau), std::cos(2 * pi * tau), 1e-15);
+  EXPECT_NEAR(basis.value(2, tau), std::sin(2 * pi * tau), 1e-15);
+  EXPECT_NEAR(basis.value(5, tau), std::cos(6 * pi * tau), 1e-15);
+  EXPECT_NEAR(basis.value(6, tau), std::sin(6 * pi * tau), 1e-15);
+  EXPECT_NEAR(basis.value(7, tau), std::cos(8 * pi * tau), 1e-15);
+  EXPECT_EQ(basis.harmonic(7), 4);
+}
+
+// Derivatives against central differences of the values (step 1e-5, error O(h²·w³) ≈ 1e-6).
+TEST(FourierBasis, DerivativesMatchCentralDifferences) {
+  const FourierBasis basis(16);
+  const double h = 1e-5;
+  for (int k = 0; k < 16; ++k) {
+    for (double tau : {0.0, 0.3, 0.77}) {
+      for (int d = 1; d <= 2; ++d) {
+        const double fd = (basis.value(k, tau + h, d - 1) - basis.value(k, tau - h, d - 1)) / (2 * h);
+        const double scale = std::pow(2 * std::numbers::pi * basis.harmonic(k), d) + 1.0;
+        EXPECT_NEAR(basis.value(k, tau, d), fd, 1e-6 * scale) << "k=" << k << " d=" << d;
+      }
+    }
+  }
+}
+
+// Slow oracle: A_d(j,k) = ∫ q_j q_k^{(d)} by a 4M-point rectangle rule, exact for these
+// trigonometric polynomials (degree ≤ M < 4M).
+TEST(FourierBasis, GalerkinOperatorsMatchQuadrature) {
+  const int m = 16, q = 4 * m;
+  const FourierBasis basis(m);
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(q, 0.0, 1.0 - 1.0 / q);
+  const Eigen::MatrixXd v0 = basis.values(tau, 0);
+  for (int d = 0; d <= 2; ++d) {
+    const Eigen::MatrixXd quad = v0.transpose() * basis.values(tau, d) / q;
+    const Eigen::MatrixXd exact(basis.galerkin_operator(d));
+    const double scale = std::pow(std::numbers::pi * m, d);
+    EXPECT_LT((quad - exact).cwiseAbs().maxCoeff(), 1e-12 * scale) << "d = " << d;
+  }
+}
+
+// Integration by parts on the circle: ∫ q_j q_k' = −∫ q_j' q_k (A₁ antisymmetric) and
+// ∫ q_j q_k'' = ∫ q_j'' q_k (A₂ symmetric).
+TEST(FourierBasis, DerivativeOperatorsHaveIntegrationByPartsSymmetry) {
+  const FourierBasis basis(32);
+  const Eigen::MatrixXd a1(basis.galerkin_operator(1));
+  const Eigen::MatrixXd a2(basis.galerkin_operator(2));
+  EXPECT_LT((a1 + a1.transpose()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((a2 - a2.transpose()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(a1.cwiseAbs().maxCoeff(), 1.0);  // not trivially zero
+}
+
+TEST(FourierBasis, RejectsDimensionsThatAreNotPowersOfTwo) {
+  for (int m : {0, 1, 3, 12, -4}) {
+    wbm::testing::expect_throw_with<std::invalid_argument>([m] { FourierBasis b(m); },
+                                                           {"M = " + std::to_string(m), "power of two"});
+  }
+}
