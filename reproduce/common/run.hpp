@@ -1,0 +1,51 @@
+#pragma once
+/// Output of one reproduce executable: out/<id>/ with CSV tables, meta.json and a report.md
+/// fragment that reproduce/report.py assembles into out/REPORT.md.
+/// Files are written into a staging folder and moved into place by finish() only if nothing
+/// failed, so an interrupted or failed run never leaves a folder that looks complete.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+namespace wbm::reproduce {
+
+class Run {
+ public:
+  /// Parses `--quick` (small sizes, for ctest) and `--out DIR` (default: WBM_OUT_DIR).
+  /// Unknown arguments print usage and exit(2).
+  static Run from_args(int argc, char** argv, std::string id);
+
+  [[nodiscard]] bool quick() const { return quick_; }
+  [[nodiscard]] const std::string& id() const { return id_; }
+
+  /// CSV with a header row (units in brackets) and one column per vector, "%.17g". A column
+  /// with NaN or inf, or columns of unequal length, fail the run and write nothing.
+  void table(const std::string& file, const std::vector<std::string>& header,
+             const std::vector<Eigen::VectorXd>& columns);
+  /// meta.json: merged with wall time, git describe, compiler and Eigen versions at finish().
+  void meta(const nlohmann::json& meta);
+  /// Markdown fragment for out/REPORT.md (appended).
+  void report(const std::string& markdown);
+  /// Records a failure (printed at finish(); the exit status becomes 1).
+  void fail(const std::string& why);
+
+  /// Moves the staged files into out/<id>/ if nothing failed; prints a summary; returns the
+  /// exit status (0 only if every solve converged and every file was written).
+  int finish();
+
+ private:
+  Run(std::string id, std::filesystem::path out, bool quick);
+  std::string id_;
+  std::filesystem::path out_, staging_;
+  bool quick_;
+  nlohmann::json meta_;
+  std::string report_;
+  std::vector<std::string> failures_;
+  double start_;
+};
+
+}  // namespace wbm::reproduce
