@@ -17,7 +17,7 @@ wbm_require(FFTW3_FOUND libfftw3-dev "FFTW 3")
 find_package(GSL QUIET)
 wbm_require(GSL_FOUND libgsl-dev "GSL")
 
-if(WBM_BUILD_REPRODUCE OR WBM_BUILD_TESTS)
+if(WBM_BUILD_REPRODUCE OR WBM_BUILD_TESTS OR WBM_BUILD_BENCH)
   find_package(tomlplusplus QUIET)
   wbm_require(tomlplusplus_FOUND libtomlplusplus-dev "toml++")
   find_package(nlohmann_json 3.10 QUIET)
