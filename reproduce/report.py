@@ -7,7 +7,7 @@ import os
 import sys
 from pathlib import Path
 
-ORDER = ["jl14_table1", "jl14_fig06", "jl14_fig07"]
+ORDER = ["jl14_table1", "jl14_fig06", "jl14_fig07", "jl14_extremes"]
 
 HEADER = """# wbm reproduction report
 
