@@ -34,7 +34,7 @@ class ContactLaw {
 
 /// Exponential penalty [JL14 Eq. (5)]:
 ///   f_c(u) = a_c (e^{x} − 1) for x = α (u − g0) > 0, and 0 otherwise,
-/// C¹ at contact onset only in value (f_c' jumps from 0 to a_c α there, as in the paper).
+/// continuous at contact onset, where f_c' jumps from 0 to a_c α (as in the paper).
 /// Overflow guard: beyond x > x_lin (`linear_beyond`, default 30, i.e. a force of a_c·1.1e13)
 /// the law continues along its tangent, f_c = a_c (e^{x_lin}(1 + x − x_lin) − 1), so that
 /// no Newton iterate produces inf; converged solutions that reach this branch are flagged by
