@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 
 #include <wbm/solvers/harmonic_balance.hpp>
 
@@ -24,9 +25,11 @@ struct Variation {
 int main(int argc, char** argv) {
   using namespace wbm;
   auto run = reproduce::Run::from_args(argc, argv, "jl14_extremes");
+  return run.execute([](reproduce::Run& run) {
   const auto scene = reproduce::load_scene("jl14_case1");
   const auto rod = scene.make_rod();
   const double f1 = rod.natural_frequencies_hz(1)(0);
+  if (!scene.contact) throw std::invalid_argument(scene.path + ": the extremes vary the [contact] table; add one");
   const auto& c = *scene.contact;
   const std::vector<Variation> rows = {
       {"Case 1 as in Table 1", c.coefficient, c.exponent, c.gap, scene.beta, scene.frequency_hz},
@@ -86,5 +89,5 @@ int main(int argc, char** argv) {
             {id, converged, iterations, residual, penetration, time_ms});
   run.meta({{"scene", scene.path}, {"dimension", m}, {"rows", reports}});
   run.report(md.str());
-  return run.finish();
+  });
 }

@@ -6,9 +6,10 @@
 
 int main(int argc, char** argv) {
   auto run = wbm::reproduce::Run::from_args(argc, argv, "jl14_fig06");
-  wbm::reproduce::tip_displacement_figure(
-      run, {"jl14_case1", "JL14 Fig. 6",
-            "HBM with 64 functions approximates the tip displacement well, with Gibbs oscillations "
-            "on the contact plateau and rounding of the sharp gradient changes [JL14 Sec. 5.1]."});
-  return run.finish();
+  return run.execute([](wbm::reproduce::Run& r) {
+    wbm::reproduce::tip_displacement_figure(
+        r, {"jl14_case1", "JL14 Fig. 6",
+              "HBM with 64 functions approximates the tip displacement well, with Gibbs oscillations "
+              "on the contact plateau and rounding of the sharp gradient changes [JL14 Sec. 5.1]."});
+  });
 }

@@ -6,9 +6,10 @@
 
 int main(int argc, char** argv) {
   auto run = wbm::reproduce::Run::from_args(argc, argv, "jl14_fig07");
-  wbm::reproduce::tip_displacement_figure(
-      run, {"jl14_case2", "JL14 Fig. 7",
-            "HBM with 64 functions approximates the tip displacement well at 1275 Hz; the contact "
-            "plateau is short and not flat, the tip penetrates the penalty stop [JL14 Sec. 5.1]."});
-  return run.finish();
+  return run.execute([](wbm::reproduce::Run& r) {
+    wbm::reproduce::tip_displacement_figure(
+        r, {"jl14_case2", "JL14 Fig. 7",
+              "HBM with 64 functions approximates the tip displacement well at 1275 Hz; the contact "
+              "plateau is short and not flat, the tip penetrates the penalty stop [JL14 Sec. 5.1]."});
+  });
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 
 #include <wbm/solvers/mechanical_system.hpp>
 
@@ -13,6 +14,7 @@
 int main(int argc, char** argv) {
   using namespace wbm;
   auto run = reproduce::Run::from_args(argc, argv, "jl14_table1");
+  return run.execute([](reproduce::Run& run) {
   const std::vector<std::string> names = {"jl14_case1", "jl14_case2"};
   // Paper's stated no-contact tip amplitudes [JL14 Sec. 4], for the report only.
   const double paper_amplitude_mm[] = {1.4, 29.0};
@@ -25,6 +27,7 @@ int main(int argc, char** argv) {
   reproduce::RodScene first;
   for (int i = 0; i < 2; ++i) {
     const auto s = reproduce::load_scene(names[i]);
+    if (!s.contact) throw std::invalid_argument(s.path + ": Table 1 needs a [contact] table");
     if (i == 0) first = s;
     const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.forcing());
     id(i) = i + 1;
@@ -58,5 +61,5 @@ int main(int argc, char** argv) {
   run.table("frequencies.csv", {"mode [-]", "f_fe [Hz]", "f_continuous [Hz]"}, {n, f, continuous});
   run.meta({{"scenes", names}, {"fundamental_hz", f(0)}});
   run.report(md.str());
-  return run.finish();
+  });
 }

@@ -22,6 +22,11 @@ Run::Run(std::string id, std::filesystem::path out, bool quick)
   std::filesystem::create_directories(staging_);
 }
 
+Run::~Run() {
+  std::error_code ignored;
+  if (!staging_.empty()) std::filesystem::remove_all(staging_, ignored);
+}
+
 Run Run::from_args(int argc, char** argv, std::string id) {
   bool quick = false;
   std::filesystem::path out = WBM_OUT_DIR;

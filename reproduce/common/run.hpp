@@ -4,6 +4,7 @@
 /// Files are written into a staging folder and moved into place by finish() only if nothing
 /// failed, so an interrupted or failed run never leaves a folder that looks complete.
 
+#include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -36,6 +37,19 @@ class Run {
   /// Moves the staged files into out/<id>/ if nothing failed; prints a summary; returns the
   /// exit status (0 only if every solve converged and every file was written).
   int finish();
+  /// Runs `body(*this)`; an exception (bad scene file, invalid parameter) becomes a recorded
+  /// failure with its message. Returns finish().
+  template <class Body>
+  int execute(Body&& body) {
+    try {
+      body(*this);
+    } catch (const std::exception& e) {
+      fail(e.what());
+    }
+    return finish();
+  }
+  ~Run();  // removes the staging folder if finish() did not move it
+  Run(Run&&) = default;
 
  private:
   Run(std::string id, std::filesystem::path out, bool quick);

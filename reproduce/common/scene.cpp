@@ -122,7 +122,13 @@ RodScene load_scene(const std::string& name) {
   s.name = path.stem().string();
   s.path = path.string();
   r.only(root, "", {"title", "structure", "damping", "forcing", "contact"});
-  if (const auto* t = root.get("title"); t && t->is_string()) s.title = t->as_string()->get();
+  if (const auto* t = root.get("title")) {
+    if (t->is_string()) {
+      s.title = t->as_string()->get();
+    } else {
+      r.error(t->source(), "title", "expected a string");
+    }
+  }
   if (const auto* t = r.table(root, "structure", true)) {
     r.only(*t, "structure", {"young_modulus", "density", "area", "length", "elements"});
     s.rod.young_modulus = r.number(*t, "structure", "young_modulus", "> 0 [Pa]", positive);

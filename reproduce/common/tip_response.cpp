@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include <wbm/solvers/harmonic_balance.hpp>
@@ -29,6 +30,10 @@ std::string fmt(const char* f, double v) {
 
 void tip_displacement_figure(Run& run, const TipFigure& figure) {
   const RodScene scene = load_scene(figure.scene);
+  if (!scene.contact) {
+    throw std::invalid_argument(scene.path + ": [contact] is required for a tip-displacement figure "
+                                "(the gap is drawn and the law is solved); add a [contact] table");
+  }
   const auto system = scene.system();
   const auto forcing = scene.forcing();
   const auto contacts = scene.contacts();

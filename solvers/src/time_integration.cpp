@@ -28,11 +28,9 @@ namespace {
 // Right-hand side data, dense (n is small for the systems this reference is for).
 struct Ode {
   int n;
-  double period;                 // T [s]
   Eigen::MatrixXd minv_k;        // T² M⁻¹ K
   Eigen::MatrixXd minv_c;        // T M⁻¹ C
-  Eigen::MatrixXd minv_cols;     // T² M⁻¹ restricted to the columns of forced/contact DOFs
-  int forced_col;                // column of minv_cols for the forcing
+  Eigen::MatrixXd minv_cols;     // T² M⁻¹ e: column 0 for the forced DOF, c + 1 for contact c
   double amplitude;
   std::vector<ContactPoint> contacts;  // contact c uses column c + 1 of minv_cols
 };
@@ -44,7 +42,7 @@ int rhs(double tau, const double y[], double dydt[], void* params) {
   Eigen::Map<Eigen::VectorXd> du(dydt, n), dw(dydt + n, n);
   du = w;
   dw.noalias() = -o.minv_k * u - o.minv_c * w;
-  dw += o.amplitude * std::cos(2.0 * std::numbers::pi * tau) * o.minv_cols.col(o.forced_col);
+  dw += o.amplitude * std::cos(2.0 * std::numbers::pi * tau) * o.minv_cols.col(0);
   for (size_t c = 0; c < o.contacts.size(); ++c) {
     dw -= o.contacts[c].law->force(u(o.contacts[c].dof)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
   }
@@ -67,7 +65,7 @@ int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* pa
   Eigen::Map<Eigen::VectorXd> dt(dfdt, 2 * n);
   dt.setZero();
   dt.tail(n) = -2.0 * std::numbers::pi * o.amplitude * std::sin(2.0 * std::numbers::pi * tau) *
-               o.minv_cols.col(o.forced_col);
+               o.minv_cols.col(0);
   return GSL_SUCCESS;
 }
 
@@ -88,8 +86,7 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
 
   Ode ode;
   ode.n = system.dofs();
-  ode.period = 1.0 / forcing.frequency_hz;
-  const double t = ode.period;
+  const double t = 1.0 / forcing.frequency_hz;  // period T [s]
   const Eigen::MatrixXd mass(system.mass);
   const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
   ode.minv_k = t * t * mlu.solve(Eigen::MatrixXd(system.stiffness));
@@ -103,7 +100,6 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
     e(contacts[c].dof) = 1.0;
     ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t * t * mlu.solve(e);
   }
-  ode.forced_col = 0;
   ode.amplitude = forcing.amplitude;
   ode.contacts = contacts;
 

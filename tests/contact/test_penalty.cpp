@@ -77,18 +77,6 @@ TEST(LinearPenalty, IsAPiecewiseLinearSpring) {
   EXPECT_DOUBLE_EQ(law.potential(1.5e-3), 0.5 * 2e9 * 0.25e-6);
 }
 
-// Batched evaluation equals the pointwise law.
-TEST(ContactLaw, BatchedEvaluationMatchesPointwise) {
-  const ExponentialPenalty law(kCase1);
-  const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(9, 0.0, 2e-3);
-  Eigen::VectorXd f(9), k(9);
-  law.evaluate(u, f, k);
-  for (int i = 0; i < 9; ++i) {
-    EXPECT_EQ(f(i), law.force(u(i)));
-    EXPECT_EQ(k(i), law.stiffness(u(i)));
-  }
-}
-
 TEST(ContactLaw, RejectsInvalidParameters) {
   using wbm::testing::expect_throw_with;
   expect_throw_with<std::invalid_argument>([] { ExponentialPenalty l({-1.0, 50.0, 0.0}); },
