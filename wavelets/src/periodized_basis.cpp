@@ -1,0 +1,66 @@
+// Periodized scaling-function basis [JL14 Eq. (25)].
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <wbm/wavelets/periodized_basis.hpp>
+
+namespace wbm::wavelets {
+
+PeriodizedBasis::PeriodizedBasis(const Family& family, int level, PeriodizedBasisOptions options)
+    : level_(level), dimension_(0), normalization_(options.normalization), scale_(1.0) {
+  if (level < 0 || level > 20) {
+    throw std::invalid_argument("PeriodizedBasis: level J = " + std::to_string(level) +
+                                " must be in [0, 20] (M = 2^J basis functions)");
+  }
+  const int grid = options.grid_level < 0 ? std::max(level, 12) : options.grid_level;
+  if (grid < level || grid - level > 20) {
+    throw std::invalid_argument("PeriodizedBasis: grid_level = " + std::to_string(grid) + " must be in [J, J + 20] = [" +
+                                std::to_string(level) + ", " + std::to_string(level + 20) + "]");
+  }
+  dimension_ = 1 << level;
+  if (normalization_ == Normalization::UnitIntegral) scale_ = std::sqrt(std::ldexp(1.0, level));  // 2^{J/2}
+  function_ = std::make_shared<const ScalingFunction>(family, grid - level);
+}
+
+double PeriodizedBasis::value(int k, double tau, int derivative) const {
+  if (k < 0 || k >= dimension_) {
+    throw std::out_of_range("PeriodizedBasis::value: k = " + std::to_string(k) + " outside [0, " +
+                            std::to_string(dimension_) + ")");
+  }
+  const double m = dimension_;
+  const double x0 = std::ldexp(tau, level_) - k;  // exact for dyadic τ
+  // φ_{J,k}(τ) = 2^{J/2} Σ_ℓ φ(2^J(τ − ℓ) − k): the ℓ with begin ≤ x0 − ℓM ≤ end.
+  const auto lo = static_cast<long>(std::ceil((x0 - function_->support_end()) / m));
+  const auto hi = static_cast<long>(std::floor((x0 - function_->support_begin()) / m));
+  double s = 0.0;
+  for (long l = lo; l <= hi; ++l) s += function_->value(x0 - static_cast<double>(l) * m, derivative);
+  return scale_ * std::sqrt(m) * std::ldexp(1.0, level_ * derivative) * s;
+}
+
+Eigen::MatrixXd PeriodizedBasis::values(const Eigen::VectorXd& tau, int derivative) const {
+  Eigen::MatrixXd v(tau.size(), dimension_);
+  for (Eigen::Index p = 0; p < tau.size(); ++p) {
+    for (int k = 0; k < dimension_; ++k) v(p, k) = value(k, tau(p), derivative);
+  }
+  return v;
+}
+
+Eigen::MatrixXd PeriodizedBasis::sampled(int samples, int derivative) const {
+  if (samples < 1) throw std::invalid_argument("PeriodizedBasis::sampled: samples Q = " + std::to_string(samples) + " must be >= 1");
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(samples, 0.0, 1.0 - 1.0 / samples);
+  return values(tau, derivative);
+}
+
+Eigen::SparseMatrix<double> PeriodizedBasis::connection_matrix(int d1, int d2) const {
+  return scale_ * scale_ * periodized_connection_matrix(connection_coefficients(family(), d1, d2), level_);
+}
+
+Eigen::MatrixXd PeriodizedBasis::discrete_inner_products(int d1, int d2, int samples) const {
+  const Eigen::MatrixXd a = sampled(samples, d1);
+  const Eigen::MatrixXd b = d2 == d1 ? a : sampled(samples, d2);
+  return a.transpose() * b / static_cast<double>(samples);
+}
+
+}  // namespace wbm::wavelets
