@@ -62,7 +62,28 @@ def tip_displacement(folder):
     save(fig, folder, "convergence")
 
 
-FIGURES = {"jl14_fig06": tip_displacement, "jl14_fig07": tip_displacement}
+def basis_functions(folder):
+    """Figs. 2-5: one panel per column of basis.csv (six functions or six levels)."""
+    header, cols = read_csv(folder / "basis.csv")
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(2, 3, figsize=(9.0, 5.0), sharex=True)
+    for ax, name, col in zip(axes.flat, header[1:], cols[1:]):
+        ax.plot(cols[0], col, lw=1.0)
+        ax.ticklabel_format(axis="y", useOffset=False)
+        if max(col) - min(col) < 1e-9:  # J = 0: the constant 1
+            ax.set_ylim(min(col) - 0.5, max(col) + 0.5)
+        ax.set_title(name.split(" [")[0].replace("phi_J", "J = ").replace("_0", ", k = 0"), fontsize=9)
+    for ax in axes[-1]:
+        ax.set_xlabel(header[0])
+    title = meta.get("family", meta.get("basis", ""))
+    norm = ", normalized by ∫φ = 1" if meta.get("normalization") == "unit integral" else ""
+    fig.suptitle(f"{meta['figure']}: {title} basis functions{norm}")
+    fig.tight_layout()
+    save(fig, folder, "basis")
+
+
+FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
+           "jl14_fig05": basis_functions, "jl14_fig06": tip_displacement, "jl14_fig07": tip_displacement}
 
 
 def main():

@@ -7,7 +7,8 @@ import os
 import sys
 from pathlib import Path
 
-ORDER = ["jl14_table1", "jl14_fig06", "jl14_fig07", "jl14_extremes"]
+ORDER = ["jl14_table1", "jl14_fig02", "jl14_fig03", "jl14_fig04", "jl14_fig05", "jl14_connection_coefficients",
+         "jl14_fig06", "jl14_fig07", "jl14_extremes"]
 
 HEADER = """# wbm reproduction report
 
