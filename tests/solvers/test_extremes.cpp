@@ -47,7 +47,9 @@ TEST_P(PenaltyExtremes, ConvergeWithVerifiedResidualOrReportWhy) {
     EXPECT_NE(sol.report.message.find("last ||R||"), std::string::npos) << sol.report.message;
     EXPECT_NE(sol.report.status, solvers::SolveStatus::Converged);
   }
-  if (e.must_converge) EXPECT_TRUE(sol.converged()) << e.name << ": " << sol.report.message;
+  if (e.must_converge) {
+    EXPECT_TRUE(sol.converged()) << e.name << ": " << sol.report.message;
+  }
 }
 
 // f1 = 1273.15 Hz is the first natural frequency of the 25-element rod.
