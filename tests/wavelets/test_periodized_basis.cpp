@@ -118,6 +118,26 @@ TEST(PeriodizedBasis, DiscreteInnerProductsConvergeToConnectionMatrices) {
   }
 }
 
+// The tabulation by support (values) against the direct periodization sum (value), one function
+// and one time at a time — including non-dyadic τ, negative τ and levels where the support wraps.
+TEST(PeriodizedBasis, TabulatedValuesMatchTheDirectPeriodizationSum) {
+  const Eigen::VectorXd tau = (Eigen::VectorXd(6) << 0.0, 0.1, 0.3125, 0.77, 0.999, -0.4).finished();
+  for (const auto& family : {ww::Family::haar(), ww::Family::daubechies(6), ww::Family::orthogonal_cubic_bspline()}) {
+    for (int level : {0, 1, 2, 5}) {
+      const ww::PeriodizedBasis basis(family, level, {.normalization = ww::Normalization::UnitIntegral});
+      for (int d = 0; d <= basis.max_derivative(); ++d) {
+        const Eigen::MatrixXd v = basis.values(tau, d);
+        for (Eigen::Index p = 0; p < tau.size(); ++p) {
+          for (int k = 0; k < basis.dimension(); ++k) {
+            const double direct = basis.value(k, tau(p), d);
+            EXPECT_NEAR(v(p, k), direct, 1e-12 * (1.0 + std::abs(direct))) << family.name() << " J = " << level;
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(PeriodizedBasis, RefusesBadLevelsAndMissingDerivatives) {
   wbm::testing::expect_throw_with<std::invalid_argument>([] { (void)ww::PeriodizedBasis(ww::Family::haar(), -1); },
                                                          {"level J = -1", "[0, 20]"});

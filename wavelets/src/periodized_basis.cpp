@@ -40,11 +40,20 @@ double PeriodizedBasis::value(int k, double tau, int derivative) const {
 }
 
 Eigen::MatrixXd PeriodizedBasis::values(const Eigen::VectorXd& tau, int derivative) const {
-  Eigen::MatrixXd v(tau.size(), dimension_);
+  // Only the functions whose (wrapped) support covers τ_p are non-zero: visit the integer shifts
+  // j = k + ℓM with begin ≤ 2^J τ_p − j ≤ end, so the cost is O(Q · support), not O(Q · M).
+  Eigen::MatrixXd v = Eigen::MatrixXd::Zero(tau.size(), dimension_);
+  const double factor = scale_ * std::sqrt(static_cast<double>(dimension_)) * std::ldexp(1.0, level_ * derivative);
   for (Eigen::Index p = 0; p < tau.size(); ++p) {
-    for (int k = 0; k < dimension_; ++k) v(p, k) = value(k, tau(p), derivative);
+    const double x = std::ldexp(tau(p), level_);
+    const auto lo = static_cast<long>(std::ceil(x - function_->support_end()));
+    const auto hi = static_cast<long>(std::floor(x - function_->support_begin()));
+    for (long j = lo; j <= hi; ++j) {
+      const long k = ((j % dimension_) + dimension_) % dimension_;
+      v(p, k) += function_->value(x - static_cast<double>(j), derivative);
+    }
   }
-  return v;
+  return factor * v;
 }
 
 Eigen::MatrixXd PeriodizedBasis::sampled(int samples, int derivative) const {

@@ -47,7 +47,8 @@ class PeriodizedBasis {
   /// d-th τ-derivative of φ_{J,k} at τ (any real τ; periodic). Throws std::out_of_range for k
   /// outside [0, M), std::invalid_argument for d > max_derivative() (naming the alternative).
   [[nodiscard]] double value(int k, double tau, int derivative = 0) const;
-  /// Values (rows = times, columns = basis functions): V(p, k) = φ_{J,k}^{(d)}(τ_p).
+  /// Values (rows = times, columns = basis functions): V(p, k) = φ_{J,k}^{(d)}(τ_p); built by
+  /// support, O(Q · support width) evaluations of φ (a dense Q × M result).
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
   /// Values on the uniform grid τ_q = q/Q, q = 0 … Q − 1 (Q × M). Throws if samples < 1.
   [[nodiscard]] Eigen::MatrixXd sampled(int samples, int derivative = 0) const;
