@@ -17,12 +17,6 @@
 namespace wbm::wavelets {
 namespace {
 
-double factorial(int d) {
-  double f = 1.0;
-  for (int i = 2; i <= d; ++i) f *= i;
-  return f;
-}
-
 // Autocorrelation of the refinement coefficients, a_j = ½ Σ_l p_l p_{l+j}, j = −(L−1) … L−1
 // (stored at j + L − 1); Σ_j a_j = 2.
 std::vector<double> autocorrelation(const std::vector<double>& p) {
@@ -84,7 +78,7 @@ ConnectionCoefficients compactly_supported(const Family& family, int d1, int d2)
   for (int m = 0; m <= d; ++m) {
     for (int k = -n; k <= n; ++k) a(size + m, k + n) = std::pow(static_cast<double>(k), m);
   }
-  rhs(size + d) = factorial(d);
+  rhs(size + d) = std::tgamma(d + 1.0);  // d!
   const Eigen::VectorXd g = a.colPivHouseholderQr().solve(rhs);
   ConnectionCoefficients out;
   out.d1 = d1;

@@ -12,12 +12,6 @@
 namespace wbm::wavelets {
 namespace {
 
-double factorial(int d) {
-  double f = 1.0;
-  for (int i = 2; i <= d; ++i) f *= i;
-  return f;
-}
-
 [[noreturn]] void throw_no_derivative(const Family& family, int derivative, int max_derivative) {
   std::string alternative =
       family.kind == FamilyKind::Haar
@@ -43,7 +37,7 @@ Eigen::VectorXd integer_values(const std::vector<double>& p, int d) {
     }
   }
   for (int m = 0; m < L; ++m) a(L, m) = std::pow(-static_cast<double>(m), d);
-  rhs(L) = factorial(d);
+  rhs(L) = std::tgamma(d + 1.0);  // d!
   Eigen::VectorXd v = a.colPivHouseholderQr().solve(rhs);
   const double residual = (a * v - rhs).cwiseAbs().maxCoeff();
   if (!(residual < 1e-10)) {
