@@ -17,8 +17,8 @@
 namespace wbm::wavelets {
 namespace {
 
-// Autocorrelation of the refinement coefficients, a_j = ½ Σ_l p_l p_{l+j}, j = −(L−1) … L−1
-// (stored at j + L − 1); Σ_j a_j = 2.
+// Autocorrelation of a sequence p of length L, a_j = ½ Σ_l p_l p_{l+j}, j = −(L−1) … L−1
+// (stored at j + L − 1); for refinement coefficients Σ_j a_j = 2.
 std::vector<double> autocorrelation(const std::vector<double>& p) {
   const int L = static_cast<int>(p.size());
   std::vector<double> a(static_cast<size_t>(2 * L - 1), 0.0);
@@ -124,14 +124,8 @@ ConnectionCoefficients bspline(int d1, int d2) {
   while (e2 > 3) { --e2; ++e1; sign = -sign; }
   const BSplineCoefficients& b = orthogonal_cubic_bspline_coefficients();
   const int kk = b.truncation;
-  std::vector<double> autocorr(static_cast<size_t>(4 * kk + 1), 0.0);  // A[s], s = −2K … 2K
-  for (int s = -2 * kk; s <= 2 * kk; ++s) {
-    double acc = 0.0;
-    for (int i = -kk; i <= kk; ++i) {
-      if (i + s >= -kk && i + s <= kk) acc += b.c[static_cast<size_t>(i + kk)] * b.c[static_cast<size_t>(i + s + kk)];
-    }
-    autocorr[static_cast<size_t>(s + 2 * kk)] = acc;
-  }
+  // A[s] = Σ_i c_i c_{i+s} = 2 a_s with a the autocorrelation helper above, s = −2K … 2K.
+  const std::vector<double> autocorr = autocorrelation(b.c);
   const std::vector<double> beta = bspline_products(e1, e2);
   const int n = 2 * kk + 3;
   Eigen::VectorXd g = Eigen::VectorXd::Zero(2 * n + 1);
@@ -139,7 +133,7 @@ ConnectionCoefficients bspline(int d1, int d2) {
     double acc = 0.0;
     for (int m = -3; m <= 3; ++m) {  // Γ[k] = Σ_s A[s] β[k + s], k + s = m
       const int s = m - k;
-      if (s >= -2 * kk && s <= 2 * kk) acc += autocorr[static_cast<size_t>(s + 2 * kk)] * beta[static_cast<size_t>(m + 3)];
+      if (s >= -2 * kk && s <= 2 * kk) acc += 2.0 * autocorr[static_cast<size_t>(s + 2 * kk)] * beta[static_cast<size_t>(m + 3)];
     }
     g(k + n) = sign * acc;
   }
