@@ -1,0 +1,168 @@
+#pragma once
+/// Weighted residuals in time for any trial:weighting pair of time bases, in strong, weak or
+/// distributional form [JL14 Secs. 2, 4.1, Eqs. (14)–(17)], with the contact forces evaluated
+/// on time samples (alternating frequency/time for any basis). Units: SI; τ = f t normalized.
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/newton.hpp>
+#include <wbm/solvers/time_basis.hpp>
+
+namespace wbm::solvers {
+
+/// Where the time derivatives of M ü + C u̇ + K u sit [JL14 Eqs. (14)–(16)]; with trial q_k and
+/// weighting p_j the time operators (row j = weighting, column k = trial) are
+///   Strong (14):         A_M = ∫ p q̈,    A_C = ∫ p q̇,    A_K = ∫ p q
+///   Weak (15):           A_M = −∫ ṗ q̇,   A_C = ∫ p q̇,    A_K = ∫ p q
+///   Distributional (16): A_M = ∫ p̈ q,    A_C = −∫ ṗ q,   A_K = ∫ p q
+/// (derivatives in τ). With exact integrals of periodic functions the three coincide.
+enum class Formulation { Strong, Weak, Distributional };
+
+/// "strong", "weak", "distributional".
+[[nodiscard]] std::string_view to_string(Formulation f) noexcept;
+/// Inverse of to_string; throws std::invalid_argument naming the value and the three names.
+[[nodiscard]] Formulation parse_formulation(const std::string& name);
+
+/// How the linear time operators are integrated.
+///  - Automatic: exactly where known — Fourier:Fourier analytically, a wavelet family with
+///    itself by connection coefficients (Galerkin, as the paper does for DB6 [JL14 Sec. 4.1];
+///    also the B-spline, whose coefficients wavelets:: computes) — and by discrete inner
+///    products on the Q samples otherwise.
+///  - Discrete: discrete inner products on the Q samples for every pair (the paper's rule for
+///    all but the Daubechies Galerkin case); needs pointwise derivatives.
+enum class OperatorRule { Automatic, Discrete };
+
+/// How G is factorized (G = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K, size n·M).
+///  - Automatic: Modal when C = c_M M + c_K K (Rayleigh; the rod's β-damping is c_K = β),
+///    SparseLU otherwise.
+///  - SparseLU: Eigen::SparseLU of the assembled Kronecker sum (any damping; slow for wavelet
+///    and dense time operators, whose periodic wrap-around defeats the fill-reducing ordering).
+///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (Eigen's generalized self-adjoint eigensolver),
+///      G = (I ⊗ Φ⁻ᵀ) blockdiag_i(A + λ_i B) (I ⊗ Φ⁻¹),  A = f² A_M + f c_M A_C,  B = f c_K A_C + A_K,
+///    i.e. n independent M × M blocks, each factorized by sparse LU when it is sparse (Fourier
+///    2 × 2 blocks, banded circulant wavelet Galerkin operators) and by dense LU otherwise
+///    (discrete Petrov–Galerkin, O(M³)), and H = Σ_i φ_i(c) φ_i(c') (A + λ_i B)⁻¹.
+///    Throws std::invalid_argument if C is not Rayleigh.
+enum class LinearSolverPath { Automatic, SparseLU, Modal };
+
+/// Empty if the pair (trial, weighting) can be assembled in `formulation` under `rule`; else
+/// why not (the basis, the missing derivative, the term) and which formulation would work.
+/// Exact operators need d_w + d_t ≤ max_connection_order of the family; discrete ones need
+/// pointwise derivatives (TimeBasis::max_derivative) of the orders of the table above.
+[[nodiscard]] std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting,
+                                          Formulation formulation, OperatorRule rule = OperatorRule::Automatic);
+
+struct WeightedResidualOptions {
+  Formulation formulation = Formulation::Distributional;  // the paper's Figs. 10–11 form
+  /// Q time samples τ_q = (q + ½)/Q (midpoint rule) for the contact forces, the forcing and
+  /// discrete inner products; 0 selects max(256, 2M) (256 as in [JL14 Sec. 4.1]); else Q ≥ M.
+  int time_samples = 0;
+  OperatorRule operators = OperatorRule::Automatic;
+  LinearSolverPath linear_solver = LinearSolverPath::Automatic;
+  NewtonOptions newton{};
+};
+
+/// The three time operators (M × M, dense; row = weighting j, column = trial k), including the
+/// sign of the formulation, and how each was integrated ("exact" or "discrete Q = 256").
+struct TimeOperators {
+  Eigen::MatrixXd mass, damping, stiffness;
+  std::string rule;
+};
+
+/// Outcome of a weighted-residual solve. coefficients is n × M (layout.hpp): row = DOF, column
+/// = trial function; u_i(τ) = Σ_k A(i, k) q_k(τ) [JL14 Eq. (11)].
+struct WeightedResidualSolution {
+  Eigen::MatrixXd coefficients;    // [m]
+  double frequency_hz = 0.0;
+  NewtonReport report;             // Newton on the contact unknowns (scaled residual)
+  double relative_residual = 0.0;  // ‖G a − b + n(a)‖₂ / ‖b‖₂ of the full system, recomputed
+  double max_penetration = 0.0;    // max over contacts and samples of u_c − g0 [m]
+  double max_contact_force = 0.0;  // max over contacts and samples of f_c [N]
+  int contact_unknowns = 0;        // n_c · M
+  double condition_number = 0.0;   // 1-norm condition estimate of G (Higham's estimator, Eigen)
+  std::string linear_solver;       // "sparse-lu" or "modal"
+  std::string operator_rule;       // TimeOperators::rule
+  double wall_time_s = 0.0;        // set-up and solve
+  [[nodiscard]] bool converged() const { return report.converged(); }
+};
+
+/// Weighted residual of M ü + C u̇ + K u = F cos(2πτ) e_f − Σ_c e_c f_c(u_c) in τ = f t with
+/// trial functions q_k and weighting functions p_j of one dimension M [JL14 Eqs. (7), (11)–(17)]:
+///   R(a) = G a − b + n(a) = 0,   G = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K,
+///   b = F e_f ⊗ (1/Q) Σ_q p(τ_q) cos 2πτ_q,
+///   n(a) = Σ_c e_c ⊗ (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)),   u_c(τ_q) = Σ_k a_{c,k} q_k(τ_q),
+/// a stacked as in layout.hpp (length n·M). The Q-point midpoint rule never samples a Haar
+/// breakpoint k/M and is second order on piecewise-smooth integrands with breakpoints on the
+/// grid, spectral on smooth periodic ones.
+///
+/// Structure exploited (as the harmonic balance of the foundation): G is factorized once
+/// (LinearSolverPath), and Newton runs on the n_c·M contact unknowns x = P a only:
+///   r(x) = (x − x_lin + H n_c(x)) / s,   H = P G⁻¹ Pᵀ,   x_lin = P G⁻¹ b,
+///   ∂r/∂x = (I + H N(x)) / s,   N = blockdiag_c((1/Q) Σ_{q: f_c' ≠ 0} p(τ_q) f_c'(u_c(τ_q)) q(τ_q)ᵀ),
+/// scaled by s = max_c |g0_c| (or ‖x_lin‖∞ when every gap is 0). N sums over the samples in
+/// contact only, and over the basis functions nonzero there (compact support).
+///
+/// Throws std::invalid_argument for invalid inputs, for M differing between trial and weighting,
+/// and for a pair/formulation that needs a derivative a basis lacks; the message names the
+/// basis, the order, the term of the equation and the formulation that works (e.g. Haar trial:
+/// Formulation::Distributional). Immutable after construction.
+class WeightedResidual {
+ public:
+  WeightedResidual(MechanicalSystem system, HarmonicForcing forcing, std::vector<ContactPoint> contacts,
+                   TimeBasis trial, TimeBasis weighting, WeightedResidualOptions options = {});
+  ~WeightedResidual();
+  WeightedResidual(WeightedResidual&&) noexcept;
+  WeightedResidual& operator=(WeightedResidual&&) noexcept;
+
+  [[nodiscard]] int dofs() const;
+  [[nodiscard]] int dimension() const;
+  [[nodiscard]] int time_samples() const;
+  [[nodiscard]] const TimeBasis& trial() const;
+  [[nodiscard]] const TimeBasis& weighting() const;
+  [[nodiscard]] Formulation formulation() const;
+  [[nodiscard]] const TimeOperators& time_operators() const;
+  /// "Fourier:Fourier, distributional" etc.
+  [[nodiscard]] std::string describe() const;
+
+  /// Full residual R(a) [N], length n·M, and its Jacobian dR/da (dense n·M × n·M; for checks at
+  /// small sizes only, the solver never forms it).
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& a) const;
+  [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& a) const;
+  /// a_lin = G⁻¹ b: the response with every contact law removed (length n·M).
+  [[nodiscard]] Eigen::VectorXd linear_response() const;
+  /// 1-norm condition estimate κ₁(G) = ‖G‖₁ ‖G⁻¹‖₁ (Higham's estimator, a few solves).
+  [[nodiscard]] double condition_number() const;
+  /// "sparse-lu" or "modal".
+  [[nodiscard]] std::string linear_solver() const;
+
+  /// The condensed system on the contact unknowns (satisfies NonlinearSystem); x(k·n_c + c).
+  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x) const;
+  [[nodiscard]] Eigen::MatrixXd contact_jacobian(const Eigen::VectorXd& x) const;
+  [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
+  /// a = G⁻¹(b − Pᵀ n_c(x)): the full coefficients for given contact unknowns.
+  [[nodiscard]] Eigen::VectorXd expand(const Eigen::VectorXd& x) const;
+
+  /// Newton on the contact unknowns from x0 (default x_lin); without x0 a failed Newton falls
+  /// back on load stepping (forcing s·F, s: 0 → 1, adaptive). Non-convergence is reported in
+  /// the solution's report, never thrown.
+  [[nodiscard]] WeightedResidualSolution solve(const Eigen::VectorXd* x0 = nullptr) const;
+
+ private:
+  struct Impl;
+  struct Condensed;
+  NewtonResult solve_with_load_stepping(Eigen::VectorXd x, int& steps) const;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Build and solve in one call; wall_time_s covers both.
+[[nodiscard]] WeightedResidualSolution solve_weighted_residual(
+    const MechanicalSystem& system, const HarmonicForcing& forcing, const std::vector<ContactPoint>& contacts,
+    const TimeBasis& trial, const TimeBasis& weighting, const WeightedResidualOptions& options = {});
+
+}  // namespace wbm::solvers
