@@ -17,7 +17,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 STYLE = {"figure.figsize": (6.4, 4.0), "axes.grid": True, "grid.alpha": 0.3, "font.size": 10,
          "legend.fontsize": 8, "savefig.dpi": 150}
-LABELS = {"bdf": "time stepping (BDF)", "fourier_fourier": "Fourier:Fourier"}
+LABELS = {"bdf": "time stepping (BDF)", "fourier_fourier": "Fourier:Fourier", "bspline_bspline": "B-spline:B-spline",
+          "db6_db6": "DB6:DB6", "haar_fourier": "Haar:Fourier", "db6_fourier": "DB6:Fourier",
+          "haar_bspline": "Haar:B-spline"}
+# Table 2 order (the combination index of the sweep tables), then BDF.
+METHODS = ["Fourier:Fourier", "B-spline:B-spline", "DB6:DB6", "Haar:Fourier", "DB6:Fourier", "Haar:B-spline", "BDF"]
+MARKERS = ["o", "s", "^", "v", "D", "<", "x"]
 
 
 def read_csv(path):
@@ -33,33 +38,84 @@ def save(fig, folder, stem):
     plt.close(fig)
 
 
-def tip_displacement(folder):
-    header, cols = read_csv(folder / "tip_displacement.csv")
+def history(folder):
+    """Figs. 6-9: one quantity over a period, BDF and every converged combination."""
     meta = json.loads((folder / "meta.json").read_text())
-    fig, ax = plt.subplots()
+    stem = {"displacement": "tip_displacement", "velocity": "tip_velocity", "force": "contact_force"}[meta["quantity"]]
+    header, cols = read_csv(folder / f"{stem}.csv")
+    scale = 1e3 if meta["quantity"] == "displacement" else 1.0
+    fig, ax = plt.subplots(figsize=(7.2, 4.4))
     for name, col in zip(header[1:], cols[1:]):
-        key = name.split(" ")[0].removeprefix("u_tip_")
-        style = {"color": "k", "lw": 2.0, "alpha": 0.5} if key == "bdf" else {"lw": 1.0}
-        label = LABELS.get(key, key.replace("_", ":"))
+        key = name.split(" ")[0].split("_", 2)[-1]
+        style = {"color": "k", "lw": 2.5, "alpha": 0.4} if key == "bdf" else {"lw": 0.9}
+        label = LABELS.get(key, key)
         if key != "bdf":
             label += f", M = {meta['figure_dimension']}"
-        ax.plot(cols[0], [1e3 * v for v in col], label=label, **style)
-    ax.axhline(1e3 * meta["gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
+        ax.plot(cols[0], [scale * v for v in col], label=label, **style)
+    if meta["quantity"] == "displacement":
+        ax.axhline(1e3 * meta["gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
     ax.set_xlabel("normalized time τ [-]")
-    ax.set_ylabel("tip displacement [mm]")
-    ax.set_title(meta["scene"]["title"])
-    ax.legend(loc="best")
-    save(fig, folder, "tip_displacement")
+    ax.set_ylabel({"displacement": "tip displacement [mm]", "velocity": "tip velocity [m/s]",
+                   "force": "contact force / F [-]"}[meta["quantity"]])
+    ax.set_title(f"{meta['figure']}: {meta['scene']['title']}")
+    ax.legend(loc="best", ncol=2)
+    save(fig, folder, stem)
 
-    header, cols = read_csv(folder / "convergence.csv")
-    fig, ax = plt.subplots()
-    ax.loglog(cols[0], cols[1], "o-", label="Fourier:Fourier")
-    ax.set_xscale("log", base=2)
-    ax.set_xlabel("number of basis functions M [-]")
-    ax.set_ylabel("rms relative tip error [-]")
-    ax.set_title(meta["scene"]["title"] + ": error against BDF")
-    ax.legend()
-    save(fig, folder, "convergence")
+
+def sweep(folder):
+    """Figs. 10-11: a metric against M for both cases, one curve per combination."""
+    meta = json.loads((folder / "meta.json").read_text())
+    metric = meta["metric"]
+    column = {"tip_error": 3, "energy_norm": 4}[metric]
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    for ax, case, tag in zip(axes, ("case1", "case2"), ("(a)", "(b)")):
+        path = folder / f"sweep_{case}.csv"
+        if not path.exists():
+            continue
+        _, cols = read_csv(path)
+        for i, name in enumerate(METHODS[:-1]):
+            pts = [(m, v) for c, m, ok, v in zip(cols[0], cols[1], cols[2], cols[column]) if int(c) == i and ok == 1.0]
+            if pts:
+                ax.plot(*zip(*pts), marker=MARKERS[i], lw=1.0, label=name)
+        ax.set_xscale("log", base=2)
+        if metric == "tip_error":
+            ax.set_yscale("log")
+        else:
+            ax.axhline(1.0, color="k", lw=0.8, ls=":")
+        ax.set_xlabel("number of basis functions M [-]")
+        ax.set_ylabel("rms relative tip error [-]" if metric == "tip_error" else "energy norm / BDF [-]")
+        ax.set_title(f"{tag} {meta[case]['scene']['title']}", fontsize=9)
+        ax.legend()
+    fig.suptitle(meta["figure"])
+    fig.tight_layout()
+    save(fig, folder, metric)
+
+
+def speed_accuracy(folder):
+    """Error against wall time per method, Pareto front as a step line."""
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.4))
+    for ax, case in zip(axes, ("case1", "case2")):
+        path = folder / f"speed_accuracy_{case}.csv"
+        if not path.exists():
+            ax.set_visible(False)
+            continue
+        _, cols = read_csv(path)
+        rows = list(zip(*cols))
+        for i, name in enumerate(METHODS):
+            pts = [(r[5], r[4]) for r in rows if int(r[0]) == i and r[3] == 1.0]
+            if pts:
+                ax.plot(*zip(*sorted(pts)), marker=MARKERS[i], lw=0.8, label=name)
+        front = sorted((r[5], r[4]) for r in rows if r[7] == 1.0)
+        if front:
+            ax.step(*zip(*front), where="post", color="k", lw=1.5, alpha=0.4, label="Pareto front")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time of a full solve [s]")
+        ax.set_ylabel("rms relative tip error [-]")
+        ax.set_title(json.loads((folder / "meta.json").read_text())[case]["scene"]["title"], fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "speed_accuracy")
 
 
 def basis_functions(folder):
@@ -83,7 +139,8 @@ def basis_functions(folder):
 
 
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
-           "jl14_fig05": basis_functions, "jl14_fig06": tip_displacement, "jl14_fig07": tip_displacement}
+           "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
+           "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_speed_accuracy": speed_accuracy}
 
 
 def main():

@@ -1,0 +1,82 @@
+// Weighted-residual kernels for the six combinations of [JL14 Table 2] on Case 1
+// (reproduce/scenes/jl14_case1.toml), distributional form, M = 16 … 256: assembly (time
+// operators, modal factorization of G, condensation H = P G⁻¹ Pᵀ), one condensed residual +
+// Jacobian, and a full solve (assembly + Newton + recovery). Goal (issue #4): every
+// combination's Case 1 solve at M = 64 in < 20 ms on one core.
+#include <benchmark/benchmark.h>
+
+#include <string>
+#include <vector>
+
+#include <wbm/solvers/weighted_residual.hpp>
+
+#include "scene.hpp"
+
+namespace {
+
+const wbm::reproduce::RodScene& case1() {
+  static const auto scene = wbm::reproduce::load_scene("jl14_case1");
+  return scene;
+}
+
+// Table 2 order; the benchmark argument range(1) indexes it.
+const std::vector<std::pair<std::string, std::string>> kPairs = {
+    {"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
+    {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
+
+wbm::solvers::WeightedResidual build(int m, int pair) {
+  const auto& s = case1();
+  const auto& p = kPairs[static_cast<size_t>(pair)];
+  return {s.system(), s.forcing(), s.contacts(), wbm::solvers::TimeBasis::from_name(p.first, m),
+          wbm::solvers::TimeBasis::from_name(p.second, m)};
+}
+
+void label(benchmark::State& state) {
+  const auto& p = kPairs[static_cast<size_t>(state.range(1))];
+  state.SetLabel(p.first + ":" + p.second);
+}
+
+void BM_WeightedResidual_Assembly(benchmark::State& state) {
+  const int m = static_cast<int>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(build(m, static_cast<int>(state.range(1))));
+  label(state);
+}
+
+void BM_WeightedResidual_ResidualAndJacobian(benchmark::State& state) {
+  const auto wr = build(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response());
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(wr.contact_residual(x));
+    benchmark::DoNotOptimize(wr.contact_jacobian(x));
+  }
+  label(state);
+}
+
+void BM_WeightedResidual_FullSolve(benchmark::State& state) {
+  const int m = static_cast<int>(state.range(0));
+  int iterations = 0;
+  bool converged = true;
+  for (auto _ : state) {
+    const auto wr = build(m, static_cast<int>(state.range(1)));
+    const auto sol = wr.solve();
+    iterations = sol.report.iterations;
+    converged = sol.converged();
+  }
+  state.counters["newton_iterations"] = iterations;
+  state.counters["converged"] = converged ? 1 : 0;
+  label(state);
+}
+
+void arguments(benchmark::internal::Benchmark* b) {
+  for (int pair = 0; pair < 6; ++pair) {
+    for (int m : {16, 32, 64, 128, 256}) b->Args({m, pair});
+  }
+  b->Unit(benchmark::kMillisecond);
+}
+
+}  // namespace
+
+BENCHMARK(BM_WeightedResidual_Assembly)->Apply(arguments);
+BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
+BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);
+BENCHMARK_MAIN();
