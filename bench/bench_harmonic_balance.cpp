@@ -10,11 +10,11 @@
 #include "scene.hpp"
 
 namespace {
-const wbm::reproduce::RodScene& case1() {
+const wbm::scene::Scene& case1() {
   static const auto scene = wbm::reproduce::load_scene("jl14_case1");
   return scene;
 }
-const wbm::reproduce::RodScene& case2() {
+const wbm::scene::Scene& case2() {
   static const auto scene = wbm::reproduce::load_scene("jl14_case2");
   return scene;
 }
@@ -23,7 +23,7 @@ void BM_HarmonicBalance_Setup(benchmark::State& state) {
   const auto& s = case1();
   const int m = static_cast<int>(state.range(0));
   for (auto _ : state) {
-    wbm::solvers::HarmonicBalance hb(s.system(), s.forcing(), s.contacts(), {.dimension = m});
+    wbm::solvers::HarmonicBalance hb(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = m});
     benchmark::DoNotOptimize(hb);
   }
   state.SetComplexityN(m);
@@ -32,7 +32,7 @@ void BM_HarmonicBalance_Setup(benchmark::State& state) {
 void BM_HarmonicBalance_ResidualAndJacobian(benchmark::State& state) {
   const auto& s = case1();
   const int m = static_cast<int>(state.range(0));
-  const wbm::solvers::HarmonicBalance hb(s.system(), s.forcing(), s.contacts(), {.dimension = m});
+  const wbm::solvers::HarmonicBalance hb(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = m});
   const Eigen::VectorXd x = hb.contact_unknowns(hb.linear_response());
   for (auto _ : state) {
     benchmark::DoNotOptimize(hb.contact_residual(x));
@@ -41,13 +41,13 @@ void BM_HarmonicBalance_ResidualAndJacobian(benchmark::State& state) {
   state.SetComplexityN(m);
 }
 
-template <const wbm::reproduce::RodScene& (*Scene)()>
+template <const wbm::scene::Scene& (*Scene)()>
 void BM_HarmonicBalance_FullSolve(benchmark::State& state) {
   const auto& s = Scene();
   const int m = static_cast<int>(state.range(0));
   int iterations = 0;
   for (auto _ : state) {
-    const auto sol = wbm::solvers::solve_harmonic_balance(s.system(), s.forcing(), s.contacts(), {.dimension = m});
+    const auto sol = wbm::solvers::solve_harmonic_balance(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = m});
     if (!sol.converged()) state.SkipWithError(sol.report.message.c_str());
     iterations = sol.report.iterations;
   }
@@ -58,7 +58,7 @@ void BM_HarmonicBalance_FullSolve(benchmark::State& state) {
 void BM_TimeIntegration_Case1(benchmark::State& state) {
   const auto& s = case1();
   for (auto _ : state) {
-    const auto ref = wbm::solvers::integrate_to_periodic(s.system(), s.forcing(), s.contacts(),
+    const auto ref = wbm::solvers::integrate_to_periodic(s.system(), s.harmonic_forcing(), s.contact_points(),
                                                          {.samples_per_period = static_cast<int>(state.range(0))});
     state.counters["periods"] = ref.report.periods;
     state.counters["steps"] = static_cast<double>(ref.report.steps);

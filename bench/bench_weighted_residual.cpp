@@ -14,7 +14,7 @@
 
 namespace {
 
-const wbm::reproduce::RodScene& case1() {
+const wbm::scene::Scene& case1() {
   static const auto scene = wbm::reproduce::load_scene("jl14_case1");
   return scene;
 }
@@ -27,7 +27,7 @@ const std::vector<std::pair<std::string, std::string>> kPairs = {
 wbm::solvers::WeightedResidual build(int m, int pair) {
   const auto& s = case1();
   const auto& p = kPairs[static_cast<size_t>(pair)];
-  return {s.system(), s.forcing(), s.contacts(), wbm::solvers::TimeBasis::from_name(p.first, m),
+  return {s.system(), s.harmonic_forcing(), s.contact_points(), wbm::solvers::TimeBasis::from_name(p.first, m),
           wbm::solvers::TimeBasis::from_name(p.second, m)};
 }
 

@@ -32,25 +32,26 @@ int main(int argc, char** argv) {
   auto run = reproduce::Run::from_args(argc, argv, "jl14_extremes");
   return run.execute([](reproduce::Run& run) {
   const auto scene = reproduce::load_scene("jl14_case1");
-  const auto rod = scene.make_rod();
+  const fem::Rod rod(scene.structure->rod);
   const double f1 = rod.natural_frequencies_hz(1)(0);
-  if (!scene.contact) throw std::invalid_argument(scene.path + ": the extremes vary the [contact] table; add one");
-  const auto& c = *scene.contact;
+  if (scene.contacts.empty()) throw std::invalid_argument(scene.path + ": the extremes vary the [contact] table; add one");
+  const auto& c = scene.contacts.front();
+  const double beta = scene.damping.beta, frequency_hz = scene.forcing->frequency_hz;
 
   const int m = run.quick() ? 16 : 64;
   std::vector<Variation> rows = {
-      {"Case 1 as in Table 1", c.coefficient, c.exponent, c.gap, scene.beta, scene.frequency_hz, 0},
-      {"alpha = 500", c.coefficient, 500.0, c.gap, scene.beta, scene.frequency_hz, 0},
-      {"a_c = 1e12", 1e12, c.exponent, c.gap, scene.beta, scene.frequency_hz, 0},
-      {"alpha = 500, a_c = 1e12", 1e12, 500.0, c.gap, scene.beta, scene.frequency_hz, 0},
-      {"beta = 1e-9 (150 Hz, away from resonance)", c.coefficient, c.exponent, c.gap, 1e-9, scene.frequency_hz, 0},
-      {"gap = 0", c.coefficient, c.exponent, 0.0, scene.beta, scene.frequency_hz, 0},
-      {"gap = -0.5 mm (prestress)", c.coefficient, c.exponent, -0.5e-3, scene.beta, scene.frequency_hz, 0},
+      {"Case 1 as in Table 1", c.coefficient, c.exponent, c.gap, beta, frequency_hz, 0},
+      {"alpha = 500", c.coefficient, 500.0, c.gap, beta, frequency_hz, 0},
+      {"a_c = 1e12", 1e12, c.exponent, c.gap, beta, frequency_hz, 0},
+      {"alpha = 500, a_c = 1e12", 1e12, 500.0, c.gap, beta, frequency_hz, 0},
+      {"beta = 1e-9 (150 Hz, away from resonance)", c.coefficient, c.exponent, c.gap, 1e-9, frequency_hz, 0},
+      {"gap = 0", c.coefficient, c.exponent, 0.0, beta, frequency_hz, 0},
+      {"gap = -0.5 mm (prestress)", c.coefficient, c.exponent, -0.5e-3, beta, frequency_hz, 0},
       {"f = f1 (linear resonance), beta = 1e-7, g0 = 14.5 mm, alpha = 20", c.coefficient, 20.0, 14.5e-3, 1e-7, f1, 0},
   };
   for (int big : run.quick() ? std::vector<int>{128} : std::vector<int>{512, 1024}) {
     rows.push_back({big == 512 ? "Case 1 at M = 512" : big == 1024 ? "Case 1 at M = 1024" : "Case 1 at M = 128",
-                    c.coefficient, c.exponent, c.gap, scene.beta, scene.frequency_hz, big});
+                    c.coefficient, c.exponent, c.gap, beta, frequency_hz, big});
   }
   std::vector<reproduce::Combination> combos = reproduce::table2_combinations();
   if (run.quick()) combos = {{"fourier", "fourier"}, {"haar", "bspline"}};
@@ -74,7 +75,7 @@ int main(int argc, char** argv) {
     md << "| " << v.what << " |";
     auto law = std::make_shared<contact::ExponentialPenalty>(
         contact::ExponentialPenaltyParameters{v.coefficient, v.exponent, v.gap});
-    auto forcing = scene.forcing();
+    auto forcing = scene.harmonic_forcing();
     forcing.frequency_hz = v.frequency_hz;
     const int dim = v.dimension > 0 ? v.dimension : m;
     for (size_t j = 0; j < combos.size(); ++j, ++k) {

@@ -24,30 +24,30 @@ int main(int argc, char** argv) {
         "Scenes: `reproduce/scenes/jl14_case{1,2}.toml`.\n\n"
         "| case | f [Hz] | a_c [N] | α [1/m] | β [s] | g0 [mm] | no-contact tip amplitude, ours [mm] | paper [mm] |\n"
         "|---|---|---|---|---|---|---|---|\n";
-  reproduce::RodScene first;
+  scene::Scene first;
   for (int i = 0; i < 2; ++i) {
     const auto s = reproduce::load_scene(names[i]);
-    if (!s.contact) throw std::invalid_argument(s.path + ": Table 1 needs a [contact] table");
+    if (s.contacts.empty()) throw std::invalid_argument(s.path + ": Table 1 needs a [contact] table");
     if (i == 0) first = s;
-    const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.forcing());
+    const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.harmonic_forcing());
     id(i) = i + 1;
-    freq(i) = s.frequency_hz;
-    ac(i) = s.contact->coefficient;
-    alpha(i) = s.contact->exponent;
-    beta(i) = s.beta;
-    gap(i) = s.contact->gap;
-    amp(i) = std::abs(u(s.forcing().dof));
+    freq(i) = s.forcing->frequency_hz;
+    ac(i) = s.contacts[0].coefficient;
+    alpha(i) = s.contacts[0].exponent;
+    beta(i) = s.damping.beta;
+    gap(i) = s.contacts[0].gap;
+    amp(i) = std::abs(u(s.forcing->dof));
     char row[256];
     std::snprintf(row, sizeof row, "| %d | %g | %g | %g | %g | %g | %.3f | ≈ %g |\n", i + 1, freq(i), ac(i),
                   alpha(i), beta(i), gap(i) * 1e3, amp(i) * 1e3, paper_amplitude_mm[i]);
     md << row;
   }
-  const Eigen::VectorXd f = first.make_rod().natural_frequencies_hz(5);
-  const double c = std::sqrt(first.rod.young_modulus / first.rod.density);
+  const Eigen::VectorXd f = fem::Rod(first.structure->rod).natural_frequencies_hz(5);
+  const double c = std::sqrt(first.structure->rod.young_modulus / first.structure->rod.density);
   Eigen::VectorXd n(5), continuous(5);
   for (int k = 0; k < 5; ++k) {
     n(k) = k + 1;
-    continuous(k) = (2 * k + 1) * c / (4 * first.rod.length);  // clamped-free rod, closed form
+    continuous(k) = (2 * k + 1) * c / (4 * first.structure->rod.length);  // clamped-free rod, closed form
   }
   char line[256];
   std::snprintf(line, sizeof line,

@@ -31,13 +31,13 @@ std::string format(const char* spec, double value) {
 Reference solve_reference(Run& run, const std::string& scene_name, double relative_tolerance) {
   Reference r;
   r.scene = load_scene(scene_name);
-  if (!r.scene.contact) {
+  if (r.scene.contacts.empty()) {
     throw std::invalid_argument(r.scene.path + ": [contact] is required for the weighted-residual figures; add a "
                                 "[contact] table");
   }
   r.system = r.scene.system();
-  r.forcing = r.scene.forcing();
-  r.contacts = r.scene.contacts();
+  r.forcing = r.scene.harmonic_forcing();
+  r.contacts = r.scene.contact_points();
   r.response = solvers::integrate_to_periodic(
       r.system, r.forcing, r.contacts,
       {.samples_per_period = run.quick() ? 256 : 1024, .relative_tolerance = relative_tolerance});
@@ -97,11 +97,11 @@ nlohmann::json to_json(const CombinationResult& r) {
 nlohmann::json to_json(const Reference& r) {
   const auto& s = r.scene;
   const auto& rep = r.response.report;
-  return {{"scene", {{"name", s.name}, {"file", s.path}, {"title", s.title}, {"E_Pa", s.rod.young_modulus},
-                     {"rho_kg_m3", s.rod.density}, {"S_m2", s.rod.area}, {"L_m", s.rod.length},
-                     {"elements", s.rod.elements}, {"beta_s", s.beta}, {"F_N", s.force_amplitude},
-                     {"frequency_hz", s.frequency_hz}, {"contact", s.contact_law()->describe()},
-                     {"gap_m", s.contact->gap}}},
+  return {{"scene", {{"name", s.name}, {"file", s.path}, {"title", s.title}, {"E_Pa", s.structure->rod.young_modulus},
+                     {"rho_kg_m3", s.structure->rod.density}, {"S_m2", s.structure->rod.area}, {"L_m", s.structure->rod.length},
+                     {"elements", s.structure->rod.elements}, {"beta_s", s.damping.beta}, {"F_N", s.forcing->amplitude},
+                     {"frequency_hz", s.forcing->frequency_hz}, {"contact", r.contacts.front().law->describe()},
+                     {"gap_m", s.contacts.front().gap}}},
           {"reference", {{"method", "GSL msbdf"},
                          {"status", std::string(solvers::to_string(rep.status))},
                          {"periods", rep.periods},
@@ -153,7 +153,7 @@ void history_figure(Run& run, const std::string& scene_name, const std::string& 
   }
   const Reference ref = solve_reference(run, scene_name);
   const int m = run.quick() ? 16 : 64;
-  const double scale = quantity == "force" ? 1.0 / ref.scene.force_amplitude : 1.0;
+  const double scale = quantity == "force" ? 1.0 / ref.scene.forcing->amplitude : 1.0;
   const std::string unit = quantity == "displacement" ? "[m]" : quantity == "velocity" ? "[m/s]" : "[-]";
   const std::string prefix = quantity == "displacement" ? "u_tip_" : quantity == "velocity" ? "v_tip_" : "f_contact_";
 
@@ -185,7 +185,7 @@ void history_figure(Run& run, const std::string& scene_name, const std::string& 
   meta["quantity"] = quantity;
   meta["figure"] = figure;
   meta["figure_dimension"] = m;
-  meta["gap_m"] = ref.scene.contact->gap;
+  meta["gap_m"] = ref.scene.contacts.front().gap;
   meta["combinations"] = solves;
   run.meta(meta);
 

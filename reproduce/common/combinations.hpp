@@ -35,7 +35,7 @@ inline constexpr solvers::Formulation kFigureFormulation = solvers::Formulation:
 /// A scene with its BDF periodic reference (GSL msbdf, rtol as given, 1024 samples per period;
 /// 256 with quick) and the reference's tip displacement, velocity, contact force and energy.
 struct Reference {
-  RodScene scene;
+  scene::Scene scene;
   solvers::MechanicalSystem system;
   solvers::HarmonicForcing forcing;
   std::vector<solvers::ContactPoint> contacts;

@@ -144,6 +144,7 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
       const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
       const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
       rep.periodicity.push_back(delta);
+      if (options.on_period) options.on_period(period, delta);
       if (delta < options.periodicity_tolerance) {
         rep.status = SolveStatus::Converged;
         break;

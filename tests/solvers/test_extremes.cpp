@@ -31,8 +31,8 @@ TEST_P(PenaltyExtremes, ConvergeWithVerifiedResidualOrReportWhy) {
   const auto scene = reproduce::load_scene("jl14_case1");  // rod and F of [JL14 Sec. 4]
   auto law = std::make_shared<contact::ExponentialPenalty>(
       contact::ExponentialPenaltyParameters{e.coefficient, e.exponent, e.gap});
-  const auto rod = scene.make_rod();
-  auto forcing = scene.forcing();
+  const auto rod = fem::Rod(scene.structure->rod);
+  auto forcing = scene.harmonic_forcing();
   forcing.frequency_hz = e.frequency_hz;
   const auto sol = solvers::solve_harmonic_balance(
       solvers::beta_damped(rod, e.beta), forcing, {{rod.tip_dof(), law}},

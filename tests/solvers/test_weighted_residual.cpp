@@ -23,7 +23,7 @@ using solvers::TimeBasis;
 
 namespace {
 
-reproduce::RodScene case1() { return reproduce::load_scene("jl14_case1"); }
+scene::Scene case1() { return reproduce::load_scene("jl14_case1"); }
 
 struct Pair {
   const char* trial;
@@ -41,23 +41,23 @@ Eigen::VectorXd uniform_tau(int p) {
 }
 
 // Tip displacement of the direct (no-contact) frequency response on the samples tau.
-Eigen::VectorXd direct_tip(const reproduce::RodScene& s, const Eigen::VectorXd& tau) {
-  const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.forcing());
+Eigen::VectorXd direct_tip(const scene::Scene& s, const Eigen::VectorXd& tau) {
+  const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.harmonic_forcing());
   Eigen::VectorXd out(tau.size());
   for (Eigen::Index p = 0; p < tau.size(); ++p) {
-    out(p) = std::real(u(s.forcing().dof) * std::exp(std::complex<double>(0.0, 2.0 * std::numbers::pi * tau(p))));
+    out(p) = std::real(u(s.harmonic_forcing().dof) * std::exp(std::complex<double>(0.0, 2.0 * std::numbers::pi * tau(p))));
   }
   return out;
 }
 
-double linear_tip_error(const reproduce::RodScene& s, const Pair& pair, int m, Formulation f, int samples = 0) {
+double linear_tip_error(const scene::Scene& s, const Pair& pair, int m, Formulation f, int samples = 0) {
   const auto trial = TimeBasis::from_name(pair.trial, m);
-  const auto sol = solvers::solve_weighted_residual(s.system(), s.forcing(), {}, trial,
+  const auto sol = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), {}, trial,
                                                     TimeBasis::from_name(pair.weighting, m),
                                                     {.formulation = f, .time_samples = samples});
   const Eigen::VectorXd tau = uniform_tau(1024);
   return solvers::rms_relative_error(
-      solvers::evaluate_trial(trial, sol.coefficients, s.forcing().dof, tau, s.frequency_hz), direct_tip(s, tau));
+      solvers::evaluate_trial(trial, sol.coefficients, s.harmonic_forcing().dof, tau, s.forcing->frequency_hz), direct_tip(s, tau));
 }
 
 }  // namespace
@@ -115,7 +115,7 @@ TEST(WeightedResidual, StrongWeakAndDistributionalAgreeWhereAllAreDefined) {
   const auto s = case1();
   for (const Pair pair : {Pair{"fourier", "fourier"}, Pair{"bspline", "bspline"}, Pair{"db6", "db6"}}) {
     const auto make = [&](Formulation f) {
-      return solvers::WeightedResidual(s.system(), s.forcing(), s.contacts(), TimeBasis::from_name(pair.trial, 16),
+      return solvers::WeightedResidual(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name(pair.trial, 16),
                                        TimeBasis::from_name(pair.weighting, 16), {.formulation = f});
     };
     const auto strong = make(Formulation::Strong), weak = make(Formulation::Weak),
@@ -133,11 +133,11 @@ TEST(WeightedResidual, StrongWeakAndDistributionalAgreeWhereAllAreDefined) {
     int i = 0;
     for (Formulation f : {Formulation::Strong, Formulation::Weak, Formulation::Distributional}) {
       const auto trial = TimeBasis::from_name("bspline", 32);
-      const auto sol = solvers::solve_weighted_residual(s.system(), s.forcing(), s.contacts(), trial,
+      const auto sol = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), trial,
                                                         TimeBasis::from_name("fourier", 32),
                                                         {.formulation = f, .time_samples = q});
       ASSERT_TRUE(sol.converged()) << sol.report.message;
-      tip[i++] = solvers::evaluate_trial(trial, sol.coefficients, s.forcing().dof, uniform_tau(512), s.frequency_hz);
+      tip[i++] = solvers::evaluate_trial(trial, sol.coefficients, s.harmonic_forcing().dof, uniform_tau(512), s.forcing->frequency_hz);
     }
     spread[qi++] = std::max(solvers::rms_relative_error(tip[1], tip[0]), solvers::rms_relative_error(tip[2], tip[0]));
   }
@@ -184,7 +184,7 @@ TEST(WeightedResidual, TimeOperatorsMatchBruteForceQuadrature) {
                        Case{{"haar", "bspline"}, Formulation::Distributional, 2e-3},
                        Case{{"fourier", "haar"}, Formulation::Strong, 2e-3}}) {
     const auto trial = TimeBasis::from_name(c.pair.trial, 8), weighting = TimeBasis::from_name(c.pair.weighting, 8);
-    const solvers::WeightedResidual wr(s.system(), s.forcing(), {}, trial, weighting, {.formulation = c.f});
+    const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), {}, trial, weighting, {.formulation = c.f});
     const Eigen::MatrixXd* ops[3] = {&wr.time_operators().mass, &wr.time_operators().damping,
                                      &wr.time_operators().stiffness};
     // (weighting order, trial order, sign) of the mass, damping, stiffness terms.
@@ -206,7 +206,7 @@ TEST(WeightedResidual, TimeOperatorsMatchBruteForceQuadrature) {
 TEST(WeightedResidual, CondensedJacobianMatchesFiniteDifferences) {
   const auto s = case1();
   for (const Pair pair : {Pair{"db6", "fourier"}, Pair{"haar", "bspline"}, Pair{"bspline", "bspline"}}) {
-    const solvers::WeightedResidual wr(s.system(), s.forcing(), s.contacts(), TimeBasis::from_name(pair.trial, 16),
+    const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name(pair.trial, 16),
                                        TimeBasis::from_name(pair.weighting, 16));
     const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response()) * 1.02;
     struct Condensed {
@@ -224,16 +224,16 @@ TEST(WeightedResidual, CondensedJacobianMatchesFiniteDifferences) {
 TEST(WeightedResidual, ModalAndSparseLuPathsAgreeAndConditionIsEstimated) {
   const auto s = case1();
   const auto trial = TimeBasis::from_name("db6", 16), weighting = TimeBasis::from_name("fourier", 16);
-  const auto modal = solvers::solve_weighted_residual(s.system(), s.forcing(), s.contacts(), trial, weighting,
+  const auto modal = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), trial, weighting,
                                                       {.linear_solver = solvers::LinearSolverPath::Modal});
-  const auto sparse = solvers::solve_weighted_residual(s.system(), s.forcing(), s.contacts(), trial, weighting,
+  const auto sparse = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), trial, weighting,
                                                        {.linear_solver = solvers::LinearSolverPath::SparseLU});
   ASSERT_TRUE(modal.converged() && sparse.converged());
   EXPECT_EQ(modal.linear_solver, "modal");
   EXPECT_EQ(sparse.linear_solver, "sparse-lu");
   EXPECT_LT((modal.coefficients - sparse.coefficients).norm(), 1e-9 * sparse.coefficients.norm());
 
-  const solvers::WeightedResidual wr(s.system(), s.forcing(), {}, TimeBasis::from_name("haar", 8),
+  const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), {}, TimeBasis::from_name("haar", 8),
                                      TimeBasis::from_name("fourier", 8));
   const Eigen::MatrixXd g = wr.jacobian(Eigen::VectorXd::Zero(25 * 8));  // no contact: J = G
   const double exact = g.cwiseAbs().colwise().sum().maxCoeff() * g.inverse().cwiseAbs().colwise().sum().maxCoeff();
@@ -250,12 +250,12 @@ TEST(WeightedResidual, ModalAndSparseLuPathsAgreeAndConditionIsEstimated) {
 // grows [JL14 Sec. 5.5], and we see the same with exact operators.
 TEST(WeightedResidual, Table2CombinationsMatchTimeSteppingAtM128) {
   const auto s = case1();
-  const auto ref = solvers::integrate_to_periodic(s.system(), s.forcing(), s.contacts(), {.samples_per_period = 1024});
+  const auto ref = solvers::integrate_to_periodic(s.system(), s.harmonic_forcing(), s.contact_points(), {.samples_per_period = 1024});
   ASSERT_TRUE(ref.report.converged());
-  const Eigen::VectorXd u_ref = ref.displacement.row(s.forcing().dof).transpose();
+  const Eigen::VectorXd u_ref = ref.displacement.row(s.harmonic_forcing().dof).transpose();
   for (const Pair& pair : kTable2) {
     const auto trial = TimeBasis::from_name(pair.trial, 128);
-    const auto sol = solvers::solve_weighted_residual(s.system(), s.forcing(), s.contacts(), trial,
+    const auto sol = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), trial,
                                                       TimeBasis::from_name(pair.weighting, 128));
     ASSERT_TRUE(sol.converged()) << pair.trial << ":" << pair.weighting << ": " << sol.report.message;
     EXPECT_LT(sol.relative_residual, 1e-8);
@@ -263,7 +263,7 @@ TEST(WeightedResidual, Table2CombinationsMatchTimeSteppingAtM128) {
     const Eigen::VectorXd best = v * v.colPivHouseholderQr().solve(u_ref);
     const double best_error = solvers::rms_relative_error(best, u_ref);
     const double error = solvers::rms_relative_error(
-        solvers::evaluate_trial(trial, sol.coefficients, s.forcing().dof, ref.tau, s.frequency_hz), u_ref);
+        solvers::evaluate_trial(trial, sol.coefficients, s.harmonic_forcing().dof, ref.tau, s.forcing->frequency_hz), u_ref);
     const double factor = std::string(pair.trial) == "bspline" ? 10.0 : 2.0;
     EXPECT_LT(error, factor * best_error + 1e-5)
         << pair.trial << ":" << pair.weighting << " error " << error << ", best approximation " << best_error;
@@ -276,7 +276,7 @@ TEST(WeightedResidual, RefusesInadmissiblePairs) {
   using wbm::testing::expect_throw_with;
   const auto s = case1();
   const auto build = [&](const char* t, const char* w, Formulation f, int mt = 16, int mw = 16) {
-    return solvers::WeightedResidual(s.system(), s.forcing(), s.contacts(), TimeBasis::from_name(t, mt),
+    return solvers::WeightedResidual(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name(t, mt),
                                      TimeBasis::from_name(w, mw), {.formulation = f});
   };
   expect_throw_with<std::invalid_argument>([&] { (void)build("haar", "fourier", Formulation::Strong); },

@@ -1,6 +1,7 @@
 #pragma once
 /// Periodic steady state by time stepping from rest: the reference solution of [JL14 Sec. 4].
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,8 @@ struct TimeIntegrationOptions {
   double absolute_tolerance = 1e-13;   // [m] on u and on du/dτ (both in metres)
   double periodicity_tolerance = 1e-7; // stop when δ_i < this [JL14 Sec. 4]
   int max_periods = 5000;
+  /// Called after each period i >= 2 with (i, δ_i), e.g. for a progress bar; may be empty.
+  std::function<void(int period, double periodicity)> on_period = nullptr;
   void validate() const;               // throws std::invalid_argument naming the field
 };
 

@@ -1,0 +1,216 @@
+// The `wbm` command: run, check and list what a scene file can ask for (docs/scenes.md).
+//   wbm run SCENE [-o DIR] [--quiet]   solve; CSV files and result.json in DIR
+//   wbm check SCENE [--json]           validate only; print the resolved scene
+//   wbm bases [-M M]                   bases and the formulations each admits
+//   wbm --version
+// Exit status: 0 converged (or valid, for check); 1 not converged or a run-time failure;
+// 2 bad input (scene file, command line). Nothing is written on bad input.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/build_information.hpp>
+#include <wbm/scene/output.hpp>
+#include <wbm/scene/scene.hpp>
+
+namespace {
+
+constexpr int kConverged = 0;
+constexpr int kNotConverged = 1;
+constexpr int kBadInput = 2;
+
+// A progress bar on standard error, only on a terminal and only once a run has lasted 1 s.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled) : enabled_(enabled && ::isatty(STDERR_FILENO) != 0) {}
+  ~ProgressBar() {
+    if (drawn_) std::cerr << "\n";
+  }
+  void operator()(double fraction, const std::string& label) {
+    if (!enabled_) return;
+    const double t = seconds();
+    if (t < 1.0 || (t - last_ < 0.1 && fraction < 1.0)) return;
+    last_ = t;
+    constexpr int width = 30;
+    const int filled = static_cast<int>(fraction * width + 0.5);
+    std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#') << std::string(static_cast<size_t>(width - filled), '.')
+              << "] " << static_cast<int>(fraction * 100.0 + 0.5) << "% " << label << "   " << std::flush;
+    drawn_ = true;
+  }
+
+ private:
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  bool enabled_;
+  bool drawn_ = false;
+  double last_ = 0.0;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+void print_warnings(const wbm::scene::Scene& s) {
+  for (const auto& w : s.warnings) std::cerr << w << "\n";
+}
+
+// Loads a scene; prints its problems and returns nullopt on bad input.
+std::optional<wbm::scene::Scene> load(const std::string& path) {
+  try {
+    auto s = wbm::scene::load_scene(path);
+    print_warnings(s);
+    return s;
+  } catch (const std::invalid_argument& e) {
+    std::cerr << e.what();
+    if (std::string(e.what()).back() != '\n') std::cerr << "\n";
+  } catch (const std::runtime_error& e) {
+    std::cerr << e.what() << "\n";
+  }
+  std::cerr << "wbm: " << path << ": not run; nothing written\n";
+  return std::nullopt;
+}
+
+int run(const std::string& scene_path, std::string out, bool quiet, const std::string& command_line) {
+  const auto scene = load(scene_path);
+  if (!scene) return kBadInput;
+  if (out.empty()) out = (std::filesystem::path("wbm-out") / scene->name).string();
+  wbm::scene::AnalysisResult result;
+  {
+    ProgressBar bar(!quiet);
+    result = wbm::scene::run_analysis(*scene, [&](double f, const std::string& label) { bar(f, label); });
+  }
+  nlohmann::json json = {{"command", command_line},
+                         {"scene_file", std::filesystem::absolute(scene_path).lexically_normal().string()},
+                         {"scene", wbm::scene::to_json(*scene)},
+                         {"warnings", scene->warnings},
+                         {"converged", result.converged},
+                         {"diagnostics", result.diagnostics},
+                         {"build", wbm::scene::build_information()}};
+  try {
+    wbm::scene::StagedOutput staged(out);
+    nlohmann::json files = nlohmann::json::array();
+    for (const auto& t : result.tables) {
+      staged.table(t);
+      files.push_back(t.file);
+    }
+    json["files"] = files;
+    staged.text("result.json", json.dump(2) + "\n");
+    staged.commit("result.json");
+  } catch (const std::exception& e) {
+    std::cerr << "wbm: " << out << ": " << e.what() << "; nothing written\n";
+    return kNotConverged;
+  }
+  if (!quiet) {
+    std::cout << result.summary << "\n";
+    std::cout << (result.converged ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "
+              << result.tables.size() << " CSV file(s) and result.json to " << out << "\n";
+  }
+  return result.converged ? kConverged : kNotConverged;
+}
+
+int check(const std::string& scene_path, bool json) {
+  const auto scene = load(scene_path);
+  if (!scene) return kBadInput;
+  if (json) {
+    std::cout << wbm::scene::to_json(*scene).dump(2) << "\n";
+  } else {
+    std::cout << scene_path << ": valid scene, analysis \"" << wbm::scene::to_string(scene->analysis.kind) << "\"";
+    if (scene->analysis.kind != wbm::scene::AnalysisKind::Timestep) {
+      std::cout << ", " << scene->basis.trial;
+      if (scene->analysis.kind == wbm::scene::AnalysisKind::Solve) std::cout << ":" << scene->basis.weighting;
+      std::cout << ", M = " << scene->basis.dimension;
+    }
+    if (scene->structure) std::cout << ", " << scene->structure->dofs() << " DOFs, " << scene->contacts.size() << " contact(s)";
+    std::cout << "\n";
+  }
+  return kConverged;
+}
+
+// For every basis: pointwise derivatives, and the formulations it admits as a trial basis (with
+// a Fourier weighting), as a weighting basis (with a Fourier trial) and paired with itself.
+int bases(int dimension) {
+  using wbm::solvers::Formulation;
+  using wbm::solvers::TimeBasis;
+  const Formulation forms[] = {Formulation::Strong, Formulation::Weak, Formulation::Distributional};
+  auto admitted = [&](const TimeBasis& trial, const TimeBasis& weighting) {
+    std::string s;
+    for (Formulation f : forms) {
+      if (wbm::solvers::inadmissibility(trial, weighting, f).empty()) {
+        s += (s.empty() ? "" : ",") + std::string(wbm::solvers::to_string(f));
+      }
+    }
+    return s.empty() ? std::string("-") : s;
+  };
+  try {
+    const TimeBasis fourier = TimeBasis::fourier(dimension);
+    std::printf("%-9s %-12s %-28s %-28s %s\n", "basis", "derivatives", "as trial (Fourier weighting)",
+                "as weighting (Fourier trial)", "with itself (Galerkin)");
+    for (const auto& name : TimeBasis::names()) {
+      const TimeBasis b = TimeBasis::from_name(name, dimension);
+      const std::string d = b.is_fourier() ? "all" : std::to_string(b.max_derivative());
+      std::printf("%-9s %-12s %-28s %-28s %s\n", name.c_str(), d.c_str(), admitted(b, fourier).c_str(),
+                  admitted(fourier, b).c_str(), admitted(b, b).c_str());
+    }
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "wbm bases: " << e.what() << "\n";
+    return kBadInput;
+  }
+  std::printf("\nderivatives: largest pointwise time derivative (Hölder regularity; Haar none). Forms [JL14 Eqs. (14)-(16)]:\n"
+              "strong needs the trial's q'' , weak q' and p', distributional the weighting's p''. Galerkin wavelet pairs\n"
+              "use exact connection coefficients, which exist for d1 + d2 < 2s (s: Sobolev exponent) [B92].\n"
+              "Other pairs are listed with the automatic operator rule at M = %d.\n",
+              dimension);
+  return kConverged;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"wbm: periodic vibrations with unilateral contact by weighted residuals in time "
+               "(wavelet balance, harmonic balance) [Jones & Legrand 2014]"};
+  app.require_subcommand(0, 1);
+  const auto info = wbm::scene::build_information();
+  app.set_version_flag("--version", "wbm " + info["wbm"].get<std::string>() + " (" +
+                                        info["git_describe"].get<std::string>() + "; Eigen " +
+                                        info["eigen"].get<std::string>() + ", FFTW " + info["fftw"].get<std::string>() +
+                                        ", GSL " + info["gsl"].get<std::string>() + ", toml++ " +
+                                        info["toml++"].get<std::string>() + ", CLI11 " + CLI11_VERSION + ")");
+
+  std::string scene_path, out;
+  bool quiet = false, json = false;
+  int dimension = 64;
+  auto* run_cmd = app.add_subcommand("run", "Run the analysis of a scene; write CSV files and result.json");
+  run_cmd->add_option("scene", scene_path, "Scene file (.toml), or a result.json to re-run")->required();
+  run_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<scene name>)");
+  run_cmd->add_flag("-q,--quiet", quiet, "No summary and no progress bar");
+  auto* check_cmd = app.add_subcommand("check", "Validate a scene without running it");
+  check_cmd->add_option("scene", scene_path, "Scene file (.toml or .json)")->required();
+  check_cmd->add_flag("--json", json, "Print the resolved scene (every default filled in) as JSON");
+  auto* bases_cmd = app.add_subcommand("bases", "List the time bases and the formulations each admits");
+  bases_cmd->add_option("-M,--dimension", dimension, "Dimension M = 2^J used for the check")->capture_default_str();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : kBadInput;
+  }
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+  try {
+    if (*run_cmd) return run(scene_path, out, quiet, command_line);
+    if (*check_cmd) return check(scene_path, json);
+    if (*bases_cmd) return bases(dimension);
+  } catch (const std::exception& e) {
+    std::cerr << "wbm: " << e.what() << "\n";
+    return kNotConverged;
+  }
+  std::cout << app.help();
+  return kConverged;
+}

@@ -1,0 +1,46 @@
+#pragma once
+/// Runs the analysis a scene asks for and gathers its result files and diagnostics; the `wbm`
+/// command writes them (docs/scenes.md lists every file and column). Units: SI.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <wbm/scene/output.hpp>
+#include <wbm/scene/scene.hpp>
+
+namespace wbm::scene {
+
+/// Progress of a long analysis: fraction in [0, 1] and a short label ("period 12, δ = 3e-5").
+using Progress = std::function<void(double fraction, const std::string& label)>;
+
+struct AnalysisResult {
+  /// True only if every solve converged (a sweep: every frequency). Tables hold converged data
+  /// only; a point that failed is listed in diagnostics with its status and residuals.
+  bool converged = false;
+  nlohmann::json diagnostics;   // status, iterations, residuals, condition estimate, timings
+  std::vector<Table> tables;    // the CSV files, in the order written
+  std::string summary;          // a few lines for the terminal
+};
+
+/// Runs `scene.analysis`:
+///  - solve, one frequency: weighted residual [JL14 Eqs. (14)–(17)] with the scene's basis pair,
+///    formulation and Newton options (solvers::solve_weighted_residual). Files:
+///    displacement.csv, velocity.csv (absent for a trial basis without a pointwise derivative
+///    other than Haar), contact_force.csv (with contact), energy.csv [JL14 Eq. (35)],
+///    coefficients.csv (the trial coefficients of the output DOFs, one row per basis function).
+///  - solve, frequency range: one solve per frequency, each started from the previous converged
+///    contact unknowns (load stepping from the linear response if that fails); files
+///    frequency_response.csv (max, min and rms displacement of each output DOF per frequency).
+///    A sweep does not pass folds: that is pseudo-arclength continuation (issue #6).
+///  - timestep: GSL BDF from rest to the periodic state [JL14 Sec. 4]; the same per-period files
+///    as solve, from the last period.
+///  - basis-plot: basis_functions.csv, values (or first τ-derivatives) of the trial basis'
+///    functions at τ_p = p/P.
+/// Bad scenes are refused by load_scene; this throws only std::logic_error for a scene that
+/// bypassed it. Non-convergence is reported (converged = false), never thrown.
+[[nodiscard]] AnalysisResult run_analysis(const Scene& scene, const Progress& progress = {});
+
+}  // namespace wbm::scene

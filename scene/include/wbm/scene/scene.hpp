@@ -1,0 +1,163 @@
+#pragma once
+/// Scene files: one problem per TOML file (toml++), every key documented in docs/scenes.md.
+/// Units: SI (Pa, kg/m³, m², m, N, s, Hz where the name says _hz).
+///
+/// A scene models only what its analysis needs: `basis-plot` builds no structure, a scene
+/// without [contact] builds no contact law. Sections (defaults in docs/scenes.md):
+///   title                      string
+///   [structure]                the clamped-free FE rod (young_modulus, density, area, length,
+///                              elements) or explicit matrices (mass, stiffness, damping: a number
+///                              for 1 DOF, a list (diagonal), a list of rows, or a Matrix Market
+///                              file name relative to the scene; dofs = names)
+///   [damping]                  C += alpha M + beta K
+///   [forcing]                  F cos 2πft on one DOF: amplitude, node | dof, frequency_hz (a number,
+///                              or [from, to] with points for a sweep)
+///   [contact] / [[contact]]    law ("exponential": coefficient, exponent; "linear": stiffness),
+///                              gap, node | dof
+///   [basis]                    trial, weighting, dimension | level, formulation, time_samples,
+///                              operators
+///   [solver]                   Newton on the contact unknowns (tolerance, max_iterations,
+///                              line_search, linear_solver)
+///   [timestep]                 BDF reference (relative_tolerance, absolute_tolerance,
+///                              periodicity_tolerance, max_periods)
+///   [analysis]                 type = "solve" | "timestep" | "basis-plot" (+ functions,
+///                              derivative, normalization for basis-plot)
+///   [output]                   samples per period, nodes | dofs to write
+/// Rod locations are node numbers 1 … elements (node 0 is clamped) or "tip"; matrix locations
+/// are DOF names or 0-based indices.
+///
+/// Errors: load_scene collects every problem of a file and throws one std::invalid_argument whose
+/// message has one line per problem, "file:line: key: what was expected" (line omitted for JSON
+/// input); a missing or unreadable file throws std::runtime_error naming the path.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/SparseCore>
+#include <nlohmann/json.hpp>
+
+#include <wbm/fem/rod.hpp>
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/time_integration.hpp>
+#include <wbm/solvers/weighted_residual.hpp>
+
+namespace wbm::scene {
+
+enum class StructureKind { Rod, Matrices };
+enum class AnalysisKind { Solve, Timestep, BasisPlot };
+
+/// "solve", "timestep", "basis-plot".
+[[nodiscard]] std::string_view to_string(AnalysisKind kind) noexcept;
+
+/// The structure: FE rod [JL14 Sec. 2] or explicit symmetric matrices (n × n, sparse).
+struct Structure {
+  StructureKind kind = StructureKind::Rod;
+  fem::RodParameters rod{0.0, 0.0, 0.0, 0.0, 0};   // Rod only
+  Eigen::SparseMatrix<double> mass, stiffness, damping;  // Matrices only; damping may be 0 × 0
+  /// Matrices only: "" when given inline, else the absolute path of the Matrix Market file.
+  std::string mass_file, stiffness_file, damping_file;
+  std::vector<std::string> dof_names;  // Matrices: given or "dof0" … ; Rod: "node1" … "nodeN"
+
+  [[nodiscard]] int dofs() const;
+  /// Rod: "node<j>"; matrices: the DOF's name.
+  [[nodiscard]] std::string dof_name(int dof) const;
+};
+
+struct Damping {
+  double alpha = 0.0;  // mass-proportional [1/s]
+  double beta = 0.0;   // stiffness-proportional [s] (the paper's C = βK)
+};
+
+struct FrequencyRange {
+  double from_hz = 0.0, to_hz = 0.0;
+  int points = 0;  // >= 2, equispaced, both ends included
+};
+
+struct Forcing {
+  double amplitude = 0.0;      // F [N]
+  int dof = 0;                 // forced DOF, 0-based
+  double frequency_hz = 0.0;   // single frequency (when range is empty) [Hz]
+  std::optional<FrequencyRange> range;
+  /// The frequencies to solve at, in order (one, or the sweep).
+  [[nodiscard]] std::vector<double> frequencies_hz() const;
+};
+
+struct Contact {
+  std::string law;           // "exponential" [JL14 Eq. (5)] or "linear"
+  double coefficient = 0.0;  // a_c [N] (exponential)
+  double exponent = 0.0;     // α [1/m] (exponential)
+  double stiffness = 0.0;    // k [N/m] (linear)
+  double gap = 0.0;          // g0 [m]
+  int dof = 0;               // 0-based
+};
+
+struct Basis {
+  std::string trial = "fourier";
+  std::string weighting = "fourier";
+  int dimension = 64;  // M = 2^J
+  solvers::Formulation formulation = solvers::Formulation::Distributional;
+  int time_samples = 0;  // Q; 0 = max(256, 2M)
+  solvers::OperatorRule operators = solvers::OperatorRule::Automatic;
+};
+
+struct Solver {
+  solvers::NewtonOptions newton{};
+  solvers::LinearSolverPath linear_solver = solvers::LinearSolverPath::Automatic;
+};
+
+struct Analysis {
+  AnalysisKind kind = AnalysisKind::Solve;
+  std::vector<int> functions;       // basis-plot: shifts k to draw (empty = all M)
+  int derivative = 0;               // basis-plot: 0 or 1
+  bool unit_integral = false;       // basis-plot: ∫₀¹ φ_{J,k} = 1 (the paper's figures) instead of orthonormal
+};
+
+struct Output {
+  int samples = 1024;      // P samples per period, τ_p = p/P
+  std::vector<int> dofs;   // 0-based DOFs written; empty = the forced and the contact DOFs
+  bool all_dofs = false;
+};
+
+/// A resolved scene: every default filled in, every location a 0-based DOF.
+struct Scene {
+  std::string name;   // file stem
+  std::string path;   // file it was read from ("" if parsed from text)
+  std::string title;
+  Analysis analysis;
+  std::optional<Structure> structure;  // absent only for basis-plot
+  Damping damping;
+  std::optional<Forcing> forcing;      // absent only for basis-plot
+  std::vector<Contact> contacts;
+  Basis basis;
+  Solver solver;
+  solvers::TimeIntegrationOptions timestep{};
+  Output output;
+  std::vector<std::string> warnings;   // sections given but unused by the analysis ("file:line: ...")
+
+  /// M, C = C_given + αM + βK, K. Throws std::logic_error without a structure.
+  [[nodiscard]] solvers::MechanicalSystem system() const;
+  /// F cos 2πft on the forced DOF at f (default: the single frequency).
+  [[nodiscard]] solvers::HarmonicForcing harmonic_forcing(std::optional<double> frequency_hz = std::nullopt) const;
+  /// One ContactPoint per [contact], in file order; empty without contact.
+  [[nodiscard]] std::vector<solvers::ContactPoint> contact_points() const;
+  [[nodiscard]] solvers::TimeBasis trial() const;
+  [[nodiscard]] solvers::TimeBasis weighting() const;
+  [[nodiscard]] solvers::WeightedResidualOptions weighted_residual_options() const;
+  /// The DOFs [output] writes (sorted, unique).
+  [[nodiscard]] std::vector<int> output_dofs() const;
+};
+
+/// Reads a scene from a .toml file, or from a .json file holding a resolved scene (either the
+/// object itself or a result.json whose "scene" member it is). Throws as described above.
+[[nodiscard]] Scene load_scene(const std::filesystem::path& path);
+/// Parses TOML text; `file` names it in messages and anchors relative Matrix Market paths.
+[[nodiscard]] Scene parse_scene(std::string_view toml_text, const std::filesystem::path& file);
+/// The resolved scene as JSON (every key explicit, matrices inline or as absolute paths); the
+/// inverse of scene_from_json: scene_from_json(to_json(s)) == s up to `path` and `warnings`.
+[[nodiscard]] nlohmann::json to_json(const Scene& scene);
+[[nodiscard]] Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& file);
+
+}  // namespace wbm::scene

@@ -1,0 +1,294 @@
+#include <wbm/scene/analysis.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include <wbm/solvers/post_processing.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::scene {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// JSON has no NaN/inf: a non-finite diagnostic is written as null.
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json to_json(const solvers::NewtonReport& r) {
+  nlohmann::json norms = nlohmann::json::array();
+  for (double v : r.residual_norms) norms.push_back(finite_or_null(v));
+  return {{"status", std::string(solvers::to_string(r.status))},
+          {"converged", r.converged()},
+          {"iterations", r.iterations},
+          {"residual_norms", norms},
+          {"message", r.message}};
+}
+
+nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
+  return {{"frequency_hz", s.frequency_hz},
+          {"newton", to_json(s.report)},
+          {"relative_residual", finite_or_null(s.relative_residual)},
+          {"max_penetration_m", finite_or_null(s.max_penetration)},
+          {"max_contact_force_N", finite_or_null(s.max_contact_force)},
+          {"contact_unknowns", s.contact_unknowns},
+          {"condition_number", finite_or_null(s.condition_number)},
+          {"linear_solver", s.linear_solver},
+          {"operators", s.operator_rule},
+          {"wall_time_s", s.wall_time_s}};
+}
+
+std::string format(const char* spec, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, spec, v);
+  return b;
+}
+
+// Per-period files from displacement/velocity of every DOF (n × P), shared by solve and timestep.
+void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
+                   const solvers::MechanicalSystem& system, double frequency_hz, const Eigen::VectorXd& tau,
+                   const Eigen::MatrixXd& displacement, const Eigen::MatrixXd* velocity, AnalysisResult& out) {
+  const Structure& st = *scene.structure;
+  const Eigen::VectorXd time = tau / frequency_hz;
+  Table u{"displacement.csv", {"tau [-]", "time [s]"}, {tau, time}};
+  nlohmann::json response = nlohmann::json::array();
+  for (int dof : scene.output_dofs()) {
+    const Eigen::VectorXd v = displacement.row(dof).transpose();
+    u.header.push_back("u_" + st.dof_name(dof) + " [m]");
+    u.columns.push_back(v);
+    response.push_back({{"dof", st.dof_name(dof)},
+                        {"max_m", v.maxCoeff()},
+                        {"min_m", v.minCoeff()},
+                        {"rms_m", solvers::rms(v)}});
+  }
+  out.diagnostics["response"] = response;
+  out.tables.push_back(std::move(u));
+  if (velocity != nullptr) {
+    Table v{"velocity.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    for (int dof : scene.output_dofs()) {
+      v.header.push_back("v_" + st.dof_name(dof) + " [m/s]");
+      v.columns.push_back(velocity->row(dof).transpose());
+    }
+    out.tables.push_back(std::move(v));
+  }
+  if (!contacts.empty()) {
+    Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    for (const auto& c : contacts) {
+      Eigen::VectorXd force(tau.size());
+      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(displacement(c.dof, p));
+      f.header.push_back("f_c_" + st.dof_name(c.dof) + " [N]");
+      f.columns.push_back(force);
+    }
+    out.tables.push_back(std::move(f));
+  }
+  if (velocity != nullptr) {
+    out.tables.push_back({"energy.csv",
+                          {"tau [-]", "time [s]", "energy [J]"},
+                          {tau, time, solvers::system_energy(system, contacts, displacement, *velocity)}});
+  }
+}
+
+void solve_one(const Scene& scene, AnalysisResult& out) {
+  const auto system = scene.system();
+  const auto forcing = scene.harmonic_forcing();
+  const auto contacts = scene.contact_points();
+  const auto trial = scene.trial();
+  const auto weighting = scene.weighting();
+  const auto solution =
+      solvers::solve_weighted_residual(system, forcing, contacts, trial, weighting, scene.weighted_residual_options());
+  out.converged = solution.report.converged();
+  out.diagnostics["solution"] = to_json(solution);
+  out.summary = trial.name() + ":" + weighting.name() + ", M = " + std::to_string(trial.dimension()) + ", " +
+                std::string(solvers::to_string(scene.basis.formulation)) + ", f = " +
+                format("%g", forcing.frequency_hz) + " Hz: " + solution.report.message + ", relative residual " +
+                format("%.2e", solution.relative_residual) + ", " + format("%.3f", solution.wall_time_s * 1e3) + " ms";
+  if (!out.converged) return;  // no curve from an unconverged iterate
+  const int p = scene.output.samples;
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+  const Eigen::MatrixXd& a = solution.coefficients;
+  std::optional<solvers::PeriodicFields> fields;
+  Eigen::MatrixXd displacement;
+  try {
+    fields = solvers::evaluate_fields(trial, a, tau, forcing.frequency_hz);
+    displacement = fields->displacement;
+  } catch (const std::invalid_argument& e) {  // no velocity for this trial basis (DB4)
+    out.diagnostics["velocity"] = std::string("not written: ") + e.what();
+    displacement.resize(a.rows(), p);
+    for (Eigen::Index i = 0; i < a.rows(); ++i) {
+      displacement.row(i) = solvers::evaluate_trial(trial, a, static_cast<int>(i), tau, forcing.frequency_hz).transpose();
+    }
+  }
+  period_tables(scene, contacts, system, forcing.frequency_hz, tau, displacement, fields ? &fields->velocity : nullptr,
+                out);
+  Table c{"coefficients.csv", {"k [-]"}, {Eigen::VectorXd::LinSpaced(a.cols(), 0.0, static_cast<double>(a.cols() - 1))}};
+  for (int dof : scene.output_dofs()) {
+    c.header.push_back("a_" + scene.structure->dof_name(dof) + " [m]");
+    c.columns.push_back(a.row(dof).transpose());
+  }
+  out.tables.push_back(std::move(c));
+}
+
+void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& out) {
+  const auto system = scene.system();
+  const auto contacts = scene.contact_points();
+  const auto trial = scene.trial();
+  const auto weighting = scene.weighting();
+  const auto frequencies = scene.forcing->frequencies_hz();
+  const auto dofs = scene.output_dofs();
+  const int p = scene.output.samples;
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+  std::vector<std::vector<double>> rows;
+  nlohmann::json points = nlohmann::json::array();
+  Eigen::VectorXd previous;  // contact unknowns of the last converged point
+  int failed = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < frequencies.size(); ++i) {
+    const double f = frequencies[i];
+    const solvers::WeightedResidual wr(system, scene.harmonic_forcing(f), contacts, trial, weighting,
+                                       scene.weighted_residual_options());
+    auto solution = wr.solve(previous.size() > 0 ? &previous : nullptr);
+    bool restarted = false;
+    if (!solution.report.converged() && previous.size() > 0) {
+      solution = wr.solve();  // from the linear response, with load stepping
+      restarted = true;
+    }
+    nlohmann::json point = to_json(solution);
+    point["restarted_from_linear"] = restarted;
+    points.push_back(point);
+    if (progress) progress(static_cast<double>(i + 1) / static_cast<double>(frequencies.size()), format("%.6g Hz", f));
+    if (!solution.report.converged()) {
+      ++failed;
+      previous.resize(0);
+      continue;
+    }
+    previous = wr.contact_unknowns(spectral::stacked(solution.coefficients));
+    std::vector<double> row = {f};
+    for (int dof : dofs) {
+      const Eigen::VectorXd u = solvers::evaluate_trial(trial, solution.coefficients, dof, tau, f);
+      row.insert(row.end(), {u.maxCoeff(), u.minCoeff(), solvers::rms(u)});
+    }
+    row.push_back(contacts.empty() ? 0.0 : solution.max_contact_force);
+    row.push_back(solution.report.iterations);
+    rows.push_back(row);
+  }
+  Table t{"frequency_response.csv", {"frequency [Hz]"}, {}};
+  for (int dof : dofs) {
+    const std::string name = scene.structure->dof_name(dof);
+    t.header.insert(t.header.end(), {"max_u_" + name + " [m]", "min_u_" + name + " [m]", "rms_u_" + name + " [m]"});
+  }
+  t.header.insert(t.header.end(), {"max_contact_force [N]", "newton_iterations [-]"});
+  for (size_t c = 0; c < t.header.size(); ++c) {
+    Eigen::VectorXd column(static_cast<Eigen::Index>(rows.size()));
+    for (size_t r = 0; r < rows.size(); ++r) column(static_cast<Eigen::Index>(r)) = rows[r][c];
+    t.columns.push_back(column);
+  }
+  if (!rows.empty()) out.tables.push_back(std::move(t));
+  out.converged = failed == 0;
+  out.diagnostics["points"] = points;
+  out.diagnostics["converged_points"] = rows.size();
+  out.diagnostics["failed_points"] = failed;
+  out.diagnostics["wall_time_s"] = seconds_since(start);
+  out.summary = trial.name() + ":" + weighting.name() + ", M = " + std::to_string(trial.dimension()) + ", sweep " +
+                format("%g", frequencies.front()) + " … " + format("%g", frequencies.back()) + " Hz: " +
+                std::to_string(rows.size()) + " of " + std::to_string(frequencies.size()) + " points converged in " +
+                format("%.3f", seconds_since(start)) + " s";
+}
+
+void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out) {
+  const auto system = scene.system();
+  const auto forcing = scene.harmonic_forcing();
+  const auto contacts = scene.contact_points();
+  auto options = scene.timestep;
+  double first = 0.0;
+  if (progress) {
+    // Progress on a log scale of δ_i, from its first value to the tolerance.
+    options.on_period = [&](int period, double delta) {
+      if (first == 0.0) first = std::max(delta, options.periodicity_tolerance * 10.0);
+      const double done = std::log(first / std::max(delta, 1e-300)) / std::log(first / options.periodicity_tolerance);
+      progress(std::clamp(done, 0.0, 1.0), "period " + std::to_string(period) + ", δ = " + format("%.1e", delta));
+    };
+  }
+  const auto response = solvers::integrate_to_periodic(system, forcing, contacts, options);
+  const auto& rep = response.report;
+  out.converged = rep.converged();
+  out.diagnostics["timestep"] = {{"method", "GSL msbdf (variable-order BDF)"},
+                                 {"status", std::string(solvers::to_string(rep.status))},
+                                 {"converged", rep.converged()},
+                                 {"periods", rep.periods},
+                                 {"steps", rep.steps},
+                                 {"periodicity", rep.periodicity.empty() ? nlohmann::json(nullptr)
+                                                                         : finite_or_null(rep.periodicity.back())},
+                                 {"message", rep.message},
+                                 {"wall_time_s", rep.wall_time_s}};
+  out.summary = "BDF at " + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
+                std::to_string(rep.steps) + " steps, " + format("%.3f", rep.wall_time_s) + " s";
+  if (!out.converged) return;
+  period_tables(scene, contacts, system, forcing.frequency_hz, response.tau, response.displacement,
+                &response.velocity, out);
+}
+
+void basis_plot(const Scene& scene, AnalysisResult& out) {
+  const auto basis = scene.trial();
+  const int p = scene.output.samples;
+  const int m = basis.dimension();
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+  Eigen::MatrixXd values = basis.values(tau, scene.analysis.derivative);  // P × M
+  // Unit-integral normalization ∫₀¹ φ_{J,k} = 1 [JL14 Sec. 3.3] = orthonormal × 2^{J/2}.
+  if (scene.analysis.unit_integral) values *= std::sqrt(static_cast<double>(m));
+  std::vector<int> functions = scene.analysis.functions;
+  if (functions.empty()) {
+    for (int k = 0; k < m; ++k) functions.push_back(k);
+  }
+  const std::string symbol = basis.is_fourier() ? "q" : "phi";
+  Table t{"basis_functions.csv", {"tau [-]"}, {tau}};
+  for (int k : functions) {
+    t.header.push_back((scene.analysis.derivative ? "d" + symbol : symbol) + "_" + std::to_string(k) +
+                       (scene.analysis.derivative ? "/dtau [-]" : " [-]"));
+    t.columns.push_back(values.col(k));
+  }
+  out.tables.push_back(std::move(t));
+  out.converged = true;
+  out.diagnostics["basis"] = {{"family", basis.name()},
+                              {"dimension", m},
+                              {"level", static_cast<int>(std::lround(std::log2(m)))},
+                              {"max_pointwise_derivative", std::min(basis.max_derivative(), 1000)},
+                              {"normalization", scene.analysis.unit_integral ? "unit-integral" : "orthonormal"},
+                              {"functions", functions},
+                              {"derivative", scene.analysis.derivative}};
+  out.summary = basis.name() + ", M = " + std::to_string(m) + ": " + std::to_string(functions.size()) +
+                " functions on " + std::to_string(p) + " samples";
+}
+
+}  // namespace
+
+AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  AnalysisResult out;
+  if (scene.analysis.kind != AnalysisKind::BasisPlot && (!scene.structure || !scene.forcing)) {
+    throw std::logic_error("run_analysis: scene \"" + scene.name + "\" lacks [structure] or [forcing]; load it "
+                           "with load_scene");
+  }
+  switch (scene.analysis.kind) {
+    case AnalysisKind::Solve:
+      if (scene.forcing->range) {
+        solve_sweep(scene, progress, out);
+      } else {
+        solve_one(scene, out);
+      }
+      break;
+    case AnalysisKind::Timestep: timestep(scene, progress, out); break;
+    case AnalysisKind::BasisPlot: basis_plot(scene, out); break;
+  }
+  out.diagnostics["analysis"] = std::string(to_string(scene.analysis.kind));
+  out.diagnostics["converged"] = out.converged;
+  out.diagnostics["wall_time_s"] = seconds_since(start);
+  return out;
+}
+
+}  // namespace wbm::scene

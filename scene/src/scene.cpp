@@ -1,0 +1,901 @@
+#include <wbm/scene/scene.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/SparseCholesky>
+#include <unsupported/Eigen/SparseExtra>
+#include <toml++/toml.h>
+
+#include "reader.hpp"
+
+namespace wbm::scene {
+namespace {
+
+using detail::Range;
+using detail::Reader;
+constexpr long long kNoLimit = std::numeric_limits<long long>::max();
+
+const std::vector<std::string>& analysis_names() {
+  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot"};
+  return n;
+}
+
+std::string linear_solver_name(solvers::LinearSolverPath p) {
+  switch (p) {
+    case solvers::LinearSolverPath::SparseLU: return "sparse-lu";
+    case solvers::LinearSolverPath::Modal: return "modal";
+    case solvers::LinearSolverPath::Automatic: break;
+  }
+  return "automatic";
+}
+
+bool is_power_of_two(long long m) { return m >= 1 && (m & (m - 1)) == 0; }
+
+// Reads one scene table into a Scene, reporting into a Reader.
+class Parser {
+ public:
+  Parser(Reader& reader, std::filesystem::path base) : r_(reader), base_(std::move(base)) {}
+
+  Scene parse(const toml::table& root) {
+    r_.only(root, "", {"title", "structure", "damping", "forcing", "contact", "basis", "solver", "timestep",
+                       "analysis", "output"});
+    if (const toml::node* t = root.get("title")) {
+      if (t->is_string()) {
+        s_.title = t->as_string()->get();
+      } else {
+        r_.error(t->source(), "title", "expected a string, got " + Reader::type_name(*t));
+      }
+    }
+    analysis(root);
+    const bool plot = s_.analysis.kind == AnalysisKind::BasisPlot;
+    if (plot) {
+      for (const char* unused : {"structure", "damping", "forcing", "contact", "solver", "timestep"}) {
+        if (const toml::node* n = root.get(unused)) {
+          r_.warn(n->source(), std::string("[") + unused + "] is not used by analysis \"basis-plot\" (no structure is "
+                               "built); ignored");
+        }
+      }
+    } else {
+      structure(root);
+      damping(root);
+      forcing(root);
+      contacts(root);
+      solver(root);
+      timestep(root);
+    }
+    basis(root);
+    if (plot) basis_plot(root);
+    output(root);
+    return std::move(s_);
+  }
+
+ private:
+  // [analysis] type first: it decides which sections are read.
+  void analysis(const toml::table& root) {
+    const toml::table* t = r_.table(root, "analysis", false);
+    if (t == nullptr) return;
+    r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization"});
+    const toml::node* type = t->get("type");
+    if (type != nullptr && type->is_string() &&
+        (type->as_string()->get() == "continuation" || type->as_string()->get() == "nnm")) {
+      r_.error(type->source(), "analysis.type",
+               "\"" + type->as_string()->get() + "\" is not available in this version (planned: pseudo-arclength "
+               "continuation, issue #6; nonlinear modes, issue #7); use one of " + Reader::list(analysis_names()) +
+               " (a frequency_hz = [from, to] sweep with \"solve\" follows a branch without folds)");
+    } else {
+      const std::string kind = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
+      s_.analysis.kind = kind == "timestep" ? AnalysisKind::Timestep
+                         : kind == "basis-plot" ? AnalysisKind::BasisPlot
+                                                : AnalysisKind::Solve;
+    }
+    if (s_.analysis.kind != AnalysisKind::BasisPlot) {
+      for (const char* key : {"functions", "derivative", "normalization"}) {
+        if (const toml::node* n = t->get(key)) {
+          r_.error(n->source(), std::string("analysis.") + key, "only used by type = \"basis-plot\"; remove it");
+        }
+      }
+    }
+  }
+
+  void structure(const toml::table& root) {
+    const size_t errors = r_.error_count();
+    const toml::table* t = r_.table(root, "structure", true);
+    if (t == nullptr) return;
+    Structure st;
+    bool matrices = t->contains("mass") || t->contains("stiffness") || t->contains("damping") || t->contains("dofs");
+    if (t->contains("type")) {
+      matrices = r_.choice(*t, "structure", "type", {"rod", "matrices"}) == "matrices";
+    }
+    if (!matrices) {
+      r_.only(*t, "structure", {"type", "young_modulus", "density", "area", "length", "elements"});
+      st.kind = StructureKind::Rod;
+      st.rod.young_modulus = r_.number(*t, "structure", "young_modulus", detail::positive("Pa"));
+      st.rod.density = r_.number(*t, "structure", "density", detail::positive("kg/m^3"));
+      st.rod.area = r_.number(*t, "structure", "area", detail::positive("m^2"));
+      st.rod.length = r_.number(*t, "structure", "length", detail::positive("m"));
+      st.rod.elements = static_cast<int>(r_.integer(*t, "structure", "elements", 1, 100000));
+      for (int j = 1; j <= st.rod.elements; ++j) st.dof_names.push_back("node" + std::to_string(j));
+    } else {
+      r_.only(*t, "structure", {"type", "mass", "stiffness", "damping", "dofs"});
+      st.kind = StructureKind::Matrices;
+      auto mass = matrix(*t, "mass", true, st.mass_file);
+      auto stiffness = matrix(*t, "stiffness", true, st.stiffness_file);
+      auto damping = matrix(*t, "damping", false, st.damping_file);
+      if (mass && stiffness) {
+        st.mass = *mass;
+        st.stiffness = *stiffness;
+        if (damping) st.damping = *damping;
+        check_matrices(*t, st);
+        dof_names(*t, st);
+      }
+    }
+    if (r_.error_count() == errors) s_.structure = std::move(st);
+  }
+
+  // A number (1 DOF), a list (diagonal), a list of rows, or a Matrix Market file.
+  std::optional<Eigen::SparseMatrix<double>> matrix(const toml::table& t, const std::string& key, bool required,
+                                                    std::string& file) {
+    const std::string full = "structure." + key;
+    const std::string forms =
+        "a number (1 DOF), a list of numbers (diagonal), a list of rows, or a Matrix Market file name";
+    const toml::node* n = t.get(key);
+    if (n == nullptr) {
+      if (required) r_.error(t.source(), full, "missing; expected " + forms);
+      return std::nullopt;
+    }
+    const size_t errors = r_.error_count();
+    Eigen::SparseMatrix<double> a;
+    if (n->is_integer() || n->is_floating_point()) {
+      a.resize(1, 1);
+      a.insert(0, 0) = r_.number_value(*n, full, detail::finite(""));
+    } else if (n->is_string()) {
+      const std::filesystem::path p = std::filesystem::absolute(base_ / n->as_string()->get()).lexically_normal();
+      file = p.string();
+      read_market(*n, full, p, a);
+    } else if (n->is_array() && !n->as_array()->empty()) {
+      const toml::array& rows = *n->as_array();
+      const auto size = static_cast<Eigen::Index>(rows.size());
+      if (rows.is_homogeneous<toml::array>()) {
+        std::vector<Eigen::Triplet<double>> entries;
+        for (Eigen::Index i = 0; i < size; ++i) {
+          const toml::array& row = *rows[static_cast<size_t>(i)].as_array();
+          if (static_cast<Eigen::Index>(row.size()) != size) {
+            r_.error(row.source(), full, "row " + std::to_string(i) + " has " + std::to_string(row.size()) +
+                                             " entries; a square matrix of " + std::to_string(size) + " rows needs " +
+                                             std::to_string(size));
+            return std::nullopt;
+          }
+          for (Eigen::Index j = 0; j < size; ++j) {
+            const double v = r_.number_value(row[static_cast<size_t>(j)], full, detail::finite(""));
+            if (v != 0.0) entries.emplace_back(i, j, v);
+          }
+        }
+        a.resize(size, size);
+        a.setFromTriplets(entries.begin(), entries.end());
+      } else {
+        a.resize(size, size);
+        for (Eigen::Index i = 0; i < size; ++i) {
+          a.insert(i, i) = r_.number_value(rows[static_cast<size_t>(i)], full, detail::finite(""));
+        }
+      }
+    } else {
+      r_.error(n->source(), full, "expected " + forms + ", got " + Reader::type_name(*n));
+    }
+    if (r_.error_count() != errors) return std::nullopt;
+    a.makeCompressed();
+    return a;
+  }
+
+  // Matrix Market coordinate format, real or integer, general or symmetric (Eigen's reader).
+  void read_market(const toml::node& n, const std::string& full, const std::filesystem::path& p,
+                   Eigen::SparseMatrix<double>& a) {
+    std::ifstream in(p);
+    std::string header;
+    if (!in || !std::getline(in, header)) {
+      r_.error(n.source(), full, "cannot read Matrix Market file " + p.string());
+      return;
+    }
+    std::istringstream words(header);
+    std::string banner, object, format, field, symmetry;
+    words >> banner >> object >> format >> field >> symmetry;
+    auto lower = [](std::string w) {
+      std::transform(w.begin(), w.end(), w.begin(), [](unsigned char c) { return std::tolower(c); });
+      return w;
+    };
+    if (banner != "%%MatrixMarket" || lower(object) != "matrix" || lower(format) != "coordinate" ||
+        (lower(field) != "real" && lower(field) != "integer") ||
+        (lower(symmetry) != "general" && lower(symmetry) != "symmetric")) {
+      r_.error(n.source(), full, p.string() + ": header \"" + header + "\" is not supported; expected "
+                                 "\"%%MatrixMarket matrix coordinate real|integer general|symmetric\"");
+      return;
+    }
+    Eigen::SparseMatrix<double> read;
+    if (!Eigen::loadMarket(read, p.string())) {
+      r_.error(n.source(), full, "cannot read Matrix Market file " + p.string());
+      return;
+    }
+    if (lower(symmetry) == "symmetric") {
+      // The file holds the lower triangle only [Matrix Market format]; mirror it.
+      a = read.selfadjointView<Eigen::Lower>();
+    } else {
+      a = read;
+    }
+    if (a.rows() != a.cols() || a.rows() == 0) {
+      r_.error(n.source(), full, p.string() + " is " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()) +
+                                     "; expected a non-empty square matrix");
+    }
+  }
+
+  void check_matrices(const toml::table& t, const Structure& st) {
+    const auto n = st.mass.rows();
+    auto check = [&](const Eigen::SparseMatrix<double>& a, const std::string& key, const std::string& symbol) {
+      if (a.rows() != n || a.cols() != n) {
+        r_.error(t.get(key)->source(), "structure." + key,
+                 symbol + " is " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()) + "; M is " +
+                     std::to_string(n) + " x " + std::to_string(n) + ": every matrix must have the size of M");
+        return;
+      }
+      const Eigen::SparseMatrix<double> at = a.transpose();
+      const Eigen::MatrixXd diff = Eigen::MatrixXd(a - at);
+      const double scale = Eigen::MatrixXd(a).cwiseAbs().maxCoeff();
+      if (diff.cwiseAbs().maxCoeff() > 1e-12 * scale) {
+        std::ostringstream os;
+        os << symbol << " is not symmetric (max |" << symbol << " - " << symbol << "^T| = " << diff.cwiseAbs().maxCoeff()
+           << "); the solvers need symmetric matrices";
+        r_.error(t.get(key)->source(), "structure." + key, os.str());
+      }
+    };
+    check(st.mass, "mass", "M");
+    check(st.stiffness, "stiffness", "K");
+    if (st.damping.size() > 0) check(st.damping, "damping", "C");
+    if (r_.failed()) return;
+    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(st.mass);
+    if (llt.info() != Eigen::Success) {
+      r_.error(t.get("mass")->source(), "structure.mass",
+               "M is not positive definite (Cholesky failed): every DOF needs mass; condense massless DOFs out first");
+    }
+  }
+
+  void dof_names(const toml::table& t, Structure& st) {
+    const auto n = static_cast<size_t>(st.mass.rows());
+    const toml::node* d = t.get("dofs");
+    if (d == nullptr) {
+      for (size_t i = 0; i < n; ++i) st.dof_names.push_back("dof" + std::to_string(i));
+      return;
+    }
+    const toml::array* a = d->as_array();
+    if (a == nullptr || a->size() != n || !a->is_homogeneous<std::string>()) {
+      r_.error(d->source(), "structure.dofs", "expected a list of " + std::to_string(n) + " names (one per row of M)");
+      return;
+    }
+    static const std::regex identifier("[A-Za-z_][A-Za-z0-9_]*");
+    std::set<std::string> seen;
+    for (const auto& e : *a) {
+      const std::string name = e.as_string()->get();
+      if (!std::regex_match(name, identifier)) {
+        r_.error(e.source(), "structure.dofs", "\"" + name + "\" is not a name (letters, digits and _, not starting "
+                                                             "with a digit); it heads CSV columns");
+      } else if (!seen.insert(name).second) {
+        r_.error(e.source(), "structure.dofs", "\"" + name + "\" appears twice");
+      }
+      st.dof_names.push_back(name);
+    }
+  }
+
+  void damping(const toml::table& root) {
+    const toml::table* t = r_.table(root, "damping", false);
+    if (t == nullptr) return;
+    r_.only(*t, "damping", {"alpha", "beta"});
+    s_.damping.alpha = r_.number(*t, "damping", "alpha", detail::non_negative("1/s"), 0.0);
+    s_.damping.beta = r_.number(*t, "damping", "beta", detail::non_negative("s"), 0.0);
+  }
+
+  // The DOF named by one location value: rod node (1 … E or "tip"), matrix DOF (name or index).
+  std::optional<int> location_value(const toml::node& n, const std::string& full) {
+    if (!s_.structure) return std::nullopt;  // the structure's own errors are reported already
+    const Structure& st = *s_.structure;
+    if (st.kind == StructureKind::Rod) {
+      if (n.is_string() && n.as_string()->get() == "tip") return st.rod.elements - 1;
+      if (n.is_integer()) {
+        const long long v = n.as_integer()->get();
+        if (v >= 1 && v <= st.rod.elements) return static_cast<int>(v - 1);
+      }
+      r_.error(n.source(), full, "expected a rod node, an integer in [1, " + std::to_string(st.rod.elements) +
+                                     "] (node 0 is clamped) or \"tip\"");
+      return std::nullopt;
+    }
+    if (n.is_string()) {
+      const auto it = std::find(st.dof_names.begin(), st.dof_names.end(), n.as_string()->get());
+      if (it != st.dof_names.end()) return static_cast<int>(it - st.dof_names.begin());
+    }
+    if (n.is_integer()) {
+      const long long v = n.as_integer()->get();
+      if (v >= 0 && v < st.dofs()) return static_cast<int>(v);
+    }
+    std::string names;
+    for (const auto& name : st.dof_names) names += (names.empty() ? "\"" : ", \"") + name + "\"";
+    if (st.dof_names.size() > 12) names = "\"" + st.dof_names.front() + "\" … \"" + st.dof_names.back() + "\"";
+    r_.error(n.source(), full, "expected a DOF name (" + names + ") or an index in [0, " +
+                                   std::to_string(st.dofs() - 1) + "]");
+    return std::nullopt;
+  }
+
+  // `node` for the rod, `dof` for matrices; `fallback` when neither is given.
+  int location(const toml::table& t, const std::string& section, std::optional<int> fallback) {
+    if (!s_.structure) return 0;
+    const bool rod = s_.structure->kind == StructureKind::Rod;
+    const std::string key = rod ? "node" : "dof";
+    const std::string other = rod ? "dof" : "node";
+    if (const toml::node* wrong = t.get(other)) {
+      r_.error(wrong->source(), section + "." + other,
+               rod ? "the rod is located by node = 1 … elements or \"tip\"; dof is for [structure] matrices"
+                   : "explicit matrices are located by dof = name or index; node is for the rod");
+      return 0;
+    }
+    const toml::node* n = t.get(key);
+    if (n == nullptr) {
+      if (fallback) return *fallback;
+      r_.error(t.source(), section + "." + key, "missing; which DOF (name or 0-based index)?");
+      return 0;
+    }
+    return location_value(*n, section + "." + key).value_or(0);
+  }
+
+  std::optional<int> default_location() const {
+    if (!s_.structure) return std::nullopt;
+    if (s_.structure->kind == StructureKind::Rod) return s_.structure->rod.elements - 1;  // the free tip
+    if (s_.structure->dofs() == 1) return 0;
+    return std::nullopt;
+  }
+
+  void forcing(const toml::table& root) {
+    const toml::table* t = r_.table(root, "forcing", true);
+    if (t == nullptr) return;
+    r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "points"});
+    Forcing f;
+    f.amplitude = r_.number(*t, "forcing", "amplitude", detail::finite("N"));
+    f.dof = location(*t, "forcing", default_location());
+    const toml::node* freq = t->get("frequency_hz");
+    const Range hz = detail::positive("Hz");
+    if (freq == nullptr) {
+      r_.error(t->source(), "forcing.frequency_hz", "missing; expected a number > 0 [Hz] or a range [from, to]");
+    } else if (freq->is_array()) {
+      const toml::array& a = *freq->as_array();
+      if (a.size() != 2) {
+        r_.error(freq->source(), "forcing.frequency_hz", "a range is [from, to] (two numbers > 0 [Hz])");
+      } else {
+        FrequencyRange range;
+        range.from_hz = r_.number_value(a[0], "forcing.frequency_hz[0]", hz);
+        range.to_hz = r_.number_value(a[1], "forcing.frequency_hz[1]", hz);
+        range.points = static_cast<int>(r_.integer(*t, "forcing", "points", 2, 100000, 51));
+        if (range.from_hz == range.to_hz) {
+          r_.error(freq->source(), "forcing.frequency_hz", "the range is empty (from = to); give one number instead");
+        }
+        f.range = range;
+      }
+    } else {
+      f.frequency_hz = r_.number_value(*freq, "forcing.frequency_hz", hz);
+      if (const toml::node* p = t->get("points")) {
+        r_.error(p->source(), "forcing.points", "only used with a range frequency_hz = [from, to]; remove it");
+      }
+    }
+    if (f.range && s_.analysis.kind == AnalysisKind::Timestep) {
+      r_.error(freq->source(), "forcing.frequency_hz",
+               "analysis \"timestep\" integrates at one frequency; give a number, or use type = \"solve\" for a sweep");
+    }
+    s_.forcing = f;
+  }
+
+  void contacts(const toml::table& root) {
+    const toml::node* n = root.get("contact");
+    if (n == nullptr) return;
+    std::vector<std::pair<const toml::table*, std::string>> tables;
+    if (n->is_table()) {
+      tables.emplace_back(n->as_table(), "contact");
+    } else if (n->is_array_of_tables()) {
+      const toml::array& a = *n->as_array();
+      for (size_t i = 0; i < a.size(); ++i) tables.emplace_back(a[i].as_table(), "contact[" + std::to_string(i) + "]");
+    } else {
+      r_.error(n->source(), "contact", "expected a table [contact] or tables [[contact]]");
+      return;
+    }
+    std::set<int> dofs;
+    for (const auto& [t, section] : tables) {
+      Contact c;
+      c.law = r_.choice(*t, section, "law", {"exponential", "linear"});
+      c.gap = r_.number(*t, section, "gap", detail::finite("m"));
+      if (c.law == "exponential") {
+        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof"});
+        c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
+        c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
+      } else if (c.law == "linear") {
+        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof"});
+        c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
+      }
+      c.dof = location(*t, section, default_location());
+      if (s_.structure && !dofs.insert(c.dof).second) {
+        r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
+                                           "; one law per DOF (combine them into one)");
+      }
+      s_.contacts.push_back(c);
+    }
+  }
+
+  void basis(const toml::table& root) {
+    const toml::table* t = r_.table(root, "basis", false);
+    const bool plot = s_.analysis.kind == AnalysisKind::BasisPlot;
+    if (t != nullptr && s_.analysis.kind == AnalysisKind::Timestep) {
+      r_.warn(t->source(), "[basis] is not used by analysis \"timestep\" (BDF); ignored");
+      return;
+    }
+    if (t == nullptr) {
+      if (plot) r_.error(root.source(), "[basis]", "missing table: basis-plot draws the [basis] trial family");
+      return;
+    }
+    r_.only(*t, "basis", {"trial", "weighting", "dimension", "level", "formulation", "time_samples", "operators"});
+    Basis& b = s_.basis;
+    const std::string trial = r_.text(*t, "basis", "trial", b.trial);
+    const std::string weighting = r_.text(*t, "basis", "weighting", trial);
+    if (t->contains("dimension") && t->contains("level")) {
+      r_.error(t->get("level")->source(), "basis.level", "give dimension = M or level = J (M = 2^J), not both");
+    } else if (t->contains("level")) {
+      b.dimension = 1 << r_.integer(*t, "basis", "level", 0, 20);
+    } else {
+      const long long m = r_.integer(*t, "basis", "dimension", 1, 1 << 20, b.dimension);
+      if (!is_power_of_two(m)) {
+        r_.error(t->get("dimension")->source(), "basis.dimension",
+                 "M = " + std::to_string(m) + " is not a power of two (M = 2^J: 2, 4, …, 64, …)");
+      } else {
+        b.dimension = static_cast<int>(m);
+      }
+    }
+    const std::string form =
+        r_.choice(*t, "basis", "formulation", {"strong", "weak", "distributional"}, "distributional");
+    b.formulation = solvers::parse_formulation(form);
+    b.time_samples = static_cast<int>(r_.integer(*t, "basis", "time_samples", 0, 1 << 24, 0, " (0: max(256, 2M))"));
+    if (b.time_samples > 0 && b.time_samples < b.dimension) {
+      r_.error(t->get("time_samples")->source(), "basis.time_samples",
+               "Q = " + std::to_string(b.time_samples) + " < M = " + std::to_string(b.dimension) +
+                   ": the Q-point rule needs Q >= M (0 picks max(256, 2M))");
+    }
+    b.operators = r_.choice(*t, "basis", "operators", {"automatic", "discrete"}, "automatic") == "discrete"
+                      ? solvers::OperatorRule::Discrete
+                      : solvers::OperatorRule::Automatic;
+    // Names and M through the solvers' own parser, so the message lists every valid name.
+    std::optional<solvers::TimeBasis> tb, wb;
+    try {
+      tb = solvers::TimeBasis::from_name(trial, b.dimension);
+      b.trial = tb->key();
+    } catch (const std::invalid_argument& e) {
+      r_.error(t->contains("trial") ? t->get("trial")->source() : t->source(), "basis.trial", e.what());
+    }
+    if (plot) {
+      if (t->contains("weighting")) r_.warn(t->get("weighting")->source(), "basis.weighting is not used by basis-plot");
+      b.weighting = b.trial;
+      return;
+    }
+    if (!tb && !t->contains("weighting")) return;  // the weighting defaults to the trial name reported above
+    try {
+      wb = solvers::TimeBasis::from_name(weighting, b.dimension);
+      b.weighting = wb->key();
+    } catch (const std::invalid_argument& e) {
+      r_.error(t->contains("weighting") ? t->get("weighting")->source() : t->source(), "basis.weighting", e.what());
+    }
+    if (tb && wb) {
+      const std::string why = solvers::inadmissibility(*tb, *wb, b.formulation, b.operators);
+      if (!why.empty()) {
+        r_.error(t->contains("formulation") ? t->get("formulation")->source() : t->source(), "basis",
+                 "not admissible: " + why);
+      }
+    }
+  }
+
+  void basis_plot(const toml::table& root) {
+    const toml::table* t = root.get("analysis") ? root.get("analysis")->as_table() : nullptr;
+    if (t == nullptr) return;
+    Analysis& a = s_.analysis;
+    const int m = s_.basis.dimension;
+    if (const toml::node* f = t->get("functions")) {
+      const toml::array* list = f->as_array();
+      if (list == nullptr || list->empty()) {
+        r_.error(f->source(), "analysis.functions", "expected a list of shifts k in [0, " + std::to_string(m - 1) + "]");
+      } else {
+        for (const auto& e : *list) {
+          a.functions.push_back(static_cast<int>(r_.integer_value(e, "analysis.functions", 0, m - 1)));
+        }
+      }
+    }
+    int max_derivative = 1;
+    try {
+      max_derivative = std::min(1, solvers::TimeBasis::from_name(s_.basis.trial, m).max_derivative());
+    } catch (const std::invalid_argument&) {
+    }  // the name error is reported by basis()
+    a.derivative = static_cast<int>(r_.integer(*t, "analysis", "derivative", 0, max_derivative, 0,
+                                               max_derivative == 0 ? " (this basis has no pointwise derivative)" : ""));
+    a.unit_integral =
+        r_.choice(*t, "analysis", "normalization", {"orthonormal", "unit-integral"}, "orthonormal") == "unit-integral";
+    if (a.unit_integral && s_.basis.trial == "fourier") {
+      r_.error(t->get("normalization")->source(), "analysis.normalization",
+               "\"unit-integral\" is the wavelet normalization ∫₀¹ φ_{J,k} = 1 [JL14 Sec. 3.3]; Fourier functions "
+               "are plotted as they are");
+    }
+  }
+
+  void solver(const toml::table& root) {
+    const toml::table* t = r_.table(root, "solver", false);
+    if (t == nullptr) return;
+    if (s_.analysis.kind == AnalysisKind::Timestep) {
+      r_.warn(t->source(), "[solver] (Newton) is not used by analysis \"timestep\"; ignored ([timestep] sets the BDF)");
+      return;
+    }
+    r_.only(*t, "solver", {"tolerance", "max_iterations", "line_search", "linear_solver"});
+    solvers::NewtonOptions& n = s_.solver.newton;
+    n.tolerance = r_.number(*t, "solver", "tolerance", detail::positive(""), n.tolerance);
+    n.max_iterations = static_cast<int>(r_.integer(*t, "solver", "max_iterations", 0, 100000, n.max_iterations));
+    n.line_search = r_.boolean(*t, "solver", "line_search", n.line_search);
+    const std::string path = r_.choice(*t, "solver", "linear_solver", {"automatic", "sparse-lu", "modal"}, "automatic");
+    s_.solver.linear_solver = path == "modal"       ? solvers::LinearSolverPath::Modal
+                              : path == "sparse-lu" ? solvers::LinearSolverPath::SparseLU
+                                                    : solvers::LinearSolverPath::Automatic;
+    if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
+        s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
+      r_.warn(t->get("linear_solver")->source(),
+              "linear_solver = \"modal\" needs Rayleigh damping; the solve fails if the given C is not αM + βK");
+    }
+  }
+
+  void timestep(const toml::table& root) {
+    const toml::table* t = r_.table(root, "timestep", false);
+    if (t == nullptr) return;
+    if (s_.analysis.kind != AnalysisKind::Timestep) {
+      r_.warn(t->source(), "[timestep] is not used by analysis \"solve\"; ignored");
+      return;
+    }
+    r_.only(*t, "timestep", {"relative_tolerance", "absolute_tolerance", "periodicity_tolerance", "max_periods"});
+    auto& o = s_.timestep;
+    o.relative_tolerance = r_.number(*t, "timestep", "relative_tolerance",
+                                     {"in (0, 1)", [](double v) { return v > 0.0 && v < 1.0; }}, o.relative_tolerance);
+    o.absolute_tolerance = r_.number(*t, "timestep", "absolute_tolerance", detail::positive("m"), o.absolute_tolerance);
+    o.periodicity_tolerance =
+        r_.number(*t, "timestep", "periodicity_tolerance", detail::positive(""), o.periodicity_tolerance);
+    o.max_periods = static_cast<int>(r_.integer(*t, "timestep", "max_periods", 2, 10000000, o.max_periods));
+  }
+
+  void output(const toml::table& root) {
+    const toml::table* t = r_.table(root, "output", false);
+    if (t == nullptr) {
+      s_.timestep.samples_per_period = s_.output.samples;
+      return;
+    }
+    r_.only(*t, "output", {"samples", "nodes", "dofs"});
+    s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
+    s_.timestep.samples_per_period = s_.output.samples;
+    for (const char* key : {"nodes", "dofs"}) {
+      const toml::node* n = t->get(key);
+      if (n == nullptr) continue;
+      if (s_.analysis.kind == AnalysisKind::BasisPlot) {
+        r_.warn(n->source(), std::string("output.") + key + " is not used by basis-plot");
+        continue;
+      }
+      if (!s_.structure) continue;
+      const bool rod = s_.structure->kind == StructureKind::Rod;
+      if (rod != (std::string(key) == "nodes")) {
+        r_.error(n->source(), std::string("output.") + key,
+                 rod ? "the rod's outputs are nodes = [...] or \"all\"" : "matrix outputs are dofs = [...] or \"all\"");
+        continue;
+      }
+      if (n->is_string() && n->as_string()->get() == "all") {
+        s_.output.all_dofs = true;
+      } else if (n->is_array() && !n->as_array()->empty()) {
+        for (const auto& e : *n->as_array()) {
+          if (auto dof = location_value(e, std::string("output.") + key)) s_.output.dofs.push_back(*dof);
+        }
+      } else {
+        r_.error(n->source(), std::string("output.") + key, "expected \"all\" or a non-empty list of locations");
+      }
+    }
+  }
+
+  Reader& r_;
+  std::filesystem::path base_;
+  Scene s_;
+};
+
+Scene parse_table(const toml::table& root, const std::filesystem::path& file) {
+  Reader r(file.string());
+  Parser parser(r, file.has_parent_path() ? file.parent_path() : std::filesystem::current_path());
+  Scene s = parser.parse(root);
+  r.finish();
+  s.name = file.stem().string();
+  s.path = file.string();
+  s.warnings = r.warnings();
+  return s;
+}
+
+// JSON → TOML, member by member (null dropped), so JSON scenes go through the same checks.
+toml::array to_toml_array(const nlohmann::json& j);
+void insert(toml::table& t, const std::string& key, const nlohmann::json& v);
+
+toml::table to_toml_table(const nlohmann::json& j) {
+  toml::table t;
+  for (const auto& [key, value] : j.items()) insert(t, key, value);
+  return t;
+}
+
+template <class Container, class Add>
+void convert(const nlohmann::json& v, Add&& add) {
+  if (v.is_object()) {
+    add(to_toml_table(v));
+  } else if (v.is_array()) {
+    add(to_toml_array(v));
+  } else if (v.is_boolean()) {
+    add(v.get<bool>());
+  } else if (v.is_number_integer()) {
+    add(v.get<int64_t>());
+  } else if (v.is_number()) {
+    add(v.get<double>());
+  } else if (v.is_string()) {
+    add(v.get<std::string>());
+  }
+}
+
+void insert(toml::table& t, const std::string& key, const nlohmann::json& v) {
+  convert<toml::table>(v, [&](auto&& x) { t.insert(key, std::forward<decltype(x)>(x)); });
+}
+
+toml::array to_toml_array(const nlohmann::json& j) {
+  toml::array a;
+  for (const auto& v : j) convert<toml::array>(v, [&](auto&& x) { a.push_back(std::forward<decltype(x)>(x)); });
+  return a;
+}
+
+nlohmann::json matrix_json(const Eigen::SparseMatrix<double>& a, const std::string& file) {
+  if (!file.empty()) return file;
+  const Eigen::MatrixXd d(a);
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < d.rows(); ++i) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index j = 0; j < d.cols(); ++j) row.push_back(d(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+std::string_view to_string(AnalysisKind kind) noexcept {
+  switch (kind) {
+    case AnalysisKind::Timestep: return "timestep";
+    case AnalysisKind::BasisPlot: return "basis-plot";
+    case AnalysisKind::Solve: break;
+  }
+  return "solve";
+}
+
+int Structure::dofs() const { return kind == StructureKind::Rod ? rod.elements : static_cast<int>(mass.rows()); }
+
+std::string Structure::dof_name(int dof) const {
+  if (dof < 0 || dof >= dofs()) throw std::out_of_range("Structure::dof_name: DOF " + std::to_string(dof) + " outside [0, " + std::to_string(dofs()) + ")");
+  return dof_names[static_cast<size_t>(dof)];
+}
+
+std::vector<double> Forcing::frequencies_hz() const {
+  if (!range) return {frequency_hz};
+  std::vector<double> f(static_cast<size_t>(range->points));
+  for (int i = 0; i < range->points; ++i) {
+    f[static_cast<size_t>(i)] = range->from_hz + (range->to_hz - range->from_hz) * i / (range->points - 1);
+  }
+  return f;
+}
+
+solvers::MechanicalSystem Scene::system() const {
+  if (!structure) throw std::logic_error("Scene::system: scene \"" + name + "\" has no [structure]");
+  solvers::MechanicalSystem sys;
+  if (structure->kind == StructureKind::Rod) {
+    sys = solvers::beta_damped(fem::Rod(structure->rod), damping.beta);  // C = βK [JL14 Eq. (7)]
+  } else {
+    sys.mass = structure->mass;
+    sys.stiffness = structure->stiffness;
+    sys.damping = damping.beta * structure->stiffness;
+    if (structure->damping.size() > 0) sys.damping += structure->damping;
+  }
+  if (damping.alpha != 0.0) sys.damping += damping.alpha * sys.mass;
+  sys.validate();
+  return sys;
+}
+
+solvers::HarmonicForcing Scene::harmonic_forcing(std::optional<double> frequency_hz) const {
+  if (!forcing) throw std::logic_error("Scene::harmonic_forcing: scene \"" + name + "\" has no [forcing]");
+  if (!frequency_hz && forcing->range) {
+    throw std::logic_error("Scene::harmonic_forcing: scene \"" + name + "\" sweeps a range; pass the frequency");
+  }
+  return {forcing->dof, forcing->amplitude, frequency_hz.value_or(forcing->frequency_hz)};
+}
+
+std::vector<solvers::ContactPoint> Scene::contact_points() const {
+  std::vector<solvers::ContactPoint> points;
+  for (const auto& c : contacts) {
+    std::shared_ptr<const contact::ContactLaw> law;
+    if (c.law == "exponential") {
+      law = std::make_shared<contact::ExponentialPenalty>(
+          contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
+    } else {
+      law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
+    }
+    points.push_back({c.dof, law});
+  }
+  return points;
+}
+
+solvers::TimeBasis Scene::trial() const { return solvers::TimeBasis::from_name(basis.trial, basis.dimension); }
+solvers::TimeBasis Scene::weighting() const { return solvers::TimeBasis::from_name(basis.weighting, basis.dimension); }
+
+solvers::WeightedResidualOptions Scene::weighted_residual_options() const {
+  return {.formulation = basis.formulation,
+          .time_samples = basis.time_samples,
+          .operators = basis.operators,
+          .linear_solver = solver.linear_solver,
+          .newton = solver.newton};
+}
+
+std::vector<int> Scene::output_dofs() const {
+  std::vector<int> dofs;
+  if (!structure) return dofs;
+  if (output.all_dofs) {
+    for (int i = 0; i < structure->dofs(); ++i) dofs.push_back(i);
+    return dofs;
+  }
+  dofs = output.dofs;
+  if (dofs.empty()) {
+    if (forcing) dofs.push_back(forcing->dof);
+    for (const auto& c : contacts) dofs.push_back(c.dof);
+  }
+  std::sort(dofs.begin(), dofs.end());
+  dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
+  return dofs;
+}
+
+Scene parse_scene(std::string_view toml_text, const std::filesystem::path& file) {
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, file.string());
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << file.string() << ":" << e.source().begin.line << ": TOML syntax: " << e.description();
+    throw std::invalid_argument(os.str());
+  }
+  return parse_table(root, file);
+}
+
+Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& file) {
+  const nlohmann::json& body = json.contains("scene") ? json.at("scene") : json;
+  if (!body.is_object()) {
+    throw std::invalid_argument(file.string() + ": expected a JSON object holding a scene (or a result.json with "
+                                "a \"scene\" member)");
+  }
+  return parse_table(to_toml_table(body), file);
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) {
+    throw std::runtime_error("scene " + path.string() + ": no such file (give the path of a .toml scene, or of a "
+                             "result.json to re-run it)");
+  }
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) throw std::runtime_error("scene " + path.string() + ": cannot read the file");
+  if (path.extension() == ".json") {
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(text.str());
+    } catch (const nlohmann::json::parse_error& e) {
+      throw std::invalid_argument(path.string() + ": JSON syntax: " + e.what());
+    }
+    return scene_from_json(j, path);
+  }
+  return parse_scene(text.str(), path);
+}
+
+nlohmann::json to_json(const Scene& s) {
+  nlohmann::json j;
+  j["title"] = s.title;
+  nlohmann::json analysis = {{"type", std::string(to_string(s.analysis.kind))}};
+  if (s.analysis.kind == AnalysisKind::BasisPlot) {
+    if (!s.analysis.functions.empty()) analysis["functions"] = s.analysis.functions;
+    analysis["derivative"] = s.analysis.derivative;
+    analysis["normalization"] = s.analysis.unit_integral ? "unit-integral" : "orthonormal";
+  }
+  j["analysis"] = analysis;
+  const bool rod = s.structure && s.structure->kind == StructureKind::Rod;
+  auto where = [&](nlohmann::json& o, int dof) {
+    if (rod) {
+      o["node"] = dof + 1;
+    } else {
+      o["dof"] = s.structure->dof_name(dof);
+    }
+  };
+  if (s.structure) {
+    const Structure& st = *s.structure;
+    if (rod) {
+      j["structure"] = {{"type", "rod"},
+                        {"young_modulus", st.rod.young_modulus},
+                        {"density", st.rod.density},
+                        {"area", st.rod.area},
+                        {"length", st.rod.length},
+                        {"elements", st.rod.elements}};
+    } else {
+      j["structure"] = {{"type", "matrices"},
+                        {"mass", matrix_json(st.mass, st.mass_file)},
+                        {"stiffness", matrix_json(st.stiffness, st.stiffness_file)},
+                        {"dofs", st.dof_names}};
+      if (st.damping.size() > 0) j["structure"]["damping"] = matrix_json(st.damping, st.damping_file);
+    }
+    j["damping"] = {{"alpha", s.damping.alpha}, {"beta", s.damping.beta}};
+  }
+  if (s.forcing) {
+    nlohmann::json f = {{"amplitude", s.forcing->amplitude}};
+    where(f, s.forcing->dof);
+    if (s.forcing->range) {
+      f["frequency_hz"] = {s.forcing->range->from_hz, s.forcing->range->to_hz};
+      f["points"] = s.forcing->range->points;
+    } else {
+      f["frequency_hz"] = s.forcing->frequency_hz;
+    }
+    j["forcing"] = f;
+  }
+  if (!s.contacts.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& c : s.contacts) {
+      nlohmann::json o = {{"law", c.law}, {"gap", c.gap}};
+      if (c.law == "exponential") {
+        o["coefficient"] = c.coefficient;
+        o["exponent"] = c.exponent;
+      } else {
+        o["stiffness"] = c.stiffness;
+      }
+      where(o, c.dof);
+      list.push_back(o);
+    }
+    j["contact"] = list;
+  }
+  if (s.analysis.kind != AnalysisKind::Timestep) {
+    nlohmann::json b = {{"trial", s.basis.trial}, {"dimension", s.basis.dimension}};
+    if (s.analysis.kind != AnalysisKind::BasisPlot) {
+      b["weighting"] = s.basis.weighting;
+      b["formulation"] = std::string(solvers::to_string(s.basis.formulation));
+      b["time_samples"] = s.basis.time_samples;
+      b["operators"] = s.basis.operators == solvers::OperatorRule::Discrete ? "discrete" : "automatic";
+    }
+    j["basis"] = b;
+  }
+  if (s.analysis.kind == AnalysisKind::Solve) {
+    j["solver"] = {{"tolerance", s.solver.newton.tolerance},
+                   {"max_iterations", s.solver.newton.max_iterations},
+                   {"line_search", s.solver.newton.line_search},
+                   {"linear_solver", linear_solver_name(s.solver.linear_solver)}};
+  }
+  if (s.analysis.kind == AnalysisKind::Timestep) {
+    j["timestep"] = {{"relative_tolerance", s.timestep.relative_tolerance},
+                     {"absolute_tolerance", s.timestep.absolute_tolerance},
+                     {"periodicity_tolerance", s.timestep.periodicity_tolerance},
+                     {"max_periods", s.timestep.max_periods}};
+  }
+  nlohmann::json out = {{"samples", s.output.samples}};
+  if (s.structure) {
+    nlohmann::json list = nlohmann::json::array();
+    for (int dof : s.output_dofs()) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));
+    out[rod ? "nodes" : "dofs"] = list;
+  }
+  j["output"] = out;
+  return j;
+}
+
+}  // namespace wbm::scene

@@ -1,0 +1,306 @@
+// Scene files (wbm::scene): the shipped scenes hold Table 1 of [JL14]; resolved JSON round
+// trips; every class of bad input is reported with file, line, key and what was expected; the
+// analyses a scene runs agree with closed forms.
+#include <cmath>
+#include <complex>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/output.hpp>
+#include <wbm/scene/scene.hpp>
+
+#include "scene.hpp"  // reproduce/common: the shipped scene directory
+#include "testing.hpp"
+
+namespace {
+
+using wbm::scene::Scene;
+using wbm::testing::expect_throw_with;
+
+std::filesystem::path temp(const std::string& name) {
+  return std::filesystem::temp_directory_path() / ("wbm_test_scene_" + std::to_string(::getpid())) / name;
+}
+
+std::filesystem::path write(const std::string& name, const std::string& text) {
+  const auto path = temp(name);
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+  return path;
+}
+
+Scene parse(const std::string& text) { return wbm::scene::parse_scene(text, temp("inline.toml")); }
+
+// Linear 1-DOF oscillator m ü + c u̇ + k u = F cos ωt: steady amplitude F / |k − mω² + iωc|.
+double oscillator_amplitude(double m, double c, double k, double f, double hz) {
+  const double w = 2.0 * std::numbers::pi * hz;
+  return f / std::abs(std::complex<double>(k - m * w * w, w * c));
+}
+
+const Eigen::VectorXd& column(const wbm::scene::AnalysisResult& r, const std::string& file, size_t c) {
+  for (const auto& t : r.tables) {
+    if (t.file == file) return t.columns.at(c);
+  }
+  throw std::out_of_range("no table " + file);
+}
+
+}  // namespace
+
+// Table 1 of [JL14]: Case 1 150 Hz, a_c = 1e8 N, α = 50 1/m, β = 1e-4 s, g0 = 1 mm;
+// Case 2 1275 Hz, α = 20, β = 5e-6, g0 = 14.5 mm; rod of Sec. 4.
+TEST(Scene, ShippedCasesHoldTable1) {
+  const Scene s1 = wbm::reproduce::load_scene("jl14_case1");
+  const Scene s2 = wbm::reproduce::load_scene("jl14_case2");
+  EXPECT_EQ(s1.forcing->frequency_hz, 150.0);
+  EXPECT_EQ(s2.forcing->frequency_hz, 1275.0);
+  ASSERT_EQ(s1.contacts.size(), 1u);
+  ASSERT_EQ(s2.contacts.size(), 1u);
+  EXPECT_EQ(s1.contacts[0].exponent, 50.0);
+  EXPECT_EQ(s2.contacts[0].exponent, 20.0);
+  EXPECT_EQ(s1.contacts[0].coefficient, 1e8);
+  EXPECT_EQ(s1.damping.beta, 1e-4);
+  EXPECT_EQ(s2.damping.beta, 5e-6);
+  EXPECT_EQ(s1.contacts[0].gap, 1e-3);
+  EXPECT_EQ(s2.contacts[0].gap, 14.5e-3);
+  EXPECT_EQ(s1.structure->rod.young_modulus, 70e9);
+  EXPECT_EQ(s1.structure->rod.area, 25e-4);
+  EXPECT_EQ(s1.forcing->amplitude, 250e3);
+  EXPECT_EQ(s1.forcing->dof, 24);  // the free tip of 25 elements
+  EXPECT_EQ(s1.contacts[0].dof, 24);
+}
+
+// Scene → resolved JSON → scene is the identity (JSON of the re-read scene equal, and the same
+// system matrices), for the rod, inline matrices, a Matrix Market file and a basis plot.
+TEST(Scene, ResolvedJsonRoundTrips) {
+  const auto market = write("chain.mtx",
+                            "%%MatrixMarket matrix coordinate real symmetric\n% 3-DOF spring chain\n3 3 5\n"
+                            "1 1 2e4\n2 1 -1e4\n2 2 2e4\n3 2 -1e4\n3 3 1e4\n");
+  std::vector<Scene> scenes = {
+      wbm::reproduce::load_scene("jl14_case2"),
+      parse("structure = { mass = [1.0, 2.0], stiffness = [[3e4, -1e4], [-1e4, 1e4]], dofs = [\"a\", \"b\"] }\n"
+            "damping = { alpha = 0.5, beta = 1e-5 }\n"
+            "forcing = { amplitude = 2.0, dof = \"b\", frequency_hz = [5.0, 40.0], points = 8 }\n"
+            "basis = { trial = \"haar\", weighting = \"B-spline\", level = 5 }\n"
+            "solver = { tolerance = 1e-9, max_iterations = 20, linear_solver = \"sparse-lu\" }\n"
+            "output = { samples = 64, dofs = \"all\" }\n"
+            "[[contact]]\nlaw = \"linear\"\nstiffness = 1e5\ngap = 1e-3\ndof = \"b\"\n"
+            "[[contact]]\nlaw = \"exponential\"\ncoefficient = 10.0\nexponent = 100.0\ngap = -1e-3\ndof = 0\n"),
+      wbm::scene::load_scene(write("market.toml", "[structure]\nmass = [1.0, 1.0, 1.0]\nstiffness = \"chain.mtx\"\n"
+                                                  "[forcing]\namplitude = 1.0\ndof = 2\nfrequency_hz = 3.0\n"
+                                                  "[analysis]\ntype = \"timestep\"\n"
+                                                  "[timestep]\nrelative_tolerance = 1e-8\n")),
+      parse("[analysis]\ntype = \"basis-plot\"\nfunctions = [0, 3]\nnormalization = \"unit-integral\"\n"
+            "[basis]\ntrial = \"db6\"\ndimension = 8\n")};
+  for (const auto& s : scenes) {
+    const nlohmann::json j = wbm::scene::to_json(s);
+    const Scene back = wbm::scene::scene_from_json(j, temp("back.json"));
+    EXPECT_EQ(wbm::scene::to_json(back), j) << j.dump(2);
+    if (s.structure) {
+      const auto a = s.system(), b = back.system();
+      EXPECT_EQ(Eigen::MatrixXd(a.mass), Eigen::MatrixXd(b.mass));
+      EXPECT_EQ(Eigen::MatrixXd(a.damping), Eigen::MatrixXd(b.damping));
+      EXPECT_EQ(Eigen::MatrixXd(a.stiffness), Eigen::MatrixXd(b.stiffness));
+      EXPECT_EQ(s.output_dofs(), back.output_dofs());
+    }
+  }
+  // A result.json (scene under "scene") is accepted as it is.
+  const Scene again = wbm::scene::scene_from_json({{"scene", wbm::scene::to_json(scenes[0])}, {"converged", true}},
+                                                  temp("result.json"));
+  EXPECT_EQ(again.forcing->frequency_hz, 1275.0);
+}
+
+// The Matrix Market reader mirrors a symmetric file's lower triangle: the same K as inline.
+TEST(Scene, MatrixMarketSymmetricEqualsInline) {
+  write("chain2.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 5\n1 1 2e4\n2 1 -1e4\n2 2 2e4\n"
+                      "3 2 -1e4\n3 3 1e4\n");
+  const auto file = wbm::scene::load_scene(write("m2.toml", "[structure]\nmass = [1.0, 1.0, 1.0]\n"
+                                                           "stiffness = \"chain2.mtx\"\n"
+                                                           "[forcing]\namplitude = 1.0\ndof = 2\nfrequency_hz = 3.0\n"));
+  const auto inline_ = parse("[structure]\nmass = [1.0, 1.0, 1.0]\nstiffness = [[2e4, -1e4, 0], [-1e4, 2e4, -1e4], "
+                             "[0, -1e4, 1e4]]\n[forcing]\namplitude = 1.0\ndof = 2\nfrequency_hz = 3.0\n");
+  EXPECT_EQ(Eigen::MatrixXd(file.system().stiffness), Eigen::MatrixXd(inline_.system().stiffness));
+}
+
+// One message per problem, each "file:line: key: what", all in one exception.
+TEST(Scene, EveryProblemOfAFileIsReportedWithLineAndKey) {
+  const auto path = write("bad.toml",
+                          "title = 3\n"                                   // 1
+                          "[structure]\n"                                 // 2
+                          "young_modulus = -70e9\n"                       // 3
+                          "density = \"heavy\"\n"                         // 4
+                          "area = 25e-4\n"                                // 5
+                          "length = 1.0\n"                                // 6
+                          "elemnts = 25\n"                                // 7
+                          "[forcing]\n"                                   // 8
+                          "amplitude = 250e3\n"                           // 9
+                          "frequency_hz = 0.0\n"                          // 10
+                          "[contact]\nlaw = \"quadratic\"\ngap = 1e-3\n"  // 11-13
+                          "[basis]\ntrial = \"morlet\"\ndimension = 48\n"  // 14-16
+                          "[colour]\nred = 1\n");                          // 17
+  const std::string p = path.string();
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::scene::load_scene(path); },
+      {p + ":1: title: expected a string, got an integer",
+       p + ":3: structure.young_modulus: value -7e+10 out of range: expected > 0 [Pa]",
+       p + ":4: structure.density: expected a number > 0 [kg/m^3], got a string",
+       p + ":7: structure.elemnts: unknown key; allowed here:",
+       "structure.elements: missing; expected an integer in [1, 100000]",
+       p + ":10: forcing.frequency_hz: value 0 out of range: expected > 0 [Hz]",
+       p + ":12: contact.law: \"quadratic\" is not one of \"exponential\", \"linear\"",
+       p + ":16: basis.dimension: M = 48 is not a power of two",
+       p + ":17: colour: unknown key; allowed here: title, structure,"});
+}
+
+// Refusals that need the solvers' knowledge: names, admissibility, locations, matrices.
+TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
+  const std::string rod = "[structure]\nyoung_modulus = 70e9\ndensity = 2700.0\narea = 25e-4\nlength = 1.0\n"
+                          "elements = 10\n";
+  const std::string force = "[forcing]\namplitude = 1.0\nfrequency_hz = 100.0\n";
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[basis]\ntrial = \"morlet\"\n"); },
+                                           {"inline.toml:11: basis.trial: basis 'morlet' is unknown; valid names: "
+                                            "fourier, haar, db4"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + "[basis]\ntrial = \"haar\"\nweighting = \"fourier\"\nformulation = \"strong\"\n"); },
+      {"inline.toml:13: basis: not admissible: Haar:Fourier, strong form: the trial basis Haar has no pointwise "
+       "derivative of order 2", "use the distributional form instead"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[basis]\ntrial = \"haar\"\n"); },
+                                           {"basis: not admissible: Haar:Haar", "no formulation admits this pair"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = 100.0\nnode = 11\n"); },
+      {"inline.toml:10: forcing.node: expected a rod node, an integer in [1, 10] (node 0 is clamped) or \"tip\""});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"linear\"\nstiffness = "
+                                                                           "1e6\ngap = 0.0\ndof = 3\n"); },
+                                           {"contact.dof: the rod is located by node"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[analysis]\ntype = \"continuation\"\n"); },
+                                           {"analysis.type: \"continuation\" is not available in this version",
+                                            "issue #6"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [[1.0, 0.1], [0.0, 1.0]]\nstiffness = [[1.0, 0.0], [0.0, 1.0]]\n" +
+                        force); },
+      {"inline.toml:2: structure.mass: M is not symmetric (max |M - M^T| = 0.1)"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [1.0, 1.0]\nstiffness = [[1.0, 0.0], [0.0, -1.0, 3.0]]\n" + force); },
+      {"inline.toml:3: structure.stiffness: row 1 has 3 entries; a square matrix of 2 rows needs 2"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [1.0, 0.0]\nstiffness = [1.0, 1.0]\n" + force); },
+      {"structure.mass: M is not positive definite"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [1.0, 1.0]\nstiffness = [1.0, 1.0]\n" + force); },
+      {"inline.toml:4: forcing.dof: missing; which DOF (name or 0-based index)?"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [1.0, 1.0]\nstiffness = [1.0, 1.0]\ndofs = [\"a\", \"a\"]\n" + force); },
+      {"structure.dofs: \"a\" appears twice"});
+  write("bad.mtx", "%%MatrixMarket matrix array real general\n2 2\n1\n0\n0\n1\n");
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::scene::load_scene(write("mm.toml", "[structure]\nmass = 1.0\nstiffness = \"bad.mtx\"\n" + force)); },
+      {"structure.stiffness:", "is not supported; expected \"%%MatrixMarket matrix coordinate"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::scene::load_scene(write("mm2.toml", "[structure]\nmass = 1.0\nstiffness = \"none.mtx\"\n" + force)); },
+      {"structure.stiffness: cannot read Matrix Market file"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse("[structure\nmass = 1.0\n"); },
+                                           {"inline.toml:1: TOML syntax:"});
+  expect_throw_with<std::runtime_error>([&] { (void)wbm::scene::load_scene(temp("absent.toml")); },
+                                        {"absent.toml: no such file"});
+  // JSON input has no lines: "file: key: what".
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::scene::scene_from_json(nlohmann::json::parse(R"({"scene": {"forcing": {"amplitude": "x"}}})"),
+                                              temp("r.json")); },
+      {"r.json: forcing.amplitude: expected a number finite [N], got a string", "r.json: [structure]: missing table"});
+}
+
+// A scene models only what it needs: sections an analysis does not use are reported and not
+// built (a basis plot builds no structure, even an invalid one).
+TEST(Scene, UnusedSectionsAreWarnedAboutAndNotBuilt) {
+  const Scene s = parse("[analysis]\ntype = \"basis-plot\"\n[basis]\ntrial = \"haar\"\nlevel = 2\n"
+                        "[structure]\nyoung_modulus = -1.0\n");
+  EXPECT_FALSE(s.structure.has_value());
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("inline.toml:6: warning: [structure] is not used by analysis \"basis-plot\""),
+            std::string::npos);
+}
+
+// 1-DOF oscillator (the five-line scene of docs/scenes.md, no contact): the solve equals the
+// closed-form amplitude F/|k − mω² + iωc| with c = αm, at one frequency and over a sweep.
+TEST(Scene, OscillatorSolveAndSweepMatchClosedForm) {
+  const double m = 2.0, k = 8e4, alpha = 3.0, f = 10.0;
+  const std::string head = "structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n";
+  const auto one = wbm::scene::run_analysis(parse(head + "forcing = { amplitude = 10.0, frequency_hz = 25.0 }\n"));
+  ASSERT_TRUE(one.converged);
+  // Fourier coefficients {1, cos 2πτ, sin 2πτ, …}: the amplitude is √(a₁² + a₂²).
+  const Eigen::VectorXd& a = column(one, "coefficients.csv", 1);
+  const double exact = oscillator_amplitude(m, alpha * m, k, f, 25.0);
+  EXPECT_NEAR(std::hypot(a(1), a(2)), exact, 1e-12 * exact);
+  EXPECT_NEAR(a.cwiseAbs().sum() - std::abs(a(1)) - std::abs(a(2)), 0.0, 1e-12 * exact);  // no other harmonic
+  const auto sweep = wbm::scene::run_analysis(
+      parse(head + "forcing = { amplitude = 10.0, frequency_hz = [5.0, 55.0], points = 11 }\n"
+                   "basis = { dimension = 8 }\noutput = { samples = 4096 }\n"));
+  ASSERT_TRUE(sweep.converged);
+  const Eigen::VectorXd& hz = column(sweep, "frequency_response.csv", 0);
+  const Eigen::VectorXd& max_u = column(sweep, "frequency_response.csv", 1);
+  ASSERT_EQ(hz.size(), 11);
+  for (Eigen::Index i = 0; i < hz.size(); ++i) {
+    // The maximum over 4096 samples of a cosine: within 1 − cos(π/4096) of its amplitude.
+    const double a = oscillator_amplitude(m, alpha * m, k, f, hz(i));
+    EXPECT_NEAR(max_u(i), a, 1e-6 * a) << hz(i) << " Hz";
+  }
+}
+
+// Time stepping from a scene: BDF on the same oscillator reaches the closed-form amplitude.
+TEST(Scene, TimestepMatchesClosedForm) {
+  const auto r = wbm::scene::run_analysis(parse("structure = { mass = 2.0, stiffness = 8e4 }\n"
+                                                "damping = { alpha = 30.0 }\n"
+                                                "forcing = { amplitude = 10.0, frequency_hz = 25.0 }\n"
+                                                "analysis = { type = \"timestep\" }\n"
+                                                "output = { samples = 8192 }\n"));
+  ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
+  const double a = oscillator_amplitude(2.0, 60.0, 8e4, 10.0, 25.0);
+  // Sampled maximum of a cosine on 8192 points: within 1 − cos(π/8192) ≈ 7e-8 of the amplitude.
+  EXPECT_NEAR(column(r, "displacement.csv", 2).maxCoeff(), a, 1e-6 * a);
+}
+
+// Basis plot: Haar φ_{J,k} is 2^{J/2} on [k/M, (k+1)/M) (orthonormal), M there with the paper's
+// ∫ = 1 scaling [JL14 Sec. 3.3]; the Fourier q_1 is cos 2πτ.
+TEST(Scene, BasisPlotGivesKnownFunctions) {
+  const auto haar = wbm::scene::run_analysis(
+      parse("[analysis]\ntype = \"basis-plot\"\nfunctions = [1]\nnormalization = \"unit-integral\"\n"
+            "[basis]\ntrial = \"haar\"\nlevel = 2\n[output]\nsamples = 16\n"));
+  const Eigen::VectorXd& phi = column(haar, "basis_functions.csv", 1);
+  for (int p = 0; p < 16; ++p) EXPECT_DOUBLE_EQ(phi(p), (p >= 4 && p < 8) ? 4.0 : 0.0) << p;
+  const auto fourier = wbm::scene::run_analysis(
+      parse("[analysis]\ntype = \"basis-plot\"\nfunctions = [1]\n[basis]\ntrial = \"fourier\"\ndimension = 8\n"));
+  const Eigen::VectorXd& tau = column(fourier, "basis_functions.csv", 0);
+  const Eigen::VectorXd& q1 = column(fourier, "basis_functions.csv", 1);
+  for (Eigen::Index p = 0; p < tau.size(); ++p) EXPECT_NEAR(q1(p), std::cos(2 * std::numbers::pi * tau(p)), 1e-14);
+}
+
+// Result files: NaN never reaches a file, and a staged run leaves nothing until commit().
+TEST(Output, NonFiniteColumnsAndUncommittedRunsWriteNothing) {
+  const auto dir = temp("staged");
+  std::filesystem::remove_all(dir);
+  Eigen::VectorXd bad(2);
+  bad << 1.0, std::nan("");
+  {
+    wbm::scene::StagedOutput out(dir);
+    out.table({"good.csv", {"x [-]"}, {Eigen::VectorXd::Ones(2)}});
+    expect_throw_with<std::invalid_argument>([&] { out.table({"bad.csv", {"x [-]"}, {bad}}); },
+                                             {"bad.csv: column \"x [-]\" contains NaN or inf; not written"});
+  }  // no commit: the staging folder and the folder created for it are gone
+  EXPECT_FALSE(std::filesystem::exists(dir));
+  {
+    wbm::scene::StagedOutput out(dir);
+    out.table({"a.csv", {"x [-]"}, {Eigen::VectorXd::Ones(3)}});
+    out.text("result.json", "{}\n");
+    EXPECT_FALSE(std::filesystem::exists(dir / "a.csv"));
+    const auto files = out.commit("result.json");
+    ASSERT_EQ(files.size(), 2u);
+    EXPECT_EQ(files.back().filename(), "result.json");  // the completion marker goes last
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "a.csv"));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 2);  // no staging folder left
+  std::filesystem::remove_all(dir);
+}
