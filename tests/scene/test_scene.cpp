@@ -23,8 +23,19 @@ namespace {
 using wbm::scene::Scene;
 using wbm::testing::expect_throw_with;
 
+// Files of this process's tests, in one folder removed at exit.
+struct Scratch {
+  std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("wbm_test_scene_" + std::to_string(::getpid()));
+  ~Scratch() {
+    std::error_code ignored;
+    std::filesystem::remove_all(dir, ignored);
+  }
+};
+
 std::filesystem::path temp(const std::string& name) {
-  return std::filesystem::temp_directory_path() / ("wbm_test_scene_" + std::to_string(::getpid())) / name;
+  static const Scratch scratch;
+  return scratch.dir / name;
 }
 
 std::filesystem::path write(const std::string& name, const std::string& text) {
