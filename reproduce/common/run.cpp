@@ -1,5 +1,8 @@
 #include "run.hpp"
 
+#include <wbm/scene/build_information.hpp>
+#include <wbm/scene/output.hpp>
+
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -47,33 +50,11 @@ Run Run::from_args(int argc, char** argv, std::string id) {
 
 void Run::table(const std::string& file, const std::vector<std::string>& header,
                 const std::vector<Eigen::VectorXd>& columns) {
-  if (header.size() != columns.size() || columns.empty()) {
-    fail(file + ": " + std::to_string(header.size()) + " header names for " +
-         std::to_string(columns.size()) + " columns");
-    return;
+  try {
+    scene::write_table(staging_ / file, {file, header, columns});
+  } catch (const std::exception& e) {
+    fail(e.what());
   }
-  for (size_t c = 0; c < columns.size(); ++c) {
-    if (columns[c].size() != columns[0].size()) {
-      fail(file + ": column \"" + header[c] + "\" has a different length");
-      return;
-    }
-    if (!columns[c].allFinite()) {
-      fail(file + ": column \"" + header[c] + "\" contains NaN or inf; not written");
-      return;
-    }
-  }
-  std::ofstream os(staging_ / file);
-  for (size_t c = 0; c < header.size(); ++c) os << (c ? "," : "") << header[c];
-  os << "\n";
-  char buf[40];
-  for (Eigen::Index r = 0; r < columns[0].size(); ++r) {
-    for (size_t c = 0; c < columns.size(); ++c) {
-      std::snprintf(buf, sizeof buf, "%.17g", columns[c](r));
-      os << (c ? "," : "") << buf;
-    }
-    os << "\n";
-  }
-  if (!os) fail(file + ": write failed");
 }
 
 void Run::meta(const nlohmann::json& meta) { meta_.merge_patch(meta); }
@@ -84,10 +65,7 @@ int Run::finish() {
   meta_["id"] = id_;
   meta_["quick"] = quick_;
   meta_["wall_time_s"] = now() - start_;
-  meta_["git_describe"] = WBM_GIT_DESCRIBE;
-  meta_["compiler"] = std::string(__VERSION__);
-  meta_["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." +
-                           std::to_string(EIGEN_MAJOR_VERSION) + "." + std::to_string(EIGEN_MINOR_VERSION);
+  meta_["build"] = scene::build_information();  // wbm, git describe, compiler, Eigen, FFTW, GSL, toml++
   meta_["failures"] = failures_;
   if (!failures_.empty()) {
     for (const auto& f : failures_) std::cerr << id_ << ": FAILED: " << f << "\n";

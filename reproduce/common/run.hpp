@@ -23,11 +23,11 @@ class Run {
   [[nodiscard]] bool quick() const { return quick_; }
   [[nodiscard]] const std::string& id() const { return id_; }
 
-  /// CSV with a header row (units in brackets) and one column per vector, "%.17g". A column
+  /// scene::write_table into the staging folder: header row (units in brackets), "%.17g". A column
   /// with NaN or inf, or columns of unequal length, fail the run and write nothing.
   void table(const std::string& file, const std::vector<std::string>& header,
              const std::vector<Eigen::VectorXd>& columns);
-  /// meta.json: merged with wall time, git describe, compiler and Eigen versions at finish().
+  /// meta.json: merged with wall time and "build" (scene::build_information()) at finish().
   void meta(const nlohmann::json& meta);
   /// Markdown fragment for out/REPORT.md (appended).
   void report(const std::string& markdown);
