@@ -3,12 +3,13 @@
 //   wbm check SCENE [--json]           validate only; print the resolved scene
 //   wbm bases [-M M]                   bases and the formulations each admits
 //   wbm --version
-// Exit status: 0 converged (or valid, for check); 1 not converged or a run-time failure;
-// 2 bad input (scene file, command line). Nothing is written on bad input.
+// Exit status: 0 converged (or valid, for check); 1 not converged or a failed write;
+// 2 bad input (scene file, command line, unusable -o). Nothing is written on bad input.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -80,6 +81,13 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
   const auto scene = load(scene_path);
   if (!scene) return kBadInput;
   if (out.empty()) out = (std::filesystem::path("wbm-out") / scene->name).string();
+  std::optional<wbm::scene::StagedOutput> staged;
+  try {
+    staged.emplace(out);  // before the run, so an unusable -o fails at once
+  } catch (const std::exception& e) {
+    std::cerr << "wbm: -o " << out << ": cannot create the output folder (" << e.what() << "); not run\n";
+    return kBadInput;
+  }
   wbm::scene::AnalysisResult result;
   {
     ProgressBar bar(!quiet);
@@ -93,15 +101,14 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
                          {"diagnostics", result.diagnostics},
                          {"build", wbm::scene::build_information()}};
   try {
-    wbm::scene::StagedOutput staged(out);
     nlohmann::json files = nlohmann::json::array();
     for (const auto& t : result.tables) {
-      staged.table(t);
+      staged->table(t);
       files.push_back(t.file);
     }
     json["files"] = files;
-    staged.text("result.json", json.dump(2) + "\n");
-    staged.commit("result.json");
+    staged->text("result.json", json.dump(2) + "\n");
+    staged->commit("result.json");
   } catch (const std::exception& e) {
     std::cerr << "wbm: " << out << ": " << e.what() << "; nothing written\n";
     return kNotConverged;

@@ -117,6 +117,11 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
   EXPECT_EQ(run_wbm("check " + scene.string()).status, 2);
   EXPECT_EQ(run_wbm("run " + (work() / "absent.toml").string()).status, 2);
   EXPECT_EQ(run_wbm("frobnicate").status, 2);
+  const fs::path file = work() / "a_file";
+  std::ofstream(file) << "not a folder\n";
+  const Outcome blocked = run_wbm("run " + case1() + " -o " + file.string());
+  EXPECT_EQ(blocked.status, 2);
+  EXPECT_NE(blocked.err.find("cannot create the output folder"), std::string::npos) << blocked.err;
 }
 
 // Non-convergence is an outcome: exit 1, result.json with the Newton report, no curve files.
