@@ -128,11 +128,12 @@ class Parser {
       auto mass = matrix(*t, "mass", true, st.mass_file);
       auto stiffness = matrix(*t, "stiffness", true, st.stiffness_file);
       auto damping = matrix(*t, "damping", false, st.damping_file);
-      if (mass && stiffness) {
-        st.mass = *mass;
-        st.stiffness = *stiffness;
-        if (damping) st.damping = *damping;
-        check_matrices(*t, st);
+      // Each matrix that parsed is checked, so one pass reports every problem.
+      if (mass) st.mass = *mass;
+      if (stiffness) st.stiffness = *stiffness;
+      if (damping) st.damping = *damping;
+      if (mass) {
+        check_matrices(*t, st, stiffness.has_value());
         dof_names(*t, st);
       }
     }
@@ -233,7 +234,7 @@ class Parser {
     }
   }
 
-  void check_matrices(const toml::table& t, const Structure& st) {
+  void check_matrices(const toml::table& t, const Structure& st, bool have_stiffness) {
     const auto n = st.mass.rows();
     auto check = [&](const Eigen::SparseMatrix<double>& a, const std::string& key, const std::string& symbol) {
       if (a.rows() != n || a.cols() != n) {
@@ -252,10 +253,11 @@ class Parser {
         r_.error(t.get(key)->source(), "structure." + key, os.str());
       }
     };
+    const size_t errors = r_.error_count();
     check(st.mass, "mass", "M");
-    check(st.stiffness, "stiffness", "K");
+    if (have_stiffness) check(st.stiffness, "stiffness", "K");
     if (st.damping.size() > 0) check(st.damping, "damping", "C");
-    if (r_.failed()) return;
+    if (r_.error_count() != errors) return;
     const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(st.mass);
     if (llt.info() != Eigen::Success) {
       r_.error(t.get("mass")->source(), "structure.mass",
