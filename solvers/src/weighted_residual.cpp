@@ -143,11 +143,74 @@ std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting, 
   return why;
 }
 
-// One modal block A + λ_i B (M × M): sparse LU when it is sparse (Fourier, wavelet Galerkin:
-// banded circulant), dense partial-pivoting LU otherwise (discrete Petrov–Galerkin).
+// Connected components of the graph i ~ j if any of the time operators couples i and j
+// (union-find); a single component is returned as an empty list.
+std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops) {
+  const Eigen::Index m = ops.mass.rows();
+  std::vector<Eigen::Index> parent(static_cast<size_t>(m));
+  for (Eigen::Index i = 0; i < m; ++i) parent[static_cast<size_t>(i)] = i;
+  auto find = [&](Eigen::Index i) {
+    while (parent[static_cast<size_t>(i)] != i) i = parent[static_cast<size_t>(i)];
+    return i;
+  };
+  for (Eigen::Index j = 0; j < m; ++j) {
+    for (Eigen::Index i = 0; i < m; ++i) {
+      if (ops.mass(i, j) != 0.0 || ops.damping(i, j) != 0.0 || ops.stiffness(i, j) != 0.0) {
+        parent[static_cast<size_t>(find(i))] = find(j);
+      }
+    }
+  }
+  std::vector<std::vector<Eigen::Index>> groups(static_cast<size_t>(m));
+  for (Eigen::Index i = 0; i < m; ++i) groups[static_cast<size_t>(find(i))].push_back(i);
+  std::vector<std::vector<Eigen::Index>> out;
+  for (auto& g : groups) {
+    if (!g.empty()) out.push_back(std::move(g));
+  }
+  if (out.size() == 1) out.clear();
+  return out;
+}
+
+// One modal block A + λ_i B (M × M). Its sparsity graph is split into connected components
+// first: Fourier:Fourier blocks fall apart into the 1 × 1 and 2 × 2 blocks of each harmonic,
+// which are inverted densely (O(M) per block). A block that stays connected is factorized by
+// sparse LU when it is sparse (banded circulant wavelet Galerkin operators) and by dense
+// partial-pivoting LU otherwise (discrete Petrov–Galerkin).
 class ModeBlock {
  public:
-  explicit ModeBlock(const Eigen::MatrixXd& block) {
+  using Components = std::vector<std::vector<Eigen::Index>>;
+
+  /// `components`: connected components of the sparsity graph shared by every mode's block
+  /// (block_components()); empty or a single one: no splitting.
+  ModeBlock(const Eigen::MatrixXd& block, const Components& components) : m_(block.rows()), component_(&components) {
+    if (components.size() > 1) {  // block diagonal after permutation
+      ok_ = true;
+      inverse_.reserve(components.size());
+      for (const auto& idx : components) {
+        const auto k = static_cast<Eigen::Index>(idx.size());
+        Eigen::MatrixXd sub(k, k);
+        for (Eigen::Index i = 0; i < k; ++i) {
+          for (Eigen::Index j = 0; j < k; ++j) sub(i, j) = block(idx[i], idx[j]);
+        }
+        if (k <= 2) {  // closed-form inverse; singular if the determinant vanishes against the entries
+          const double scale = sub.cwiseAbs().maxCoeff();
+          const double det = k == 1 ? sub(0, 0) : sub(0, 0) * sub(1, 1) - sub(0, 1) * sub(1, 0);
+          if (!(std::abs(det) > 1e-300 + 1e-15 * (k == 1 ? scale : scale * scale)) || !std::isfinite(det)) ok_ = false;
+          Eigen::MatrixXd inv(k, k);
+          if (k == 1) {
+            inv(0, 0) = 1.0 / det;
+          } else {
+            inv << sub(1, 1) / det, -sub(0, 1) / det, -sub(1, 0) / det, sub(0, 0) / det;
+          }
+          inverse_.push_back(std::move(inv));
+        } else {
+          const Eigen::PartialPivLU<Eigen::MatrixXd> lu(sub);
+          const double rc = lu.rcond();
+          if (!(rc > 1e-300 && std::isfinite(rc))) ok_ = false;
+          inverse_.push_back(lu.inverse());
+        }
+      }
+      return;
+    }
     const double density = static_cast<double>((block.array() != 0.0).count()) / static_cast<double>(block.size());
     sparse_ = block.rows() > 8 && density <= 0.25;
     if (sparse_) {
@@ -164,13 +227,40 @@ class ModeBlock {
   }
   [[nodiscard]] bool ok() const { return ok_; }
   [[nodiscard]] Eigen::MatrixXd solve(const Eigen::MatrixXd& r, bool transposed) const {
+    if (!inverse_.empty()) {
+      Eigen::MatrixXd out(r.rows(), r.cols());
+      for (size_t c = 0; c < component_->size(); ++c) {
+        const auto& idx = (*component_)[c];
+        const auto k = static_cast<Eigen::Index>(idx.size());
+        Eigen::MatrixXd rhs(k, r.cols());
+        for (Eigen::Index i = 0; i < k; ++i) rhs.row(i) = r.row(idx[i]);
+        const Eigen::MatrixXd y = transposed ? Eigen::MatrixXd(inverse_[c].transpose() * rhs) : Eigen::MatrixXd(inverse_[c] * rhs);
+        for (Eigen::Index i = 0; i < k; ++i) out.row(idx[i]) = y.row(i);
+      }
+      return out;
+    }
     if (sparse_) return transposed ? Eigen::MatrixXd(sparse_lu_->transpose().solve(r)) : Eigen::MatrixXd(sparse_lu_->solve(r));
     return transposed ? Eigen::MatrixXd(dense_lu_.transpose().solve(r)) : Eigen::MatrixXd(dense_lu_.solve(r));
+  }
+  /// The inverse, M × M (dense storage; only the components' entries are nonzero).
+  [[nodiscard]] Eigen::MatrixXd inverse() const {
+    if (inverse_.empty()) return solve(Eigen::MatrixXd::Identity(m_, m_), false);
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m_, m_);
+    for (size_t c = 0; c < component_->size(); ++c) {
+      const auto& idx = (*component_)[c];
+      for (size_t i = 0; i < idx.size(); ++i) {
+        for (size_t j = 0; j < idx.size(); ++j) out(idx[i], idx[j]) = inverse_[c](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+      }
+    }
+    return out;
   }
 
  private:
   using SparseLu = Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>;
+  Eigen::Index m_;
   bool sparse_ = false, ok_ = false;
+  const Components* component_;
+  std::vector<Eigen::MatrixXd> inverse_;  // per component, when split
   std::unique_ptr<SparseLu> sparse_lu_;  // SparseLU::transpose() is not const; held by pointer
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu_;
 };
@@ -198,7 +288,8 @@ struct WeightedResidual::Impl {
   Eigen::MatrixXd phi;            // modal path: n × n, Φᵀ M Φ = I
   Eigen::VectorXd lambda;
   std::vector<ModeBlock> blocks;
-  double g_norm1 = 0.0;
+  std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
+  mutable double g_norm1 = 0.0;  // < 0: not computed yet
 
   Eigen::VectorXd b, a_lin, x_lin;
   Eigen::MatrixXd h;
@@ -234,6 +325,7 @@ struct WeightedResidual::Impl {
     wq = weighting.values(tau, 0) / static_cast<double>(q);
     assemble_time_operators(tau);
     sample_structure();
+    components = block_components(ops);
 
     Eigen::VectorXd cosine(q);
     for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * tau(k));
@@ -259,6 +351,24 @@ struct WeightedResidual::Impl {
       scale = gmax > 0.0 ? gmax : x_lin.lpNorm<Eigen::Infinity>();
       if (!(scale > 0.0) || !std::isfinite(scale)) scale = 1.0;
     }
+  }
+
+  // The same problem at another frequency: every frequency-independent member is copied (time
+  // operators, samples, b, modal basis, residual scale); only G is factorized again.
+  Impl(const Impl& base, double frequency_hz)
+      : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
+        weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
+        ops(base.ops), theta(base.theta), wq(base.wq), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
+        sparse_rows(base.sparse_rows), phi(base.phi), lambda(base.lambda), components(base.components), b(base.b),
+        scale(base.scale),
+        contact_rows(base.contact_rows) {
+    forcing.frequency_hz = frequency_hz;
+    forcing.validate(n);
+    factorize();
+    if (!factorized) return;
+    a_lin = solve_stacked(b, false);
+    x_lin = gather(a_lin);
+    if (nc > 0) compliance();
   }
 
   void assemble_time_operators(const Eigen::VectorXd& tau) {
@@ -339,7 +449,7 @@ struct WeightedResidual::Impl {
         modal = true;
         break;
     }
-    if (modal) {
+    if (modal && phi.size() == 0) {  // the modal basis does not depend on f: computed once
       const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
                                                                           Eigen::MatrixXd(system.mass));
       if (eig.info() != Eigen::Success) {
@@ -348,16 +458,18 @@ struct WeightedResidual::Impl {
       }
       phi = eig.eigenvectors();
       lambda = eig.eigenvalues();
+    }
+    if (modal) {
       const Eigen::MatrixXd a = t[0] + fr * c_m * ops.damping;
       const Eigen::MatrixXd bb = fr * c_k * ops.damping + t[2];
       blocks.clear();
       factorized = true;
       blocks.reserve(static_cast<size_t>(n));
       for (int i = 0; i < n; ++i) {
-        blocks.emplace_back(a + lambda(i) * bb);
+        blocks.emplace_back(a + lambda(i) * bb, components);
         if (!blocks.back().ok()) factorized = false;
       }
-      g_norm1 = kronecker_norm1(t, {&system.mass, &system.damping, &system.stiffness});
+      g_norm1 = -1.0;  // ‖G‖₁ from the Kronecker factors on demand (condition_number), not per frequency
     } else {
       g = Eigen::kroneckerProduct(Eigen::SparseMatrix<double>(t[0].sparseView()), system.mass).eval();
       g += Eigen::kroneckerProduct(Eigen::SparseMatrix<double>(t[1].sparseView()), system.damping).eval();
@@ -390,7 +502,7 @@ struct WeightedResidual::Impl {
     if (modal) {
       h.setZero();
       for (int i = 0; i < n; ++i) {
-        const Eigen::MatrixXd s_i = blocks[i].solve(Eigen::MatrixXd::Identity(m, m), false);
+        const Eigen::MatrixXd s_i = blocks[i].inverse();
         for (int c = 0; c < nc; ++c) {
           for (int d = 0; d < nc; ++d) {
             const double w = phi(contacts[c].dof, i) * phi(contacts[d].dof, i);
@@ -483,6 +595,9 @@ WeightedResidual& WeightedResidual::operator=(WeightedResidual&&) noexcept = def
 int WeightedResidual::dofs() const { return impl_->n; }
 int WeightedResidual::dimension() const { return impl_->m; }
 int WeightedResidual::time_samples() const { return impl_->q; }
+const MechanicalSystem& WeightedResidual::system() const { return impl_->system; }
+const HarmonicForcing& WeightedResidual::forcing() const { return impl_->forcing; }
+const std::vector<ContactPoint>& WeightedResidual::contacts() const { return impl_->contacts; }
 const TimeBasis& WeightedResidual::trial() const { return impl_->trial; }
 const TimeBasis& WeightedResidual::weighting() const { return impl_->weighting; }
 Formulation WeightedResidual::formulation() const { return impl_->options.formulation; }
@@ -509,6 +624,11 @@ double WeightedResidual::condition_number() const {
     [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v) const { return impl->solve_stacked(v, transposed); }
     [[nodiscard]] InverseOfG adjoint() const { return {impl, !transposed}; }
   };
+  if (p.g_norm1 < 0.0) {
+    const double fr = p.forcing.frequency_hz;
+    p.g_norm1 = p.kronecker_norm1({fr * fr * p.ops.mass, fr * p.ops.damping, p.ops.stiffness},
+                                  {&p.system.mass, &p.system.damping, &p.system.stiffness});
+  }
   return p.g_norm1 * Eigen::internal::rcond_invmatrix_L1_norm_estimate(InverseOfG{&p, false});
 }
 
@@ -553,8 +673,37 @@ Eigen::VectorXd WeightedResidual::linear_response() const {
 
 Eigen::VectorXd WeightedResidual::contact_unknowns(const Eigen::VectorXd& a) const { return impl_->gather(a); }
 
-Eigen::VectorXd WeightedResidual::contact_residual(const Eigen::VectorXd& x) const {
-  return impl_->contact_residual(x, 1.0);
+Eigen::VectorXd WeightedResidual::contact_residual(const Eigen::VectorXd& x, double load) const {
+  return impl_->contact_residual(x, load);
+}
+
+WeightedResidual::WeightedResidual(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+WeightedResidual WeightedResidual::at_frequency(double frequency_hz) const {
+  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
+    throw std::invalid_argument("WeightedResidual::at_frequency: f = " + std::to_string(frequency_hz) +
+                                " Hz; must be > 0 and finite");
+  }
+  return WeightedResidual(std::make_unique<Impl>(*impl_, frequency_hz));
+}
+
+double WeightedResidual::frequency_hz() const { return impl_->forcing.frequency_hz; }
+double WeightedResidual::residual_scale() const { return impl_->scale; }
+
+Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Eigen::VectorXd& x, double load) const {
+  const auto& p = *impl_;
+  p.require_factorized();
+  Eigen::VectorXd rhs = load * p.b;
+  if (p.nc > 0) {
+    const Eigen::VectorXd nx = p.contact_forces(x, nullptr);
+    for (size_t j = 0; j < p.contact_rows.size(); ++j) rhs(p.contact_rows[j]) -= nx(static_cast<Eigen::Index>(j));
+  }
+  const Eigen::MatrixXd a = spectral::as_coefficients(p.solve_stacked(rhs, false), p.n);  // n × M
+  // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C: (T ⊗ S) a ↔ S A Tᵀ on the n × M coefficients.
+  const double f = p.forcing.frequency_hz;
+  const Eigen::MatrixXd ga = 2.0 * f * (p.system.mass * a * p.ops.mass.transpose()) +
+                             p.system.damping * a * p.ops.damping.transpose();
+  return p.gather(p.solve_stacked(spectral::stacked(ga), false)) / p.scale;
 }
 
 Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) const {

@@ -123,6 +123,9 @@ class WeightedResidual {
   [[nodiscard]] int dofs() const;
   [[nodiscard]] int dimension() const;
   [[nodiscard]] int time_samples() const;
+  [[nodiscard]] const MechanicalSystem& system() const;
+  [[nodiscard]] const HarmonicForcing& forcing() const;
+  [[nodiscard]] const std::vector<ContactPoint>& contacts() const;
   [[nodiscard]] const TimeBasis& trial() const;
   [[nodiscard]] const TimeBasis& weighting() const;
   [[nodiscard]] Formulation formulation() const;
@@ -142,11 +145,26 @@ class WeightedResidual {
   [[nodiscard]] std::string linear_solver() const;
 
   /// The condensed system on the contact unknowns (satisfies NonlinearSystem); x(k·n_c + c).
-  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x) const;
+  /// `load` scales the forcing (s·F): r = (x − s·x_lin + H n_c(x)) / s_r, so ∂r/∂s = −x_lin/s_r.
+  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load = 1.0) const;
   [[nodiscard]] Eigen::MatrixXd contact_jacobian(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
   /// a = G⁻¹(b − Pᵀ n_c(x)): the full coefficients for given contact unknowns.
   [[nodiscard]] Eigen::VectorXd expand(const Eigen::VectorXd& x) const;
+
+  /// The same problem at another forcing frequency f [Hz]: time operators, samples, forcing
+  /// vector, modal basis and the residual scale s_r are reused, only G(f) is factorized again
+  /// (so contact residuals at different f are comparable, as continuation needs).
+  /// Throws std::invalid_argument unless f > 0 and finite.
+  [[nodiscard]] WeightedResidual at_frequency(double frequency_hz) const;
+  [[nodiscard]] double frequency_hz() const;
+  /// s_r, the scale of contact_residual [m].
+  [[nodiscard]] double residual_scale() const;
+  /// ∂r/∂f of contact_residual at x and load s [1/Hz]: with a(x) = G⁻¹(s b − Pᵀ n_c(x)),
+  ///   ∂r/∂f = P G⁻¹ G′(f) a(x) / s_r,   G′(f) = 2f A_M ⊗ M + A_C ⊗ C,
+  /// since b does not depend on f in normalized time τ = f t. Two solves with the factorized G.
+  [[nodiscard]] Eigen::VectorXd contact_residual_frequency_derivative(const Eigen::VectorXd& x,
+                                                                      double load = 1.0) const;
 
   /// Newton on the contact unknowns from x0 (default x_lin); without x0 a failed Newton falls
   /// back on load stepping (forcing s·F, s: 0 → 1, adaptive). Non-convergence is reported in
@@ -156,6 +174,7 @@ class WeightedResidual {
  private:
   struct Impl;
   struct Condensed;
+  explicit WeightedResidual(std::unique_ptr<Impl> impl);
   NewtonResult solve_with_load_stepping(Eigen::VectorXd x, int& steps) const;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,0 +1,292 @@
+#pragma once
+/// Pseudo-arclength continuation of R(x, λ) = 0 through folds [Keller 1977; for harmonic balance
+/// with contact, von Groll & Ewins 2001, ref. [38] of JL14 Sec. 5.6].
+///
+/// Unknowns are scaled, x̂ = x / state_scale and λ̂ = λ / parameter_scale, and the arclength is
+/// measured in the metric ⟨a, b⟩ = (1/n) â_xᵀ b̂_x + â_λ b̂_λ (n = length of x), so a step means the
+/// same whatever n and whether λ is 150 Hz or 1500 Hz. Each step (JL14 Sec. 5.6, [38]):
+///   predictor  ẑ⁰ = ẑ_k + h t_k (tangent t_k, ⟨t_k, t_k⟩ = 1);
+///   corrector  Newton on [R(x, λ); ⟨t_k, ẑ − ẑ_k⟩ − h] = 0 with the bordered Jacobian
+///              [[∂R/∂x̂, ∂R/∂λ̂]; [t_kᵀ W]] — one extra row and column, dense (n + 1) LU;
+///   tangent    t_{k+1} from the same bordered matrix with right-hand side (0, 1), normalized, so
+///              ⟨t_k, t_{k+1}⟩ > 0 and the branch never turns back on itself;
+///   step       h ← h · clamp(target/iterations, ½, 2) after a success, h ← h/2 and retry after a
+///              corrector failure or a tangent turning by more than max_turn_degrees (a turn that
+///              persists down to h = kink_step is a kink of a nonsmooth branch and is kept).
+/// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
+/// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step.
+/// The branch stops on a StopReason; every point it holds converged (‖R‖ ≤ corrector_tolerance);
+/// with RangeReached the last point lies beyond the range by less than one step.
+/// Non-convergence is never thrown.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <concepts>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include <wbm/solvers/newton.hpp>
+
+namespace wbm::solvers {
+
+/// Residual R (n), Jacobian ∂R/∂x (n × n) and parameter derivative ∂R/∂λ (n) at (x, λ).
+struct Linearization {
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd parameter_derivative;
+};
+
+/// A square system along one parameter: residual(x, λ) and linearize(x, λ).
+template <class S>
+concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, double p) {
+  { s.residual(x, p) } -> std::convertible_to<Eigen::VectorXd>;
+  { s.linearize(x, p) } -> std::convertible_to<Linearization>;
+};
+
+enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed };
+
+[[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
+  switch (r) {
+    case StopReason::RangeReached: return "range reached";
+    case StopReason::StepBelowMinimum: return "step below minimum";
+    case StopReason::MaxPoints: return "point limit reached";
+    case StopReason::InitialPointFailed: return "initial point did not converge";
+  }
+  return "?";
+}
+
+struct PseudoArclengthOptions {
+  double parameter_min = 0.0, parameter_max = 0.0;  // the branch stops when λ leaves [min, max]
+  double parameter_scale = 1.0;  // λ̂ = λ / parameter_scale (> 0), e.g. the start frequency
+  double state_scale = 1.0;      // x̂ = x / state_scale (> 0), e.g. the gap
+  int direction = +1;            // sign of dλ at the start
+  double initial_step = 1e-2;    // h, in the scaled metric
+  double min_step = 1e-7;
+  double max_step = 5e-2;
+  int max_points = 10000;
+  int max_corrector_iterations = 8;
+  double corrector_tolerance = 1e-9;  // on ‖R‖₂, R as the system scales it
+  int target_iterations = 3;          // corrector iterations the step adaptation aims at
+  double max_turn_degrees = 30.0;     // a larger angle between consecutive tangents halves h ...
+  double kink_step = 1e-4;            // ... unless h <= kink_step: then the point is kept (a kink)
+  NewtonOptions initial_newton{};     // for the first point, at fixed λ
+  /// Throws std::invalid_argument naming the field, its value and the range.
+  void validate() const;
+};
+
+struct BranchPoint {
+  double parameter = 0.0;       // λ
+  Eigen::VectorXd x;            // converged state
+  Eigen::VectorXd tangent;      // scaled tangent (x̂ part then λ̂), ⟨t, t⟩ = 1
+  double arclength = 0.0;       // scaled arclength from the first point
+  double step = 0.0;            // h that reached this point
+  int corrector_iterations = 0;
+  double residual_norm = 0.0;   // ‖R‖₂ at the point
+  [[nodiscard]] double parameter_tangent() const { return tangent(tangent.size() - 1); }
+};
+
+struct Fold {
+  double parameter = 0.0;  // λ at the turning point (Hermite interpolation)
+  size_t after = 0;        // the fold lies between points[after] and points[after + 1]
+};
+
+struct Branch {
+  std::vector<BranchPoint> points;
+  std::vector<Fold> folds;
+  StopReason stop = StopReason::InitialPointFailed;
+  std::string message;      // why it stopped, with the last λ and step
+  int rejected_steps = 0;   // corrector failures and over-sharp turns, each retried with h/2
+  int kinks = 0;            // sharp turns kept at h <= kink_step (nonsmooth branch)
+  long corrector_iterations = 0;
+  double wall_time_s = 0.0;
+};
+
+inline void PseudoArclengthOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("PseudoArclengthOptions." + what); };
+  if (!(parameter_min < parameter_max)) fail("parameter_min must be < parameter_max");
+  if (!(parameter_scale > 0.0) || !(state_scale > 0.0)) fail("parameter_scale and state_scale must be > 0");
+  if (direction != 1 && direction != -1) fail("direction = " + std::to_string(direction) + ": must be +1 or -1");
+  if (!(min_step > 0.0 && min_step <= initial_step && initial_step <= max_step)) {
+    fail("steps: need 0 < min_step <= initial_step <= max_step");
+  }
+  if (max_points < 1 || max_corrector_iterations < 1 || target_iterations < 1) {
+    fail("max_points, max_corrector_iterations and target_iterations must be >= 1");
+  }
+  if (!(corrector_tolerance > 0.0)) fail("corrector_tolerance must be > 0");
+  if (!(max_turn_degrees > 0.0 && max_turn_degrees < 180.0)) fail("max_turn_degrees must lie in (0, 180)");
+  if (!(kink_step >= min_step)) fail("kink_step must be >= min_step");
+}
+
+namespace detail {
+
+// The bordered matrix [[∂R/∂x̂, ∂R/∂λ̂]; [t_xᵀ/n, t_λ]] of the scaled problem.
+inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls) {
+  const auto n = l.jacobian.rows();
+  Eigen::MatrixXd b(n + 1, n + 1);
+  b.topLeftCorner(n, n) = l.jacobian * xs;
+  b.topRightCorner(n, 1) = l.parameter_derivative * ls;
+  b.bottomLeftCorner(1, n) = t.head(n).transpose() / static_cast<double>(n);
+  b(n, n) = t(n);
+  return b;
+}
+
+inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const auto n = a.size() - 1;
+  return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
+}
+
+}  // namespace detail
+
+/// Traces the branch through (x0, λ0): x0 is corrected at fixed λ0 first (initial_newton), then
+/// continued until a StopReason. Throws std::invalid_argument for invalid options or λ0 outside
+/// [parameter_min, parameter_max].
+template <ParametrizedSystem S>
+Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, const PseudoArclengthOptions& o) {
+  o.validate();
+  if (!(lambda0 >= o.parameter_min && lambda0 <= o.parameter_max)) {
+    throw std::invalid_argument("pseudo_arclength: λ0 = " + std::to_string(lambda0) + " outside [" +
+                                std::to_string(o.parameter_min) + ", " + std::to_string(o.parameter_max) + "]");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const double xs = o.state_scale, ls = o.parameter_scale;
+  const auto n = x0.size();
+  Branch branch;
+  auto finish = [&](StopReason why, const std::string& text) {
+    branch.stop = why;
+    branch.message = text;
+    branch.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return branch;
+  };
+  auto scaled = [&](const Eigen::VectorXd& x, double lambda) {
+    Eigen::VectorXd z(n + 1);
+    z.head(n) = x / xs;
+    z(n) = lambda / ls;
+    return z;
+  };
+
+  // Fixed-λ system for the first point.
+  struct Fixed {
+    const S* s;
+    double lambda;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, lambda); }
+    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return s->linearize(x, lambda).jacobian; }
+  };
+  NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton);
+  if (!first.report.converged()) return finish(StopReason::InitialPointFailed, first.report.message);
+
+  // Tangent at the first point, oriented by `direction`.
+  Eigen::VectorXd seed = Eigen::VectorXd::Zero(n + 1);
+  seed(n) = o.direction;
+  auto tangent_at = [&](const Linearization& l, const Eigen::VectorXd& previous) {
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + 1);
+    rhs(n) = 1.0;
+    Eigen::VectorXd t = Eigen::PartialPivLU<Eigen::MatrixXd>(detail::bordered(l, previous, xs, ls)).solve(rhs);
+    return Eigen::VectorXd(t / std::sqrt(detail::inner(t, t)));
+  };
+  BranchPoint p0;
+  p0.parameter = lambda0;
+  p0.x = first.x;
+  p0.residual_norm = first.report.residual_norms.back();
+  p0.corrector_iterations = first.report.iterations;
+  p0.tangent = tangent_at(system.linearize(p0.x, lambda0), seed);
+  branch.points.push_back(p0);
+
+  const double cos_turn = std::cos(o.max_turn_degrees * 3.14159265358979323846 / 180.0);
+  double h = o.initial_step;
+  while (static_cast<int>(branch.points.size()) < o.max_points) {
+    const BranchPoint& last = branch.points.back();
+    const Eigen::VectorXd z_last = scaled(last.x, last.parameter);
+    Eigen::VectorXd z = z_last + h * last.tangent;
+    bool converged = false;
+    int iterations = 0;
+    double rnorm = 0.0;
+    Linearization lin;
+    for (; iterations <= o.max_corrector_iterations; ++iterations) {
+      lin = system.linearize(z.head(n) * xs, z(n) * ls);
+      rnorm = lin.residual.norm();
+      if (!std::isfinite(rnorm) || !lin.jacobian.allFinite() || !lin.parameter_derivative.allFinite()) break;
+      if (rnorm <= o.corrector_tolerance) {
+        converged = true;
+        break;
+      }
+      if (iterations == o.max_corrector_iterations) break;
+      Eigen::VectorXd rhs(n + 1);
+      rhs.head(n) = -lin.residual;
+      rhs(n) = -(detail::inner(last.tangent, z - z_last) - h);
+      const Eigen::PartialPivLU<Eigen::MatrixXd> lu(detail::bordered(lin, last.tangent, xs, ls));
+      const Eigen::VectorXd dz = lu.solve(rhs);
+      if (!dz.allFinite()) break;
+      z += dz;
+    }
+    branch.corrector_iterations += iterations;
+    Eigen::VectorXd t_new;
+    if (converged) {
+      t_new = tangent_at(lin, last.tangent);
+      if (!t_new.allFinite()) converged = false;
+    }
+    // A sharp turn halves h, down to kink_step: below it the turn is a kink of a nonsmooth
+    // branch (contact onset seen by piecewise-constant Haar trial functions) and is passed.
+    const bool sharp = converged && detail::inner(t_new, last.tangent) < cos_turn;
+    if (sharp && h <= o.kink_step) ++branch.kinks;
+    if (!converged || (sharp && h > o.kink_step)) {
+      ++branch.rejected_steps;
+      h *= 0.5;
+      if (h < o.min_step) {
+        return finish(StopReason::StepBelowMinimum,
+                      "step below minimum at λ = " + std::to_string(last.parameter) + " (h = " + std::to_string(h) +
+                          (converged ? ", tangent turning too fast)" : ", corrector failed, ‖R‖ = " + std::to_string(rnorm) + ")"));
+      }
+      continue;
+    }
+    BranchPoint p;
+    p.parameter = z(n) * ls;
+    p.x = z.head(n) * xs;
+    p.tangent = t_new;
+    const Eigen::VectorXd dz = z - z_last;
+    const double ds = std::sqrt(detail::inner(dz, dz));
+    p.arclength = last.arclength + ds;
+    p.step = h;
+    p.corrector_iterations = iterations;
+    p.residual_norm = rnorm;
+    // Fold: the λ-component of the tangent changes sign; Hermite cubic λ̂(s) on [0, ds].
+    const double d0 = last.parameter_tangent(), d1 = p.parameter_tangent();
+    if (d0 * d1 < 0.0) {
+      const double l0 = z_last(n), l1 = z(n);
+      // λ̂'(s) = d0 + s (6 Δ/ds² − (4 d0 + 2 d1)/ds) + s² (3(d0 + d1)/ds² − 6 Δ/ds³), Δ = l1 − l0.
+      const double delta = l1 - l0;
+      const double a = 3.0 * (d0 + d1) / (ds * ds) - 6.0 * delta / (ds * ds * ds);
+      const double b = 6.0 * delta / (ds * ds) - (4.0 * d0 + 2.0 * d1) / ds;
+      double s_star = -d0 / b;
+      if (std::abs(a) > 1e-14 * std::abs(b)) {
+        const double disc = std::sqrt(std::max(0.0, b * b - 4.0 * a * d0));
+        for (double root : {(-b + disc) / (2.0 * a), (-b - disc) / (2.0 * a)}) {
+          if (root >= 0.0 && root <= ds) s_star = root;
+        }
+      }
+      s_star = std::clamp(s_star, 0.0, ds);
+      const double u = s_star / ds;
+      const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
+      const double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
+      const double lambda_fold = h00 * l0 + h10 * ds * d0 + h01 * l1 + h11 * ds * d1;
+      branch.folds.push_back({lambda_fold * ls, branch.points.size() - 1});
+    }
+    branch.points.push_back(std::move(p));
+    const double lambda = branch.points.back().parameter;
+    if (lambda < o.parameter_min || lambda > o.parameter_max) {
+      return finish(StopReason::RangeReached, "λ = " + std::to_string(lambda) + " left [" +
+                                                  std::to_string(o.parameter_min) + ", " +
+                                                  std::to_string(o.parameter_max) + "]");
+    }
+    const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);
+    h = std::clamp(h * factor, o.min_step, o.max_step);
+  }
+  return finish(StopReason::MaxPoints, "point limit " + std::to_string(o.max_points) + " reached at λ = " +
+                                           std::to_string(branch.points.back().parameter));
+}
+
+}  // namespace wbm::solvers

@@ -1,0 +1,61 @@
+#pragma once
+/// Stability of periodic solutions: the monodromy matrix and its Floquet multipliers.
+/// Units: SI; times in s, frequencies in Hz.
+///
+/// About a periodic solution u*(t) of M ü + C u̇ + K u = f(t) − Σ_c e_c f_c(u_c), a perturbation
+/// y = (δu, δu̇) (length 2n, displacements then velocities) obeys the linear periodic system
+///   ẏ = A₀ y + Σ_c k_c(t) b_c e_cᵀ y,   A₀ = [[0, I], [−M⁻¹K, −M⁻¹C]],
+///   k_c(t) = f_c'(u*_c(t)),  b_c = (0, −M⁻¹ e_c),  e_cᵀ y = δu_c,
+/// and the monodromy matrix Φ = Y(T), Y(0) = I, T = 1/f, maps a perturbation over one period.
+/// Its eigenvalues are the Floquet multipliers; the solution is asymptotically stable if all
+/// lie inside the unit circle.
+///
+/// Why the monodromy matrix and not Hill's method: it needs only u*_c(t), so it treats every
+/// trial basis alike (Haar's piecewise-constant u*_c included), and it has no truncation
+/// artefacts (Hill's method on M harmonics returns 2nM exponents, most of them spurious, and a
+/// dense 2nM eigenproblem). The nonlinearity lives on n_c DOFs, which this exploits:
+/// integration on P steps of h = T/P, the linear part exactly, the contact part by the
+/// trapezoidal rule (variation of constants):
+///   (I − (h/2) K_{p+1}) Y_{p+1} = e^{A₀h} (I + (h/2) K_p) Y_p,   K_p = Σ_c k_c(t_p) b_c e_cᵀ,
+/// second-order in h; K_p has rank n_c, so both brackets cost O(n n_c) (Woodbury), and runs of
+/// steps without contact stiffness (k_c = 0) are one product with a power of e^{A₀h}.
+/// e^{A₀h}: Eigen's matrix exponential (unsupported/MatrixFunctions, scaling and squaring Padé).
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/mechanical_system.hpp>
+
+namespace wbm::solvers {
+
+struct FloquetResult {
+  Eigen::MatrixXd monodromy;          // Φ, 2n × 2n
+  Eigen::VectorXcd multipliers;       // eigenvalues of Φ, by decreasing modulus
+  double max_modulus = 0.0;           // spectral radius of Φ
+  [[nodiscard]] bool stable(double tolerance = 1e-6) const { return max_modulus < 1.0 + tolerance; }
+};
+
+/// Monodromy matrix and Floquet multipliers about a periodic solution given by its contact
+/// displacements: contact_displacement is n_c × P, row c = u*_c(τ_p) [m] at τ_p = p/P of one
+/// period (P ≥ 8 steps; the row order of `contacts`). Without contacts pass a 0 × P matrix.
+/// Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples or
+/// f ≤ 0.
+[[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
+                                                const std::vector<ContactPoint>& contacts,
+                                                const Eigen::MatrixXd& contact_displacement, double frequency_hz);
+
+/// How a multiplier crossed the unit circle between two solutions of a branch.
+enum class Bifurcation { None, Fold, PeriodDoubling, NeimarkSacker };
+[[nodiscard]] std::string_view to_string(Bifurcation b) noexcept;
+
+/// Compares two consecutive points' multipliers: if the number outside the unit circle
+/// (|μ| > 1 + tolerance) changed, the crossing multiplier (the one of largest modulus at the
+/// unstable point) classifies it: near +1 Fold (real, the branch turns), near −1
+/// PeriodDoubling, a complex pair NeimarkSacker (|arg μ| in (0.05, π − 0.05)).
+[[nodiscard]] Bifurcation classify_crossing(const FloquetResult& before, const FloquetResult& after,
+                                            double tolerance = 1e-6);
+
+}  // namespace wbm::solvers

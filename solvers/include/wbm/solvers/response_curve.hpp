@@ -1,0 +1,98 @@
+#pragma once
+/// Forced-response curves of the weighted-residual problem by pseudo-arclength continuation
+/// [JL14 Sec. 5.6], in the forcing frequency or the forcing amplitude, for any trial:weighting
+/// pair and formulation. The continuation runs on the condensed contact unknowns x (n_c·M) of
+/// WeightedResidual, so each corrector iteration costs one refactorization of G(f) and an
+/// (n_c·M + 1) bordered LU. Units: SI, Hz.
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/weighted_residual.hpp>
+
+namespace wbm::solvers {
+
+enum class ContinuationParameter {
+  Frequency,  // λ = f [Hz]; G(f) is refactorized at each new f (WeightedResidual::at_frequency)
+  Amplitude,  // λ = F [N]; the condensed residual is linear in F (r = (x − (F/F₀) x_lin + H n)/s_r)
+};
+
+/// The condensed residual r(x; λ) of a WeightedResidual as a ParametrizedSystem:
+///   residual(x, λ) = contact_residual at λ,
+///   linearize(x, λ) = {r, ∂r/∂x, ∂r/∂λ} with ∂r/∂f from contact_residual_frequency_derivative
+///   and ∂r/∂F = −x_lin/(F₀ s_r).
+/// The WeightedResidual of the last frequency asked for is cached (continuation asks each f
+/// several times). Not thread-safe (the cache is mutable).
+class ForcedResponseFamily {
+ public:
+  ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter);
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const;
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const;
+  /// The problem at λ (a frequency, or the base problem for an amplitude parameter).
+  [[nodiscard]] const WeightedResidual& at(double lambda) const;
+  /// Forcing scale s = F/F₀ at λ (1 for a frequency parameter).
+  [[nodiscard]] double load(double lambda) const;
+  [[nodiscard]] ContinuationParameter parameter() const { return parameter_; }
+
+ private:
+  const WeightedResidual* base_;
+  ContinuationParameter parameter_;
+  double base_amplitude_;
+  mutable std::optional<WeightedResidual> cache_;
+  mutable double cache_lambda_ = 0.0;
+};
+
+/// One point of a forced-response curve.
+struct ResponsePoint {
+  double parameter = 0.0;              // f [Hz] or F [N]
+  double frequency_hz = 0.0;
+  double amplitude_n = 0.0;            // F [N]
+  Eigen::VectorXd contact_unknowns;    // x (n_c·M, x(k·n_c + c)) [m]; the rest: family.at(λ).expand(x)
+  double max_displacement = 0.0;       // max over P samples of u at `observed_dof` [m]
+  double min_displacement = 0.0;       // min [m]
+  double amplitude = 0.0;              // (max − min)/2 [m], the curve's amplitude measure
+  double max_contact_force = 0.0;      // max over contacts and P samples of f_c [N]
+  int corrector_iterations = 0;
+  // Stability (ResponseCurveOptions::stability): floquet.hpp.
+  double max_multiplier = 0.0;         // spectral radius of the monodromy matrix
+  bool stable = true;                  // every |μ| < 1 + 1e-6
+  Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
+};
+
+struct ResponseCurve {
+  std::vector<ResponsePoint> points;
+  std::vector<Fold> folds;             // parameters of the turning points
+  StopReason stop = StopReason::InitialPointFailed;
+  std::string message;
+  int rejected_steps = 0;
+  int kinks = 0;
+  long corrector_iterations = 0;
+  double wall_time_s = 0.0;            // continuation only (post-processing excluded)
+  double stability_time_s = 0.0;       // monodromy matrices of every point
+};
+
+struct ResponseCurveOptions {
+  ContinuationParameter parameter = ContinuationParameter::Frequency;
+  double parameter_min = 0.0, parameter_max = 0.0;  // range of λ; the start is the base problem's
+  int direction = +1;                               // sign of dλ at the start
+  double initial_step = 5e-3, min_step = 1e-7, max_step = 2e-2;  // scaled arclength (see continuation.hpp)
+  int max_points = 5000;
+  int max_corrector_iterations = 8;
+  double corrector_tolerance = 1e-9;
+  int observed_dof = -1;               // DOF of max/min/amplitude; −1 = the forced DOF
+  int samples = 512;                   // P samples per period for max/min, and monodromy steps
+  bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
+};
+
+/// Traces the response of `base` (its frequency and amplitude are the start) over the range of
+/// the parameter. Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
+/// The start is solved with base.solve() (load stepping if needed). Throws
+/// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
+/// without contact (a linear curve needs no continuation: frequency_response()).
+[[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
+
+}  // namespace wbm::solvers

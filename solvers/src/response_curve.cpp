@@ -1,0 +1,149 @@
+#include <wbm/solvers/response_curve.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <optional>
+#include <stdexcept>
+
+#include <wbm/solvers/post_processing.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::solvers {
+
+ForcedResponseFamily::ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter)
+    : base_(&base), parameter_(parameter), base_amplitude_(base.forcing().amplitude) {
+  if (parameter_ == ContinuationParameter::Amplitude && base_amplitude_ == 0.0) {
+    throw std::invalid_argument("ForcedResponseFamily: amplitude continuation needs a base problem with F != 0");
+  }
+}
+
+double ForcedResponseFamily::load(double lambda) const {
+  return parameter_ == ContinuationParameter::Amplitude ? lambda / base_amplitude_ : 1.0;
+}
+
+const WeightedResidual& ForcedResponseFamily::at(double lambda) const {
+  if (parameter_ == ContinuationParameter::Amplitude) return *base_;
+  if (!cache_ || cache_lambda_ != lambda) {
+    cache_.emplace(base_->at_frequency(lambda));
+    cache_lambda_ = lambda;
+  }
+  return *cache_;
+}
+
+Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double lambda) const {
+  return at(lambda).contact_residual(x, load(lambda));
+}
+
+Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double lambda) const {
+  const WeightedResidual& wr = at(lambda);
+  Linearization l;
+  l.residual = wr.contact_residual(x, load(lambda));
+  l.jacobian = wr.contact_jacobian(x);
+  if (parameter_ == ContinuationParameter::Frequency) {
+    l.parameter_derivative = wr.contact_residual_frequency_derivative(x);
+  } else {
+    l.parameter_derivative = -wr.contact_unknowns(wr.linear_response()) / (wr.residual_scale() * base_amplitude_);
+  }
+  return l;
+}
+
+}  // namespace wbm::solvers
+
+namespace wbm::solvers {
+
+ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
+  if (base.contact_unknowns(base.linear_response()).size() == 0) {
+    throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
+                                "(use frequency_response)");
+  }
+  const bool frequency = o.parameter == ContinuationParameter::Frequency;
+  const double lambda0 = frequency ? base.frequency_hz() : base.forcing().amplitude;
+  if (!(lambda0 >= o.parameter_min && lambda0 <= o.parameter_max)) {
+    throw std::invalid_argument("trace_response: the start " + std::to_string(lambda0) + " lies outside [" +
+                                std::to_string(o.parameter_min) + ", " + std::to_string(o.parameter_max) +
+                                "]; start the base problem inside the range");
+  }
+  const int dof = o.observed_dof >= 0 ? o.observed_dof : base.forcing().dof;
+  if (dof >= base.dofs()) {
+    throw std::invalid_argument("trace_response: observed_dof = " + std::to_string(dof) + " outside [0, " +
+                                std::to_string(base.dofs()) + ")");
+  }
+  const ForcedResponseFamily family(base, o.parameter);
+  // The start, with load stepping if needed.
+  const WeightedResidualSolution start = base.solve();
+  ResponseCurve curve;
+  if (!start.report.converged()) {
+    curve.message = "start: " + start.report.message;
+    return curve;
+  }
+  const Eigen::VectorXd x0 = base.contact_unknowns(spectral::stacked(start.coefficients));
+  PseudoArclengthOptions pa;
+  pa.parameter_min = o.parameter_min;
+  pa.parameter_max = o.parameter_max;
+  pa.parameter_scale = std::abs(lambda0) > 0.0 ? std::abs(lambda0) : 1.0;
+  pa.state_scale = base.residual_scale();
+  pa.direction = o.direction;
+  pa.initial_step = o.initial_step;
+  pa.min_step = o.min_step;
+  pa.max_step = o.max_step;
+  pa.max_points = o.max_points;
+  pa.max_corrector_iterations = o.max_corrector_iterations;
+  pa.corrector_tolerance = o.corrector_tolerance;
+  pa.initial_newton.tolerance = o.corrector_tolerance;
+  const Branch branch = pseudo_arclength(family, x0, lambda0, pa);
+  curve.folds = branch.folds;
+  curve.stop = branch.stop;
+  curve.message = branch.message;
+  curve.rejected_steps = branch.rejected_steps;
+  curve.kinks = branch.kinks;
+  curve.corrector_iterations = branch.corrector_iterations;
+  curve.wall_time_s = branch.wall_time_s;
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);
+  const auto& contacts = base.contacts();
+  const auto nc = static_cast<int>(contacts.size());
+  int observed_contact = -1;  // the observed DOF's index among the contacts, if it is one
+  for (int c = 0; c < nc; ++c) {
+    if (contacts[c].dof == dof) observed_contact = c;
+  }
+  const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
+  std::optional<FloquetResult> previous;
+  for (const auto& p : branch.points) {
+    ResponsePoint r;
+    r.parameter = p.parameter;
+    r.frequency_hz = frequency ? p.parameter : base.frequency_hz();
+    r.amplitude_n = family.load(p.parameter) * base.forcing().amplitude;
+    r.contact_unknowns = p.x;
+    const Eigen::MatrixXd uc = q * spectral::as_coefficients(p.x, nc).transpose();  // P × n_c
+    for (int c = 0; c < nc; ++c) {
+      for (Eigen::Index k = 0; k < uc.rows(); ++k) {
+        r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
+      }
+    }
+    Eigen::VectorXd u;
+    if (observed_contact >= 0) {
+      u = uc.col(observed_contact);
+    } else {  // a DOF away from the contacts: expand (one more factorization of G at this point)
+      const WeightedResidual& wr = family.at(p.parameter);
+      Eigen::VectorXd a = wr.expand(p.x);
+      a += (family.load(p.parameter) - 1.0) * wr.linear_response();  // expand() is at load 1
+      u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
+    }
+    r.max_displacement = u.maxCoeff();
+    r.min_displacement = u.minCoeff();
+    r.amplitude = 0.5 * (r.max_displacement - r.min_displacement);
+    r.corrector_iterations = p.corrector_iterations;
+    if (o.stability) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+      r.max_multiplier = fl.max_modulus;
+      r.stable = fl.stable();
+      if (previous) r.crossing = classify_crossing(*previous, fl);
+      previous = fl;
+      curve.stability_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    curve.points.push_back(std::move(r));
+  }
+  return curve;
+}
+
+}  // namespace wbm::solvers
