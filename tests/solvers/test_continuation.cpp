@@ -1,0 +1,301 @@
+// Pseudo-arclength continuation, forced-response curves and Floquet multipliers, against closed
+// forms: the single-harmonic Duffing response (folds, middle branch unstable), the linear rod's
+// direct frequency response, the multipliers e^{sT} of a linear system; and finite differences.
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
+
+#include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/response_curve.hpp>
+
+#include "scene.hpp"
+#include "testing.hpp"
+
+namespace {
+
+using namespace wbm;
+using solvers::ContinuationParameter;
+using solvers::TimeBasis;
+
+constexpr double kPi = std::numbers::pi;
+
+// Cubic spring f(u) = k3 u³ on one DOF: the Duffing oscillator's nonlinearity through the
+// contact-law interface (a law is any scalar restoring force of the DOF's displacement).
+class CubicSpring final : public contact::ContactLaw {
+ public:
+  explicit CubicSpring(double k3) : k3_(k3) {}
+  [[nodiscard]] double force(double u) const override { return k3_ * u * u * u; }
+  [[nodiscard]] double stiffness(double u) const override { return 3.0 * k3_ * u * u; }
+  [[nodiscard]] double potential(double u) const override { return 0.25 * k3_ * u * u * u * u; }
+  [[nodiscard]] double gap() const override { return 0.0; }
+  [[nodiscard]] std::string describe() const override { return "cubic spring"; }
+
+ private:
+  double k3_;
+};
+
+// Duffing m ü + c u̇ + k u + k3 u³ = F cos ωt: f_n = 10 Hz, ζ = 1 %, F = 1 N, k3 = 1e7 N/m³.
+struct Duffing {
+  double m = 1.0, k = std::pow(2 * kPi * 10.0, 2), c = 2 * 0.01 * 2 * kPi * 10.0, k3 = 1e7, f = 1.0;
+
+  [[nodiscard]] solvers::MechanicalSystem system() const {
+    solvers::MechanicalSystem s;
+    s.mass.resize(1, 1);
+    s.mass.insert(0, 0) = m;
+    s.stiffness.resize(1, 1);
+    s.stiffness.insert(0, 0) = k;
+    s.damping.resize(1, 1);
+    s.damping.insert(0, 0) = c;
+    return s;
+  }
+  // Harmonic balance with {1, cos, sin, cos 2ωt}: for the odd cubic the constant and cos 2ωt
+  // stay zero and u³ projects exactly on cos, sin, so this is the single-harmonic balance.
+  [[nodiscard]] solvers::WeightedResidual problem(double hz, int dimension = 4) const {
+    return {system(), {0, f, hz}, {{0, std::make_shared<CubicSpring>(k3)}}, TimeBasis::fourier(dimension),
+            TimeBasis::fourier(dimension)};
+  }
+  // Single-harmonic closed form: A² [(K_A − mω²)² + c²ω²] = F², K_A = k + ¾ k3 A², i.e.
+  //   m²W² − (2mK_A − c²) W + K_A² − F²/A² = 0 in W = ω².
+  // The two roots meet at the peak amplitude A_max (4m²F²/A² = c²(4mK_A − c²)); the larger one,
+  // f₊(A), falls from ∞ (A → 0) to a local minimum (the jump-up fold), rises to a local maximum
+  // (the jump-down fold, just below A_max for light damping) and falls again to A_max.
+  [[nodiscard]] double ka(double a) const { return k + 0.75 * k3 * a * a; }
+  [[nodiscard]] double upper_hz(double a) const {
+    const double kk = ka(a), b = 2 * m * kk - c * c;
+    const double disc = b * b - 4 * m * m * (kk * kk - f * f / (a * a));
+    return std::sqrt((b + std::sqrt(std::max(0.0, disc))) / (2 * m * m)) / (2 * kPi);
+  }
+  [[nodiscard]] double peak_amplitude() const {
+    auto g = [&](double a) { return 4 * m * m * f * f / (a * a) - c * c * (4 * m * ka(a) - c * c); };
+    double lo = 1e-4, hi = 1.0;  // g(lo) > 0 > g(hi)
+    for (int i = 0; i < 200; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (g(mid) > 0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+  // Golden-section extremum of f₊ on [lo, hi] (sign = +1 maximum, −1 minimum).
+  [[nodiscard]] double extremum(double lo, double hi, double sign) const {
+    const double r = (std::sqrt(5.0) - 1) / 2;
+    for (int i = 0; i < 200; ++i) {
+      const double x1 = hi - r * (hi - lo), x2 = lo + r * (hi - lo);
+      if (sign * upper_hz(x1) > sign * upper_hz(x2)) {
+        hi = x2;
+      } else {
+        lo = x1;
+      }
+    }
+    return upper_hz(0.5 * (lo + hi));
+  }
+  // {jump-up, jump-down} fold frequencies [Hz]: the local minimum and maximum of f₊ on a fine
+  // grid, refined by golden section on the neighbouring cells.
+  [[nodiscard]] std::pair<double, double> folds_hz() const {
+    const double a_max = peak_amplitude();
+    const int n = 20000;
+    std::vector<double> a(n), fa(n);
+    for (int i = 0; i < n; ++i) {
+      a[i] = a_max * std::pow(1e-3, 1.0 - static_cast<double>(i) / (n - 1));
+      fa[i] = upper_hz(a[i]);
+    }
+    int imin = -1, imax = -1;
+    for (int i = 1; i + 1 < n; ++i) {
+      if (imin < 0 && fa[i] < fa[i - 1] && fa[i] <= fa[i + 1]) imin = i;
+      if (imin >= 0 && fa[i] > fa[i - 1] && fa[i] >= fa[i + 1]) imax = i;
+    }
+    return {extremum(a[imin - 1], a[imin + 1], -1.0), extremum(a[imax - 1], a[imax + 1], +1.0)};
+  }
+};
+
+solvers::ResponseCurveOptions duffing_options(int direction) {
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = 8.0;
+  o.parameter_max = 14.0;
+  o.direction = direction;
+  o.max_step = 5e-2;
+  o.corrector_tolerance = 1e-12;
+  return o;
+}
+
+}  // namespace
+
+// ∂r/∂f against central differences of the condensed residual through at_frequency, for a
+// Galerkin and a Petrov–Galerkin pair with the Case 2 stop active.
+TEST(Continuation, FrequencyDerivativeMatchesFiniteDifferences) {
+  const auto s = reproduce::load_scene("jl14_case2");
+  for (const auto& [tr, we] : {std::pair{"fourier", "fourier"}, std::pair{"haar", "fourier"}, std::pair{"db6", "db6"}}) {
+    const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(1300.0), s.contact_points(),
+                                       TimeBasis::from_name(tr, 16), TimeBasis::from_name(we, 16));
+    const Eigen::VectorXd x = 1.3 * wr.contact_unknowns(wr.linear_response());  // deep in contact
+    const double h = 1e-3;                                                     // Hz
+    const Eigen::VectorXd fd =
+        (wr.at_frequency(1300.0 + h).contact_residual(x) - wr.at_frequency(1300.0 - h).contact_residual(x)) / (2 * h);
+    const Eigen::VectorXd analytic = wr.contact_residual_frequency_derivative(x);
+    EXPECT_LE((analytic - fd).norm(), 1e-6 * fd.norm()) << tr << ":" << we;
+  }
+}
+
+// With the stop out of reach (g0 = 1 m) the rod is linear: every point of the branch through
+// the first resonance (1273 Hz) equals the direct solve (K − ω²M + iωC) U = F e_tip.
+TEST(Continuation, LinearRodFollowsTheDirectFrequencyResponse) {
+  const auto s = reproduce::load_scene("jl14_case2");
+  const std::vector<solvers::ContactPoint> far = {
+      {s.forcing->dof, std::make_shared<contact::ExponentialPenalty>(contact::ExponentialPenaltyParameters{1e8, 20.0, 1.0})}};
+  const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(1000.0), far, TimeBasis::fourier(8),
+                                     TimeBasis::fourier(8));
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = 1000.0;
+  o.parameter_max = 1500.0;
+  o.corrector_tolerance = 1e-13;  // on r = (x − …)/g0 with g0 = 1 m: 1e-13 m
+  const auto curve = solvers::trace_response(wr, o);
+  ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
+  EXPECT_TRUE(curve.folds.empty());
+  EXPECT_GT(curve.points.size(), 20u);
+  for (const auto& p : curve.points) {
+    auto forcing = s.harmonic_forcing(p.frequency_hz);
+    const double exact = std::abs(solvers::frequency_response(s.system(), forcing)(forcing.dof));
+    // Fourier ordering {1, cos, sin, ...}: the first-harmonic amplitude is √(a₁² + a₂²).
+    EXPECT_NEAR(std::hypot(p.contact_unknowns(1), p.contact_unknowns(2)), exact, 1e-10 * exact + 1e-12) << p.frequency_hz;
+    EXPECT_TRUE(p.stable) << p.frequency_hz;  // a damped linear system
+  }
+}
+
+// Duffing, single harmonic: both folds of the closed form, and the same folds traced from
+// either end of the range.
+TEST(Continuation, DuffingFoldsMatchClosedFormFromEitherEnd) {
+  const Duffing d;
+  const auto [jump_up, jump_down] = d.folds_hz();
+  const auto up = solvers::trace_response(d.problem(8.0), duffing_options(+1));
+  ASSERT_EQ(up.stop, solvers::StopReason::RangeReached) << up.message;
+  ASSERT_EQ(up.folds.size(), 2u);
+  EXPECT_NEAR(up.folds[0].parameter, jump_down, 1e-6 * jump_down);
+  EXPECT_NEAR(up.folds[1].parameter, jump_up, 1e-6 * jump_up);
+  const auto down = solvers::trace_response(d.problem(14.0), duffing_options(-1));
+  ASSERT_EQ(down.folds.size(), 2u) << down.message;
+  EXPECT_NEAR(down.folds[0].parameter, up.folds[1].parameter, 1e-6 * jump_up);
+  EXPECT_NEAR(down.folds[1].parameter, up.folds[0].parameter, 1e-6 * jump_down);
+}
+
+// Duffing with 8 harmonics (an accurate orbit): the monodromy matrix of the ODE about it finds
+// the middle branch unstable and the others stable, and a multiplier crossing +1 at each fold.
+// (About the single-harmonic orbit the crossings sit ~0.5 % away from its folds: the missing
+// third harmonic.)
+TEST(Continuation, DuffingMiddleBranchIsUnstable) {
+  const Duffing d;
+  const auto curve = solvers::trace_response(d.problem(8.0, 16), duffing_options(+1));
+  ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
+  ASSERT_EQ(curve.folds.size(), 2u);
+  const size_t first = curve.folds[0].after, second = curve.folds[1].after;
+  for (size_t i = 0; i < curve.points.size(); ++i) {
+    const auto& p = curve.points[i];
+    if (i > first + 1 && i < second) {
+      EXPECT_FALSE(p.stable) << i << " at " << p.frequency_hz << " Hz";
+    }
+    if (i + 1 < first || i > second + 2) {
+      EXPECT_TRUE(p.stable) << i << " at " << p.frequency_hz << " Hz, |mu| = " << p.max_multiplier;
+    }
+  }
+  int crossings = 0;
+  for (const auto& p : curve.points) crossings += p.crossing == solvers::Bifurcation::Fold ? 1 : 0;
+  EXPECT_EQ(crossings, 2);
+}
+
+// A corrector that fails (non-finite residual) the first times it is asked inside a window is
+// retried with halved steps; the branch then reaches the end with the same folds.
+TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
+  const Duffing d;
+  const auto base = d.problem(8.0);
+  const solvers::ForcedResponseFamily family(base, ContinuationParameter::Frequency);
+  struct Flaky {
+    const solvers::ForcedResponseFamily* family;
+    mutable int failures_left = 6;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const { return family->residual(x, f); }
+    [[nodiscard]] solvers::Linearization linearize(const Eigen::VectorXd& x, double f) const {
+      solvers::Linearization l = family->linearize(x, f);
+      if (f > 10.5 && f < 11.0 && failures_left > 0) {
+        --failures_left;
+        l.residual.setConstant(std::nan(""));
+      }
+      return l;
+    }
+  };
+  const Flaky flaky{&family};
+  solvers::PseudoArclengthOptions o;
+  o.parameter_min = 8.0;
+  o.parameter_max = 14.0;
+  o.parameter_scale = 8.0;
+  o.state_scale = base.residual_scale();
+  o.max_step = 5e-2;
+  o.corrector_tolerance = 1e-12;
+  const Eigen::VectorXd x0 = base.contact_unknowns(base.linear_response());
+  const auto clean = solvers::pseudo_arclength(family, x0, 8.0, o);
+  const auto recovered = solvers::pseudo_arclength(flaky, x0, 8.0, o);
+  EXPECT_EQ(flaky.failures_left, 0);
+  EXPECT_GE(recovered.rejected_steps, clean.rejected_steps + 1);
+  ASSERT_EQ(recovered.stop, solvers::StopReason::RangeReached) << recovered.message;
+  ASSERT_EQ(recovered.folds.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) EXPECT_NEAR(recovered.folds[i].parameter, clean.folds[i].parameter, 1e-5);
+}
+
+// Linear system: Φ = e^{A₀T} exactly, so the multipliers are e^{sT} with the modal eigenvalues
+// s = −ζω ± ω√(ζ² − 1), ω² = λ_i, 2ζω = β λ_i (C = βK) of the rod.
+TEST(Floquet, LinearRodMultipliersAreExponentialsOfModalEigenvalues) {
+  const auto s = reproduce::load_scene("jl14_case2");
+  const auto sys = s.system();
+  const double f = 1275.0, beta = s.damping.beta;
+  const auto result = solvers::floquet_multipliers(sys, {}, Eigen::MatrixXd(0, 64), f);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(sys.stiffness),
+                                                                      Eigen::MatrixXd(sys.mass));
+  ASSERT_EQ(result.multipliers.size(), 2 * sys.dofs());
+  for (Eigen::Index i = 0; i < eig.eigenvalues().size(); ++i) {
+    // High modes are overdamped (ζ > 1): s is then real, hence the complex square root.
+    const double w = std::sqrt(eig.eigenvalues()(i)), zeta = 0.5 * beta * w;
+    const std::complex<double> s_i = -zeta * w + w * std::sqrt(std::complex<double>(zeta * zeta - 1.0));
+    const std::complex<double> mu = std::exp(s_i / f);
+    double best = 1e300;
+    for (Eigen::Index j = 0; j < result.multipliers.size(); ++j) best = std::min(best, std::abs(result.multipliers(j) - mu));
+    EXPECT_LT(best, 1e-9) << "mode " << i;
+  }
+  EXPECT_TRUE(result.stable());
+}
+
+// The contact part is integrated by the trapezoidal rule: second order in the step T/P (Duffing
+// point on the resonant branch, smooth k(t) = 3 k3 u(t)²; reference P = 16384).
+TEST(Floquet, MonodromyConvergesAtSecondOrder) {
+  const Duffing d;
+  const auto wr = d.problem(10.8);
+  const auto sol = wr.solve();
+  ASSERT_TRUE(sol.converged());
+  auto multipliers = [&](int p) {
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+    const Eigen::MatrixXd u = (TimeBasis::fourier(4).values(tau, 0) * sol.coefficients.transpose()).transpose();
+    return solvers::floquet_multipliers(d.system(), wr.contacts(), u, 10.8).monodromy;
+  };
+  const Eigen::MatrixXd reference = multipliers(16384);
+  std::vector<double> h, err;
+  for (int p : {64, 128, 256, 512}) {
+    h.push_back(1.0 / p);
+    err.push_back((multipliers(p) - reference).norm());
+  }
+  EXPECT_NEAR(wbm::testing::observed_order(h, err), 2.0, 0.15);
+}
+
+// Bad input is refused with the parameter named.
+TEST(Continuation, RefusesInvalidOptions) {
+  const Duffing d;
+  auto o = duffing_options(+1);
+  o.parameter_min = 9.0;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)solvers::trace_response(d.problem(8.0), o); },
+                                                    {"start 8", "outside [9"});
+  solvers::PseudoArclengthOptions p;
+  p.parameter_min = 1.0;
+  p.parameter_max = 2.0;
+  p.direction = 0;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { p.validate(); }, {"direction = 0"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::floquet_multipliers(d.system(), {}, Eigen::MatrixXd(0, 4), 10.0); }, {"need P >= 8"});
+}
