@@ -86,6 +86,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.initial_step = o.initial_step;
   pa.min_step = o.min_step;
   pa.max_step = o.max_step;
+  pa.max_parameter_step = o.max_parameter_step;
   pa.max_points = o.max_points;
   pa.max_corrector_iterations = o.max_corrector_iterations;
   pa.corrector_tolerance = o.corrector_tolerance;

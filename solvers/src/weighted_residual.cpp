@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -225,8 +226,19 @@ class ModeBlock {
       ok_ = rc > 1e-300 && std::isfinite(rc);
     }
   }
+  /// Factored block (A_K⁻¹ S)⁻¹ given S = its core and the shared left factor A_K⁻¹ (see
+  /// FourierWeighting): solve and inverse apply A_K⁻¹ S.
+  ModeBlock(Eigen::MatrixXd core, const Eigen::MatrixXd* left)
+      : m_(core.rows()), component_(nullptr), left_(left), core_(std::move(core)) {
+    ok_ = core_.allFinite();
+  }
   [[nodiscard]] bool ok() const { return ok_; }
+  [[nodiscard]] bool factored() const { return left_ != nullptr; }
+  [[nodiscard]] const Eigen::MatrixXd& core() const { return core_; }
   [[nodiscard]] Eigen::MatrixXd solve(const Eigen::MatrixXd& r, bool transposed) const {
+    if (left_ != nullptr) {
+      return transposed ? Eigen::MatrixXd(core_.transpose() * (left_->transpose() * r)) : Eigen::MatrixXd(*left_ * (core_ * r));
+    }
     if (!inverse_.empty()) {
       Eigen::MatrixXd out(r.rows(), r.cols());
       for (size_t c = 0; c < component_->size(); ++c) {
@@ -244,6 +256,7 @@ class ModeBlock {
   }
   /// The inverse, M × M (dense storage; only the components' entries are nonzero).
   [[nodiscard]] Eigen::MatrixXd inverse() const {
+    if (left_ != nullptr) return *left_ * core_;
     if (inverse_.empty()) return solve(Eigen::MatrixXd::Identity(m_, m_), false);
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m_, m_);
     for (size_t c = 0; c < component_->size(); ++c) {
@@ -261,8 +274,91 @@ class ModeBlock {
   bool sparse_ = false, ok_ = false;
   const Components* component_;
   std::vector<Eigen::MatrixXd> inverse_;  // per component, when split
+  const Eigen::MatrixXd* left_ = nullptr;  // factored: A_K⁻¹ (shared) ...
+  Eigen::MatrixXd core_;                   // ... and S, the block's inverse being A_K⁻¹ S
   std::unique_ptr<SparseLu> sparse_lu_;  // SparseLU::transpose() is not const; held by pointer
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu_;
+};
+
+// Distributional form with a Fourier weighting basis {1, cos 2πkτ, sin 2πkτ, …, cos πMτ}: the
+// weighting functions' derivatives stay in the basis, p̈_j = −ω_j² p_j for every j and
+// ṗ = D₁ p for every row but the last (cos πMτ, whose derivative sin πMτ is not in the basis), so
+//   A_M = D₂ A_K,   A_C = −D₁ A_K + e_L c_Lᵀ,   c_L = last row of A_C,
+// whatever the trial basis and whether A is exact or discrete (checked at set-up). A modal block
+// is then f² A_M + f c_i A_C + λ_i A_K = (P_i + γ_i e_L gᵀ) A_K with
+//   P_i = f² D₂ − f c_i D₁ + λ_i I (1 × 1 and 2 × 2 blocks per harmonic),  γ_i = f c_i,  gᵀ = c_Lᵀ A_K⁻¹,
+// whose inverse A_K⁻¹ S_i, S_i = P_i⁻¹ − γ_i P_i⁻¹ e_L gᵀ P_i⁻¹ / (1 + γ_i gᵀ P_i⁻¹ e_L)
+// (Sherman–Morrison) costs O(M²) instead of the O(M³) dense LU and inverse.
+// When the last row of A_K vanishes (Haar trial functions: cos πMτ integrates to zero over every
+// Haar cell), A_K is singular but the block is Q_i N with N = A_K with its last row replaced by
+// c_Lᵀ and Q_i = diag(P_i without its last row and column, γ_i): then S_i = Q_i⁻¹, left factor N⁻¹.
+struct FourierWeighting {
+  Eigen::MatrixXd ak_inv;   // A_K⁻¹, or N⁻¹ when replaced_last_row (dense, frequency independent)
+  Eigen::VectorXd g;        // A_K⁻ᵀ c_L (Sherman–Morrison form only)
+  Eigen::VectorXd omega;    // ω_j = 2πk_j of weighting function j (0 for the constant)
+  bool replaced_last_row = false;
+
+  // Returns nullopt unless the identities hold to 1e-10 relative and A_K is well conditioned.
+  static std::optional<FourierWeighting> detect(const TimeOperators& ops) {
+    const Eigen::Index m = ops.stiffness.rows();
+    if (m < 4) return std::nullopt;
+    FourierWeighting fw;
+    fw.omega = Eigen::VectorXd::Zero(m);
+    for (Eigen::Index j = 1; j < m - 1; ++j) fw.omega(j) = 2.0 * std::numbers::pi * static_cast<double>((j + 1) / 2);
+    fw.omega(m - 1) = std::numbers::pi * static_cast<double>(m);
+    const Eigen::MatrixXd d2ak = -(fw.omega.array().square().matrix().asDiagonal() * ops.stiffness);
+    Eigen::MatrixXd d1ak = Eigen::MatrixXd::Zero(m, m);  // D₁ A_K: row 2k−1 (cos) ← −ω sin row, row 2k ← ω cos row
+    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+      d1ak.row(j) = -fw.omega(j) * ops.stiffness.row(j + 1);
+      d1ak.row(j + 1) = fw.omega(j) * ops.stiffness.row(j);
+    }
+    const double sm = ops.mass.cwiseAbs().maxCoeff(), sc = ops.damping.cwiseAbs().maxCoeff();
+    if (!((ops.mass - d2ak).cwiseAbs().maxCoeff() <= 1e-10 * sm)) return std::nullopt;
+    if (!((ops.damping + d1ak).topRows(m - 1).cwiseAbs().maxCoeff() <= 1e-10 * sc)) return std::nullopt;
+    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(ops.stiffness);
+    if (lu.rcond() > 1e-12) {
+      fw.ak_inv = lu.inverse();
+      fw.g = fw.ak_inv.transpose() * ops.damping.row(m - 1).transpose();
+      return fw;
+    }
+    if (!(ops.stiffness.row(m - 1).cwiseAbs().maxCoeff() <= 1e-12 * ops.stiffness.cwiseAbs().maxCoeff())) {
+      return std::nullopt;
+    }
+    Eigen::MatrixXd n = ops.stiffness;
+    n.row(m - 1) = ops.damping.row(m - 1);
+    const Eigen::PartialPivLU<Eigen::MatrixXd> nlu(n);
+    if (!(nlu.rcond() > 1e-12)) return std::nullopt;
+    fw.ak_inv = nlu.inverse();
+    fw.replaced_last_row = true;
+    return fw;
+  }
+
+  // S_i (dense M × M) for the block f² A_M + f c A_C + λ A_K.
+  [[nodiscard]] Eigen::MatrixXd core(double f, double c, double lambda) const {
+    const Eigen::Index m = omega.size(), last = m - 1;
+    Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(m, m);  // P⁻¹
+    pinv(0, 0) = 1.0 / lambda;
+    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+      // P on (cos, sin): [[a, b], [−b, a]] with a = λ − f² ω², b = f c ω (from −f c D₁).
+      const double a = lambda - f * f * omega(j) * omega(j), b = f * c * omega(j);
+      const double det = a * a + b * b;
+      pinv(j, j) = a / det;
+      pinv(j, j + 1) = -b / det;
+      pinv(j + 1, j) = b / det;
+      pinv(j + 1, j + 1) = a / det;
+    }
+    const double gamma = f * c;
+    if (replaced_last_row) {
+      pinv(last, last) = 1.0 / gamma;  // inf without damping: the block is singular (reported)
+      return pinv;
+    }
+    const double p_last = lambda - f * f * omega(last) * omega(last);
+    pinv(last, last) = 1.0 / p_last;
+    const Eigen::RowVectorXd gp = g.transpose() * pinv;  // gᵀ P⁻¹
+    const double denominator = 1.0 + gamma * g(last) / p_last;
+    pinv.row(last) -= (gamma / (p_last * denominator)) * gp;  // − γ P⁻¹ e_L gᵀ P⁻¹ / (1 + γ gᵀ P⁻¹ e_L)
+    return pinv;
+  }
 };
 
 struct WeightedResidual::Impl {
@@ -289,6 +385,7 @@ struct WeightedResidual::Impl {
   Eigen::VectorXd lambda;
   std::vector<ModeBlock> blocks;
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
+  std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
   mutable double g_norm1 = 0.0;  // < 0: not computed yet
 
   Eigen::VectorXd b, a_lin, x_lin;
@@ -326,6 +423,9 @@ struct WeightedResidual::Impl {
     assemble_time_operators(tau);
     sample_structure();
     components = block_components(ops);
+    if (weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional) {
+      fourier_weighting = FourierWeighting::detect(ops);
+    }
 
     Eigen::VectorXd cosine(q);
     for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * tau(k));
@@ -359,7 +459,8 @@ struct WeightedResidual::Impl {
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
         ops(base.ops), theta(base.theta), wq(base.wq), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
-        sparse_rows(base.sparse_rows), phi(base.phi), lambda(base.lambda), components(base.components), b(base.b),
+        sparse_rows(base.sparse_rows), phi(base.phi), lambda(base.lambda), components(base.components),
+        fourier_weighting(base.fourier_weighting), b(base.b),
         scale(base.scale),
         contact_rows(base.contact_rows) {
     forcing.frequency_hz = frequency_hz;
@@ -466,7 +567,11 @@ struct WeightedResidual::Impl {
       factorized = true;
       blocks.reserve(static_cast<size_t>(n));
       for (int i = 0; i < n; ++i) {
-        blocks.emplace_back(a + lambda(i) * bb, components);
+        if (fourier_weighting) {
+          blocks.emplace_back(fourier_weighting->core(fr, c_m + lambda(i) * c_k, lambda(i)), &fourier_weighting->ak_inv);
+        } else {
+          blocks.emplace_back(a + lambda(i) * bb, components);
+        }
         if (!blocks.back().ok()) factorized = false;
       }
       g_norm1 = -1.0;  // ‖G‖₁ from the Kronecker factors on demand (condition_number), not per frequency
@@ -499,6 +604,19 @@ struct WeightedResidual::Impl {
   // H = P G⁻¹ Pᵀ (n_c·M square, x ordering).
   void compliance() {
     h.resize(nc * m, nc * m);
+    if (modal && fourier_weighting) {  // H_cd = A_K⁻¹ Σ_i φ_i(c) φ_i(d) S_i: one product per contact pair
+      for (int c = 0; c < nc; ++c) {
+        for (int d = 0; d < nc; ++d) {
+          Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(m, m);
+          for (int i = 0; i < n; ++i) sum += (phi(contacts[c].dof, i) * phi(contacts[d].dof, i)) * blocks[i].core();
+          const Eigen::MatrixXd hcd = fourier_weighting->ak_inv * sum;
+          for (int l = 0; l < m; ++l) {
+            for (int k = 0; k < m; ++k) h(k * nc + c, l * nc + d) = hcd(k, l);
+          }
+        }
+      }
+      return;
+    }
     if (modal) {
       h.setZero();
       for (int i = 0; i < n; ++i) {

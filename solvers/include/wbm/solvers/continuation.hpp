@@ -11,8 +11,10 @@
 ///   tangent    t_{k+1} from the same bordered matrix with right-hand side (0, 1), normalized, so
 ///              ⟨t_k, t_{k+1}⟩ > 0 and the branch never turns back on itself;
 ///   step       h ← h · clamp(target/iterations, ½, 2) after a success, h ← h/2 and retry after a
-///              corrector failure or a tangent turning by more than max_turn_degrees (a turn that
-///              persists down to h = kink_step is a kink of a nonsmooth branch and is kept).
+///              corrector failure or a tangent turning by more than max_turn_degrees; a turn that
+///              persists down to h = kink_step is a corner of a nonsmooth branch, jumped by one
+///              step of the last accepted length along the old tangent when that continues in
+///              the old direction, else kept.
 /// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
 /// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step.
 /// The branch stops on a StopReason; every point it holds converged (‖R‖ ≤ corrector_tolerance);
@@ -68,6 +70,7 @@ struct PseudoArclengthOptions {
   double initial_step = 1e-2;    // h, in the scaled metric
   double min_step = 1e-7;
   double max_step = 5e-2;
+  double max_parameter_step = 0.0;  // > 0: also |Δλ| <= this per step (λ units), for a dense curve
   int max_points = 10000;
   int max_corrector_iterations = 8;
   double corrector_tolerance = 1e-9;  // on ‖R‖₂, R as the system scales it
@@ -101,7 +104,7 @@ struct Branch {
   StopReason stop = StopReason::InitialPointFailed;
   std::string message;      // why it stopped, with the last λ and step
   int rejected_steps = 0;   // corrector failures and over-sharp turns, each retried with h/2
-  int kinks = 0;            // sharp turns kept at h <= kink_step (nonsmooth branch)
+  int kinks = 0;            // corners met at h <= kink_step (nonsmooth branch), jumped or kept
   long corrector_iterations = 0;
   double wall_time_s = 0.0;
 };
@@ -198,41 +201,67 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
 
   const double cos_turn = std::cos(o.max_turn_degrees * 3.14159265358979323846 / 180.0);
   double h = o.initial_step;
-  while (static_cast<int>(branch.points.size()) < o.max_points) {
-    const BranchPoint& last = branch.points.back();
-    const Eigen::VectorXd z_last = scaled(last.x, last.parameter);
-    Eigen::VectorXd z = z_last + h * last.tangent;
+  double h_accepted = h;  // the step of the last accepted point, for jumps over kinks
+  // One predictor–corrector step of length `step` from the last point along its tangent.
+  struct Attempt {
     bool converged = false;
     int iterations = 0;
     double rnorm = 0.0;
+    Eigen::VectorXd z, tangent;
+  };
+  auto attempt = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, double step) {
+    Attempt a;
+    a.z = z_last + step * last.tangent;
     Linearization lin;
-    for (; iterations <= o.max_corrector_iterations; ++iterations) {
-      lin = system.linearize(z.head(n) * xs, z(n) * ls);
-      rnorm = lin.residual.norm();
-      if (!std::isfinite(rnorm) || !lin.jacobian.allFinite() || !lin.parameter_derivative.allFinite()) break;
-      if (rnorm <= o.corrector_tolerance) {
-        converged = true;
+    for (; a.iterations <= o.max_corrector_iterations; ++a.iterations) {
+      lin = system.linearize(a.z.head(n) * xs, a.z(n) * ls);
+      a.rnorm = lin.residual.norm();
+      if (!std::isfinite(a.rnorm) || !lin.jacobian.allFinite() || !lin.parameter_derivative.allFinite()) break;
+      if (a.rnorm <= o.corrector_tolerance) {
+        a.converged = true;
         break;
       }
-      if (iterations == o.max_corrector_iterations) break;
+      if (a.iterations == o.max_corrector_iterations) break;
       Eigen::VectorXd rhs(n + 1);
       rhs.head(n) = -lin.residual;
-      rhs(n) = -(detail::inner(last.tangent, z - z_last) - h);
+      rhs(n) = -(detail::inner(last.tangent, a.z - z_last) - step);
       const Eigen::PartialPivLU<Eigen::MatrixXd> lu(detail::bordered(lin, last.tangent, xs, ls));
       const Eigen::VectorXd dz = lu.solve(rhs);
       if (!dz.allFinite()) break;
-      z += dz;
+      a.z += dz;
     }
-    branch.corrector_iterations += iterations;
-    Eigen::VectorXd t_new;
-    if (converged) {
-      t_new = tangent_at(lin, last.tangent);
-      if (!t_new.allFinite()) converged = false;
+    if (a.converged) {
+      a.tangent = tangent_at(lin, last.tangent);
+      if (!a.tangent.allFinite()) a.converged = false;
     }
-    // A sharp turn halves h, down to kink_step: below it the turn is a kink of a nonsmooth
-    // branch (contact onset seen by piecewise-constant Haar trial functions) and is passed.
-    const bool sharp = converged && detail::inner(t_new, last.tangent) < cos_turn;
-    if (sharp && h <= o.kink_step) ++branch.kinks;
+    return a;
+  };
+  while (static_cast<int>(branch.points.size()) < o.max_points) {
+    const BranchPoint& last = branch.points.back();
+    const Eigen::VectorXd z_last = scaled(last.x, last.parameter);
+    Attempt a = attempt(last, z_last, h);
+    branch.corrector_iterations += a.iterations;
+    // A sharp turn halves h, down to kink_step: below it the turn is a corner of a nonsmooth
+    // branch (a contact sample changing state). The corner is then jumped: one step of the last
+    // accepted length along the old tangent; if that lands on a branch that continues in the old
+    // direction it is taken (a secondary branch that starts at the corner is not followed),
+    // otherwise the corner point itself is kept.
+    bool sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
+    if (sharp && h <= o.kink_step) {
+      ++branch.kinks;
+      Attempt jump = attempt(last, z_last, h_accepted);
+      branch.corrector_iterations += jump.iterations;
+      if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
+        a = std::move(jump);
+        h = h_accepted;
+        sharp = false;
+      }
+    }
+    const bool converged = a.converged;
+    const int iterations = a.iterations;
+    const double rnorm = a.rnorm;
+    const Eigen::VectorXd& z = a.z;
+    const Eigen::VectorXd& t_new = a.tangent;
     if (!converged || (sharp && h > o.kink_step)) {
       ++branch.rejected_steps;
       h *= 0.5;
@@ -282,8 +311,14 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
                                                   std::to_string(o.parameter_min) + ", " +
                                                   std::to_string(o.parameter_max) + "]");
     }
+    h_accepted = h;
     const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);
-    h = std::clamp(h * factor, o.min_step, o.max_step);
+    double h_max = o.max_step;
+    const double t_lambda = std::abs(branch.points.back().parameter_tangent());
+    if (o.max_parameter_step > 0.0 && t_lambda > 0.0) {
+      h_max = std::min(h_max, o.max_parameter_step / (ls * t_lambda));  // |Δλ| ≈ h |t_λ| ls
+    }
+    h = std::clamp(h * factor, o.min_step, std::max(o.min_step, h_max));
   }
   return finish(StopReason::MaxPoints, "point limit " + std::to_string(o.max_points) + " reached at λ = " +
                                            std::to_string(branch.points.back().parameter));
