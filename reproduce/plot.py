@@ -138,9 +138,47 @@ def basis_functions(folder):
     save(fig, folder, "basis")
 
 
+def frequency_response(folder):
+    """Fig. 12: tip amplitude against frequency, unstable parts dashed, linear and BDF overlaid."""
+    _, b = read_csv(folder / "branches.csv")
+    _, lin = read_csv(folder / "linear.csv")
+    bdf = read_csv(folder / "bdf.csv")[1] if (folder / "bdf.csv").exists() else None
+    meta = json.loads((folder / "meta.json").read_text())
+    gap = meta["gap_m"]
+    present = sorted({int(c) for c in b[0]})
+    for stem, wanted in (("frequency_response", [0, 3]), ("frequency_response_all", present)):
+        fig, ax = plt.subplots(figsize=(7.0, 4.4))
+        ax.plot(lin[0], [1e3 * a for a in lin[1]], color="0.6", lw=1.0, label="linear (no contact)")
+        for i in wanted:
+            pts = [(f, 1e3 * a, s) for c, f, a, s in zip(b[0], b[1], b[4], b[5]) if int(c) == i]
+            if not pts:
+                continue
+            color = None
+            # Consecutive points of equal stability form one segment; unstable ones dashed.
+            start = 0
+            for k in range(1, len(pts) + 1):
+                if k == len(pts) or pts[k][2] != pts[start][2]:
+                    seg = pts[max(0, start - 1):k]
+                    line, = ax.plot([p[0] for p in seg], [p[1] for p in seg], color=color,
+                                    ls="-" if pts[start][2] == 1.0 else "--", lw=1.2,
+                                    label=METHODS[i] if color is None else None)
+                    color = line.get_color()
+                    start = k
+        if bdf:
+            ax.plot(bdf[0], [1e3 * a for a in bdf[3]], "kx", ms=7, label="time stepping (BDF), from rest")
+        ax.axhline(1e3 * gap, color="k", lw=0.6, ls=":", label="gap")
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("tip amplitude (max - min)/2 [mm]")
+        ax.set_title(f"{meta['figure']}: M = {meta['dimension']}, unstable dashed", fontsize=9)
+        ax.legend()
+        fig.tight_layout()
+        save(fig, folder, stem)
+
+
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
            "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
-           "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_speed_accuracy": speed_accuracy}
+           "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
+           "jl14_speed_accuracy": speed_accuracy}
 
 
 def main():

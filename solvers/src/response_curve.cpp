@@ -87,6 +87,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.min_step = o.min_step;
   pa.max_step = o.max_step;
   pa.max_parameter_step = o.max_parameter_step;
+  pa.max_state = o.max_state;
   pa.max_points = o.max_points;
   pa.max_corrector_iterations = o.max_corrector_iterations;
   pa.corrector_tolerance = o.corrector_tolerance;

@@ -299,3 +299,41 @@ TEST(Continuation, RefusesInvalidOptions) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::floquet_multipliers(d.system(), {}, Eigen::MatrixXd(0, 4), 10.0); }, {"need P >= 8"});
 }
+
+// Extremes of issue #6 on the Case 2 rod: a stiff penalty (α = 500 1/m), very light damping
+// (β = 1e-7 s, a sharp fold) and a zero gap. Each branch completes or stops with a reason, and
+// every point it holds is a converged, finite solution (the residual is checked again here).
+TEST(Continuation, ExtremesCompleteOrStopWithAReasonAndValidPoints) {
+  const auto s = reproduce::load_scene("jl14_case2");
+  const auto& c = s.contacts.front();
+  struct Extreme {
+    const char* what;
+    double exponent, beta, gap;
+  };
+  for (const Extreme e : {Extreme{"alpha = 500", 500.0, s.damping.beta, c.gap}, Extreme{"beta = 1e-7", c.exponent, 1e-7, c.gap},
+                          Extreme{"gap = 0", c.exponent, s.damping.beta, 0.0}}) {
+    const fem::Rod rod(s.structure->rod);
+    const std::vector<solvers::ContactPoint> contacts = {
+        {rod.tip_dof(), std::make_shared<contact::ExponentialPenalty>(
+                            contact::ExponentialPenaltyParameters{c.coefficient, e.exponent, e.gap})}};
+    const solvers::WeightedResidual base(solvers::beta_damped(rod, e.beta), s.harmonic_forcing(1000.0), contacts,
+                                         TimeBasis::fourier(16), TimeBasis::fourier(16));
+    solvers::ResponseCurveOptions o;
+    o.parameter_min = 1000.0;
+    o.parameter_max = 1700.0;
+    o.max_points = 800;
+    const auto curve = solvers::trace_response(base, o);
+    EXPECT_FALSE(curve.message.empty()) << e.what;
+    EXPECT_NE(curve.stop, solvers::StopReason::InitialPointFailed) << e.what << ": " << curve.message;
+    ASSERT_FALSE(curve.points.empty()) << e.what;
+    const solvers::ForcedResponseFamily family(base, ContinuationParameter::Frequency);
+    for (size_t i = 0; i < curve.points.size(); i += 25) {
+      const auto& p = curve.points[i];
+      ASSERT_TRUE(p.contact_unknowns.allFinite() && std::isfinite(p.amplitude) && std::isfinite(p.max_multiplier))
+          << e.what;
+      EXPECT_LE(family.residual(p.contact_unknowns, p.frequency_hz).norm(), 1e-8) << e.what << " at " << p.frequency_hz;
+    }
+    std::printf("[ extreme  ] %s: %zu points, %zu folds, stop: %s (%s)\n", e.what, curve.points.size(),
+                curve.folds.size(), std::string(solvers::to_string(curve.stop)).c_str(), curve.message.c_str());
+  }
+}

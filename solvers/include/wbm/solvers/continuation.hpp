@@ -50,7 +50,7 @@ concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, doub
   { s.linearize(x, p) } -> std::convertible_to<Linearization>;
 };
 
-enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed };
+enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed, StateBound };
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
   switch (r) {
@@ -58,6 +58,7 @@ enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointF
     case StopReason::StepBelowMinimum: return "step below minimum";
     case StopReason::MaxPoints: return "point limit reached";
     case StopReason::InitialPointFailed: return "initial point did not converge";
+    case StopReason::StateBound: return "state bound exceeded";
   }
   return "?";
 }
@@ -71,6 +72,7 @@ struct PseudoArclengthOptions {
   double min_step = 1e-7;
   double max_step = 5e-2;
   double max_parameter_step = 0.0;  // > 0: also |Δλ| <= this per step (λ units), for a dense curve
+  double max_state = 0.0;           // > 0: stop (StateBound) once ‖x̂‖∞ = ‖x‖∞/state_scale exceeds it
   int max_points = 10000;
   int max_corrector_iterations = 8;
   double corrector_tolerance = 1e-9;  // on ‖R‖₂, R as the system scales it
@@ -306,6 +308,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     }
     branch.points.push_back(std::move(p));
     const double lambda = branch.points.back().parameter;
+    if (o.max_state > 0.0 && branch.points.back().x.lpNorm<Eigen::Infinity>() / xs > o.max_state) {
+      return finish(StopReason::StateBound, "‖x‖∞/state_scale > " + std::to_string(o.max_state) + " at λ = " +
+                                                std::to_string(lambda));
+    }
     if (lambda < o.parameter_min || lambda > o.parameter_max) {
       return finish(StopReason::RangeReached, "λ = " + std::to_string(lambda) + " left [" +
                                                   std::to_string(o.parameter_min) + ", " +

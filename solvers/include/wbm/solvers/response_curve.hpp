@@ -81,6 +81,7 @@ struct ResponseCurveOptions {
   int direction = +1;                               // sign of dλ at the start
   double initial_step = 5e-3, min_step = 1e-7, max_step = 2e-2;  // scaled arclength (see continuation.hpp)
   double max_parameter_step = 0.0;     // > 0: |Δλ| per step at most this (λ units)
+  double max_state = 10.0;             // stop (StateBound) once a contact coefficient exceeds this many s_r (gaps)
   int max_points = 5000;
   int max_corrector_iterations = 8;
   double corrector_tolerance = 1e-9;
