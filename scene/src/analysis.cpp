@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include <wbm/solvers/post_processing.hpp>
+#include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/layout.hpp>
 
 namespace wbm::scene {
@@ -265,6 +266,80 @@ void basis_plot(const Scene& scene, AnalysisResult& out) {
                 " functions on " + std::to_string(p) + " samples";
 }
 
+void continuation(const Scene& scene, AnalysisResult& out) {
+  const auto& range = *scene.forcing->range;
+  const solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz), scene.contact_points(),
+                                       scene.trial(), scene.weighting(), scene.weighted_residual_options());
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = std::min(range.from_hz, range.to_hz);
+  o.parameter_max = std::max(range.from_hz, range.to_hz);
+  o.direction = range.to_hz > range.from_hz ? +1 : -1;
+  o.max_step = scene.analysis.max_step;
+  o.initial_step = std::min(o.initial_step, o.max_step);
+  o.max_parameter_step = scene.analysis.max_frequency_step_hz;
+  o.max_points = scene.analysis.max_points;
+  o.max_state = scene.analysis.max_state;
+  o.stability = scene.analysis.stability;
+  o.corrector_tolerance = scene.solver.newton.tolerance;
+  o.samples = scene.output.samples;
+  const auto curve = solvers::trace_response(base, o);
+  const std::string dof = scene.structure->dof_name(scene.forcing->dof);
+  const auto n = static_cast<Eigen::Index>(curve.points.size());
+  Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), its(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& p = curve.points[static_cast<size_t>(i)];
+    f(i) = p.frequency_hz;
+    umax(i) = p.max_displacement;
+    umin(i) = p.min_displacement;
+    amp(i) = p.amplitude;
+    force(i) = p.max_contact_force;
+    stable(i) = p.stable ? 1.0 : 0.0;
+    mu(i) = p.max_multiplier;
+    its(i) = p.corrector_iterations;
+  }
+  if (n > 0) {
+    std::vector<std::string> header = {"frequency [Hz]", "u_max_" + dof + " [m]", "u_min_" + dof + " [m]",
+                                       "amplitude_" + dof + " [m]", "max_contact_force [N]"};
+    std::vector<Eigen::VectorXd> columns = {f, umax, umin, amp, force};
+    if (o.stability) {
+      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]"});
+      columns.insert(columns.end(), {stable, mu});
+    }
+    header.push_back("corrector_iterations [-]");
+    columns.push_back(its);
+    out.tables.push_back({"branch.csv", header, columns});
+  }
+  nlohmann::json folds = nlohmann::json::array();
+  Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(curve.folds.size())), fold_ok = fold_hz;
+  for (size_t k = 0; k < curve.folds.size(); ++k) {
+    const auto& fold = curve.folds[k];
+    bool crossing = false;  // a Floquet multiplier crosses +1 within two points of the fold
+    for (size_t i = fold.after; o.stability && i < std::min(curve.points.size(), fold.after + 3); ++i) {
+      crossing = crossing || curve.points[i].crossing == solvers::Bifurcation::Fold;
+    }
+    fold_hz(static_cast<Eigen::Index>(k)) = fold.parameter;
+    fold_ok(static_cast<Eigen::Index>(k)) = crossing ? 1.0 : 0.0;
+    folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}});
+  }
+  if (!curve.folds.empty()) {
+    out.tables.push_back({"folds.csv", {"frequency [Hz]", "floquet_crossing [-]"}, {fold_hz, fold_ok}});
+  }
+  out.converged = curve.stop == solvers::StopReason::RangeReached;
+  out.diagnostics["continuation"] = {{"points", curve.points.size()},
+                                     {"folds", folds},
+                                     {"stop", std::string(solvers::to_string(curve.stop))},
+                                     {"message", curve.message},
+                                     {"rejected_steps", curve.rejected_steps},
+                                     {"corners", curve.kinks},
+                                     {"corrector_iterations", curve.corrector_iterations},
+                                     {"continuation_time_s", curve.wall_time_s},
+                                     {"stability_time_s", curve.stability_time_s}};
+  out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
+                ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
+                std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +
+                std::string(solvers::to_string(curve.stop)) + " (" + format("%.3f", curve.wall_time_s) + " s)";
+}
+
 }  // namespace
 
 AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
@@ -284,6 +359,7 @@ AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
       break;
     case AnalysisKind::Timestep: timestep(scene, progress, out); break;
     case AnalysisKind::BasisPlot: basis_plot(scene, out); break;
+    case AnalysisKind::Continuation: continuation(scene, out); break;
   }
   out.diagnostics["analysis"] = std::string(to_string(scene.analysis.kind));
   out.diagnostics["converged"] = out.converged;

@@ -23,7 +23,7 @@ using detail::Reader;
 constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 
 const std::vector<std::string>& analysis_names() {
-  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot"};
+  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot", "continuation"};
   return n;
 }
 
@@ -81,26 +81,40 @@ class Parser {
   void analysis(const toml::table& root) {
     const toml::table* t = r_.table(root, "analysis", false);
     if (t == nullptr) return;
-    r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization"});
+    r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization", "max_step", "max_frequency_step_hz",
+                             "max_points", "max_state", "stability"});
     const toml::node* type = t->get("type");
-    if (type != nullptr && type->is_string() &&
-        (type->as_string()->get() == "continuation" || type->as_string()->get() == "nnm")) {
+    if (type != nullptr && type->is_string() && type->as_string()->get() == "nnm") {
       r_.error(type->source(), "analysis.type",
-               "\"" + type->as_string()->get() + "\" is not available in this version (planned: pseudo-arclength "
-               "continuation, issue #6; nonlinear modes, issue #7); use one of " + Reader::list(analysis_names()) +
-               " (a frequency_hz = [from, to] sweep with \"solve\" follows a branch without folds)");
+               "\"nnm\" is not available in this version (planned: nonlinear modes, issue #7); use one of " +
+                   Reader::list(analysis_names()));
     } else {
       const std::string kind = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
-      s_.analysis.kind = kind == "timestep" ? AnalysisKind::Timestep
-                         : kind == "basis-plot" ? AnalysisKind::BasisPlot
-                                                : AnalysisKind::Solve;
+      s_.analysis.kind = kind == "timestep"       ? AnalysisKind::Timestep
+                         : kind == "basis-plot"   ? AnalysisKind::BasisPlot
+                         : kind == "continuation" ? AnalysisKind::Continuation
+                                                  : AnalysisKind::Solve;
     }
-    if (s_.analysis.kind != AnalysisKind::BasisPlot) {
-      for (const char* key : {"functions", "derivative", "normalization"}) {
+    auto only_for = [&](AnalysisKind kind, std::initializer_list<const char*> keys) {
+      if (s_.analysis.kind == kind) return;
+      for (const char* key : keys) {
         if (const toml::node* n = t->get(key)) {
-          r_.error(n->source(), std::string("analysis.") + key, "only used by type = \"basis-plot\"; remove it");
+          r_.error(n->source(), std::string("analysis.") + key,
+                   "only used by type = \"" + std::string(to_string(kind)) + "\"; remove it");
         }
       }
+    };
+    only_for(AnalysisKind::BasisPlot, {"functions", "derivative", "normalization"});
+    only_for(AnalysisKind::Continuation, {"max_step", "max_frequency_step_hz", "max_points", "max_state", "stability"});
+    if (s_.analysis.kind == AnalysisKind::Continuation) {
+      Analysis& a = s_.analysis;
+      a.max_step = r_.number(*t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
+                             a.max_step);
+      a.max_frequency_step_hz = r_.number(*t, "analysis", "max_frequency_step_hz", detail::non_negative("Hz"),
+                                          a.max_frequency_step_hz);
+      a.max_points = static_cast<int>(r_.integer(*t, "analysis", "max_points", 2, 1000000, a.max_points));
+      a.max_state = r_.number(*t, "analysis", "max_state", detail::positive("gaps"), a.max_state);
+      a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
     }
   }
 
@@ -388,6 +402,14 @@ class Parser {
         r_.error(p->source(), "forcing.points", "only used with a range frequency_hz = [from, to]; remove it");
       }
     }
+    if (freq != nullptr && !freq->is_array() && s_.analysis.kind == AnalysisKind::Continuation) {
+      r_.error(freq->source(), "forcing.frequency_hz",
+               "analysis \"continuation\" follows the branch over a range: give frequency_hz = [from, to]");
+    }
+    if (f.range && s_.analysis.kind == AnalysisKind::Continuation && t->contains("points")) {
+      r_.error(t->get("points")->source(), "forcing.points",
+               "continuation chooses its own points (analysis.max_step, max_frequency_step_hz); remove it");
+    }
     if (f.range && s_.analysis.kind == AnalysisKind::Timestep) {
       r_.error(freq->source(), "forcing.frequency_hz",
                "analysis \"timestep\" integrates at one frequency; give a number, or use type = \"solve\" for a sweep");
@@ -557,7 +579,8 @@ class Parser {
     const toml::table* t = r_.table(root, "timestep", false);
     if (t == nullptr) return;
     if (s_.analysis.kind != AnalysisKind::Timestep) {
-      r_.warn(t->source(), "[timestep] is not used by analysis \"solve\"; ignored");
+      r_.warn(t->source(), "[timestep] is not used by analysis \"" + std::string(to_string(s_.analysis.kind)) +
+                               "\"; ignored");
       return;
     }
     r_.only(*t, "timestep", {"relative_tolerance", "absolute_tolerance", "periodicity_tolerance", "max_periods"});
@@ -676,6 +699,7 @@ std::string_view to_string(AnalysisKind kind) noexcept {
   switch (kind) {
     case AnalysisKind::Timestep: return "timestep";
     case AnalysisKind::BasisPlot: return "basis-plot";
+    case AnalysisKind::Continuation: return "continuation";
     case AnalysisKind::Solve: break;
   }
   return "solve";
@@ -815,6 +839,13 @@ nlohmann::json to_json(const Scene& s) {
     analysis["derivative"] = s.analysis.derivative;
     analysis["normalization"] = s.analysis.unit_integral ? "unit-integral" : "orthonormal";
   }
+  if (s.analysis.kind == AnalysisKind::Continuation) {
+    analysis["max_step"] = s.analysis.max_step;
+    analysis["max_frequency_step_hz"] = s.analysis.max_frequency_step_hz;
+    analysis["max_points"] = s.analysis.max_points;
+    analysis["max_state"] = s.analysis.max_state;
+    analysis["stability"] = s.analysis.stability;
+  }
   j["analysis"] = analysis;
   const bool rod = s.structure && s.structure->kind == StructureKind::Rod;
   auto where = [&](nlohmann::json& o, int dof) {
@@ -847,7 +878,7 @@ nlohmann::json to_json(const Scene& s) {
     where(f, s.forcing->dof);
     if (s.forcing->range) {
       f["frequency_hz"] = {s.forcing->range->from_hz, s.forcing->range->to_hz};
-      f["points"] = s.forcing->range->points;
+      if (s.analysis.kind != AnalysisKind::Continuation) f["points"] = s.forcing->range->points;
     } else {
       f["frequency_hz"] = s.forcing->frequency_hz;
     }
@@ -878,7 +909,7 @@ nlohmann::json to_json(const Scene& s) {
     }
     j["basis"] = b;
   }
-  if (s.analysis.kind == AnalysisKind::Solve) {
+  if (s.analysis.kind == AnalysisKind::Solve || s.analysis.kind == AnalysisKind::Continuation) {
     j["solver"] = {{"tolerance", s.solver.newton.tolerance},
                    {"max_iterations", s.solver.newton.max_iterations},
                    {"line_search", s.solver.newton.line_search},

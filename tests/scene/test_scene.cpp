@@ -187,9 +187,12 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"linear\"\nstiffness = "
                                                                            "1e6\ngap = 0.0\ndof = 3\n"); },
                                            {"contact.dof: the rod is located by node"});
-  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[analysis]\ntype = \"continuation\"\n"); },
-                                           {"analysis.type: \"continuation\" is not available in this version",
-                                            "issue #6"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[analysis]\ntype = \"nnm\"\n"); },
+                                           {"analysis.type: \"nnm\" is not available in this version", "issue #7"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + "[analysis]\ntype = \"continuation\"\nfunctions = [1]\n"); },
+      {"inline.toml:9: forcing.frequency_hz: analysis \"continuation\" follows the branch over a range",
+       "analysis.functions: only used by type = \"basis-plot\""});
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse("[structure]\nmass = [[1.0, 0.1], [0.0, 1.0]]\nstiffness = [[1.0, 0.0], [0.0, 1.0]]\n" +
                         force); },
@@ -314,4 +317,27 @@ TEST(Output, NonFiniteColumnsAndUncommittedRunsWriteNothing) {
   EXPECT_TRUE(std::filesystem::exists(dir / "a.csv"));
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 2);  // no staging folder left
   std::filesystem::remove_all(dir);
+}
+
+// Continuation from a scene: with the stop out of reach the oscillator is linear, so every
+// point's amplitude is F/|k − mω² + iωc| (sampled on 1024 points: within 1 − cos(π/1024)).
+TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
+  const Scene s = parse("structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n"
+                        "forcing = { amplitude = 10.0, frequency_hz = [5.0, 55.0] }\n"
+                        "contact = { law = \"linear\", stiffness = 1e6, gap = 1.0 }\n"
+                        "basis = { dimension = 8 }\n"
+                        "analysis = { type = \"continuation\", max_frequency_step_hz = 1.0 }\n");
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(wbm::scene::to_json(s), temp("c.json"))),
+            wbm::scene::to_json(s));
+  const auto r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
+  const Eigen::VectorXd& hz = column(r, "branch.csv", 0);
+  const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
+  EXPECT_GE(hz.size(), 50);
+  for (Eigen::Index i = 0; i < hz.size(); ++i) {
+    if (hz(i) > 55.0) continue;  // the last point may lie one step beyond the range
+    const double a = oscillator_amplitude(2.0, 6.0, 8e4, 10.0, hz(i));
+    EXPECT_NEAR(amplitude(i), a, 1e-5 * a) << hz(i) << " Hz";
+  }
+  EXPECT_EQ(column(r, "branch.csv", 5).minCoeff(), 1.0);  // every point stable
 }

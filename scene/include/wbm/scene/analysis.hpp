@@ -39,6 +39,10 @@ struct AnalysisResult {
 ///    as solve, from the last period.
 ///  - basis-plot: basis_functions.csv, values (or first τ-derivatives) of the trial basis'
 ///    functions at τ_p = p/P.
+///  - continuation: pseudo-arclength continuation in f over frequency_hz = [from, to]
+///    (solvers::trace_response) with Floquet stability; branch.csv (max, min and amplitude of
+///    the forced DOF, contact force, stability, corrector iterations per point) and folds.csv
+///    (with whether a Floquet multiplier crosses +1 there). Converged = the range was reached.
 /// Bad scenes are refused by load_scene; this throws only std::logic_error for a scene that
 /// bypassed it. Non-convergence is reported (converged = false), never thrown.
 [[nodiscard]] AnalysisResult run_analysis(const Scene& scene, const Progress& progress = {});

@@ -20,8 +20,10 @@
 ///                              line_search, linear_solver)
 ///   [timestep]                 BDF reference (relative_tolerance, absolute_tolerance,
 ///                              periodicity_tolerance, max_periods)
-///   [analysis]                 type = "solve" | "timestep" | "basis-plot" (+ functions,
-///                              derivative, normalization for basis-plot)
+///   [analysis]                 type = "solve" | "timestep" | "basis-plot" | "continuation"
+///                              (+ functions, derivative, normalization for basis-plot; max_step,
+///                              max_frequency_step_hz, max_points, max_state, stability for
+///                              continuation)
 ///   [output]                   samples per period, nodes | dofs to write
 /// Rod locations are node numbers 1 … elements (node 0 is clamped) or "tip"; matrix locations
 /// are DOF names or 0-based indices.
@@ -47,9 +49,9 @@
 namespace wbm::scene {
 
 enum class StructureKind { Rod, Matrices };
-enum class AnalysisKind { Solve, Timestep, BasisPlot };
+enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation };
 
-/// "solve", "timestep", "basis-plot".
+/// "solve", "timestep", "basis-plot", "continuation".
 [[nodiscard]] std::string_view to_string(AnalysisKind kind) noexcept;
 
 /// The structure: FE rod [JL14 Sec. 2] or explicit symmetric matrices (n × n, sparse).
@@ -113,6 +115,12 @@ struct Analysis {
   std::vector<int> functions;       // basis-plot: shifts k to draw (empty = all M)
   int derivative = 0;               // basis-plot: 0 or 1
   bool unit_integral = false;       // basis-plot: ∫₀¹ φ_{J,k} = 1 (the paper's figures) instead of orthonormal
+  // continuation (pseudo-arclength in the forcing frequency over forcing.frequency_hz = [from, to]):
+  double max_step = 2e-2;           // scaled arclength (solvers/continuation.hpp)
+  double max_frequency_step_hz = 0; // > 0: |Δf| per step at most this [Hz]
+  int max_points = 5000;
+  double max_state = 10.0;          // stop once a contact coefficient exceeds this many gaps
+  bool stability = true;            // Floquet multipliers of every point
 };
 
 struct Output {

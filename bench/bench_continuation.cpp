@@ -1,0 +1,64 @@
+// Pseudo-arclength continuation of the Fig. 12 branch (Case 2, 1000–1700 Hz, steps ≤ 0.02 and
+// ≤ 2 Hz, M = 64, distributional) for the paper's two combinations, and the monodromy matrix of
+// one point. Counters: points on the branch and points per second. Goal (issue #6): the whole
+// branch, at least 300 points, in under 1 s on one core.
+#include <benchmark/benchmark.h>
+
+#include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/response_curve.hpp>
+
+#include "scene.hpp"
+
+namespace {
+
+const wbm::scene::Scene& case2() {
+  static const auto scene = wbm::reproduce::load_scene("jl14_case2");
+  return scene;
+}
+
+const char* const kTrial[] = {"fourier", "haar"};
+
+void BM_Continuation_Fig12Branch(benchmark::State& state) {
+  const auto& s = case2();
+  const int m = static_cast<int>(state.range(0));
+  const char* trial = kTrial[state.range(1)];
+  state.SetLabel(std::string(trial) + ":fourier");
+  const wbm::solvers::WeightedResidual base(s.system(), s.harmonic_forcing(1000.0), s.contact_points(),
+                                            wbm::solvers::TimeBasis::from_name(trial, m),
+                                            wbm::solvers::TimeBasis::fourier(m));
+  wbm::solvers::ResponseCurveOptions o;
+  o.parameter_min = 1000.0;
+  o.parameter_max = 1700.0;
+  o.max_parameter_step = 2.0;
+  o.stability = false;
+  size_t points = 0;
+  double continuation = 0.0;
+  for (auto _ : state) {
+    const auto curve = wbm::solvers::trace_response(base, o);
+    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+    points = curve.points.size();
+    continuation = curve.wall_time_s;
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["continuation_points_per_s"] = static_cast<double>(points) / continuation;
+}
+
+void BM_Floquet_OnePoint(benchmark::State& state) {
+  const auto& s = case2();
+  const int p = static_cast<int>(state.range(0));
+  const auto sol = wbm::solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(1300.0), s.contact_points(),
+                                                         wbm::solvers::TimeBasis::fourier(64),
+                                                         wbm::solvers::TimeBasis::fourier(64));
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+  const Eigen::MatrixXd uc =
+      (wbm::solvers::TimeBasis::fourier(64).values(tau, 0) * sol.coefficients.row(s.forcing->dof).transpose()).transpose();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(wbm::solvers::floquet_multipliers(s.system(), s.contact_points(), uc, 1300.0));
+  }
+}
+
+}  // namespace
+
+BENCHMARK(BM_Continuation_Fig12Branch)->ArgsProduct({{32, 64}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Floquet_OnePoint)->RangeMultiplier(2)->Range(256, 2048)->Unit(benchmark::kMillisecond);
+BENCHMARK_MAIN();
