@@ -119,7 +119,7 @@ struct Analysis {
   double max_step = 2e-2;           // scaled arclength (solvers/continuation.hpp)
   double max_frequency_step_hz = 0; // > 0: |Δf| per step at most this [Hz]
   int max_points = 5000;
-  double max_state = 10.0;          // stop once a contact coefficient exceeds this many gaps
+  double max_state = 0.0;           // > 0: stop once ‖x‖∞ > max_state · (largest gap); 0: no bound
   bool stability = true;            // Floquet multipliers of every point
 };
 

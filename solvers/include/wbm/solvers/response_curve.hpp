@@ -81,7 +81,8 @@ struct ResponseCurveOptions {
   int direction = +1;                               // sign of dλ at the start
   double initial_step = 5e-3, min_step = 1e-7, max_step = 2e-2;  // scaled arclength (see continuation.hpp)
   double max_parameter_step = 0.0;     // > 0: |Δλ| per step at most this (λ units)
-  double max_state = 10.0;             // stop (StateBound) once a contact coefficient exceeds this many s_r (gaps)
+  double max_state = 0.0;              // > 0: stop (StateBound) once ‖x‖∞ > max_state · s_r (s_r: the largest
+                                       // gap, or ‖x_lin‖∞ at the start when every gap is 0); 0: no bound
   int max_points = 5000;
   int max_corrector_iterations = 8;
   double corrector_tolerance = 1e-9;
