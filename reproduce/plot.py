@@ -167,9 +167,15 @@ def frequency_response(folder):
         if bdf:
             ax.plot(bdf[0], [1e3 * a for a in bdf[3]], "kx", ms=7, label="time stepping (BDF), from rest")
         ax.axhline(1e3 * gap, color="k", lw=0.6, ls=":", label="gap")
+        # A branch that ran off (stopped at the state bound) would flatten the figure: the axis
+        # stops at 1.2 x the linear peak, and the caption says which branches leave it.
+        top = 1.2e3 * max(lin[1])
+        off = [METHODS[i] for i in wanted if any(int(c) == i and 1e3 * a > top for c, a in zip(b[0], b[4]))]
+        ax.set_ylim(0.0, top)
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("tip amplitude (max - min)/2 [mm]")
-        ax.set_title(f"{meta['figure']}: M = {meta['dimension']}, unstable dashed", fontsize=9)
+        note = f"; off scale: {', '.join(off)} (see REPORT)" if off else ""
+        ax.set_title(f"{meta['figure']}: M = {meta['dimension']}, unstable dashed{note}", fontsize=9)
         ax.legend()
         fig.tight_layout()
         save(fig, folder, stem)
