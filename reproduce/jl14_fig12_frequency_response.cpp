@@ -102,13 +102,9 @@ int main(int argc, char** argv) {
     for (size_t k = 0; k < traced.size(); ++k) {
       const auto& curve = traced[k].curve;
       std::vector<double> confirmed_hz;
-      for (const auto& f : curve.folds) {
-        // A fold of the approximate branch is confirmed when a Floquet multiplier crosses +1
-        // within two points of it.
-        bool confirmed = false;
-        for (size_t i = f.after; i <= std::min(curve.points.size() - 1, f.after + 2); ++i) {
-          confirmed = confirmed || curve.points[i].crossing == solvers::Bifurcation::Fold;
-        }
+      for (size_t j = 0; j < curve.folds.size(); ++j) {
+        const auto& f = curve.folds[j];
+        const bool confirmed = curve.fold_confirmed[j];  // a Floquet multiplier crosses +1 there
         fold_id.push_back(combo_index[k]);
         fold_hz.push_back(f.parameter);
         fold_confirmed.push_back(confirmed ? 1.0 : 0.0);

@@ -313,10 +313,7 @@ void continuation(const Scene& scene, AnalysisResult& out) {
   Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(curve.folds.size())), fold_ok = fold_hz;
   for (size_t k = 0; k < curve.folds.size(); ++k) {
     const auto& fold = curve.folds[k];
-    bool crossing = false;  // a Floquet multiplier crosses +1 within two points of the fold
-    for (size_t i = fold.after; o.stability && i < std::min(curve.points.size(), fold.after + 3); ++i) {
-      crossing = crossing || curve.points[i].crossing == solvers::Bifurcation::Fold;
-    }
+    const bool crossing = curve.fold_confirmed[k];
     fold_hz(static_cast<Eigen::Index>(k)) = fold.parameter;
     fold_ok(static_cast<Eigen::Index>(k)) = crossing ? 1.0 : 0.0;
     folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}});

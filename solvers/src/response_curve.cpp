@@ -145,6 +145,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     }
     curve.points.push_back(std::move(r));
   }
+  for (const auto& fold : curve.folds) {
+    bool crossing = false;
+    for (size_t i = fold.after; o.stability && i < std::min(curve.points.size(), fold.after + 3); ++i) {
+      crossing = crossing || curve.points[i].crossing == Bifurcation::Fold;
+    }
+    curve.fold_confirmed.push_back(crossing);
+  }
   return curve;
 }
 

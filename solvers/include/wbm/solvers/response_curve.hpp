@@ -66,6 +66,9 @@ struct ResponsePoint {
 struct ResponseCurve {
   std::vector<ResponsePoint> points;
   std::vector<Fold> folds;             // parameters of the turning points
+  /// Per fold: a Floquet multiplier crosses +1 within two points of it (with stability), i.e. it
+  /// is a fold of the dynamics and not only of the truncated weighted-residual system.
+  std::vector<bool> fold_confirmed;
   StopReason stop = StopReason::InitialPointFailed;
   std::string message;
   int rejected_steps = 0;
