@@ -202,6 +202,8 @@ TEST(Continuation, DuffingMiddleBranchIsUnstable) {
   int crossings = 0;
   for (const auto& p : curve.points) crossings += p.crossing == solvers::Bifurcation::Fold ? 1 : 0;
   EXPECT_EQ(crossings, 2);
+  ASSERT_EQ(curve.fold_confirmed.size(), 2u);
+  EXPECT_TRUE(curve.fold_confirmed[0] && curve.fold_confirmed[1]);
 }
 
 // A corrector that fails (non-finite residual) the first times it is asked inside a window is
