@@ -1,0 +1,144 @@
+#pragma once
+/// Nonlinear normal modes of a structure with exact (Signorini) frictionless contact against rigid
+/// stops, by the frequency-domain Rayleigh quotient and an augmented Lagrangian [LL11 Secs. 3–4].
+/// Units: SI (m, kg, N/m, Hz where the name says _hz).
+///
+/// Unknowns: real Fourier coefficients of one period, u(τ) = Σ_k Y(:, k) q_k(τ), τ = t/T, with
+/// q = {1, cos 2πτ, sin 2πτ, …, cos 2πNτ, sin 2πNτ} (F = 2N + 1 functions, Y is n × F), i.e. the
+/// complex Û_n, n = −N … N, of [LL11 Eq. (23)] in real storage. With weights w_0 = 1, w_k = ½ and
+/// harmonic ν_k of function k,
+///   k̂(Y) = Σ_k w_k Y_kᵀ K Y_k,   m̂(Y) = Σ_k w_k ν_k² Y_kᵀ M Y_k      [LL11 Eq. (11)]
+///   ω² = r(Y) = k̂/m̂                                                  [LL11 Eq. (24a)]
+///   g_ck = u_c(τ_k) − g_c ≤ 0 at τ_k = k/m, every stop c              [LL11 Eq. (24b)]
+///   h(Y) = ½ m̂(Y) − γ = 0                                              [LL11 Eq. (12)]
+/// The paper's Eq. (24c) drops the ν² of Eq. (12); we keep it: then h constrains the same
+/// functional that divides the Rayleigh quotient (so ω² m̂ = 2 × the time-averaged kinetic energy
+/// and h fixes it at ω² γ), and for the linear mode the two agree. The energy axis is normalized by
+///   γ_c = ½ m̂ of the linear first mode whose stop DOF just reaches its gap,
+/// so the reported energy E = γ/γ_c is exactly 1 at contact onset [LL11 Fig. 3]. The time origin
+/// is fixed by Y(c₀, sin 2πτ) = 0 at the phase DOF c₀ (the problem is invariant under time shifts).
+///
+/// Nonlinear modes are critical points of r on {h = 0, g ≤ 0} [LL11 Eq. (13)], not minima: on
+/// more than one harmonic, r decreases towards ω₁²/ν² along ν-th harmonics of the first mode. So
+/// each primal step solves the stationarity ∇L_κ = 0 of the augmented Lagrangian [LL11 Eqs.
+/// (18)–(20)] by Newton's method with a line search on ‖∇L_κ‖ (not a descent on L_κ), dense LU of
+/// the analytic Hessian, and the multipliers and penalties follow Powell's rules
+/// (contact::AugmentedLagrangian, [LL11 Alg. 3]).
+///  - ModeAlgorithm::Simultaneous [LL11 Alg. 1]: L_κ = r/ω₀² + φ(g, h), ω from r inside.
+///  - ModeAlgorithm::Sequential [LL11 Alg. 2]: L_κ = (k̂ − ω² m̂)/(ω₀² 2γ) + φ(g, h) with ω fixed
+///    during each primal solve and updated to √r after it; converged when Powell's measures and
+///    the relative change of ω² are below ε.
+/// Everything is solved in units of the largest gap g_ref (g/g_ref, Y/g_ref) and ω₀ (the linear
+/// first frequency), so tolerances are dimensionless.
+///
+/// Status (issue #7, in progress): tested on the LL11 rod below contact (the linear mode exactly),
+/// at onset, and above contact at E = 1.2 (constraints, complementarity, normalization, gap
+/// invariance); the backbone reaches E ≈ 1.8 with N = 8 but its primal Newton stalls beyond
+/// (many Powell iterations, energy step collapsing), and ModeAlgorithm::Sequential is not yet
+/// validated. Figs. 3–5 of LL11 and the penalty-limit check are not done yet.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/contact/augmented_lagrangian.hpp>
+#include <wbm/solvers/mechanical_system.hpp>
+
+namespace wbm::solvers {
+
+/// A rigid stop: u_dof ≤ gap [m], gap > 0.
+struct RigidStop {
+  int dof;
+  double gap;
+};
+
+enum class ModeAlgorithm { Simultaneous, Sequential };
+
+struct NonlinearModeOptions {
+  int harmonics = 16;                 // N
+  int samples = 512;                  // m time samples of the constraints, m > 2N
+  ModeAlgorithm algorithm = ModeAlgorithm::Simultaneous;
+  contact::PowellParameters powell{};
+  int max_powell_iterations = 200;
+  double stationarity_tolerance = 1e-10;  // ‖∇L_κ‖∞ of a primal solve (dimensionless)
+  int max_newton_iterations = 60;
+  int phase_dof = -1;                 // DOF whose sin 2πτ coefficient is 0; −1: the first stop's
+  /// Throws std::invalid_argument naming the field, its value and the range.
+  void validate(int dofs) const;
+};
+
+/// One mode at one energy level.
+struct ModeLevel {
+  double energy = 0.0;                // E = γ/γ_c (1 at contact onset)
+  double frequency_hz = 0.0;          // √r / 2π
+  Eigen::MatrixXd coefficients;       // Y, n × (2N + 1) [m]
+  bool converged = false;
+  std::string message;
+  int powell_iterations = 0, newton_iterations = 0;
+  double inequality_measure = 0.0;    // G_i [LL11 Eq. (25a)], in units of the gap
+  double equality_measure = 0.0;      // G_e = |h|/γ_c [LL11 Eq. (25b)]
+  double max_penetration = 0.0;       // max over stops and samples of (u_c − g_c)/g_ref
+  double complementarity = 0.0;       // max_k |λ_k g_k| / max_k λ_k, in units of the gap (0 without contact)
+  double normalization_error = 0.0;   // |½ m̂/γ_c − E|
+  Eigen::VectorXd multipliers;        // λ at the m samples of each stop (stop-major), dimensionless
+  double equality_multiplier = 0.0;   // μ
+  double wall_time_s = 0.0;
+};
+
+struct Backbone {
+  std::vector<ModeLevel> levels;      // converged levels, increasing energy
+  std::vector<double> failed_energies;  // levels that did not converge (the step was then shrunk)
+  std::string message;
+  double wall_time_s = 0.0;
+};
+
+struct BackboneOptions {
+  double energy_min = 0.2, energy_max = 5.0;
+  double initial_step = 0.05, min_step = 1e-4, max_step = 0.1;  // in E
+  std::vector<double> include;        // energies that must be levels (e.g. 0.7 and 1.8 for Fig. 5)
+};
+
+/// The modal problem of a structure (M, K; damping is ignored) against rigid stops.
+/// Throws std::invalid_argument for invalid options, stops on invalid DOFs or with gap ≤ 0
+/// (the energy normalization is by the gap; the normalized backbone does not depend on it).
+class NonlinearModes {
+ public:
+  NonlinearModes(const MechanicalSystem& system, std::vector<RigidStop> stops, NonlinearModeOptions options = {});
+
+  [[nodiscard]] double linear_frequency_hz() const { return omega0_ / (2.0 * 3.14159265358979323846); }
+  /// φ₁ scaled so that the first stop's DOF has amplitude equal to its gap (the mode at E = 1).
+  [[nodiscard]] const Eigen::VectorXd& onset_mode() const { return onset_; }
+  [[nodiscard]] int harmonics() const { return n_harm_; }
+  [[nodiscard]] int dofs() const { return n_; }
+
+  /// The mode at normalized energy E from `start` (a previous level's coefficients, scaled by
+  /// √(E/E_start)), or from the linear mode. Never throws for non-convergence.
+  [[nodiscard]] ModeLevel solve(double energy, const ModeLevel* start = nullptr) const;
+  /// Levels from energy_min to energy_max: secant predictor between levels, step grown after
+  /// quick convergence and halved after a failure (the failed energy is recorded).
+  [[nodiscard]] Backbone backbone(const BackboneOptions& options) const;
+
+  /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
+  [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
+  [[nodiscard]] Eigen::MatrixXd velocity(const ModeLevel& level, int samples) const;
+
+ private:
+  struct Evaluation;
+  [[nodiscard]] Evaluation evaluate(const Eigen::VectorXd& y, double energy, double omega2_fixed,
+                                    const contact::AugmentedLagrangian& al, bool hessian) const;
+  [[nodiscard]] Eigen::MatrixXd basis_values(int samples, int derivative) const;
+
+  MechanicalSystem system_;
+  std::vector<RigidStop> stops_;
+  NonlinearModeOptions options_;
+  int n_, n_harm_, f_;
+  double omega0_ = 0.0, g_ref_ = 1.0, m_c_ = 0.0;
+  Eigen::MatrixXd k_, m_;          // dense K, M
+  Eigen::VectorXd weight_, nu_;    // w_k, ν_k
+  Eigen::MatrixXd theta_;          // m × F values at τ_k = k/m
+  Eigen::VectorXd onset_;
+  int phase_index_ = 0;            // index in the stacked y of the fixed coefficient
+};
+
+}  // namespace wbm::solvers
