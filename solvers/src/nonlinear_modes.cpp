@@ -200,25 +200,46 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
     ++level.powell_iterations;
     // LL11 Alg. 3, l. 3: the primal problem, ∇L_κ = 0 by Newton (line search on ‖∇L_κ‖).
     Evaluation e = evaluate(expand(x), energy, omega2, al, true);
+    // Newton steps with a short line search on ‖∇L‖; when they stall (a change of the active
+    // set), Levenberg–Marquardt steps on ½‖∇L‖², (H² + μI) d = −H ∇L, with μ adapted to the gain.
+    double mu_lm = 0.0;
     for (int it = 0; it < options_.max_newton_iterations; ++it) {
       const double norm = e.gradient.lpNorm<Eigen::Infinity>();
       if (!(norm > options_.stationarity_tolerance)) break;
-      const Eigen::VectorXd d = -Eigen::PartialPivLU<Eigen::MatrixXd>(e.hessian).solve(e.gradient);
-      if (!d.allFinite()) break;
-      double t = 1.0;
-      const double n2 = e.gradient.squaredNorm();
-      Evaluation trial;
-      bool accepted = false;
-      for (int b = 0; b < 30; ++b, t *= 0.5) {
-        trial = evaluate(expand(x + t * d), energy, omega2, al, false);
-        if (trial.gradient.allFinite() && trial.gradient.squaredNorm() <= (1.0 - 1e-4 * t) * n2) {
-          accepted = true;
-          break;
-        }
-      }
       ++level.newton_iterations;
-      if (!accepted) break;  // no decrease of ‖∇L‖: the outer update changes the problem
-      x += t * d;
+      const double n2 = e.gradient.squaredNorm();
+      bool accepted = false;
+      if (mu_lm == 0.0) {
+        const Eigen::VectorXd d = -Eigen::PartialPivLU<Eigen::MatrixXd>(e.hessian).solve(e.gradient);
+        double t = 1.0;
+        for (int b = 0; b < 4 && d.allFinite(); ++b, t *= 0.5) {
+          const Evaluation trial = evaluate(expand(x + t * d), energy, omega2, al, false);
+          if (trial.gradient.allFinite() && trial.gradient.squaredNorm() <= (1.0 - 1e-4 * t) * n2) {
+            x += t * d;
+            accepted = true;
+            break;
+          }
+        }
+        if (!accepted) mu_lm = 1e-6 * e.hessian.cwiseAbs().rowwise().sum().maxCoeff();
+      }
+      if (!accepted) {
+        const Eigen::MatrixXd h2 = e.hessian * e.hessian;
+        const Eigen::VectorXd hg = e.hessian * e.gradient;
+        for (int b = 0; b < 20; ++b) {
+          Eigen::MatrixXd a = h2;
+          a.diagonal().array() += mu_lm * mu_lm;
+          const Eigen::VectorXd d = -a.ldlt().solve(hg);
+          const Evaluation trial = evaluate(expand(x + d), energy, omega2, al, false);
+          if (d.allFinite() && trial.gradient.allFinite() && trial.gradient.squaredNorm() < n2) {
+            x += d;
+            accepted = true;
+            mu_lm *= 0.3;
+            break;
+          }
+          mu_lm *= 4.0;
+        }
+        if (!accepted) break;  // no decrease of ‖∇L‖: the outer update changes the problem
+      }
       e = evaluate(expand(x), energy, omega2, al, true);
     }
     // l. 4–5: constraints and Powell's measures; Alg. 2 updates ω from the Rayleigh quotient.

@@ -33,9 +33,11 @@
 ///
 /// Status (issue #7, in progress): tested on the LL11 rod below contact (the linear mode exactly),
 /// at onset, and above contact at E = 1.2 (constraints, complementarity, normalization, gap
-/// invariance); the backbone reaches E ≈ 1.8 with N = 8 but its primal Newton stalls beyond
-/// (many Powell iterations, energy step collapsing), and ModeAlgorithm::Sequential is not yet
-/// validated. Figs. 3–5 of LL11 and the penalty-limit check are not done yet.
+/// invariance). From neighbouring levels (N = 8, m = 256) it converges at E = 1.4 and 2.0 but
+/// not at 1.6 or 1.8: the primal stationarity solve (Newton, then Levenberg–Marquardt on ‖∇L‖²)
+/// stalls when the active set of contact samples changes while Powell raises the penalties, so
+/// the backbone is not yet robust; ModeAlgorithm::Sequential is not yet validated; Figs. 3–5 of
+/// LL11 and the penalty-limit check are not done.
 
 #include <string>
 #include <vector>
