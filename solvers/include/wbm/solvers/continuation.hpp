@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <concepts>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
