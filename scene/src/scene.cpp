@@ -654,7 +654,7 @@ toml::table to_toml_table(const nlohmann::json& j) {
   return t;
 }
 
-template <class Container, class Add>
+template <class Add>
 void convert(const nlohmann::json& v, Add&& add) {
   if (v.is_object()) {
     add(to_toml_table(v));
@@ -672,12 +672,12 @@ void convert(const nlohmann::json& v, Add&& add) {
 }
 
 void insert(toml::table& t, const std::string& key, const nlohmann::json& v) {
-  convert<toml::table>(v, [&](auto&& x) { t.insert(key, std::forward<decltype(x)>(x)); });
+  convert(v, [&](auto&& x) { t.insert(key, std::forward<decltype(x)>(x)); });
 }
 
 toml::array to_toml_array(const nlohmann::json& j) {
   toml::array a;
-  for (const auto& v : j) convert<toml::array>(v, [&](auto&& x) { a.push_back(std::forward<decltype(x)>(x)); });
+  for (const auto& v : j) convert(v, [&](auto&& x) { a.push_back(std::forward<decltype(x)>(x)); });
   return a;
 }
 

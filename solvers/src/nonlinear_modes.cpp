@@ -258,14 +258,13 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
     }
   }
   // Report on the final iterate.
-  const contact::AugmentedLagrangian& final_al = al;
-  const Evaluation e = evaluate(expand(x), energy, omega2, final_al, false);
+  const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
   level.frequency_hz = std::sqrt(e.r) / (2.0 * std::numbers::pi);
   level.coefficients = spectral::as_coefficients(expand(x) * g_ref_, n_);
   level.max_penetration = e.g.maxCoeff();
-  const Eigen::VectorXd lambda = final_al.inequality_gradient(e.g);
+  const Eigen::VectorXd lambda = al.inequality_gradient(e.g);
   level.multipliers = lambda;
-  level.equality_multiplier = final_al.equality_gradient(e.h);
+  level.equality_multiplier = al.equality_gradient(e.h);
   const double lmax = lambda.size() > 0 ? lambda.maxCoeff() : 0.0;
   level.complementarity = lmax > 0.0 ? (lambda.array() * e.g.array()).abs().maxCoeff() / lmax : 0.0;
   level.normalization_error = std::abs(e.h);
