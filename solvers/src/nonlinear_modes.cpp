@@ -77,6 +77,11 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   const Eigen::VectorXd on = onset_ / g_ref_;
   m_c_ = 0.5 * on.dot(m_ * on);  // m̂ of the onset mode (cos 2πτ, w = ½, ν = 1), normalized units
   phase_index_ = static_cast<int>(spectral::stacked_index(2, options_.phase_dof >= 0 ? options_.phase_dof : c0, n_));
+  m_ref_ = 2.0 * m_c_;
+  ks_ = system_.stiffness / (omega0_ * omega0_ * m_ref_);
+  ms_ = system_.mass / m_ref_;
+  ks_.makeCompressed();
+  ms_.makeCompressed();
 }
 
 Eigen::MatrixXd NonlinearModes::basis_values(int samples, int derivative) const {
@@ -259,12 +264,19 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
   }
   // Report on the final iterate.
   const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
-  level.frequency_hz = std::sqrt(e.r) / (2.0 * std::numbers::pi);
+  level.rayleigh_frequency_hz = std::sqrt(e.r) / (2.0 * std::numbers::pi);
+  // The orbit's frequency from the stationarity ∇k̂ − (r − μ ω₀² m̂/m̂_c) ∇m̂ + m̂ ω₀² Θᵀλ = 0,
+  // which is the harmonic balance of the free motion with contact forces (continue_backbone).
+  const double m_ratio = e.h + energy;  // m̂/m̂_c
+  level.frequency_hz =
+      std::sqrt(e.r - al.equality_gradient(e.h) * omega0_ * omega0_ * m_ratio) / (2.0 * std::numbers::pi);
   level.coefficients = spectral::as_coefficients(expand(x) * g_ref_, n_);
   level.max_penetration = e.g.maxCoeff();
   const Eigen::VectorXd lambda = al.inequality_gradient(e.g);
   level.multipliers = lambda;
   level.equality_multiplier = al.equality_gradient(e.h);
+  level.contact_force = lambda * (0.5 * m_ratio * m_c_ / m_ref_) *
+                        (options_.samples * omega0_ * omega0_ * m_ref_ * g_ref_);  // λ_AL m̂/(2 m_ref) f_ref
   const double lmax = lambda.size() > 0 ? lambda.maxCoeff() : 0.0;
   level.complementarity = lmax > 0.0 ? (lambda.array() * e.g.array()).abs().maxCoeff() / lmax : 0.0;
   level.normalization_error = std::abs(e.h);
@@ -342,6 +354,267 @@ Eigen::MatrixXd NonlinearModes::displacement(const ModeLevel& level, int samples
 
 Eigen::MatrixXd NonlinearModes::velocity(const ModeLevel& level, int samples) const {
   return level.frequency_hz * (level.coefficients * basis_values(samples, 1).transpose());  // d/dt = f d/dτ
+}
+
+}  // namespace wbm::solvers
+
+// ---------------------------------------------------------------------------------------------
+// Backbone by pseudo-arclength continuation of the KKT conditions (harmonic-balance form).
+
+namespace wbm::solvers {
+
+void BackboneContinuationOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("BackboneContinuationOptions." + what); };
+  if (!(energy_min > 0.0 && energy_min < energy_max) || !std::isfinite(energy_max)) {
+    fail("energy range [" + std::to_string(energy_min) + ", " + std::to_string(energy_max) +
+         "]: need 0 < energy_min < energy_max, finite");
+  }
+  if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
+    fail("penalty_stiffness = " + std::to_string(penalty_stiffness) + ": must be >= 0 [N/m] (0: exact contact)");
+  }
+  if (!(max_energy_step > 0.0)) fail("max_energy_step = " + std::to_string(max_energy_step) + ": must be > 0");
+  if (!(tolerance > 0.0)) fail("tolerance = " + std::to_string(tolerance) + ": must be > 0");
+  if (max_points < 2) fail("max_points = " + std::to_string(max_points) + ": must be >= 2");
+}
+
+NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
+  if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
+    throw std::invalid_argument("BackboneSystem: penalty_stiffness = " + std::to_string(penalty_stiffness) +
+                                ": must be >= 0 [N/m]");
+  }
+  const auto& o = modes.options_;
+  penalty_ = penalty_stiffness / (o.samples * modes.omega0_ * modes.omega0_ * modes.m_ref_);
+  ny_ = static_cast<Eigen::Index>(modes.n_) * modes.f_ - 1;
+  size_ = ny_ + 1 + (penalty_ > 0.0 ? 0 : static_cast<Eigen::Index>(modes.stops_.size()) * o.samples);
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) const {
+  const auto& nm = *nm_;
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(ny_ + 1);
+  full.segment(nm.n_, nm.n_) = nm.onset_ * (std::sqrt(energy) / nm.g_ref_);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(size_);
+  x.head(nm.phase_index_) = full.head(nm.phase_index_);
+  x.segment(nm.phase_index_, ny_ - nm.phase_index_) = full.tail(ny_ - nm.phase_index_);
+  x(ny_) = 1.0;
+  return x;
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::residual(const Eigen::VectorXd& x, double energy) const {
+  return evaluate(x, energy, false).residual;
+}
+
+SparseLinearization NonlinearModes::BackboneSystem::linearize(const Eigen::VectorXd& x, double energy) const {
+  return evaluate(x, energy, true);
+}
+
+SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::VectorXd& x, double energy,
+                                                             bool jacobian) const {
+  const auto& nm = *nm_;
+  const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
+  const Eigen::Index p = nm.phase_index_, full_size = ny_ + 1;
+  if (x.size() != size_) {
+    throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
+                                std::to_string(size_));
+  }
+  // Full stacked Y (phase coefficient 0) and the map full index -> reduced index (−1: removed).
+  Eigen::VectorXd yf(full_size);
+  yf << x.head(p), 0.0, x.segment(p, ny_ - p);
+  auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
+  const Eigen::Map<const Eigen::MatrixXd> ym(yf.data(), n, f);
+  const double s = x(ny_);
+  const bool exact = penalty_ == 0.0;
+  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
+
+  // Harmonic balance rows, full size: w_k (K̂ − ν_k² s M̂) Y_k + Σ_s θ_sk λ_s e_c.
+  const Eigen::MatrixXd ky = nm.ks_ * ym, my = nm.ms_ * ym;
+  Eigen::MatrixXd hb(n, f);
+  for (int k = 0; k < f; ++k) hb.col(k) = nm.weight_(k) * (ky.col(k) - nm.nu_(k) * nm.nu_(k) * s * my.col(k));
+  // Constraint values and contact multipliers per stop.
+  Eigen::VectorXd g(n_stops * ms), lambda(n_stops * ms);
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const auto& stop = nm.stops_[static_cast<size_t>(c)];
+    g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
+    lambda.segment(c * ms, ms) =
+        exact ? Eigen::VectorXd(x.segment(ny_ + 1 + c * ms, ms)) : Eigen::VectorXd(penalty_ * g.segment(c * ms, ms).cwiseMax(0.0));
+    hb.row(stop.dof) += (nm.theta_.transpose() * lambda.segment(c * ms, ms)).transpose();
+  }
+  double mh = 0.0;
+  for (int k = 0; k < f; ++k) mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(my.col(k)) * nm.m_ref_;
+  SparseLinearization out;
+  out.residual.resize(size_);
+  const Eigen::VectorXd hbs = spectral::stacked(hb);
+  out.residual.head(p) = hbs.head(p);
+  out.residual.segment(p, ny_ - p) = hbs.tail(ny_ - p);
+  out.residual(ny_) = mh / nm.m_c_ - energy;
+  // Signorini at every sample: min(λ_s, −g_s) = 0 (λ in units of f_ref).
+  if (exact) {
+    for (Eigen::Index i = 0; i < n_stops * ms; ++i) out.residual(ny_ + 1 + i) = std::min(lambda(i), -g(i));
+  }
+  out.parameter_derivative = Eigen::VectorXd::Zero(size_);
+  out.parameter_derivative(ny_) = -1.0;
+  if (!jacobian) return out;
+
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<size_t>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros() + 2 * n) +
+            static_cast<size_t>(n_stops * ms) * (f + 2) + static_cast<size_t>(f * f * n_stops));
+  auto add = [&](Eigen::Index row_full, Eigen::Index col_full, double v) {
+    const Eigen::Index r = reduced(row_full), c = reduced(col_full);
+    if (r >= 0 && c >= 0) t.emplace_back(r, c, v);
+  };
+  auto add_row = [&](Eigen::Index row_full, Eigen::Index col, double v) {  // column already in state units
+    const Eigen::Index r = reduced(row_full);
+    if (r >= 0) t.emplace_back(r, col, v);
+  };
+  for (int k = 0; k < f; ++k) {
+    const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
+    for (int pass = 0; pass < 2; ++pass) {
+      const Eigen::SparseMatrix<double>& a = pass == 0 ? nm.ks_ : nm.ms_;
+      const double factor = pass == 0 ? w : -w * nu2 * s;
+      for (Eigen::Index col = 0; col < a.outerSize(); ++col) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it) {
+          add(static_cast<Eigen::Index>(k) * n + it.row(), static_cast<Eigen::Index>(k) * n + it.col(), factor * it.value());
+        }
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Index row = static_cast<Eigen::Index>(k) * n + i;
+      add_row(row, ny_, -w * nu2 * my(i, k));                                         // ∂/∂s
+      const double dn = 2.0 * w * nu2 * my(i, k) * nm.m_ref_ / nm.m_c_;                // ∂(m̂/m̂_c)/∂Y
+      if (reduced(row) >= 0) t.emplace_back(ny_, reduced(row), dn);
+    }
+  }
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const int d = nm.stops_[static_cast<size_t>(c)].dof;
+    if (exact) {
+      for (int smp = 0; smp < ms; ++smp) {
+        const Eigen::Index i = c * ms + smp, col = ny_ + 1 + i;
+        for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, nm.theta_(smp, k));  // ∂HB/∂λ
+        if (lambda(i) <= -g(i)) {
+          t.emplace_back(col, col, 1.0);  // the min picks λ_s
+        } else {
+          for (int k = 0; k < f; ++k) {  // the min picks −g_s
+            const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
+            if (r >= 0) t.emplace_back(col, r, -nm.theta_(smp, k));
+          }
+        }
+      }
+    } else {  // penalty: ∂HB(k, d)/∂Y(l, d) = κ Σ_s θ_sk θ_sl [g_s > 0]
+      const Eigen::VectorXd on = (g.segment(c * ms, ms).array() > 0.0).cast<double>() * penalty_;
+      if (on.isZero(0.0)) continue;
+      const Eigen::MatrixXd block = nm.theta_.transpose() * on.asDiagonal() * nm.theta_;
+      for (int k = 0; k < f; ++k) {
+        for (int l = 0; l < f; ++l) {
+          add(static_cast<Eigen::Index>(k) * n + d, static_cast<Eigen::Index>(l) * n + d, block(k, l));
+        }
+      }
+    }
+  }
+  out.jacobian.resize(size_, size_);
+  out.jacobian.setFromTriplets(t.begin(), t.end());
+  return out;
+}
+
+ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double energy) const {
+  const auto& nm = *nm_;
+  const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
+  const Eigen::Index p = nm.phase_index_;
+  Eigen::VectorXd yf(ny_ + 1);
+  yf << x.head(p), 0.0, x.segment(p, ny_ - p);
+  const Eigen::Map<const Eigen::MatrixXd> ym(yf.data(), n, f);
+  ModeLevel l;
+  l.energy = energy;
+  l.converged = true;
+  l.coefficients = ym * nm.g_ref_;
+  l.frequency_hz = std::sqrt(x(ny_)) * nm.omega0_ / (2.0 * std::numbers::pi);
+  double kh = 0.0, mh = 0.0;
+  for (int k = 0; k < f; ++k) {
+    kh += nm.weight_(k) * ym.col(k).dot(nm.k_ * ym.col(k));
+    mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(nm.m_ * ym.col(k));
+  }
+  l.rayleigh_frequency_hz = std::sqrt(kh / mh) / (2.0 * std::numbers::pi);
+  l.normalization_error = std::abs(mh / nm.m_c_ - energy);
+  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
+  Eigen::VectorXd g(n_stops * ms), lambda(n_stops * ms);
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const auto& stop = nm.stops_[static_cast<size_t>(c)];
+    g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
+    lambda.segment(c * ms, ms) = penalty_ == 0.0 ? Eigen::VectorXd(x.segment(ny_ + 1 + c * ms, ms))
+                                                 : Eigen::VectorXd(penalty_ * g.segment(c * ms, ms).cwiseMax(0.0));
+  }
+  const double f_ref = ms * nm.omega0_ * nm.omega0_ * nm.m_ref_ * nm.g_ref_;
+  l.contact_force = lambda * f_ref;
+  l.max_penetration = g.maxCoeff();
+  const double lmax = lambda.maxCoeff();
+  l.complementarity = lmax > 0.0 ? (lambda.array() * g.array()).abs().maxCoeff() / lmax : 0.0;
+  l.inequality_measure = std::max(0.0, l.max_penetration);
+  l.equality_measure = l.normalization_error;
+  // The Lagrangian's multipliers (see solve()): λ_AL = 2 m_ref λ/(m̂), μ = (r/ω₀² − s)/E.
+  l.multipliers = lambda * (2.0 * nm.m_ref_ / (mh));
+  l.equality_multiplier = (kh / mh / (nm.omega0_ * nm.omega0_) - x(ny_)) / energy;
+  l.message = "converged (KKT residual " + std::to_string(residual(x, energy).norm()) + ")";
+  return l;
+}
+
+ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const {
+  struct Fixed {
+    const BackboneSystem* s;
+    double e;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& v) const { return s->residual(v, e); }
+    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& v) const { return Eigen::MatrixXd(s->linearize(v, e).jacobian); }
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  const NewtonResult r = newton(Fixed{&system, energy}, std::move(x), {.tolerance = 1e-10, .max_iterations = 30});
+  ModeLevel l = system.level(r.x, energy);
+  l.converged = r.report.converged();
+  l.newton_iterations = r.report.iterations;
+  if (!l.converged) l.message = "semismooth Newton at fixed E: " + r.report.message;
+  l.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return l;
+}
+
+Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o) const {
+  o.validate();
+  const auto t0 = std::chrono::steady_clock::now();
+  const BackboneSystem system(*this, o.penalty_stiffness);
+  Backbone b;
+  // Start below contact on the linear mode (an exact solution); above onset, from the linear
+  // mode corrected by Newton at fixed E.
+  const double e0 = o.energy_min;
+  const Eigen::VectorXd x0 = system.linear_state(std::min(e0, 1.0));
+  PseudoArclengthOptions pa;
+  pa.parameter_min = 0.5 * e0;
+  pa.parameter_max = o.energy_max;
+  pa.parameter_scale = 1.0;
+  pa.state_scale = 1.0;
+  pa.initial_step = o.initial_step;
+  pa.min_step = o.min_step;
+  pa.max_step = o.max_step;
+  pa.max_parameter_step = o.max_energy_step;
+  pa.max_points = o.max_points;
+  pa.corrector_tolerance = o.tolerance;
+  pa.max_corrector_iterations = 12;
+  pa.kink_step = 1e-5;
+  pa.corner_restart = true;
+  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = 50};
+  const Branch branch = pseudo_arclength(system, x0, e0, pa);
+  for (const auto& pt : branch.points) {
+    if (pt.parameter > o.energy_max) {  // the last point overshoots the range: land on energy_max
+      ModeLevel last = level_at(system, pt.x, o.energy_max);
+      if (last.converged) b.levels.push_back(std::move(last));
+      break;
+    }
+    ModeLevel l = system.level(pt.x, pt.parameter);
+    l.newton_iterations = pt.corrector_iterations;
+    b.levels.push_back(std::move(l));
+  }
+  for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
+  b.kinks = branch.kinks;
+  b.rejected_steps = branch.rejected_steps;
+  b.complete = branch.stop == StopReason::RangeReached && !b.levels.empty() &&
+               b.levels.back().energy >= o.energy_max * (1.0 - 1e-12);
+  b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
+  b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return b;
 }
 
 }  // namespace wbm::solvers

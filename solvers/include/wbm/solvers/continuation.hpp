@@ -14,7 +14,9 @@
 ///              corrector failure or a tangent turning by more than max_turn_degrees; a turn that
 ///              persists down to h = kink_step is a corner of a nonsmooth branch, jumped by one
 ///              step of the last accepted length along the old tangent when that continues in
-///              the old direction, else kept.
+///              the old direction, else kept; with corner_restart, a corrector that fails down
+///              to h = kink_step restarts along the tangent of the piece beyond the corner
+///              (complementarity branches may turn back by more than 90° there).
 /// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
 /// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step.
 /// The branch stops on a StopReason; every point it holds converged (‖R‖ ≤ corrector_tolerance);
@@ -32,6 +34,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 #include <wbm/solvers/newton.hpp>
 
@@ -44,11 +48,22 @@ struct Linearization {
   Eigen::VectorXd parameter_derivative;
 };
 
-/// A square system along one parameter: residual(x, λ) and linearize(x, λ).
+/// The same with a sparse Jacobian: the bordered systems are then solved by sparse LU
+/// (Eigen::SparseLU, COLAMD ordering), for large systems with few couplings, e.g. harmonic
+/// balance of an FE model whose nonlinearity sits on a few DOFs.
+struct SparseLinearization {
+  Eigen::VectorXd residual;
+  Eigen::SparseMatrix<double> jacobian;
+  Eigen::VectorXd parameter_derivative;
+};
+
+/// A square system along one parameter: residual(x, λ) and linearize(x, λ), the latter
+/// returning a Linearization (dense) or a SparseLinearization.
 template <class S>
 concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, double p) {
   { s.residual(x, p) } -> std::convertible_to<Eigen::VectorXd>;
-  { s.linearize(x, p) } -> std::convertible_to<Linearization>;
+  requires std::same_as<decltype(s.linearize(x, p)), Linearization> ||
+               std::same_as<decltype(s.linearize(x, p)), SparseLinearization>;
 };
 
 enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed, StateBound };
@@ -80,6 +95,8 @@ struct PseudoArclengthOptions {
   int target_iterations = 3;          // corrector iterations the step adaptation aims at
   double max_turn_degrees = 30.0;     // a larger angle between consecutive tangents halves h ...
   double kink_step = 1e-4;            // ... unless h <= kink_step: then the point is kept (a kink)
+  bool corner_restart = false;        // a corrector failing at h <= kink_step restarts along the
+                                      // new piece's tangent (turning corners, see below)
   NewtonOptions initial_newton{};     // for the first point, at fixed λ
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
@@ -141,6 +158,43 @@ inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t
   return b;
 }
 
+// Solves the bordered system for one right-hand side; NaN if the sparse factorization fails.
+inline Eigen::VectorXd bordered_solve(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls,
+                                      const Eigen::VectorXd& rhs) {
+  return Eigen::PartialPivLU<Eigen::MatrixXd>(bordered(l, t, xs, ls)).solve(rhs);
+}
+
+inline Eigen::VectorXd bordered_solve(const SparseLinearization& l, const Eigen::VectorXd& t, double xs, double ls,
+                                      const Eigen::VectorXd& rhs) {
+  const auto n = l.jacobian.rows();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(l.jacobian.nonZeros() + 2 * n + 1));
+  for (Eigen::Index c = 0; c < l.jacobian.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(l.jacobian, c); it; ++it) {
+      entries.emplace_back(it.row(), it.col(), it.value() * xs);
+    }
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (l.parameter_derivative(i) != 0.0) entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
+    if (t(i) != 0.0) entries.emplace_back(n, i, t(i) / static_cast<double>(n));
+  }
+  entries.emplace_back(n, n, t(n));
+  Eigen::SparseMatrix<double> b(n + 1, n + 1);
+  b.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(b);
+  if (lu.info() != Eigen::Success) return Eigen::VectorXd::Constant(n + 1, std::nan(""));
+  return lu.solve(rhs);
+}
+
+inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
+inline bool finite(const SparseLinearization& l) {
+  return Eigen::Map<const Eigen::VectorXd>(l.jacobian.valuePtr(), l.jacobian.nonZeros()).allFinite() &&
+         l.parameter_derivative.allFinite();
+}
+
+inline Eigen::MatrixXd dense(const Eigen::MatrixXd& j) { return j; }
+inline Eigen::MatrixXd dense(const Eigen::SparseMatrix<double>& j) { return Eigen::MatrixXd(j); }
+
 inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   const auto n = a.size() - 1;
   return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
@@ -180,7 +234,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     const S* s;
     double lambda;
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, lambda); }
-    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return s->linearize(x, lambda).jacobian; }
+    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
+      return detail::dense(s->linearize(x, lambda).jacobian);
+    }
   };
   NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton);
   if (!first.report.converged()) return finish(StopReason::InitialPointFailed, first.report.message);
@@ -188,10 +244,11 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   // Tangent at the first point, oriented by `direction`.
   Eigen::VectorXd seed = Eigen::VectorXd::Zero(n + 1);
   seed(n) = o.direction;
-  auto tangent_at = [&](const Linearization& l, const Eigen::VectorXd& previous) {
+  using Lin = decltype(system.linearize(x0, lambda0));
+  auto tangent_at = [&](const Lin& l, const Eigen::VectorXd& previous) {
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + 1);
     rhs(n) = 1.0;
-    Eigen::VectorXd t = Eigen::PartialPivLU<Eigen::MatrixXd>(detail::bordered(l, previous, xs, ls)).solve(rhs);
+    Eigen::VectorXd t = detail::bordered_solve(l, previous, xs, ls, rhs);
     return Eigen::VectorXd(t / std::sqrt(detail::inner(t, t)));
   };
   BranchPoint p0;
@@ -212,14 +269,14 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     double rnorm = 0.0;
     Eigen::VectorXd z, tangent;
   };
-  auto attempt = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, double step) {
+  auto attempt_along = [&](const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
     Attempt a;
-    a.z = z_last + step * last.tangent;
-    Linearization lin;
+    a.z = z_last + step * direction;
+    Lin lin;
     for (; a.iterations <= o.max_corrector_iterations; ++a.iterations) {
       lin = system.linearize(a.z.head(n) * xs, a.z(n) * ls);
       a.rnorm = lin.residual.norm();
-      if (!std::isfinite(a.rnorm) || !lin.jacobian.allFinite() || !lin.parameter_derivative.allFinite()) break;
+      if (!std::isfinite(a.rnorm) || !detail::finite(lin)) break;
       if (a.rnorm <= o.corrector_tolerance) {
         a.converged = true;
         break;
@@ -227,17 +284,48 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       if (a.iterations == o.max_corrector_iterations) break;
       Eigen::VectorXd rhs(n + 1);
       rhs.head(n) = -lin.residual;
-      rhs(n) = -(detail::inner(last.tangent, a.z - z_last) - step);
-      const Eigen::PartialPivLU<Eigen::MatrixXd> lu(detail::bordered(lin, last.tangent, xs, ls));
-      const Eigen::VectorXd dz = lu.solve(rhs);
+      rhs(n) = -(detail::inner(direction, a.z - z_last) - step);
+      const Eigen::VectorXd dz = detail::bordered_solve(lin, direction, xs, ls, rhs);
       if (!dz.allFinite()) break;
       a.z += dz;
     }
     if (a.converged) {
-      a.tangent = tangent_at(lin, last.tangent);
+      a.tangent = tangent_at(lin, direction);
       if (!a.tangent.allFinite()) a.converged = false;
     }
     return a;
+  };
+  auto attempt = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, double step) {
+    return attempt_along(last.tangent, z_last, step);
+  };
+  // A corner where the corrector fails for every small step (a complementarity condition
+  // switching, the new piece turning back by more than 90°, so that no hyperplane normal to the
+  // old tangent meets it): the Jacobian a little beyond the corner along the old tangent already
+  // has the new piece's active set; its null direction is the new tangent. Both orientations
+  // are tried, from the last accepted step down to kink_step, and a point that only retreats
+  // along the old piece is refused.
+  auto restart_at_corner = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, Attempt& out) {
+    const Eigen::VectorXd probe = z_last + o.kink_step * last.tangent;
+    const Lin beyond = system.linearize(probe.head(n) * xs, probe(n) * ls);
+    if (!detail::finite(beyond)) return false;
+    const Eigen::VectorXd t_new = tangent_at(beyond, last.tangent);
+    if (!t_new.allFinite()) return false;
+    for (double sign : {1.0, -1.0}) {
+      for (double step = std::max(h_accepted, o.kink_step); step >= o.kink_step; step *= 0.25) {
+        Attempt c = attempt_along(sign * t_new, z_last, step);
+        branch.corrector_iterations += c.iterations;
+        if (!c.converged) continue;
+        // Refuse a landing closer to the retreat along the old piece (−t_old) than half-way
+        // from it to the intended direction (the pieces may meet at a fraction of a degree).
+        const Eigen::VectorXd dz = c.z - z_last;
+        const Eigen::VectorXd back = dz / std::sqrt(detail::inner(dz, dz)) + last.tangent;
+        const Eigen::VectorXd apart = sign * t_new + last.tangent;
+        if (detail::inner(back, back) < 0.25 * detail::inner(apart, apart)) continue;
+        out = std::move(c);
+        return true;
+      }
+    }
+    return false;
   };
   while (static_cast<int>(branch.points.size()) < o.max_points) {
     const BranchPoint& last = branch.points.back();
@@ -257,6 +345,14 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
         a = std::move(jump);
         h = h_accepted;
+        sharp = false;
+      }
+    }
+    if (!a.converged && h <= o.kink_step && o.corner_restart) {
+      Attempt c;
+      if (restart_at_corner(last, z_last, c)) {
+        ++branch.kinks;
+        a = std::move(c);
         sharp = false;
       }
     }

@@ -44,7 +44,10 @@
 
 #include <Eigen/Core>
 
+#include <Eigen/SparseCore>
+
 #include <wbm/contact/augmented_lagrangian.hpp>
+#include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 
 namespace wbm::solvers {
@@ -73,7 +76,8 @@ struct NonlinearModeOptions {
 /// One mode at one energy level.
 struct ModeLevel {
   double energy = 0.0;                // E = γ/γ_c (1 at contact onset)
-  double frequency_hz = 0.0;          // √r / 2π
+  double frequency_hz = 0.0;          // ω/2π of the periodic orbit: √(r − μ ω₀² E)/2π (see below)
+  double rayleigh_frequency_hz = 0.0; // √r/2π, the eigenvalue ω² = r(Û) of [LL11 Eq. (24a)]
   Eigen::MatrixXd coefficients;       // Y, n × (2N + 1) [m]
   bool converged = false;
   std::string message;
@@ -85,14 +89,36 @@ struct ModeLevel {
   double normalization_error = 0.0;   // |½ m̂/γ_c − E|
   Eigen::VectorXd multipliers;        // λ at the m samples of each stop (stop-major), dimensionless
   double equality_multiplier = 0.0;   // μ
+  /// Contact force samples f_s [N] (stop-major, m per stop) whose rectangle rule
+  /// (1/m) Σ_s f_s q_k(τ_s) is the contact term of the harmonic balance; with exact contact they
+  /// sit on the few samples where u_c touches its gap.
+  Eigen::VectorXd contact_force;
   double wall_time_s = 0.0;
 };
 
 struct Backbone {
-  std::vector<ModeLevel> levels;      // converged levels, increasing energy
+  std::vector<ModeLevel> levels;      // converged levels in branch order (E increasing between folds)
   std::vector<double> failed_energies;  // levels that did not converge (the step was then shrunk)
+  std::vector<double> folds;          // energies where the branch turns back in E (continuation)
+  int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
+  int rejected_steps = 0;             // continuation steps retried with half the step
+  bool complete = false;              // energy_max reached
   std::string message;
   double wall_time_s = 0.0;
+};
+
+/// Pseudo-arclength continuation in energy of the backbone [Keller 1977; continuation.hpp].
+struct BackboneContinuationOptions {
+  double energy_min = 0.5, energy_max = 10.0;  // E range; energy_min < 1 starts below contact
+  /// 0: exact (Signorini) contact; > 0: a linear penalty spring k [N/m] at every stop instead,
+  /// f = k (u_c − g_c)₊ (the penalty-limit check [issue #7]).
+  double penalty_stiffness = 0.0;
+  double initial_step = 1e-2, min_step = 1e-7, max_step = 5e-2;  // scaled arclength (continuation.hpp)
+  double max_energy_step = 0.05;      // |ΔE| per step, for a dense curve
+  int max_points = 5000;
+  double tolerance = 1e-10;           // ‖R‖₂ of the KKT residual below (dimensionless)
+  /// Throws std::invalid_argument naming the field, its value and the range.
+  void validate() const;
 };
 
 struct BackboneOptions {
@@ -121,6 +147,43 @@ class NonlinearModes {
   /// quick convergence and halved after a failure (the failed energy is recorded).
   [[nodiscard]] Backbone backbone(const BackboneOptions& options) const;
 
+  /// The backbone by pseudo-arclength continuation in E of the optimality (KKT) conditions of
+  /// [LL11 Eq. (24)], written as the harmonic balance of the free motion with contact forces:
+  ///   w_k (K − ν_k² ω² M) Y_k + (1/m) Σ_s q_k(τ_s) f_s e_c = 0   (every (k, dof) but the phase row)
+  ///   min(f_s/f_ref, −g_s) = 0                                 (Signorini at every sample s)
+  ///   m̂(Y)/m̂_c − E = 0                                        (normalization, Eq. 12)
+  /// with unknowns Y (phase coefficient fixed), ω² and f (exact contact), solved by semismooth
+  /// Newton inside the continuation (sparse LU); or with f_s = k (u_c(τ_s) − g_c)₊ and no f
+  /// unknowns (penalty). These are the stationarity conditions of L = r + λᵀg + μ h with
+  /// ω² = r − μ ω₀² E (BackboneSystem below), so both methods find the same modes; unlike
+  /// energy stepping with solve(), the continuation passes turning points in E.
+  [[nodiscard]] Backbone continue_backbone(const BackboneContinuationOptions& options) const;
+
+  /// The KKT (or penalty) system of continue_backbone as a ParametrizedSystem in E. State x =
+  /// [Y stacked k·n + dof without the phase coefficient (units of g_ref); ω²/ω₀²; f/f_ref
+  /// (stop-major, m per stop, exact contact only)], f_ref = m ω₀² m_ref g_ref with m_ref = 2 m̂_c
+  /// [kg] (the modal mass of the onset mode scaled to a unit stop amplitude). Residual rows: harmonic balance / (ω₀² m_ref g_ref) without the phase row; the
+  /// normalization; min(f_s/f_ref, −g_s) per sample. Exposed for tests (finite differences).
+  class BackboneSystem {
+   public:
+    BackboneSystem(const NonlinearModes& modes, double penalty_stiffness);
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double energy) const;
+    [[nodiscard]] SparseLinearization linearize(const Eigen::VectorXd& x, double energy) const;
+    /// The state of the linear mode at E ≤ 1 (an exact solution, no contact force).
+    [[nodiscard]] Eigen::VectorXd linear_state(double energy) const;
+    /// The level at a converged state (frequencies, contact forces, diagnostics).
+    [[nodiscard]] ModeLevel level(const Eigen::VectorXd& x, double energy) const;
+    [[nodiscard]] Eigen::Index size() const { return size_; }
+
+   private:
+    [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian) const;
+    const NonlinearModes* nm_;
+    double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
+    Eigen::Index ny_ = 0, size_ = 0;
+  };
+  /// The level at exactly `energy` from a converged state x near it (semismooth Newton at fixed E).
+  [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const;
+
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
   [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
   [[nodiscard]] Eigen::MatrixXd velocity(const ModeLevel& level, int samples) const;
@@ -141,6 +204,8 @@ class NonlinearModes {
   Eigen::MatrixXd theta_;          // m × F values at τ_k = k/m
   Eigen::VectorXd onset_;
   int phase_index_ = 0;            // index in the stacked y of the fixed coefficient
+  Eigen::SparseMatrix<double> ks_, ms_;  // K/(ω₀² m_ref), M/m_ref (continue_backbone)
+  double m_ref_ = 1.0;             // 2 m̂_c g_ref² [kg]
 };
 
 }  // namespace wbm::solvers
