@@ -31,6 +31,13 @@ inline Range finite(const std::string& unit) {
   return {"finite" + (unit.empty() ? "" : " [" + unit + "]"), [](double v) { return std::isfinite(v); }};
 }
 
+// A number as the messages print it ("%g"-like, shortest of <<).
+inline std::string number_text(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}

@@ -23,7 +23,7 @@ using detail::Reader;
 constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 
 const std::vector<std::string>& analysis_names() {
-  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot", "continuation"};
+  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot", "continuation", "nnm"};
   return n;
 }
 
@@ -62,6 +62,27 @@ class Parser {
                                "built); ignored");
         }
       }
+    } else if (s_.analysis.kind == AnalysisKind::NonlinearModes) {
+      // Modes of the conservative system against its stops: no forcing, damping, basis, solver
+      // or time stepping.
+      for (const char* unused : {"forcing", "damping", "basis", "solver", "timestep"}) {
+        if (const toml::node* n = root.get(unused)) {
+          r_.warn(n->source(), std::string("[") + unused + "] is not used by analysis \"nnm\" (modes of the "
+                               "undamped, unforced structure); ignored");
+        }
+      }
+      structure(root);
+      contacts(root);
+      const bool penalty = std::any_of(s_.contacts.begin(), s_.contacts.end(), [](const Contact& c) { return c.law == "linear"; });
+      if (penalty && s_.analysis.algorithm != "continuation") {
+        r_.error(root.source(), "analysis.algorithm",
+                 "\"" + s_.analysis.algorithm + "\" (augmented Lagrangian, LL11 Alg. 1/2) imposes exact contact: use "
+                 "law = \"rigid\", or algorithm = \"continuation\" for penalty stops");
+      }
+      if (root.get("contact") == nullptr) {
+        r_.error(root.source(), "[contact]", "missing: analysis \"nnm\" needs at least one stop (law = \"rigid\" "
+                                             "for exact contact, or \"linear\" for a penalty spring), with a gap > 0");
+      }
     } else {
       structure(root);
       damping(root);
@@ -70,7 +91,7 @@ class Parser {
       solver(root);
       timestep(root);
     }
-    basis(root);
+    if (s_.analysis.kind != AnalysisKind::NonlinearModes) basis(root);
     if (plot) basis_plot(root);
     output(root);
     return std::move(s_);
@@ -82,19 +103,14 @@ class Parser {
     const toml::table* t = r_.table(root, "analysis", false);
     if (t == nullptr) return;
     r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization", "max_step", "max_frequency_step_hz",
-                             "max_points", "max_state", "stability"});
-    const toml::node* type = t->get("type");
-    if (type != nullptr && type->is_string() && type->as_string()->get() == "nnm") {
-      r_.error(type->source(), "analysis.type",
-               "\"nnm\" is not available in this version (planned: nonlinear modes, issue #7); use one of " +
-                   Reader::list(analysis_names()));
-    } else {
-      const std::string kind = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
-      s_.analysis.kind = kind == "timestep"       ? AnalysisKind::Timestep
-                         : kind == "basis-plot"   ? AnalysisKind::BasisPlot
-                         : kind == "continuation" ? AnalysisKind::Continuation
-                                                  : AnalysisKind::Solve;
-    }
+                             "max_points", "max_state", "stability", "energy", "harmonics", "samples", "algorithm",
+                             "max_energy_step", "levels"});
+    const std::string kind = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
+    s_.analysis.kind = kind == "timestep"       ? AnalysisKind::Timestep
+                       : kind == "basis-plot"   ? AnalysisKind::BasisPlot
+                       : kind == "continuation" ? AnalysisKind::Continuation
+                       : kind == "nnm"          ? AnalysisKind::NonlinearModes
+                                                : AnalysisKind::Solve;
     auto only_for = [&](AnalysisKind kind, std::initializer_list<const char*> keys) {
       if (s_.analysis.kind == kind) return;
       for (const char* key : keys) {
@@ -105,7 +121,16 @@ class Parser {
       }
     };
     only_for(AnalysisKind::BasisPlot, {"functions", "derivative", "normalization"});
-    only_for(AnalysisKind::Continuation, {"max_step", "max_frequency_step_hz", "max_points", "max_state", "stability"});
+    only_for(AnalysisKind::Continuation, {"max_frequency_step_hz", "max_state", "stability"});
+    only_for(AnalysisKind::NonlinearModes, {"energy", "harmonics", "samples", "algorithm", "max_energy_step", "levels"});
+    if (s_.analysis.kind != AnalysisKind::Continuation && s_.analysis.kind != AnalysisKind::NonlinearModes) {
+      for (const char* key : {"max_step", "max_points"}) {
+        if (const toml::node* n = t->get(key)) {
+          r_.error(n->source(), std::string("analysis.") + key, "only used by type = \"continuation\" or \"nnm\"; remove it");
+        }
+      }
+    }
+    if (s_.analysis.kind == AnalysisKind::NonlinearModes) nnm(*t);
     if (s_.analysis.kind == AnalysisKind::Continuation) {
       Analysis& a = s_.analysis;
       a.max_step = r_.number(*t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
@@ -115,6 +140,54 @@ class Parser {
       a.max_points = static_cast<int>(r_.integer(*t, "analysis", "max_points", 2, 1000000, a.max_points));
       a.max_state = r_.number(*t, "analysis", "max_state", detail::non_negative("gaps; 0 = no bound"), a.max_state);
       a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
+    }
+  }
+
+  // [analysis] of type "nnm": energy = [from, to] (normalized, 1 = contact onset), N, m, the
+  // outer algorithm, steps and the levels whose mode shapes are written.
+  void nnm(const toml::table& t) {
+    Analysis& a = s_.analysis;
+    const toml::node* e = t.get("energy");
+    const toml::array* range = e != nullptr ? e->as_array() : nullptr;
+    if (range == nullptr || range->size() != 2) {
+      r_.error(e != nullptr ? e->source() : t.source(), "analysis.energy",
+               std::string(e == nullptr ? "missing" : "expected") +
+                   "; give energy = [from, to], normalized energies (1 = contact onset), 0 < from < to");
+    } else {
+      a.energy_min = r_.number_value((*range)[0], "analysis.energy", detail::positive("normalized energy"));
+      a.energy_max = r_.number_value((*range)[1], "analysis.energy", detail::positive("normalized energy"));
+      if (!(a.energy_min < a.energy_max)) {
+        r_.error(e->source(), "analysis.energy", "the range is empty or reversed (from >= to); give from < to");
+      }
+    }
+    a.harmonics = static_cast<int>(r_.integer(t, "analysis", "harmonics", 1, 512, a.harmonics));
+    a.samples = static_cast<int>(r_.integer(t, "analysis", "samples", 3, 1 << 16, std::max(a.samples, 8 * a.harmonics)));
+    if (a.samples <= 2 * a.harmonics) {
+      r_.error(t.get("samples") != nullptr ? t.get("samples")->source() : t.source(), "analysis.samples",
+               "m = " + std::to_string(a.samples) + " must exceed 2N = " + std::to_string(2 * a.harmonics) +
+                   " (the contact conditions are imposed at m samples of a degree-N trigonometric polynomial)");
+    }
+    a.algorithm = r_.choice(t, "analysis", "algorithm", {"continuation", "simultaneous", "sequential"}, a.algorithm);
+    a.max_step = r_.number(t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
+                           5e-2);
+    a.max_energy_step = r_.number(t, "analysis", "max_energy_step", detail::positive("normalized energy"),
+                                  a.max_energy_step);
+    a.max_points = static_cast<int>(r_.integer(t, "analysis", "max_points", 2, 1000000, a.max_points));
+    if (const toml::node* l = t.get("levels")) {
+      const toml::array* list = l->as_array();
+      if (list == nullptr) {
+        r_.error(l->source(), "analysis.levels", "expected a list of normalized energies inside analysis.energy");
+      } else {
+        for (const auto& v : *list) {
+          const double level = r_.number_value(v, "analysis.levels", detail::positive("normalized energy"));
+          if (level < a.energy_min || level > a.energy_max) {
+            r_.error(v.source(), "analysis.levels", "energy " + detail::number_text(level) + " outside analysis.energy = [" +
+                                                      detail::number_text(a.energy_min) + ", " +
+                                                      detail::number_text(a.energy_max) + "]");
+          }
+          a.levels.push_back(level);
+        }
+      }
     }
   }
 
@@ -431,17 +504,39 @@ class Parser {
       return;
     }
     std::set<int> dofs;
+    const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
     for (const auto& [t, section] : tables) {
       Contact c;
-      c.law = r_.choice(*t, section, "law", {"exponential", "linear"});
-      c.gap = r_.number(*t, section, "gap", detail::finite("m"));
-      if (c.law == "exponential") {
+      c.law = r_.choice(*t, section, "law", {"exponential", "linear", "rigid"});
+      c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
+                                                  : detail::finite("m"));
+      if (c.law == "rigid" && !modes) {
+        r_.error(t->get("law")->source(), section + ".law",
+                 "\"rigid\" (exact contact) is solved by analysis \"nnm\" only; the forced-response solvers need a "
+                 "penalty law: \"exponential\" or \"linear\"");
+      }
+      if (c.law == "exponential" && modes) {
+        r_.error(t->get("law")->source(), section + ".law",
+                 "analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)");
+      }
+      if (modes && !s_.contacts.empty() && (c.law == "rigid") != (s_.contacts.front().law == "rigid")) {
+        r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
+      }
+      if (c.law == "rigid") {
+        r_.only(*t, section, {"law", "gap", "node", "dof"});
+      } else if (c.law == "exponential") {
         r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof"});
         c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
         c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
       } else if (c.law == "linear") {
         r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof"});
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
+        if (modes && !s_.contacts.empty() && s_.contacts.front().law == "linear" &&
+            c.stiffness != s_.contacts.front().stiffness) {
+          r_.error(t->get("stiffness")->source(), section + ".stiffness",
+                   "nnm penalty stops share one stiffness (" + detail::number_text(s_.contacts.front().stiffness) +
+                       " N/m in the first [[contact]])");
+        }
       }
       c.dof = location(*t, section, default_location());
       if (s_.structure && !dofs.insert(c.dof).second) {
@@ -700,6 +795,7 @@ std::string_view to_string(AnalysisKind kind) noexcept {
     case AnalysisKind::Timestep: return "timestep";
     case AnalysisKind::BasisPlot: return "basis-plot";
     case AnalysisKind::Continuation: return "continuation";
+    case AnalysisKind::NonlinearModes: return "nnm";
     case AnalysisKind::Solve: break;
   }
   return "solve";
@@ -749,6 +845,10 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
   std::vector<solvers::ContactPoint> points;
   for (const auto& c : contacts) {
     std::shared_ptr<const contact::ContactLaw> law;
+    if (c.law == "rigid") {
+      throw std::logic_error("Scene::contact_points: a rigid stop has no penalty law (analysis \"nnm\" reads "
+                             "Scene::contacts directly)");
+    }
     if (c.law == "exponential") {
       law = std::make_shared<contact::ExponentialPenalty>(
           contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
@@ -846,6 +946,16 @@ nlohmann::json to_json(const Scene& s) {
     analysis["max_state"] = s.analysis.max_state;
     analysis["stability"] = s.analysis.stability;
   }
+  if (s.analysis.kind == AnalysisKind::NonlinearModes) {
+    analysis["energy"] = {s.analysis.energy_min, s.analysis.energy_max};
+    analysis["harmonics"] = s.analysis.harmonics;
+    analysis["samples"] = s.analysis.samples;
+    analysis["algorithm"] = s.analysis.algorithm;
+    analysis["max_step"] = s.analysis.max_step;
+    analysis["max_energy_step"] = s.analysis.max_energy_step;
+    analysis["max_points"] = s.analysis.max_points;
+    analysis["levels"] = s.analysis.levels;
+  }
   j["analysis"] = analysis;
   const bool rod = s.structure && s.structure->kind == StructureKind::Rod;
   auto where = [&](nlohmann::json& o, int dof) {
@@ -871,7 +981,7 @@ nlohmann::json to_json(const Scene& s) {
                         {"dofs", st.dof_names}};
       if (st.damping.size() > 0) j["structure"]["damping"] = matrix_json(st.damping, st.damping_file);
     }
-    j["damping"] = {{"alpha", s.damping.alpha}, {"beta", s.damping.beta}};
+    if (s.analysis.kind != AnalysisKind::NonlinearModes) j["damping"] = {{"alpha", s.damping.alpha}, {"beta", s.damping.beta}};
   }
   if (s.forcing) {
     nlohmann::json f = {{"amplitude", s.forcing->amplitude}};
@@ -891,7 +1001,7 @@ nlohmann::json to_json(const Scene& s) {
       if (c.law == "exponential") {
         o["coefficient"] = c.coefficient;
         o["exponent"] = c.exponent;
-      } else {
+      } else if (c.law == "linear") {
         o["stiffness"] = c.stiffness;
       }
       where(o, c.dof);
@@ -899,7 +1009,7 @@ nlohmann::json to_json(const Scene& s) {
     }
     j["contact"] = list;
   }
-  if (s.analysis.kind != AnalysisKind::Timestep) {
+  if (s.analysis.kind != AnalysisKind::Timestep && s.analysis.kind != AnalysisKind::NonlinearModes) {
     nlohmann::json b = {{"trial", s.basis.trial}, {"dimension", s.basis.dimension}};
     if (s.analysis.kind != AnalysisKind::BasisPlot) {
       b["weighting"] = s.basis.weighting;

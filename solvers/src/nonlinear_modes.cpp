@@ -343,7 +343,18 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     }
     energy = std::min(next, o.energy_max);
   }
-  if (b.message.empty()) b.message = "reached E = " + std::to_string(o.energy_max);
+  if (b.message.empty()) {
+    b.message = "reached E = " + std::to_string(o.energy_max);
+    b.complete = true;
+  }
+  for (double e : o.include) {
+    for (const auto& l : b.levels) {
+      if (std::abs(l.energy - e) <= 1e-12 * e) {
+        b.included.push_back(l);
+        break;
+      }
+    }
+  }
   b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return b;
 }
@@ -551,7 +562,9 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
   // The Lagrangian's multipliers (see solve()): λ_AL = 2 m_ref λ/(m̂), μ = (r/ω₀² − s)/E.
   l.multipliers = lambda * (2.0 * nm.m_ref_ / (mh));
   l.equality_multiplier = (kh / mh / (nm.omega0_ * nm.omega0_) - x(ny_)) / energy;
-  l.message = "converged (KKT residual " + std::to_string(residual(x, energy).norm()) + ")";
+  std::ostringstream os;
+  os << "KKT residual " << residual(x, energy).norm();
+  l.message = os.str();
   return l;
 }
 
@@ -606,6 +619,15 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
     ModeLevel l = system.level(pt.x, pt.parameter);
     l.newton_iterations = pt.corrector_iterations;
     b.levels.push_back(std::move(l));
+  }
+  for (double e : o.include) {  // first passage of the branch through e, then Newton at fixed e
+    for (size_t k = 0; k + 1 < branch.points.size(); ++k) {
+      const auto &p0 = branch.points[k], &p1 = branch.points[k + 1];
+      if ((p0.parameter - e) * (p1.parameter - e) > 0.0) continue;
+      const double t = p1.parameter == p0.parameter ? 0.0 : (e - p0.parameter) / (p1.parameter - p0.parameter);
+      b.included.push_back(level_at(system, p0.x + t * (p1.x - p0.x), e));
+      break;
+    }
   }
   for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
   b.kinks = branch.kinks;

@@ -73,6 +73,29 @@ struct DriverDeleter {
   void operator()(gsl_odeiv2_driver* d) const { gsl_odeiv2_driver_free(d); }
 };
 
+// The normalized ODE with time unit t_unit [s]: forcing on `forced_dof` (amplitude may be 0).
+Ode make_ode(const MechanicalSystem& system, int forced_dof, double amplitude,
+             const std::vector<ContactPoint>& contacts, double t_unit) {
+  Ode ode;
+  ode.n = system.dofs();
+  const Eigen::MatrixXd mass(system.mass);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
+  ode.minv_k = t_unit * t_unit * mlu.solve(Eigen::MatrixXd(system.stiffness));
+  ode.minv_c = t_unit * mlu.solve(Eigen::MatrixXd(system.damping));
+  ode.minv_cols.resize(ode.n, static_cast<Eigen::Index>(contacts.size()) + 1);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(ode.n);
+  e(forced_dof) = 1.0;
+  ode.minv_cols.col(0) = t_unit * t_unit * mlu.solve(e);
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    e.setZero();
+    e(contacts[c].dof) = 1.0;
+    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t_unit * t_unit * mlu.solve(e);
+  }
+  ode.amplitude = amplitude;
+  ode.contacts = contacts;
+  return ode;
+}
+
 }  // namespace
 
 PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
@@ -84,24 +107,8 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   options.validate();
   const auto start = std::chrono::steady_clock::now();
 
-  Ode ode;
-  ode.n = system.dofs();
   const double t = 1.0 / forcing.frequency_hz;  // period T [s]
-  const Eigen::MatrixXd mass(system.mass);
-  const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
-  ode.minv_k = t * t * mlu.solve(Eigen::MatrixXd(system.stiffness));
-  ode.minv_c = t * mlu.solve(Eigen::MatrixXd(system.damping));
-  ode.minv_cols.resize(ode.n, static_cast<Eigen::Index>(contacts.size()) + 1);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(ode.n);
-  e(forcing.dof) = 1.0;
-  ode.minv_cols.col(0) = t * t * mlu.solve(e);
-  for (size_t c = 0; c < contacts.size(); ++c) {
-    e.setZero();
-    e(contacts[c].dof) = 1.0;
-    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t * t * mlu.solve(e);
-  }
-  ode.amplitude = forcing.amplitude;
-  ode.contacts = contacts;
+  Ode ode = make_ode(system, forcing.dof, forcing.amplitude, contacts, t);
 
   gsl_set_error_handler_off();  // report GSL failures through return codes, never abort
   gsl_odeiv2_system sys{rhs, jacobian, static_cast<size_t>(2 * ode.n), &ode};
@@ -159,6 +166,63 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods
      << " periods, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
   rep.message = os.str();
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+Trajectory integrate_free(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
+                          const Eigen::VectorXd& u0, const Eigen::VectorXd& v0, double period_s, int periods,
+                          const TimeIntegrationOptions& options) {
+  system.validate();
+  ContactPoint::validate(contacts, system.dofs());
+  options.validate();
+  const int n = system.dofs();
+  if (u0.size() != n || v0.size() != n || !u0.allFinite() || !v0.allFinite()) {
+    throw std::invalid_argument("integrate_free: u0 and v0 must be finite vectors of length " + std::to_string(n));
+  }
+  if (!(period_s > 0.0) || !std::isfinite(period_s)) {
+    throw std::invalid_argument("integrate_free: period_s = " + std::to_string(period_s) + ": must be > 0 [s]");
+  }
+  if (periods < 1) throw std::invalid_argument("integrate_free: periods = " + std::to_string(periods) + ": must be >= 1");
+  const auto start = std::chrono::steady_clock::now();
+  Ode ode = make_ode(system, 0, 0.0, contacts, period_s);
+  gsl_set_error_handler_off();
+  gsl_odeiv2_system sys{rhs, jacobian, static_cast<size_t>(2 * n), &ode};
+  const int p_count = options.samples_per_period;
+  std::unique_ptr<gsl_odeiv2_driver, DriverDeleter> driver(gsl_odeiv2_driver_alloc_y_new(
+      &sys, gsl_odeiv2_step_msbdf, 1.0 / (16.0 * p_count), options.absolute_tolerance, options.relative_tolerance));
+  gsl_odeiv2_driver_set_nmax(driver.get(), 0);
+  const int total = periods * p_count + 1;
+  Trajectory out;
+  out.time_s = Eigen::VectorXd::LinSpaced(total, 0.0, periods * period_s);
+  out.displacement.resize(n, total);
+  out.velocity.resize(n, total);
+  Eigen::VectorXd y(2 * n);
+  y << u0, v0 * period_s;  // du/dτ = T du/dt
+  double tau = 0.0;
+  auto& rep = out.report;
+  for (int k = 0; k < total; ++k) {
+    if (k > 0) {
+      const int status = gsl_odeiv2_driver_apply(driver.get(), &tau, static_cast<double>(k) / p_count, y.data());
+      if (status != GSL_SUCCESS || !y.allFinite()) {
+        rep.status = SolveStatus::NonFinite;
+        rep.message = std::string("GSL msbdf failed (") + gsl_strerror(status) + ") at t = " +
+                      std::to_string(tau * period_s) + " s";
+        out.time_s.conservativeResize(k);
+        out.displacement.conservativeResize(n, k);
+        out.velocity.conservativeResize(n, k);
+        break;
+      }
+    }
+    out.displacement.col(k) = y.head(n);
+    out.velocity.col(k) = y.tail(n) / period_s;
+  }
+  if (rep.message.empty()) {
+    rep.status = SolveStatus::Converged;
+    rep.message = "integrated " + std::to_string(periods) + " spans of " + std::to_string(period_s) + " s";
+  }
+  rep.periods = periods;
+  rep.steps = static_cast<long>(driver->e->count);
   rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <wbm/scene/output.hpp>
+#include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/scene/scene.hpp>
 
 namespace wbm::scene {
@@ -43,8 +44,29 @@ struct AnalysisResult {
 ///    (solvers::trace_response) with Floquet stability; branch.csv (max, min and amplitude of
 ///    the forced DOF, contact force, stability, corrector iterations per point) and folds.csv
 ///    (with whether a Floquet multiplier crosses +1 there). Converged = the range was reached.
+///  - nnm: the first nonlinear normal mode of the undamped structure against its stops
+///    (solvers::NonlinearModes, [LL11]) over analysis.energy: by pseudo-arclength continuation in
+///    energy (algorithm "continuation") or by the augmented Lagrangian with Powell's updates at
+///    energy steps (LL11 Alg. 1 "simultaneous" or Alg. 2 "sequential", rigid stops only).
+///    Files: backbone.csv (per level: normalized energy, orbit and Rayleigh-quotient frequencies,
+///    penetration, complementarity, normalization error, largest contact force, iterations;
+///    Powell's measures for Alg. 1/2), folds.csv (energies where the branch turns back), and per
+///    analysis.levels energy E: mode_E<E>.csv (u and du/dt of the output DOFs over one period,
+///    [output] samples) and mode_E<E>_contact.csv (contact force samples). Converged = the
+///    energy range was covered and every level converged.
 /// Bad scenes are refused by load_scene; this throws only std::logic_error for a scene that
 /// bypassed it. Non-convergence is reported (converged = false), never thrown.
 [[nodiscard]] AnalysisResult run_analysis(const Scene& scene, const Progress& progress = {});
+
+/// The modal problem of an nnm scene: M and K of [structure] (damping ignored), one stop per
+/// [contact] (dof, gap), the penalty stiffness (0 for rigid stops) and N, m of [analysis].
+struct ModeProblem {
+  solvers::MechanicalSystem system;
+  std::vector<solvers::RigidStop> stops;
+  double penalty_stiffness = 0.0;  // [N/m]
+  solvers::NonlinearModeOptions options;
+};
+/// Throws std::logic_error unless the scene's analysis is nnm.
+[[nodiscard]] ModeProblem mode_problem(const Scene& scene);
 
 }  // namespace wbm::scene

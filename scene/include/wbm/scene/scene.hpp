@@ -12,18 +12,19 @@
 ///   [damping]                  C += alpha M + beta K
 ///   [forcing]                  F cos 2πft on one DOF: amplitude, node | dof, frequency_hz (a number,
 ///                              or [from, to] with points for a sweep)
-///   [contact] / [[contact]]    law ("exponential": coefficient, exponent; "linear": stiffness),
-///                              gap, node | dof
+///   [contact] / [[contact]]    law ("exponential": coefficient, exponent; "linear": stiffness;
+///                              "rigid": exact Signorini contact, nnm only), gap, node | dof
 ///   [basis]                    trial, weighting, dimension | level, formulation, time_samples,
 ///                              operators
 ///   [solver]                   Newton on the contact unknowns (tolerance, max_iterations,
 ///                              line_search, linear_solver)
 ///   [timestep]                 BDF reference (relative_tolerance, absolute_tolerance,
 ///                              periodicity_tolerance, max_periods)
-///   [analysis]                 type = "solve" | "timestep" | "basis-plot" | "continuation"
+///   [analysis]                 type = "solve" | "timestep" | "basis-plot" | "continuation" | "nnm"
 ///                              (+ functions, derivative, normalization for basis-plot; max_step,
 ///                              max_frequency_step_hz, max_points, max_state, stability for
-///                              continuation)
+///                              continuation; energy, harmonics, samples, algorithm,
+///                              max_energy_step, max_points, levels for nnm)
 ///   [output]                   samples per period, nodes | dofs to write
 /// Rod locations are node numbers 1 … elements (node 0 is clamped) or "tip"; matrix locations
 /// are DOF names or 0-based indices.
@@ -49,9 +50,9 @@
 namespace wbm::scene {
 
 enum class StructureKind { Rod, Matrices };
-enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation };
+enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation, NonlinearModes };
 
-/// "solve", "timestep", "basis-plot", "continuation".
+/// "solve", "timestep", "basis-plot", "continuation", "nnm".
 [[nodiscard]] std::string_view to_string(AnalysisKind kind) noexcept;
 
 /// The structure: FE rod [JL14 Sec. 2] or explicit symmetric matrices (n × n, sparse).
@@ -88,7 +89,7 @@ struct Forcing {
 };
 
 struct Contact {
-  std::string law;           // "exponential" [JL14 Eq. (5)] or "linear"
+  std::string law;           // "exponential" [JL14 Eq. (5)], "linear" or "rigid" (nnm only)
   double coefficient = 0.0;  // a_c [N] (exponential)
   double exponent = 0.0;     // α [1/m] (exponential)
   double stiffness = 0.0;    // k [N/m] (linear)
@@ -121,6 +122,13 @@ struct Analysis {
   int max_points = 5000;
   double max_state = 0.0;           // > 0: stop once ‖x‖∞ > max_state · (largest gap); 0: no bound
   bool stability = true;            // Floquet multipliers of every point
+  // nnm (first nonlinear normal mode against the stops, solvers/nonlinear_modes.hpp):
+  double energy_min = 0.5, energy_max = 0.0;  // normalized energy range (1 = contact onset)
+  int harmonics = 16;               // N
+  int samples = 256;                // m time samples of the contact conditions, > 2N
+  std::string algorithm = "continuation";  // "continuation" | "simultaneous" | "sequential" (LL11 Alg. 1/2)
+  double max_energy_step = 0.05;    // |ΔE| per step
+  std::vector<double> levels;       // energies whose mode shapes are written
 };
 
 struct Output {

@@ -100,6 +100,9 @@ struct Backbone {
   std::vector<ModeLevel> levels;      // converged levels in branch order (E increasing between folds)
   std::vector<double> failed_energies;  // levels that did not converge (the step was then shrunk)
   std::vector<double> folds;          // energies where the branch turns back in E (continuation)
+  /// The levels at the energies asked for by `include`, in that order (first passage of the
+  /// branch; a level that could not be reached is absent or has converged = false).
+  std::vector<ModeLevel> included;
   int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
   int rejected_steps = 0;             // continuation steps retried with half the step
   bool complete = false;              // energy_max reached
@@ -116,6 +119,7 @@ struct BackboneContinuationOptions {
   double initial_step = 1e-2, min_step = 1e-7, max_step = 5e-2;  // scaled arclength (continuation.hpp)
   double max_energy_step = 0.05;      // |ΔE| per step, for a dense curve
   int max_points = 5000;
+  std::vector<double> include;        // energies landed on exactly (Backbone::included), e.g. 0.7, 1.8
   double tolerance = 1e-10;           // ‖R‖₂ of the KKT residual below (dimensionless)
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
@@ -124,7 +128,8 @@ struct BackboneContinuationOptions {
 struct BackboneOptions {
   double energy_min = 0.2, energy_max = 5.0;
   double initial_step = 0.05, min_step = 1e-4, max_step = 0.1;  // in E
-  std::vector<double> include;        // energies that must be levels (e.g. 0.7 and 1.8 for Fig. 5)
+  std::vector<double> include;        // energies that must be levels (e.g. 0.7 and 1.8 for Fig. 5),
+                                      // also returned in Backbone::included
 };
 
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.

@@ -59,4 +59,22 @@ struct PeriodicResponse {
                                                      const std::vector<ContactPoint>& contacts,
                                                      const TimeIntegrationOptions& options = {});
 
+/// Samples of a trajectory: displacement and velocity n × S at the times t (S).
+struct Trajectory {
+  Eigen::VectorXd time_s;        // [s]
+  Eigen::MatrixXd displacement;  // [m]
+  Eigen::MatrixXd velocity;      // [m/s]
+  TimeIntegrationReport report;  // status Converged once the whole span is integrated
+};
+
+/// Free motion M ü + C u̇ + K u = −Σ_c e_c f_c(u_c) from u(0) = u0, u̇(0) = v0 [m, m/s], over
+/// `periods` spans of length period_s [s], sampled samples_per_period times per span (S =
+/// periods · P + 1 samples, t = 0 included), by the same GSL msbdf scheme and normalized state
+/// as integrate_to_periodic (time unit period_s). For checking periodic orbits, e.g. nonlinear
+/// modes (the periodicity tolerance and max_periods of the options are not used). Throws
+/// std::invalid_argument for invalid inputs; a GSL failure is reported, never thrown.
+[[nodiscard]] Trajectory integrate_free(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
+                                        const Eigen::VectorXd& u0, const Eigen::VectorXd& v0, double period_s,
+                                        int periods, const TimeIntegrationOptions& options = {});
+
 }  // namespace wbm::solvers
