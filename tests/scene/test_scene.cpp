@@ -187,8 +187,24 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"linear\"\nstiffness = "
                                                                            "1e6\ngap = 0.0\ndof = 3\n"); },
                                            {"contact.dof: the rod is located by node"});
+  // nnm: an energy range and a stop are required; the forced-response laws and solvers are not theirs.
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[analysis]\ntype = \"nnm\"\n"); },
-                                           {"analysis.type: \"nnm\" is not available in this version", "issue #7"});
+                                           {"analysis.energy: missing; give energy = [from, to]",
+                                            "[contact]: missing: analysis \"nnm\" needs at least one stop"});
+  const std::string nnm = "[analysis]\ntype = \"nnm\"\nenergy = [0.5, 2.0]\n";
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "[contact]\nlaw = \"exponential\"\ncoefficient = 1.0\nexponent = 1.0\ngap = 1e-3\n" + nnm); },
+      {"contact.law: analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n"); },
+                                           {"contact.law: \"rigid\" (exact contact) is solved by analysis \"nnm\" only"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + "[contact]\nlaw = \"rigid\"\ngap = 0.0\n" + nnm); },
+                                           {"contact.gap: value 0 out of range: expected > 0 [m; nnm normalizes"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "[contact]\nlaw = \"linear\"\nstiffness = 1e9\ngap = 1e-3\n" + nnm + "algorithm = \"sequential\"\n"); },
+      {"analysis.algorithm: \"sequential\" (augmented Lagrangian, LL11 Alg. 1/2) imposes exact contact"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n" + nnm + "harmonics = 16\nsamples = 32\nlevels = [3.0]\n"); },
+      {"analysis.samples: m = 32 must exceed 2N = 32", "analysis.levels: energy 3 outside analysis.energy = [0.5, 2]"});
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(rod + force + "[analysis]\ntype = \"continuation\"\nfunctions = [1]\n"); },
       {"inline.toml:9: forcing.frequency_hz: analysis \"continuation\" follows the branch over a range",
