@@ -181,10 +181,144 @@ def frequency_response(folder):
         save(fig, folder, stem)
 
 
+def column(folder, file, name):
+    header, cols = read_csv(folder / file)
+    return cols[header.index(name)]
+
+
+def frequency_energy(folder):
+    """LL11 Fig. 3: orbit frequency (solid) and Rayleigh quotient (dashed) against normalized energy."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    e = column(folder, "backbone.csv", "energy [-]")
+    f = column(folder, "backbone.csv", "frequency [Hz]")
+    fr = column(folder, "backbone.csv", "rayleigh_frequency [Hz]")
+    e8 = column(folder, "n8_backbone.csv", "energy [-]")
+    f8 = column(folder, "n8_backbone.csv", "frequency [Hz]")
+    for ax, emax in zip(axes, (max(e), 2.5)):
+        ax.plot(e, f, "C0-", lw=1.0, label=f"orbit frequency, N = {meta['harmonics']}")
+        ax.plot(e, fr, "C0--", lw=0.8, label=f"Rayleigh quotient √r (paper's ω), N = {meta['harmonics']}")
+        ax.plot(e8, f8, "C1-", lw=0.7, alpha=0.7, label="orbit frequency, N = 8")
+        for stem, marker, name in (("alg1_", "o", "LL11 Alg. 1 (simultaneous)"), ("alg2_", "x", "LL11 Alg. 2 (sequential)")):
+            if (folder / f"{stem}backbone.csv").exists():
+                ax.plot(column(folder, f"{stem}backbone.csv", "energy [-]"),
+                        column(folder, f"{stem}backbone.csv", "frequency [Hz]"), marker, color="k", ms=4,
+                        mfc="none", label=name + ", N = 8")
+        ax.axvline(1.0, color="0.5", lw=0.6, ls=":")
+        ax.set_xlim(min(e), emax)
+        ax.set_xlabel("normalized modal energy E [-] (1: contact onset)")
+        ax.set_ylabel("frequency [Hz]")
+    axes[0].set_title(f"{meta['figure']}: first nonlinear mode, linear {meta['linear_frequency_hz']:.1f} Hz", fontsize=9)
+    axes[1].set_title("zoom on E ≤ 2.5 (turning points at internal resonances)", fontsize=9)
+    axes[1].set_ylim(meta["linear_frequency_hz"] - 0.5, max(x for x, y in zip(f, e) if y <= 2.5) + 0.5)
+    axes[0].legend(loc="lower right")
+    fig.tight_layout()
+    save(fig, folder, "frequency_energy")
+
+
+def mode_fields(folder, energy):
+    header, cols = read_csv(folder / f"mode_E{energy:g}.csv")
+    u = [cols[i] for i, h in enumerate(header) if h.startswith("u_node")]
+    v = [cols[i] for i, h in enumerate(header) if h.startswith("v_node")]
+    return cols[0], u, v
+
+
+def phase_space(folder):
+    """LL11 Fig. 4: last and first node displacement against middle node displacement and velocity."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig = plt.figure(figsize=(10.0, 4.6))
+    names = meta["nodes"]
+    for k, (node, tag) in enumerate(((names[2], "(a) last node"), (names[0], "(b) first node"))):
+        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        for level in meta["levels"]:
+            header, cols = read_csv(folder / f"mode_E{level['energy']:g}.csv")
+            get = lambda name: cols[header.index(name)]  # noqa: E731
+            um, vm, uz = get(f"u_{names[1]} [m]"), get(f"v_{names[1]} [m/s]"), get(f"u_{node} [m]")
+            close = lambda x: x + x[:1]  # noqa: E731
+            ax.plot(close([1e3 * x for x in um]), close(vm), close([1e3 * x for x in uz]), lw=1.0,
+                    label=f"E = {level['energy']:g} ({level['frequency_hz']:.2f} Hz)")
+        ax.set_xlabel(f"u {names[1]} [mm]", fontsize=8)
+        ax.set_ylabel(f"du/dt {names[1]} [m/s]", fontsize=8)
+        ax.set_zlabel(f"u {node} [mm]", fontsize=8)
+        ax.set_title(f"{meta['figure']} {tag}", fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "phase_space")
+
+
+def space_time(folder):
+    """LL11 Fig. 5: displacement and velocity of every node over one period, E = 0.7 and 1.8."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(2, 2, figsize=(9.0, 6.4))
+    for row, level in enumerate(meta["levels"][:2]):
+        tau, u, v = mode_fields(folder, level["energy"])
+        for col, (field, name, unit) in enumerate(((u, "displacement", 1e3), (v, "velocity", 1.0))):
+            ax = axes[row][col]
+            data = [[unit * x for x in r] for r in field]
+            im = ax.imshow(data, aspect="auto", origin="lower", cmap="RdBu_r",
+                           extent=(0.0, 1.0, 0.5, len(field) + 0.5))
+            fig.colorbar(im, ax=ax, label="mm" if col == 0 else "m/s")
+            ax.set_xlabel("normalized time t/T [-]")
+            ax.set_ylabel("node")
+            ax.set_title(f"({'abcd'[2 * row + col]}) {name}, E = {level['energy']:g}", fontsize=9)
+            ax.grid(False)
+    fig.suptitle(f"{meta['figure']}: space–time maps of the first nonlinear mode", fontsize=10)
+    fig.tight_layout()
+    save(fig, folder, "space_time")
+
+
+def penalty_limit(folder):
+    """Issue #7: penalty backbones approach the exact-contact one as the stiffness grows."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    ax = axes[0]
+    ax.plot(column(folder, "exact_backbone.csv", "energy [-]"), column(folder, "exact_backbone.csv", "frequency [Hz]"),
+            "k-", lw=1.6, label="exact (Signorini)")
+    for p in meta["penalty"]:
+        stem = f"k{p['stiffness_N_per_m']:.0e}_backbone.csv".replace("e+", "e+")
+        if (folder / stem).exists():
+            ax.plot(column(folder, stem, "energy [-]"), column(folder, stem, "frequency [Hz]"), lw=0.9,
+                    label=f"penalty k = {p['stiffness_N_per_m']:.0e} N/m")
+    ax.set_xlabel("normalized modal energy E [-]")
+    ax.set_ylabel("orbit frequency [Hz]")
+    ax.set_title("backbones", fontsize=9)
+    ax.legend()
+    ax = axes[1]
+    ks = [p["stiffness_N_per_m"] for p in meta["penalty"]]
+    ax.loglog(ks, [p["max_frequency_difference_hz"] for p in meta["penalty"]], "o-", label="max |f_k − f_exact|")
+    ax.loglog(ks, [p["max_penetration_gaps"] for p in meta["penalty"]], "s--", label="max penetration [g0]")
+    ax.set_xlabel("penalty stiffness k [N/m]")
+    ax.set_title(f"at E = {', '.join(f'{e:g}' for e in meta['energies'])}: order "
+                 f"{meta['observed_order_in_1_over_k']:.2f} in 1/k", fontsize=9)
+    ax.legend()
+    fig.tight_layout()
+    save(fig, folder, "penalty_limit")
+
+
+def free_vibration(folder):
+    """Issue #7: deviation of a free time simulation from the computed modes, period by period."""
+    meta = json.loads((folder / "meta.json").read_text())
+    header, cols = read_csv(folder / "deviation.csv")
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for k, level in enumerate(meta["levels"]):
+        rows = [i for i, e in enumerate(cols[0]) if e == level["energy"]]
+        ax.semilogy([cols[1][i] for i in rows], [cols[2][i] for i in rows], "o-", color=f"C{k}",
+                    label=f"E = {level['energy']:g}, T from the orbit frequency")
+        ax.semilogy([cols[1][i] for i in rows], [cols[3][i] for i in rows], "x--", color=f"C{k}",
+                    label=f"E = {level['energy']:g}, T from the Rayleigh quotient")
+    ax.set_xlabel("period [-]")
+    ax.set_ylabel("max |u(t) − u_mode(t)| / max |u_mode| [-]")
+    ax.set_title(f"free vibration from the modes (stop: spring {meta['penalty_N_per_m']:.0e} N/m)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "free_vibration")
+
+
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
            "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
            "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
-           "jl14_speed_accuracy": speed_accuracy}
+           "jl14_speed_accuracy": speed_accuracy, "ll11_fig03": frequency_energy, "ll11_fig04": phase_space,
+           "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration}
 
 
 def main():

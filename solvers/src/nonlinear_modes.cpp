@@ -552,6 +552,9 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
     lambda.segment(c * ms, ms) = penalty_ == 0.0 ? Eigen::VectorXd(x.segment(ny_ + 1 + c * ms, ms))
                                                  : Eigen::VectorXd(penalty_ * g.segment(c * ms, ms).cwiseMax(0.0));
   }
+  // Inactive samples carry rounding (|λ| ~ 1e-20 of the active ones) from the linear solves.
+  const double active = 1e-12 * std::max(0.0, lambda.maxCoeff());
+  lambda = (lambda.array() > active).select(lambda, 0.0);
   const double f_ref = ms * nm.omega0_ * nm.omega0_ * nm.m_ref_ * nm.g_ref_;
   l.contact_force = lambda * f_ref;
   l.max_penetration = g.maxCoeff();
