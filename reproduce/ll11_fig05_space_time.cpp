@@ -1,7 +1,7 @@
 // Laxalde & Legrand 2011, Fig. 5 (Sec. 5.1): time histories of the displacement and velocity of
 // every node over one period at normalized energies 0.7 (no contact: a standing wave) and 1.8
 // (contact over part of the period: travelling waves). Scene reproduce/scenes/ll11_rod.toml
-// (N = 16, m = 256), continuation from E = 0.5, the two levels landed on exactly. ~10 s.
+// (N = 12, m = 256), continuation from E = 0.5, the two levels landed on exactly. ~10 s.
 // Writes out/ll11_fig05/mode_E0.7.csv, mode_E1.8.csv (+ contact force samples), backbone.csv,
 // meta.json, report.md. --quick: N = 8, m = 64.
 #include <algorithm>

@@ -199,6 +199,9 @@ def frequency_energy(folder):
         ax.plot(e, f, "C0-", lw=1.0, label=f"orbit frequency, N = {meta['harmonics']}")
         ax.plot(e, fr, "C0--", lw=0.8, label=f"Rayleigh quotient √r (paper's ω), N = {meta['harmonics']}")
         ax.plot(e8, f8, "C1-", lw=0.7, alpha=0.7, label="orbit frequency, N = 8")
+        if (folder / "n16_backbone.csv").exists():
+            ax.plot(column(folder, "n16_backbone.csv", "energy [-]"), column(folder, "n16_backbone.csv", "frequency [Hz]"),
+                    "C2-", lw=0.7, alpha=0.7, label="orbit frequency, N = 16, m = 128")
         for stem, marker, name in (("alg1_", "o", "LL11 Alg. 1 (simultaneous)"), ("alg2_", "x", "LL11 Alg. 2 (sequential)")):
             if (folder / f"{stem}backbone.csv").exists():
                 ax.plot(column(folder, f"{stem}backbone.csv", "energy [-]"),
@@ -237,6 +240,7 @@ def phase_space(folder):
             close = lambda x: x + x[:1]  # noqa: E731
             ax.plot(close([1e3 * x for x in um]), close(vm), close([1e3 * x for x in uz]), lw=1.0,
                     label=f"E = {level['energy']:g} ({level['frequency_hz']:.2f} Hz)")
+        ax.view_init(elev=20, azim=-35)
         ax.set_xlabel(f"u {names[1]} [mm]", fontsize=8)
         ax.set_ylabel(f"du/dt {names[1]} [m/s]", fontsize=8)
         ax.set_zlabel(f"u {node} [mm]", fontsize=8)

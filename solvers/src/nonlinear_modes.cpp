@@ -612,7 +612,28 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   pa.kink_step = 1e-5;
   pa.corner_restart = true;
   pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = 50};
-  const Branch branch = pseudo_arclength(system, x0, e0, pa);
+  Branch branch = pseudo_arclength(system, x0, e0, pa);
+  // A branch that comes back below contact onset after contact has retraced the backbone (the
+  // linear mode is the only solution there): keep it up to where it turned back, and say so.
+  bool retraced = false;
+  double highest = 0.0;
+  for (size_t k = 0; k < branch.points.size(); ++k) {
+    const double e = branch.points[k].parameter;
+    if (highest > 1.0 + 1e-6 && e < 1.0) {
+      size_t top = 0;
+      for (size_t j = 1; j < k; ++j) {
+        if (branch.points[j].parameter > branch.points[top].parameter) top = j;
+      }
+      branch.points.resize(top + 1);
+      std::erase_if(branch.folds, [&](const Fold& f) { return f.after >= top; });
+      branch.stop = StopReason::StepBelowMinimum;
+      branch.message = "the branch turned back at a corner near E = " + std::to_string(branch.points[top].parameter) +
+                       " and retraced the backbone down to the linear mode; kept up to that energy";
+      retraced = true;
+      break;
+    }
+    highest = std::max(highest, e);
+  }
   for (const auto& pt : branch.points) {
     if (pt.parameter > o.energy_max) {  // the last point overshoots the range: land on energy_max
       ModeLevel last = level_at(system, pt.x, o.energy_max);
@@ -635,7 +656,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
   b.kinks = branch.kinks;
   b.rejected_steps = branch.rejected_steps;
-  b.complete = branch.stop == StopReason::RangeReached && !b.levels.empty() &&
+  b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
                b.levels.back().energy >= o.energy_max * (1.0 - 1e-12);
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
   b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

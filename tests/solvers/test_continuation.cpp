@@ -243,6 +243,84 @@ TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
   for (size_t i = 0; i < 2; ++i) EXPECT_NEAR(recovered.folds[i].parameter, clean.folds[i].parameter, 1e-5);
 }
 
+// The same branch through the sparse path (SparseLinearization, sparse LU of the bordered system)
+// as through the dense one: Duffing's folds agree to the corrector tolerance.
+TEST(Continuation, SparseJacobianPathEqualsTheDensePath) {
+  const Duffing d;
+  const auto base = d.problem(8.0);
+  const solvers::ForcedResponseFamily family(base, ContinuationParameter::Frequency);
+  struct Sparse {
+    const solvers::ForcedResponseFamily* family;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const { return family->residual(x, f); }
+    [[nodiscard]] solvers::SparseLinearization linearize(const Eigen::VectorXd& x, double f) const {
+      const solvers::Linearization l = family->linearize(x, f);
+      return {l.residual, l.jacobian.sparseView(), l.parameter_derivative};
+    }
+  };
+  solvers::PseudoArclengthOptions o;
+  o.parameter_min = 8.0;
+  o.parameter_max = 14.0;
+  o.parameter_scale = 8.0;
+  o.state_scale = base.residual_scale();
+  o.max_step = 5e-2;
+  o.corrector_tolerance = 1e-12;
+  const Eigen::VectorXd x0 = base.contact_unknowns(base.linear_response());
+  const auto dense = solvers::pseudo_arclength(family, x0, 8.0, o);
+  const auto sparse = solvers::pseudo_arclength(Sparse{&family}, x0, 8.0, o);
+  ASSERT_EQ(sparse.stop, solvers::StopReason::RangeReached) << sparse.message;
+  ASSERT_EQ(sparse.folds.size(), 2u);
+  EXPECT_EQ(sparse.points.size(), dense.points.size());
+  for (size_t i = 0; i < 2; ++i) EXPECT_NEAR(sparse.folds[i].parameter, dense.folds[i].parameter, 1e-9);
+}
+
+// A complementarity branch that turns back at a corner: x − λ + a μ = 0, min(μ, 1 − x) = 0 with
+// a = −0.1 (state (x, μ), parameter λ). Free piece x = λ up to λ = 1; then the stop x = 1 is
+// active, μ = (λ − 1)/a ≥ 0 needs λ ≤ 1: the branch turns back by 180° − 5.7°, and no hyperplane
+// normal to the old tangent meets the new piece. Without corner restarts the corrector fails for
+// every step (StepBelowMinimum at λ = 1); with them the continuation follows the new piece to
+// μ = 1 (λ = 0.9) exactly.
+TEST(Continuation, CornerRestartFollowsAComplementarityBranchThatTurnsBack) {
+  struct Stop {
+    double a = -0.1;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
+      return Eigen::Vector2d(x(0) - lambda + a * x(1), std::min(x(1), 1.0 - x(0)));
+    }
+    [[nodiscard]] solvers::Linearization linearize(const Eigen::VectorXd& x, double lambda) const {
+      Eigen::Matrix2d j;
+      j << 1.0, a, 0.0, 0.0;
+      if (x(1) <= 1.0 - x(0)) j(1, 1) = 1.0; else j(1, 0) = -1.0;  // the min picks μ, else 1 − x
+      return {residual(x, lambda), j, Eigen::Vector2d(-1.0, 0.0)};
+    }
+  };
+  solvers::PseudoArclengthOptions o;
+  o.parameter_min = 0.0;
+  o.parameter_max = 2.0;
+  o.initial_step = 0.05;
+  o.max_step = 0.05;
+  o.max_points = 400;
+  o.corrector_tolerance = 1e-12;
+  const auto plain = solvers::pseudo_arclength(Stop{}, Eigen::Vector2d(0.5, 0.0), 0.5, o);
+  EXPECT_EQ(plain.stop, solvers::StopReason::StepBelowMinimum);
+  EXPECT_NEAR(plain.points.back().parameter, 1.0, 0.06);
+  o.corner_restart = true;
+  const auto turned = solvers::pseudo_arclength(Stop{}, Eigen::Vector2d(0.5, 0.0), 0.5, o);
+  EXPECT_EQ(turned.kinks, 1);
+  ASSERT_EQ(turned.folds.size(), 1u);
+  EXPECT_NEAR(turned.folds[0].parameter, 1.0, 1e-2);  // Hermite interpolation across a corner: within a step
+  bool reached = false;
+  for (const auto& p : turned.points) {
+    EXPECT_LE(std::abs(Stop{}.residual(p.x, p.parameter).norm()), 1e-12);
+    EXPECT_GE(p.x(1), -1e-12);           // μ ≥ 0
+    EXPECT_LE(p.x(0), 1.0 + 1e-12);      // x ≤ 1
+    EXPECT_LE(p.parameter, 1.0 + 1e-12);  // the branch never passes the corner
+    if (p.x(1) >= 1.0) {
+      reached = true;
+      EXPECT_NEAR(p.parameter, 1.0 + (-0.1) * p.x(1), 1e-12);  // on the new piece, λ = 1 + a μ
+    }
+  }
+  EXPECT_TRUE(reached);
+}
+
 // Linear system: Φ = e^{A₀T} exactly, so the multipliers are e^{sT} with the modal eigenvalues
 // s = −ζω ± ω√(ζ² − 1), ω² = λ_i, 2ζω = β λ_i (C = βK) of the rod.
 TEST(Floquet, LinearRodMultipliersAreExponentialsOfModalEigenvalues) {

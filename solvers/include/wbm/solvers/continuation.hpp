@@ -192,6 +192,15 @@ inline bool finite(const SparseLinearization& l) {
          l.parameter_derivative.allFinite();
 }
 
+// Σ_j |a_ij − b_ij| per row.
+inline Eigen::VectorXd row_change(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).cwiseAbs().rowwise().sum();
+}
+inline Eigen::VectorXd row_change(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
+  const Eigen::SparseMatrix<double> d = a - b;
+  return d.cwiseAbs() * Eigen::VectorXd::Ones(d.cols());
+}
+
 inline Eigen::MatrixXd dense(const Eigen::MatrixXd& j) { return j; }
 inline Eigen::MatrixXd dense(const Eigen::SparseMatrix<double>& j) { return Eigen::MatrixXd(j); }
 
@@ -301,26 +310,35 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   // A corner where the corrector fails for every small step (a complementarity condition
   // switching, the new piece turning back by more than 90°, so that no hyperplane normal to the
   // old tangent meets it): the Jacobian a little beyond the corner along the old tangent already
-  // has the new piece's active set; its null direction is the new tangent. Both orientations
-  // are tried, from the last accepted step down to kink_step, and a point that only retreats
-  // along the old piece is refused.
+  // has the new piece's active set; its null direction is the new tangent. The rows in which
+  // that Jacobian differs from the last point's by more than a tenth of the largest difference
+  // are the switching rows. Both orientations of the new tangent are tried, with steps from
+  // 1000 kink_step down to kink_step, and a landing is taken only if its Jacobian's switching
+  // rows are the new piece's (closer to those beyond the corner than to the last point's) and no
+  // other row switched (a landing across another corner, e.g. on a piece passed earlier, is
+  // refused): pieces can meet at a fraction of a degree, so directions cannot tell them apart.
   auto restart_at_corner = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, Attempt& out) {
     const Eigen::VectorXd probe = z_last + o.kink_step * last.tangent;
     const Lin beyond = system.linearize(probe.head(n) * xs, probe(n) * ls);
-    if (!detail::finite(beyond)) return false;
+    const Lin here = system.linearize(z_last.head(n) * xs, z_last(n) * ls);
+    if (!detail::finite(beyond) || !detail::finite(here)) return false;
+    const Eigen::VectorXd change = detail::row_change(beyond.jacobian, here.jacobian);
+    if (!(change.maxCoeff() > 0.0)) return false;  // no switching row: not a corner
+    const Eigen::ArrayXd switching = (change.array() > 0.1 * change.maxCoeff()).cast<double>();
     const Eigen::VectorXd t_new = tangent_at(beyond, last.tangent);
     if (!t_new.allFinite()) return false;
     for (double sign : {1.0, -1.0}) {
-      for (double step = std::max(h_accepted, o.kink_step); step >= o.kink_step; step *= 0.25) {
+      for (double step = std::min(o.max_step, 1e3 * o.kink_step); step >= o.kink_step; step *= 0.25) {
         Attempt c = attempt_along(sign * t_new, z_last, step);
         branch.corrector_iterations += c.iterations;
         if (!c.converged) continue;
-        // Refuse a landing closer to the retreat along the old piece (−t_old) than half-way
-        // from it to the intended direction (the pieces may meet at a fraction of a degree).
-        const Eigen::VectorXd dz = c.z - z_last;
-        const Eigen::VectorXd back = dz / std::sqrt(detail::inner(dz, dz)) + last.tangent;
-        const Eigen::VectorXd apart = sign * t_new + last.tangent;
-        if (detail::inner(back, back) < 0.25 * detail::inner(apart, apart)) continue;
+        const Lin landed = system.linearize(c.z.head(n) * xs, c.z(n) * ls);
+        const Eigen::ArrayXd from_here = detail::row_change(landed.jacobian, here.jacobian).array();
+        const double to_new = (detail::row_change(landed.jacobian, beyond.jacobian).array() * switching).sum();
+        const double to_old = (from_here * switching).sum();
+        if (!(to_new < to_old)) continue;  // back on the old piece
+        if ((from_here * (1.0 - switching)).maxCoeff() > 0.1 * change.maxCoeff()) continue;  // beyond another corner
+
         out = std::move(c);
         return true;
       }

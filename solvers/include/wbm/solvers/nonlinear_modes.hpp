@@ -31,13 +31,15 @@
 /// Everything is solved in units of the largest gap g_ref (g/g_ref, Y/g_ref) and ω₀ (the linear
 /// first frequency), so tolerances are dimensionless.
 ///
-/// Status (issue #7, in progress): tested on the LL11 rod below contact (the linear mode exactly),
-/// at onset, and above contact at E = 1.2 (constraints, complementarity, normalization, gap
-/// invariance). From neighbouring levels (N = 8, m = 256) it converges at E = 1.4 and 2.0 but
-/// not at 1.6 or 1.8: the primal stationarity solve (Newton, then Levenberg–Marquardt on ‖∇L‖²)
-/// stalls when the active set of contact samples changes while Powell raises the penalties, so
-/// the backbone is not yet robust; ModeAlgorithm::Sequential is not yet validated; Figs. 3–5 of
-/// LL11 and the penalty-limit check are not done.
+/// The frequency of the periodic orbit is ω² = r − μ ω₀² E (μ the normalization multiplier), not
+/// the Rayleigh quotient r the paper reports: the stationarity conditions are the harmonic balance
+/// of the free motion at that ω (see continue_backbone); both are reported.
+///
+/// Backbones: backbone() steps in energy with LL11 Alg. 1 or 2 (a secant predictor between
+/// levels; fine up to E ≈ 1.3 on the LL11 rod, where the branch starts turning back in energy);
+/// continue_backbone() continues the KKT conditions by pseudo-arclength through those turning
+/// points and the corners where contact samples change state (to E = 10 on the LL11 rod with
+/// N = 8 or 12; with N = 16, m ≥ 256 it may stop or retrace, which it reports). docs/design.md.
 
 #include <string>
 #include <vector>
