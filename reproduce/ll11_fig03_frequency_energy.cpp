@@ -117,6 +117,13 @@ int main(int argc, char** argv) {
       }
     }
     const Eigen::Index last = e.size() - 1;
+    // The top of the hardening branch, and the quietest contact after it.
+    Eigen::Index top = 0, quiet = 0;
+    f.maxCoeff(&top);
+    const Eigen::VectorXd& force = reproduce::result_column(main_result, "backbone.csv", "max_contact_force [N]");
+    force.tail(e.size() - top).minCoeff(&quiet);
+    quiet += top;
+    const double f2 = std::sqrt(eig.eigenvalues()(1)) / (2.0 * std::numbers::pi);
     run.meta({{"figure", "LL11 Fig. 3"},
               {"scene", s.path},
               {"harmonics", s.analysis.harmonics},
@@ -148,10 +155,15 @@ int main(int argc, char** argv) {
        << format("%.3f", 100.0 * (at18["frequency_hz"].get<double>() / f0 - 1.0)) << " %); at the largest energy, E = "
        << format("%.2f", e(last)) << ": " << format("%.3f", f(last)) << " Hz (+"
        << format("%.3f", 100.0 * (f(last) / f0 - 1.0)) << " %). The backbone hardens, as in the paper, but only "
-       << "slightly: the FE rod's modes are nearly odd multiples of the first (" << ladder << "), so the branch climbs through a cascade of internal resonances just above "
-       << "1297.5 Hz; it turns back in energy " << nnm["folds"].size() << " times (folds.csv) and has "
-       << nnm["corners"].get<int>() << " corners where a contact sample changes state. Energy stepping cannot pass "
-       << "those turns; the continuation does.\n\n"
+       << "slightly, and not monotonically: it rises to " << format("%.3f", f(top)) << " Hz at E = "
+       << format("%.2f", e(top)) << ", then follows a 3:1 internal resonance with the second mode, its frequency "
+       << "falling towards f₂/3 = " << format("%.2f", f2 / 3.0) << " Hz while the contact force fades (largest "
+       << "contact force " << format("%.0f", force(quiet)) << " N at E = " << format("%.2f", e(quiet))
+       << ", against " << format("%.0f", force(top)) << " N at the maximum), before the stop bites again. The FE "
+          "rod's modes are nearly odd multiples of the first (" << ladder << "), so internal resonances crowd "
+          "just above 1297.5 Hz. The branch turns back in energy " << nnm["folds"].size() << " times (folds.csv) "
+          "and has " << nnm["corners"].get<int>() << " corners where a contact sample changes state; energy "
+          "stepping cannot pass those turns, the continuation does.\n\n"
        << "**Which frequency.** The paper's eigenvalue is the Rayleigh quotient ω² = r(Û) (Eq. 24a). At a mode in "
        << "contact the normalization multiplier μ is not zero, and the stationarity conditions are the harmonic "
        << "balance of the free motion at ω² = r − μω₀²E, not at r: contact forces do no work on the motion, but "

@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     s.analysis.energy_max = run.quick() ? 2.0 : 2.5;  // the stiffest springs retrace near E = 2.5-3 (notes)
     // Energies below the first fold of the exact backbone (the branches then differ only by the
     // spring), landed on exactly on every backbone.
-    const std::vector<double> probes = run.quick() ? std::vector<double>{1.1, 1.2} : std::vector<double>{1.05, 1.1, 1.2, 1.3};
+    const std::vector<double> probes = run.quick() ? std::vector<double>{1.05, 1.1} : std::vector<double>{1.05, 1.1, 1.2, 1.3};
     const std::vector<double> stiffness = run.quick() ? std::vector<double>{1e10, 1e12}
                                                       : std::vector<double>{1e9, 1e10, 1e11, 1e12};
     // One backbone of the scene's problem with the stops rigid (k = 0) or springs k; its curve is
@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
       rows << "| " << format("%.0e", k);
       for (size_t i = 0; i < probes.size() && i < b.included.size() && i < exact.included.size(); ++i) {
         const double a = b.included[i].frequency_hz, ref = exact.included[i].frequency_hz;
-        worst = std::max(worst, std::abs(a - ref));
+        if (probes[i] <= 1.1 + 1e-12) worst = std::max(worst, std::abs(a - ref));  // the order's measure
         worst_pen = std::max(worst_pen, b.included[i].max_penetration);
         col_k.push_back(k);
         col_e.push_back(probes[i]);
@@ -112,9 +112,11 @@ int main(int argc, char** argv) {
     md << "---|---|\n" << rows.str() << "| exact |";
     for (const auto& l : exact.included) md << " " << format("%.5f", l.frequency_hz) << " |";
     md << " 0 | " << format("%.1f", exact.wall_time_s) << " |\n\n"
-       << "The penalty backbones converge to the exact one as k grows; the largest difference over these energies "
-          "falls as k^(−" << format("%.2f", order) << ")" << " between the two stiffest springs (a penalty solution "
-          "penetrates by O(1/k), so first order is expected).\n";
+       << "The penalty backbones approach the exact one as k grows. Over E ≤ 1.1 the largest difference falls as "
+          "k^(−" << format("%.2f", order) << ") between the two stiffest springs (a penalty solution penetrates by "
+          "O(1/k), so first order is expected; the N = 8, m = 64 test shows 1.0). Closer to the first cluster of "
+          "corners (E = 1.2, 1.3) the differences stop decreasing at 1e-4 to 4e-3 Hz: there the branch is very "
+          "sensitive to the contact law (see the table).\n";
     run.report(md.str());
   });
 }
