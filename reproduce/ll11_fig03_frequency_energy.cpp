@@ -117,9 +117,12 @@ int main(int argc, char** argv) {
       }
     }
     const Eigen::Index last = e.size() - 1;
-    // The top of the hardening branch, and the quietest contact after it.
+    // The top of the hardening branch (the highest frequency before the branch first falls 1 Hz
+    // below its running maximum), and the quietest contact after it.
     Eigen::Index top = 0, quiet = 0;
-    f.maxCoeff(&top);
+    for (Eigen::Index i = 0; i < e.size() && f(i) > f(top) - 1.0; ++i) {
+      if (f(i) > f(top)) top = i;
+    }
     const Eigen::VectorXd& force = reproduce::result_column(main_result, "backbone.csv", "max_contact_force [N]");
     force.tail(e.size() - top).minCoeff(&quiet);
     quiet += top;

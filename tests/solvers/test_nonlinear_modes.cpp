@@ -7,6 +7,8 @@
 // on the computed orbit, first-order convergence of penalty backbones, and gap invariance.
 #include <cmath>
 #include <memory>
+#include <numbers>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -241,4 +243,46 @@ TEST(NonlinearModes, ContinuationIsGapInvariant) {
   ASSERT_NE(lb, nullptr);
   EXPECT_NEAR(la->frequency_hz, lb->frequency_hz, 1e-9 * la->frequency_hz);
   EXPECT_LT((lb->coefficients * 1e6 - la->coefficients).norm(), 1e-8 * la->coefficients.norm());
+}
+
+// The 1-DOF impact oscillator has a closed-form nonlinear mode: harmonic arcs of amplitude A
+// between elastic impacts at the stop g, period (2π − 2 arccos(g/A))/ωn, and normalized energy
+// E = 2 mean(u̇²)/(ω² g²) (the functional of [LL11 Eq. (12)] over its value at onset). The orbit
+// frequency of the truncated problem converges to it at first order in 1/N (the velocity jumps
+// at impacts, so the Fourier coefficients decay as 1/k²); the Rayleigh quotient does not.
+TEST(NonlinearModes, ImpactOscillatorFrequencyConvergesToTheClosedForm) {
+  const double wn = 2 * std::numbers::pi * 10.0, g = 1e-3, energy = 1.5;
+  solvers::MechanicalSystem s;
+  s.mass.resize(1, 1);
+  s.mass.insert(0, 0) = 1.0;
+  s.stiffness.resize(1, 1);
+  s.stiffness.insert(0, 0) = wn * wn;
+  s.damping.resize(1, 1);
+  auto closed_form = [&](double e) {  // f(E) by bisection on A
+    auto normalized = [&](double a_amp) {
+      const double a = std::acos(g / a_amp), span = 2 * std::numbers::pi - 2 * a;
+      const double mean_v2 = a_amp * a_amp * wn * wn * ((std::numbers::pi - a) + std::sin(2 * a) / 2) / span;
+      const double w = 2 * std::numbers::pi * wn / span;
+      return 2 * mean_v2 / (w * w * g * g);
+    };
+    double lo = g, hi = 100 * g;
+    for (int i = 0; i < 200; ++i) (normalized(0.5 * (lo + hi)) < e ? lo : hi) = 0.5 * (lo + hi);
+    return wn / (2 * std::numbers::pi - 2 * std::acos(g / (0.5 * (lo + hi))));
+  };
+  const double exact = closed_form(energy);
+  EXPECT_NEAR(exact, 13.7485, 1e-4);  // 37.5 % above the linear 10 Hz
+  std::vector<double> error;
+  for (int n : {8, 16, 32}) {
+    const solvers::NonlinearModes nm(s, {{0, g}}, {.harmonics = n, .samples = 16 * n});
+    const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.6, .include = {energy}});
+    const auto* l = included(b, energy);
+    ASSERT_NE(l, nullptr) << b.message;
+    error.push_back(std::abs(l->frequency_hz - exact) / exact);
+    EXPECT_GT(std::abs(l->rayleigh_frequency_hz - exact) / exact, 0.1);  // the paper's ω is not the frequency
+  }
+  EXPECT_LT(error.back(), 1e-2);
+  for (size_t i = 1; i < error.size(); ++i) {
+    EXPECT_GT(error[i - 1] / error[i], 1.7);  // first order in 1/N
+    EXPECT_LT(error[i - 1] / error[i], 2.3);
+  }
 }
