@@ -121,6 +121,19 @@ solvers::ResponseCurveOptions duffing_options(int direction) {
   return o;
 }
 
+// Raw pseudo-arclength options over the Duffing range 8–14 Hz, scaled by the start frequency and
+// the residual scale.
+solvers::PseudoArclengthOptions duffing_arclength(const solvers::WeightedResidual& base) {
+  solvers::PseudoArclengthOptions o;
+  o.parameter_min = 8.0;
+  o.parameter_max = 14.0;
+  o.parameter_scale = 8.0;
+  o.state_scale = base.residual_scale();
+  o.max_step = 5e-2;
+  o.corrector_tolerance = 1e-12;
+  return o;
+}
+
 }  // namespace
 
 // ∂r/∂f against central differences of the condensed residual through at_frequency, for a
@@ -226,13 +239,7 @@ TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
     }
   };
   const Flaky flaky{&family};
-  solvers::PseudoArclengthOptions o;
-  o.parameter_min = 8.0;
-  o.parameter_max = 14.0;
-  o.parameter_scale = 8.0;
-  o.state_scale = base.residual_scale();
-  o.max_step = 5e-2;
-  o.corrector_tolerance = 1e-12;
+  const solvers::PseudoArclengthOptions o = duffing_arclength(base);
   const Eigen::VectorXd x0 = base.contact_unknowns(base.linear_response());
   const auto clean = solvers::pseudo_arclength(family, x0, 8.0, o);
   const auto recovered = solvers::pseudo_arclength(flaky, x0, 8.0, o);
@@ -257,13 +264,7 @@ TEST(Continuation, SparseJacobianPathEqualsTheDensePath) {
       return {l.residual, l.jacobian.sparseView(), l.parameter_derivative};
     }
   };
-  solvers::PseudoArclengthOptions o;
-  o.parameter_min = 8.0;
-  o.parameter_max = 14.0;
-  o.parameter_scale = 8.0;
-  o.state_scale = base.residual_scale();
-  o.max_step = 5e-2;
-  o.corrector_tolerance = 1e-12;
+  const solvers::PseudoArclengthOptions o = duffing_arclength(base);
   const Eigen::VectorXd x0 = base.contact_unknowns(base.linear_response());
   const auto dense = solvers::pseudo_arclength(family, x0, 8.0, o);
   const auto sparse = solvers::pseudo_arclength(Sparse{&family}, x0, 8.0, o);
