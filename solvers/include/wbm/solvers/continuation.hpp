@@ -312,8 +312,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   // old tangent meets it): the Jacobian a little beyond the corner along the old tangent already
   // has the new piece's active set; its null direction is the new tangent. The rows in which
   // that Jacobian differs from the last point's by more than a tenth of the largest difference
-  // are the switching rows. Both orientations of the new tangent are tried, with steps from
-  // 1000 kink_step down to kink_step, and a landing is taken only if its Jacobian's switching
+  // are the switching rows; the corner is located by bisection along the old tangent (where
+  // they switch). Both orientations of the new tangent are tried from the corner, with steps
+  // from 1000 kink_step down to kink_step, and a landing is taken only if its Jacobian's switching
   // rows are the new piece's (closer to those beyond the corner than to the last point's) and no
   // other row switched (a landing across another corner, e.g. on a piece passed earlier, is
   // refused): pieces can meet at a fraction of a degree, so directions cannot tell them apart.
@@ -327,9 +328,20 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     const Eigen::ArrayXd switching = (change.array() > 0.1 * change.maxCoeff()).cast<double>();
     const Eigen::VectorXd t_new = tangent_at(beyond, last.tangent);
     if (!t_new.allFinite()) return false;
+    // The corner itself, to first order: bisection along the old tangent for where the
+    // switching rows change; the restarts leave from there.
+    double lo = 0.0, hi = o.kink_step;
+    const double total = (change.array() * switching).sum();
+    for (int k = 0; k < 30; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      const Eigen::VectorXd z = z_last + mid * last.tangent;
+      const Lin l = system.linearize(z.head(n) * xs, z(n) * ls);
+      ((detail::row_change(l.jacobian, here.jacobian).array() * switching).sum() > 0.5 * total ? hi : lo) = mid;
+    }
+    const Eigen::VectorXd z_corner = z_last + hi * last.tangent;
     for (double sign : {1.0, -1.0}) {
       for (double step = std::min(o.max_step, 1e3 * o.kink_step); step >= o.kink_step; step *= 0.25) {
-        Attempt c = attempt_along(sign * t_new, z_last, step);
+        Attempt c = attempt_along(sign * t_new, z_corner, step);
         branch.corrector_iterations += c.iterations;
         if (!c.converged) continue;
         const Lin landed = system.linearize(c.z.head(n) * xs, c.z(n) * ls);

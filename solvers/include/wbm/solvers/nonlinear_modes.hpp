@@ -39,7 +39,7 @@
 /// levels; fine up to E ≈ 1.3 on the LL11 rod, where the branch starts turning back in energy);
 /// continue_backbone() continues the KKT conditions by pseudo-arclength through those turning
 /// points and the corners where contact samples change state (to E = 10 on the LL11 rod with
-/// N = 8 or 12; with N = 16, m ≥ 256 it may stop or retrace, which it reports). docs/design.md.
+/// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
 
 #include <string>
 #include <vector>
