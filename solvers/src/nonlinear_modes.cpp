@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <Eigen/SparseLU>
 
 #include <wbm/spectral/layout.hpp>
 
@@ -410,6 +411,27 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) cons
   return x;
 }
 
+NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(const Eigen::VectorXd& x) const {
+  const auto& nm = *nm_;
+  if (x.size() != size_) {
+    throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
+                                std::to_string(size_));
+  }
+  const Eigen::Index p = nm.phase_index_, ms = nm.options_.samples;
+  Unpacked u;
+  u.y.resize(ny_ + 1);
+  u.y << x.head(p), 0.0, x.segment(p, ny_ - p);
+  const Eigen::Map<const Eigen::MatrixXd> ym(u.y.data(), nm.n_, nm.f_);
+  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
+  u.g.resize(n_stops * ms);
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const auto& stop = nm.stops_[static_cast<size_t>(c)];
+    u.g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
+  }
+  u.lambda = penalty_ == 0.0 ? Eigen::VectorXd(x.tail(n_stops * ms)) : Eigen::VectorXd(penalty_ * u.g.cwiseMax(0.0));
+  return u;
+}
+
 Eigen::VectorXd NonlinearModes::BackboneSystem::residual(const Eigen::VectorXd& x, double energy) const {
   return evaluate(x, energy, false).residual;
 }
@@ -422,16 +444,13 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
                                                              bool jacobian) const {
   const auto& nm = *nm_;
   const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
-  const Eigen::Index p = nm.phase_index_, full_size = ny_ + 1;
-  if (x.size() != size_) {
-    throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
-                                std::to_string(size_));
-  }
-  // Full stacked Y (phase coefficient 0) and the map full index -> reduced index (−1: removed).
-  Eigen::VectorXd yf(full_size);
-  yf << x.head(p), 0.0, x.segment(p, ny_ - p);
+  const Eigen::Index p = nm.phase_index_;
+  const Unpacked state = unpack(x);
+  const Eigen::VectorXd& g = state.g;
+  const Eigen::VectorXd& lambda = state.lambda;
+  // The map full stacked index -> reduced index (−1: the phase coefficient, removed).
   auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
-  const Eigen::Map<const Eigen::MatrixXd> ym(yf.data(), n, f);
+  const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
   const double s = x(ny_);
   const bool exact = penalty_ == 0.0;
   const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
@@ -440,14 +459,8 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   const Eigen::MatrixXd ky = nm.ks_ * ym, my = nm.ms_ * ym;
   Eigen::MatrixXd hb(n, f);
   for (int k = 0; k < f; ++k) hb.col(k) = nm.weight_(k) * (ky.col(k) - nm.nu_(k) * nm.nu_(k) * s * my.col(k));
-  // Constraint values and contact multipliers per stop.
-  Eigen::VectorXd g(n_stops * ms), lambda(n_stops * ms);
-  for (Eigen::Index c = 0; c < n_stops; ++c) {
-    const auto& stop = nm.stops_[static_cast<size_t>(c)];
-    g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
-    lambda.segment(c * ms, ms) =
-        exact ? Eigen::VectorXd(x.segment(ny_ + 1 + c * ms, ms)) : Eigen::VectorXd(penalty_ * g.segment(c * ms, ms).cwiseMax(0.0));
-    hb.row(stop.dof) += (nm.theta_.transpose() * lambda.segment(c * ms, ms)).transpose();
+  for (Eigen::Index c = 0; c < n_stops; ++c) {  // contact forces on the stop DOFs
+    hb.row(nm.stops_[static_cast<size_t>(c)].dof) += (nm.theta_.transpose() * lambda.segment(c * ms, ms)).transpose();
   }
   double mh = 0.0;
   for (int k = 0; k < f; ++k) mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(my.col(k)) * nm.m_ref_;
@@ -528,10 +541,10 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
 ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double energy) const {
   const auto& nm = *nm_;
   const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
-  const Eigen::Index p = nm.phase_index_;
-  Eigen::VectorXd yf(ny_ + 1);
-  yf << x.head(p), 0.0, x.segment(p, ny_ - p);
-  const Eigen::Map<const Eigen::MatrixXd> ym(yf.data(), n, f);
+  Unpacked state = unpack(x);
+  const Eigen::VectorXd& g = state.g;
+  Eigen::VectorXd& lambda = state.lambda;
+  const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
   ModeLevel l;
   l.energy = energy;
   l.converged = true;
@@ -544,14 +557,6 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
   }
   l.rayleigh_frequency_hz = std::sqrt(kh / mh) / (2.0 * std::numbers::pi);
   l.normalization_error = std::abs(mh / nm.m_c_ - energy);
-  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
-  Eigen::VectorXd g(n_stops * ms), lambda(n_stops * ms);
-  for (Eigen::Index c = 0; c < n_stops; ++c) {
-    const auto& stop = nm.stops_[static_cast<size_t>(c)];
-    g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
-    lambda.segment(c * ms, ms) = penalty_ == 0.0 ? Eigen::VectorXd(x.segment(ny_ + 1 + c * ms, ms))
-                                                 : Eigen::VectorXd(penalty_ * g.segment(c * ms, ms).cwiseMax(0.0));
-  }
   // Inactive samples carry rounding (|λ| ~ 1e-20 of the active ones) from the linear solves.
   const double active = 1e-12 * std::max(0.0, lambda.maxCoeff());
   lambda = (lambda.array() > active).select(lambda, 0.0);
@@ -572,18 +577,30 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
 }
 
 ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const {
-  struct Fixed {
-    const BackboneSystem* s;
-    double e;
-    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& v) const { return s->residual(v, e); }
-    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& v) const { return Eigen::MatrixXd(s->linearize(v, e).jacobian); }
-  };
   const auto t0 = std::chrono::steady_clock::now();
-  const NewtonResult r = newton(Fixed{&system, energy}, std::move(x), {.tolerance = 1e-10, .max_iterations = 30});
-  ModeLevel l = system.level(r.x, energy);
-  l.converged = r.report.converged();
-  l.newton_iterations = r.report.iterations;
-  if (!l.converged) l.message = "semismooth Newton at fixed E: " + r.report.message;
+  // Semismooth Newton at fixed E with the sparse Jacobian (no line search: x is a converged point
+  // of the branch less than one step away).
+  double norm = std::nan("");
+  int it = 0;
+  for (; it <= 30; ++it) {
+    const SparseLinearization lin = system.linearize(x, energy);
+    norm = lin.residual.norm();
+    if (!(norm > 1e-10) || it == 30) break;
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(lin.jacobian);
+    if (lu.info() != Eigen::Success) break;
+    const Eigen::VectorXd dx = lu.solve(lin.residual);
+    if (!dx.allFinite()) break;
+    x -= dx;
+  }
+  ModeLevel l = system.level(x, energy);
+  l.converged = norm <= 1e-10;
+  l.newton_iterations = it;
+  if (!l.converged) {
+    std::ostringstream os;
+    os << "semismooth Newton at fixed E = " << energy << " did not converge: ‖R‖ = " << norm << " after " << it
+       << " iterations";
+    l.message = os.str();
+  }
   l.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return l;
 }

@@ -183,12 +183,20 @@ class NonlinearModes {
     [[nodiscard]] Eigen::Index size() const { return size_; }
 
    private:
+    // A state unpacked: full stacked Y (phase coefficient 0, units of g_ref), the constraint
+    // values g and the contact multipliers λ (stop-major, m per stop).
+    struct Unpacked {
+      Eigen::VectorXd y, g, lambda;
+    };
+    [[nodiscard]] Unpacked unpack(const Eigen::VectorXd& x) const;
     [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian) const;
     const NonlinearModes* nm_;
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
     Eigen::Index ny_ = 0, size_ = 0;
   };
-  /// The level at exactly `energy` from a converged state x near it (semismooth Newton at fixed E).
+  /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
+  /// with sparse LU, at most 30 iterations to ‖R‖ ≤ 1e-10; converged = false (with the last
+  /// residual in the message) otherwise.
   [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const;
 
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
