@@ -40,10 +40,10 @@ void BM_NonlinearModes_Fig3Backbone(benchmark::State& state) {
 void BM_NonlinearModes_Algorithm1Level(benchmark::State& state) {
   const auto nm = modes(8, 256);
   const auto start = nm.solve(1.15);
-  if (!start.converged) state.SkipWithError(start.message.c_str());
+  if (!start.converged()) state.SkipWithError(start.message.c_str());
   for (auto _ : state) {
     const auto level = nm.solve(1.2, &start);
-    if (!level.converged) state.SkipWithError(level.message.c_str());
+    if (!level.converged()) state.SkipWithError(level.message.c_str());
     state.counters["powell_iterations"] = level.powell_iterations;
     state.counters["newton_iterations"] = level.newton_iterations;
   }

@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
     const auto reference = modes8.continue_backbone(co);
     auto continued = [&](double energy) {
       for (const auto& l : reference.included) {
-        if (std::abs(l.energy - energy) < 1e-9 && l.converged) return l.frequency_hz;
+        if (std::abs(l.energy - energy) < 1e-9 && l.converged()) return l.frequency_hz;
       }
       return std::nan("");
     };

@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
       run.table(prefix + "backbone.csv", {"energy [-]", "frequency [Hz]", "max_penetration [gap]"}, {e, f, pen});
       if (b.included.size() != probes.size()) run.fail(prefix + ": a probe energy was not reached");
       for (const auto& l : b.included) {
-        if (!l.converged) run.fail(prefix + ": E = " + format("%g", l.energy) + ": " + l.message);
+        if (!l.converged()) run.fail(prefix + ": E = " + format("%g", l.energy) + ": " + l.message);
       }
       return b;
     };

@@ -115,11 +115,11 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
   const Eigen::MatrixXd& a = solution.coefficients;
   std::optional<solvers::PeriodicFields> fields;
   Eigen::MatrixXd displacement;
-  try {
+  if (const std::string why = solvers::velocity_unavailable(trial); why.empty()) {
     fields = solvers::evaluate_fields(trial, a, tau, forcing.frequency_hz);
     displacement = fields->displacement;
-  } catch (const std::invalid_argument& e) {  // no velocity for this trial basis (DB4)
-    out.diagnostics["velocity"] = std::string("not written: ") + e.what();
+  } else {
+    out.diagnostics["velocity"] = "not written: " + why;
     displacement.resize(a.rows(), p);
     for (Eigen::Index i = 0; i < a.rows(); ++i) {
       displacement.row(i) = solvers::evaluate_trial(trial, a, static_cast<int>(i), tau, forcing.frequency_hz).transpose();
@@ -339,7 +339,10 @@ void continuation(const Scene& scene, AnalysisResult& out) {
 
 nlohmann::json to_json(const solvers::ModeLevel& l) {
   return {{"energy", l.energy},
-          {"converged", l.converged},
+          {"converged", l.converged()},
+          {"status", std::string(solvers::to_string(l.status))},
+          {"residual_norm", finite_or_null(l.residual_norm)},
+          {"tolerance", l.tolerance},
           {"frequency_hz", finite_or_null(l.frequency_hz)},
           {"rayleigh_frequency_hz", finite_or_null(l.rayleigh_frequency_hz)},
           {"max_penetration_gaps", finite_or_null(l.max_penetration)},
@@ -423,7 +426,7 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
   for (double energy : a.levels) {
     const auto it = std::find_if(b.included.begin(), b.included.end(),
                                  [&](const solvers::ModeLevel& l) { return std::abs(l.energy - energy) <= 1e-12 * energy; });
-    if (it == b.included.end() || !it->converged) {
+    if (it == b.included.end() || !it->converged()) {
       levels_ok = false;
       included.push_back({{"energy", energy}, {"converged", false},
                           {"message", it == b.included.end() ? "not reached by the backbone" : it->message}});

@@ -1,5 +1,6 @@
 #include <wbm/solvers/mechanical_system.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -31,10 +32,41 @@ void MechanicalSystem::validate() const {
       }
     }
   };
+  // Symmetry: the modal paths (generalized eigensolver, nonlinear modes) read one triangle only,
+  // so a non-symmetric matrix would be solved silently as another one.
+  auto symmetric = [](const Eigen::SparseMatrix<double>& x, const char* name) {
+    const Eigen::SparseMatrix<double> xt = x.transpose();
+    const Eigen::SparseMatrix<double> d = x - xt;
+    double largest = 0.0, worst = 0.0;
+    Eigen::Index wr = 0, wc = 0;
+    for (int k = 0; k < x.outerSize(); ++k) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(x, k); it; ++it) largest = std::max(largest, std::abs(it.value()));
+    }
+    for (int k = 0; k < d.outerSize(); ++k) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(d, k); it; ++it) {
+        if (std::abs(it.value()) > worst) {
+          worst = std::abs(it.value());
+          wr = it.row();
+          wc = it.col();
+        }
+      }
+    }
+    // 1e-12 of the largest entry: FE assembly and Matrix Market round trips are symmetric to rounding.
+    if (worst > 1e-12 * largest) {
+      std::ostringstream os;
+      os << "MechanicalSystem." << name << " is not symmetric: |X(" << wr << ", " << wc << ") - X(" << wc << ", " << wr
+         << ")| = " << worst << ", " << worst / largest << " of the largest entry (allowed 1e-12); symmetrize it "
+         << "((X + X^T)/2) if the asymmetry is rounding, or check the assembly (wbm solves self-adjoint structures)";
+      throw std::invalid_argument(os.str());
+    }
+  };
   if (n < 1) throw std::invalid_argument("MechanicalSystem: mass matrix is empty, need n >= 1 DOF");
   check(mass, "mass");
   check(damping, "damping");
   check(stiffness, "stiffness");
+  symmetric(mass, "mass");
+  symmetric(damping, "damping");
+  symmetric(stiffness, "stiffness");
 }
 
 MechanicalSystem beta_damped(const fem::Rod& rod, double beta) {

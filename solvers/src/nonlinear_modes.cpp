@@ -38,6 +38,7 @@ struct NonlinearModes::Evaluation {
 
 NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<RigidStop> stops, NonlinearModeOptions options)
     : system_(system), stops_(std::move(stops)), options_(options) {
+  system_.validate();  // square, finite, symmetric: the eigensolver reads one triangle
   system_.mass.makeCompressed();
   n_ = system_.dofs();
   options_.validate(n_);
@@ -49,7 +50,7 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
                                   std::to_string(n_) + ")");
     }
     if (!(s.gap > 0.0) || !std::isfinite(s.gap)) {
-      throw std::invalid_argument("NonlinearModes: stop gap " + std::to_string(s.gap) + " m: must be > 0 (energies "
+      throw std::invalid_argument("NonlinearModes: stop gap " + format_number(s.gap) + " m: must be > 0 (energies "
                                   "are normalized by contact onset; the normalized backbone does not depend on g0, "
                                   "so any small positive gap will do)");
     }
@@ -83,6 +84,12 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   ms_ = system_.mass / m_ref_;
   ks_.makeCompressed();
   ms_.makeCompressed();
+}
+
+Eigen::VectorXd NonlinearModes::with_phase(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd full(x.size() + 1);
+  full << x.head(phase_index_), 0.0, x.tail(x.size() - phase_index_);
+  return full;
 }
 
 Eigen::MatrixXd NonlinearModes::basis_values(int samples, int derivative) const {
@@ -173,7 +180,7 @@ NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, do
 ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
   const auto t0 = std::chrono::steady_clock::now();
   if (!(energy > 0.0) || !std::isfinite(energy)) {
-    throw std::invalid_argument("NonlinearModes::solve: energy " + std::to_string(energy) + " must be > 0");
+    throw std::invalid_argument("NonlinearModes::solve: energy " + format_number(energy) + " must be > 0");
   }
   ModeLevel level;
   level.energy = energy;
@@ -190,64 +197,41 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
     x << full.head(phase_index_), full.tail(full.size() - phase_index_ - 1);
     return x;
   };
-  auto expand = [&](const Eigen::VectorXd& x) {
-    Eigen::VectorXd full(x.size() + 1);
-    full << x.head(phase_index_), 0.0, x.tail(x.size() - phase_index_);
-    return full;
-  };
+  auto expand = [&](const Eigen::VectorXd& x) { return with_phase(x); };
   contact::AugmentedLagrangian al(static_cast<int>(stops_.size()) * options_.samples, options_.powell);
   if (start != nullptr && start->multipliers.size() == static_cast<Eigen::Index>(stops_.size()) * options_.samples) {
     al.warm_start(start->multipliers, start->equality_multiplier);  // contact forces vary continuously with E
   }
   Eigen::VectorXd x = reduce(y);
   double omega2 = start != nullptr ? std::pow(2.0 * std::numbers::pi * start->frequency_hz, 2) : omega0_ * omega0_;
+  const NewtonOptions primal_options{.tolerance = options_.stationarity_tolerance,
+                                     .max_iterations = options_.max_newton_iterations,
+                                     .max_backtracks = 3,
+                                     .levenberg_marquardt = true,
+                                     .norm = ResidualNorm::Max};
+  NewtonReport last_primal;
   std::string why = "Powell iteration limit reached";
   for (int j = 0; j < options_.max_powell_iterations; ++j) {
     ++level.powell_iterations;
-    // LL11 Alg. 3, l. 3: the primal problem, ∇L_κ = 0 by Newton (line search on ‖∇L_κ‖).
-    Evaluation e = evaluate(expand(x), energy, omega2, al, true);
-    // Newton steps with a short line search on ‖∇L‖; when they stall (a change of the active
-    // set), Levenberg–Marquardt steps on ½‖∇L‖², (H² + μI) d = −H ∇L, with μ adapted to the gain.
-    double mu_lm = 0.0;
-    for (int it = 0; it < options_.max_newton_iterations; ++it) {
-      const double norm = e.gradient.lpNorm<Eigen::Infinity>();
-      if (!(norm > options_.stationarity_tolerance)) break;
-      ++level.newton_iterations;
-      const double n2 = e.gradient.squaredNorm();
-      bool accepted = false;
-      if (mu_lm == 0.0) {
-        const Eigen::VectorXd d = -Eigen::PartialPivLU<Eigen::MatrixXd>(e.hessian).solve(e.gradient);
-        double t = 1.0;
-        for (int b = 0; b < 4 && d.allFinite(); ++b, t *= 0.5) {
-          const Evaluation trial = evaluate(expand(x + t * d), energy, omega2, al, false);
-          if (trial.gradient.allFinite() && trial.gradient.squaredNorm() <= (1.0 - 1e-4 * t) * n2) {
-            x += t * d;
-            accepted = true;
-            break;
-          }
-        }
-        if (!accepted) mu_lm = 1e-6 * e.hessian.cwiseAbs().rowwise().sum().maxCoeff();
+    // LL11 Alg. 3, l. 3: the primal problem ∇L_κ = 0, by the Newton core: line search on
+    // ‖∇L_κ‖₂, and Levenberg–Marquardt steps on ½‖∇L_κ‖² once it stalls (a change of the active
+    // set). A stalled solve is not final: the outer update changes the problem.
+    struct Stationarity {
+      const NonlinearModes* nm;
+      double energy, omega2;
+      const contact::AugmentedLagrangian* al;
+      [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
+        return nm->evaluate(nm->with_phase(x), energy, omega2, *al, false).gradient;
       }
-      if (!accepted) {
-        const Eigen::MatrixXd h2 = e.hessian * e.hessian;
-        const Eigen::VectorXd hg = e.hessian * e.gradient;
-        for (int b = 0; b < 20; ++b) {
-          Eigen::MatrixXd a = h2;
-          a.diagonal().array() += mu_lm * mu_lm;
-          const Eigen::VectorXd d = -a.ldlt().solve(hg);
-          const Evaluation trial = evaluate(expand(x + d), energy, omega2, al, false);
-          if (d.allFinite() && trial.gradient.allFinite() && trial.gradient.squaredNorm() < n2) {
-            x += d;
-            accepted = true;
-            mu_lm *= 0.3;
-            break;
-          }
-          mu_lm *= 4.0;
-        }
-        if (!accepted) break;  // no decrease of ‖∇L‖: the outer update changes the problem
+      [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
+        return nm->evaluate(nm->with_phase(x), energy, omega2, *al, true).hessian;
       }
-      e = evaluate(expand(x), energy, omega2, al, true);
-    }
+    };
+    const NewtonResult primal = newton(Stationarity{this, energy, omega2, &al}, x, primal_options);
+    level.newton_iterations += primal.report.iterations;
+    x = primal.x;
+    last_primal = primal.report;
+    const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
     // l. 4–5: constraints and Powell's measures; Alg. 2 updates ω from the Rayleigh quotient.
     bool omega_settled = true;
     if (options_.algorithm == ModeAlgorithm::Sequential) {
@@ -256,15 +240,22 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
     }
     level.inequality_measure = al.inequality_measure(e.g);
     level.equality_measure = contact::AugmentedLagrangian::equality_measure(e.h);
-    const bool stationary = !(e.gradient.lpNorm<Eigen::Infinity>() > 1e3 * options_.stationarity_tolerance);
+    // A level converges only on a verified stationarity residual (‖∇L_κ‖∞ ≤ tolerance).
+    const bool stationary = e.gradient.lpNorm<Eigen::Infinity>() <= options_.stationarity_tolerance;
     if (al.update(e.g, e.h) && omega_settled && stationary) {
-      level.converged = true;
+      level.status = SolveStatus::Converged;
       why = "converged";
       break;
     }
   }
   // Report on the final iterate.
   const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
+  level.residual_norm = e.gradient.lpNorm<Eigen::Infinity>();
+  level.tolerance = options_.stationarity_tolerance;
+  if (!level.converged()) {
+    level.status = last_primal.converged() ? SolveStatus::MaxIterations : last_primal.status;
+    why += "; last primal solve " + last_primal.brief();
+  }
   level.rayleigh_frequency_hz = std::sqrt(e.r) / (2.0 * std::numbers::pi);
   // The orbit's frequency from the stationarity ∇k̂ − (r − μ ω₀² m̂/m̂_c) ∇m̂ + m̂ ω₀² Θᵀλ = 0,
   // which is the harmonic balance of the free motion with contact forces (continue_backbone).
@@ -282,12 +273,15 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
   level.complementarity = lmax > 0.0 ? (lambda.array() * e.g.array()).abs().maxCoeff() / lmax : 0.0;
   level.normalization_error = std::abs(e.h);
   if (!std::isfinite(level.frequency_hz) || !level.coefficients.allFinite()) {
-    level.converged = false;
+    level.status = SolveStatus::NonFinite;
     why = "non-finite iterate";
   }
   std::ostringstream os;
   os << why << " after " << level.powell_iterations << " Powell and " << level.newton_iterations
-     << " Newton iterations: G_i = " << level.inequality_measure << ", G_e = " << level.equality_measure;
+     << " Newton iterations: G_i = " << format_number(level.inequality_measure)
+     << ", G_e = " << format_number(level.equality_measure) << ", ‖∇L‖∞ = " << format_number(level.residual_norm)
+     << " (tolerances " << format_number(options_.powell.tolerance) << ", "
+     << format_number(options_.stationarity_tolerance) << ")";
   level.message = os.str();
   level.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return level;
@@ -322,19 +316,19 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
       start = &b.levels.back();
     }
     ModeLevel level = solve(energy, start);
-    if (level.converged) {
+    if (level.converged()) {
       b.levels.push_back(std::move(level));
       if (energy >= o.energy_max) break;
       if (b.levels.back().powell_iterations <= 8) step = std::min(o.max_step, 1.5 * step);
     } else {
       b.failed_energies.push_back(energy);
       if (b.levels.empty()) {
-        b.message = "the first level E = " + std::to_string(energy) + " did not converge: " + level.message;
+        b.message = "the first level E = " + format_number(energy) + " did not converge: " + level.message;
         break;
       }
       step *= 0.5;
       if (step < o.min_step) {
-        b.message = "energy step below minimum after E = " + std::to_string(b.levels.back().energy) + ": " + level.message;
+        b.message = "energy step below minimum after E = " + format_number(b.levels.back().energy) + ": " + level.message;
         break;
       }
     }
@@ -345,7 +339,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     energy = std::min(next, o.energy_max);
   }
   if (b.message.empty()) {
-    b.message = "reached E = " + std::to_string(o.energy_max);
+    b.message = "reached E = " + format_number(o.energy_max);
     b.complete = true;
   }
   for (double e : o.include) {
@@ -378,20 +372,23 @@ namespace wbm::solvers {
 void BackboneContinuationOptions::validate() const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("BackboneContinuationOptions." + what); };
   if (!(energy_min > 0.0 && energy_min < energy_max) || !std::isfinite(energy_max)) {
-    fail("energy range [" + std::to_string(energy_min) + ", " + std::to_string(energy_max) +
+    fail("energy range [" + format_number(energy_min) + ", " + format_number(energy_max) +
          "]: need 0 < energy_min < energy_max, finite");
   }
   if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
-    fail("penalty_stiffness = " + std::to_string(penalty_stiffness) + ": must be >= 0 [N/m] (0: exact contact)");
+    fail("penalty_stiffness = " + format_number(penalty_stiffness) + ": must be >= 0 [N/m] (0: exact contact)");
   }
-  if (!(max_energy_step > 0.0)) fail("max_energy_step = " + std::to_string(max_energy_step) + ": must be > 0");
-  if (!(tolerance > 0.0)) fail("tolerance = " + std::to_string(tolerance) + ": must be > 0");
+  if (!(max_energy_step > 0.0)) fail("max_energy_step = " + format_number(max_energy_step) + ": must be > 0");
+  if (!(tolerance > 0.0)) fail("tolerance = " + format_number(tolerance) + ": must be > 0");
   if (max_points < 2) fail("max_points = " + std::to_string(max_points) + ": must be >= 2");
+  if (max_newton_iterations < 1) {
+    fail("max_newton_iterations = " + std::to_string(max_newton_iterations) + ": must be >= 1");
+  }
 }
 
 NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
   if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
-    throw std::invalid_argument("BackboneSystem: penalty_stiffness = " + std::to_string(penalty_stiffness) +
+    throw std::invalid_argument("BackboneSystem: penalty_stiffness = " + format_number(penalty_stiffness) +
                                 ": must be >= 0 [N/m]");
   }
   const auto& o = modes.options_;
@@ -419,8 +416,7 @@ NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(
   }
   const Eigen::Index p = nm.phase_index_, ms = nm.options_.samples;
   Unpacked u;
-  u.y.resize(ny_ + 1);
-  u.y << x.head(p), 0.0, x.segment(p, ny_ - p);
+  u.y = nm.with_phase(x.head(ny_));
   const Eigen::Map<const Eigen::MatrixXd> ym(u.y.data(), nm.n_, nm.f_);
   const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
   u.g.resize(n_stops * ms);
@@ -538,7 +534,7 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   return out;
 }
 
-ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double energy) const {
+ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double energy, double tolerance) const {
   const auto& nm = *nm_;
   const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
   Unpacked state = unpack(x);
@@ -547,7 +543,11 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
   const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
   ModeLevel l;
   l.energy = energy;
-  l.converged = true;
+  l.residual_norm = residual(x, energy).norm();
+  l.tolerance = tolerance;
+  l.status = !std::isfinite(l.residual_norm) ? SolveStatus::NonFinite
+             : l.residual_norm <= tolerance  ? SolveStatus::Converged
+                                             : SolveStatus::MaxIterations;
   l.coefficients = ym * nm.g_ref_;
   l.frequency_hz = std::sqrt(x(ny_)) * nm.omega0_ / (2.0 * std::numbers::pi);
   double kh = 0.0, mh = 0.0;
@@ -570,36 +570,32 @@ ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double
   // The Lagrangian's multipliers (see solve()): λ_AL = 2 m_ref λ/(m̂), μ = (r/ω₀² − s)/E.
   l.multipliers = lambda * (2.0 * nm.m_ref_ / (mh));
   l.equality_multiplier = (kh / mh / (nm.omega0_ * nm.omega0_) - x(ny_)) / energy;
-  std::ostringstream os;
-  os << "KKT residual " << residual(x, energy).norm();
-  l.message = os.str();
+  l.message = std::string(to_string(l.status)) + ": KKT residual ‖R‖₂ = " + format_number(l.residual_norm) +
+              " (tolerance " + format_number(tolerance) + ")";
   return l;
 }
 
-ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const {
+ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy,
+                                   const BackboneContinuationOptions& options) const {
   const auto t0 = std::chrono::steady_clock::now();
-  // Semismooth Newton at fixed E with the sparse Jacobian (no line search: x is a converged point
-  // of the branch less than one step away).
-  double norm = std::nan("");
-  int it = 0;
-  for (; it <= 30; ++it) {
-    const SparseLinearization lin = system.linearize(x, energy);
-    norm = lin.residual.norm();
-    if (!(norm > 1e-10) || it == 30) break;
-    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(lin.jacobian);
-    if (lu.info() != Eigen::Success) break;
-    const Eigen::VectorXd dx = lu.solve(lin.residual);
-    if (!dx.allFinite()) break;
-    x -= dx;
-  }
-  ModeLevel l = system.level(x, energy);
-  l.converged = norm <= 1e-10;
-  l.newton_iterations = it;
-  if (!l.converged) {
-    std::ostringstream os;
-    os << "semismooth Newton at fixed E = " << energy << " did not converge: ‖R‖ = " << norm << " after " << it
-       << " iterations";
-    l.message = os.str();
+  // Semismooth Newton at fixed E (no line search: x is a converged point of the branch less
+  // than one step away), through the Newton core with sparse LU.
+  struct Fixed {
+    const BackboneSystem* s;
+    double energy;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, energy); }
+    [[nodiscard]] Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+      return s->linearize(x, energy).jacobian;
+    }
+  };
+  const NewtonResult r = newton(Fixed{&system, energy}, std::move(x),
+                                {.tolerance = options.tolerance, .max_iterations = options.max_newton_iterations,
+                                 .line_search = false});
+  ModeLevel l = system.level(r.x, energy, options.tolerance);
+  l.newton_iterations = r.report.iterations;
+  if (!r.report.converged()) {
+    l.status = r.report.status;
+    l.message = "semismooth Newton at fixed E = " + format_number(energy) + ": " + r.report.message;
   }
   l.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return l;
@@ -628,7 +624,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   pa.max_corrector_iterations = 12;
   pa.kink_step = 1e-5;
   pa.corner_restart = true;
-  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = 50};
+  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
   Branch branch = pseudo_arclength(system, x0, e0, pa);
   // A branch that comes back below contact onset after contact has retraced the backbone (the
   // linear mode is the only solution there): keep it up to where it turned back, and say so.
@@ -643,8 +639,8 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
       }
       branch.points.resize(top + 1);
       std::erase_if(branch.folds, [&](const Fold& f) { return f.after >= top; });
-      branch.stop = StopReason::StepBelowMinimum;
-      branch.message = "the branch turned back at a corner near E = " + std::to_string(branch.points[top].parameter) +
+      branch.stop = StopReason::Retraced;
+      branch.message = "the branch turned back at a corner near E = " + format_number(branch.points[top].parameter) +
                        " and retraced the backbone down to the linear mode; kept up to that energy";
       retraced = true;
       break;
@@ -653,11 +649,11 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   }
   for (const auto& pt : branch.points) {
     if (pt.parameter > o.energy_max) {  // the last point overshoots the range: land on energy_max
-      ModeLevel last = level_at(system, pt.x, o.energy_max);
-      if (last.converged) b.levels.push_back(std::move(last));
+      ModeLevel last = level_at(system, pt.x, o.energy_max, o);
+      if (last.converged()) b.levels.push_back(std::move(last));
       break;
     }
-    ModeLevel l = system.level(pt.x, pt.parameter);
+    ModeLevel l = system.level(pt.x, pt.parameter, o.tolerance);
     l.newton_iterations = pt.corrector_iterations;
     b.levels.push_back(std::move(l));
   }
@@ -666,13 +662,14 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
       const auto &p0 = branch.points[k], &p1 = branch.points[k + 1];
       if ((p0.parameter - e) * (p1.parameter - e) > 0.0) continue;
       const double t = p1.parameter == p0.parameter ? 0.0 : (e - p0.parameter) / (p1.parameter - p0.parameter);
-      b.included.push_back(level_at(system, p0.x + t * (p1.x - p0.x), e));
+      b.included.push_back(level_at(system, p0.x + t * (p1.x - p0.x), e, o));
       break;
     }
   }
   for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
   b.kinks = branch.kinks;
   b.rejected_steps = branch.rejected_steps;
+  b.stop = branch.stop;
   b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
                b.levels.back().energy >= o.energy_max * (1.0 - 1e-12);
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;

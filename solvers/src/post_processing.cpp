@@ -6,6 +6,14 @@
 
 namespace wbm::solvers {
 
+std::string velocity_unavailable(const TimeBasis& trial) {
+  if (trial.max_derivative() >= 1) return {};
+  const auto* w = trial.wavelet_basis();
+  if (w != nullptr && w->family().kind == wavelets::FamilyKind::Haar) return {};  // delta pairs
+  return trial.name() + " has no pointwise first derivative and is not piecewise constant; no velocity "
+                        "representation (use DB6 or smoother trial functions)";
+}
+
 Eigen::VectorXd evaluate_trial(const TimeBasis& trial, const Eigen::MatrixXd& coefficients, int dof,
                                const Eigen::VectorXd& tau, double frequency_hz, int derivative) {
   const int m = trial.dimension();
@@ -25,12 +33,10 @@ Eigen::VectorXd evaluate_trial(const TimeBasis& trial, const Eigen::MatrixXd& co
   if (derivative <= trial.max_derivative()) {
     return std::pow(frequency_hz, derivative) * (trial.values(tau, derivative) * a);
   }
-  const auto* w = trial.wavelet_basis();
-  if (w == nullptr || w->family().kind != wavelets::FamilyKind::Haar) {
-    throw std::invalid_argument("evaluate_trial: " + trial.name() +
-                                " has no pointwise first derivative and is not piecewise constant; no velocity "
-                                "representation (use DB6 or smoother trial functions)");
+  if (const std::string why = velocity_unavailable(trial); !why.empty()) {
+    throw std::invalid_argument("evaluate_trial: " + why);
   }
+  const auto* w = trial.wavelet_basis();
   // Delta-pair velocity of [JL14 Sec. 5.2] in the box form of the header.
   Eigen::VectorXd cell(m);
   for (int k = 0; k < m; ++k) cell(k) = a(k) * w->value(k, (k + 0.5) / m);

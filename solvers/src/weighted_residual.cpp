@@ -408,6 +408,11 @@ struct WeightedResidual::Impl {
                                   " functions but weighting " + weighting.name() + " has " +
                                   std::to_string(weighting.dimension()) + "; use one dimension M for both");
     }
+    if (!(options.residual_tolerance > 0.0)) {
+      throw std::invalid_argument("WeightedResidualOptions.residual_tolerance = " +
+                                  format_number(options.residual_tolerance) +
+                                  ": must be > 0 (a relative bound on the full residual, e.g. 1e-8)");
+    }
     if (options.time_samples < 0 || (options.time_samples > 0 && options.time_samples < m)) {
       throw std::invalid_argument("WeightedResidualOptions.time_samples Q = " + std::to_string(options.time_samples) +
                                   ": must be 0 (automatic, max(256, 2M)) or >= M = " + std::to_string(m));
@@ -799,7 +804,7 @@ WeightedResidual::WeightedResidual(std::unique_ptr<Impl> impl) : impl_(std::move
 
 WeightedResidual WeightedResidual::at_frequency(double frequency_hz) const {
   if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
-    throw std::invalid_argument("WeightedResidual::at_frequency: f = " + std::to_string(frequency_hz) +
+    throw std::invalid_argument("WeightedResidual::at_frequency: f = " + format_number(frequency_hz) +
                                 " Hz; must be > 0 and finite");
   }
   return WeightedResidual(std::make_unique<Impl>(*impl_, frequency_hz));
@@ -940,9 +945,16 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
       }
     }
   }
+  s.residual_tolerance = p.options.residual_tolerance;
   if (s.report.converged() && (!std::isfinite(s.relative_residual) || !s.coefficients.allFinite())) {
     s.report.status = SolveStatus::NonFinite;
     s.report.message = "non-finite full residual after convergence of the condensed system";
+  } else if (s.report.converged() && !(s.relative_residual <= p.options.residual_tolerance)) {
+    s.report.status = SolveStatus::ResidualNotVerified;
+    s.report.message = "the condensed system converged (" + s.report.message + "), but the full residual " +
+                       format_number(s.relative_residual) + " ‖b‖ exceeds residual_tolerance = " +
+                       format_number(p.options.residual_tolerance) +
+                       " (ill-conditioned G? condition estimate " + format_number(s.condition_number) + ")";
   }
   s.wall_time_s = elapsed(start);
   return s;

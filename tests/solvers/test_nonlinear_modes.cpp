@@ -39,7 +39,7 @@ solvers::NonlinearModes modes(double gap, int harmonics = 8, int samples = 256,
 
 const solvers::ModeLevel* included(const solvers::Backbone& b, double energy) {
   for (const auto& l : b.included) {
-    if (std::abs(l.energy - energy) < 1e-12 && l.converged) return &l;
+    if (std::abs(l.energy - energy) < 1e-12 && l.converged()) return &l;
   }
   return nullptr;
 }
@@ -55,14 +55,14 @@ TEST(NonlinearModes, LinearFrequencyIsThePapers) { EXPECT_NEAR(modes(1e-3).linea
 TEST(NonlinearModes, BelowContactTheModeIsLinear) {
   const auto nm = modes(1e-3);
   const auto level = nm.solve(0.7);
-  ASSERT_TRUE(level.converged) << level.message;
+  ASSERT_TRUE(level.converged()) << level.message;
   EXPECT_NEAR(level.frequency_hz, nm.linear_frequency_hz(), 1e-9 * nm.linear_frequency_hz());
   Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(nm.dofs(), 2 * nm.harmonics() + 1);
   expected.col(1) = std::sqrt(0.7) * nm.onset_mode();
   EXPECT_LT((level.coefficients - expected).norm(), 1e-12 * expected.norm());
   EXPECT_NEAR(level.max_penetration, std::sqrt(0.7) - 1.0, 1e-12);  // tip amplitude √E g0
   const auto onset = nm.solve(1.0);
-  ASSERT_TRUE(onset.converged);
+  ASSERT_TRUE(onset.converged());
   EXPECT_NEAR(onset.max_penetration, 0.0, 1e-12);
 }
 
@@ -72,7 +72,7 @@ TEST(NonlinearModes, BelowContactTheModeIsLinear) {
 TEST(NonlinearModes, AboveContactConstraintsHoldAndFrequencyHardens) {
   const auto nm = modes(1e-3);
   const auto level = nm.solve(1.2);
-  ASSERT_TRUE(level.converged) << level.message;
+  ASSERT_TRUE(level.converged()) << level.message;
   EXPECT_LE(level.max_penetration, 1e-8);
   EXPECT_LE(level.complementarity, 1e-8);
   EXPECT_LE(level.normalization_error, 1e-8);
@@ -80,7 +80,7 @@ TEST(NonlinearModes, AboveContactConstraintsHoldAndFrequencyHardens) {
   EXPECT_GT(level.multipliers.maxCoeff(), 0.0);  // the stop does push
   EXPECT_GT(level.frequency_hz, nm.linear_frequency_hz() * (1.0 + 1e-6));
   const auto tiny = modes(1e-6).solve(1.2);
-  ASSERT_TRUE(tiny.converged) << tiny.message;
+  ASSERT_TRUE(tiny.converged()) << tiny.message;
   EXPECT_NEAR(tiny.frequency_hz, level.frequency_hz, 1e-8 * level.frequency_hz);
   EXPECT_LT((tiny.coefficients * 1e3 - level.coefficients).norm(), 1e-6 * level.coefficients.norm());
 }
@@ -129,8 +129,8 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
 TEST(NonlinearModes, AugmentedLagrangianAndKktContinuationAgree) {
   const auto alg1 = modes(1e-3).solve(1.2);
   const auto alg2 = modes(1e-3, 8, 256, solvers::ModeAlgorithm::Sequential).solve(1.2);
-  ASSERT_TRUE(alg1.converged) << alg1.message;
-  ASSERT_TRUE(alg2.converged) << alg2.message;
+  ASSERT_TRUE(alg1.converged()) << alg1.message;
+  ASSERT_TRUE(alg2.converged()) << alg2.message;
   const auto nm = modes(1e-3);
   const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.3, .include = {1.2}});
   ASSERT_TRUE(b.complete) << b.message;

@@ -7,7 +7,9 @@
 /// same whatever n and whether λ is 150 Hz or 1500 Hz. Each step (JL14 Sec. 5.6, [38]):
 ///   predictor  ẑ⁰ = ẑ_k + h t_k (tangent t_k, ⟨t_k, t_k⟩ = 1);
 ///   corrector  Newton on [R(x, λ); ⟨t_k, ẑ − ẑ_k⟩ − h] = 0 with the bordered Jacobian
-///              [[∂R/∂x̂, ∂R/∂λ̂]; [t_kᵀ W]] — one extra row and column, dense (n + 1) LU;
+///              [[∂R/∂x̂, ∂R/∂λ̂]; [t_kᵀ W]] — one extra row and column; this is newton()
+///              without line search, with dense LU (Linearization) or sparse LU (SparseLinearization,
+///              one SparseLu per branch, its symbolic analysis reused while the pattern holds);
 ///   tangent    t_{k+1} from the same bordered matrix with right-hand side (0, 1), normalized, so
 ///              ⟨t_k, t_{k+1}⟩ > 0 and the branch never turns back on itself;
 ///   step       h ← h · clamp(target/iterations, ½, 2) after a success, h ← h/2 and retry after a
@@ -30,6 +32,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -66,7 +69,10 @@ concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, doub
                std::same_as<decltype(s.linearize(x, p)), SparseLinearization>;
 };
 
-enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed, StateBound };
+/// Why a branch ended. Retraced: the branch came back along a piece it had already traced
+/// (detected by the caller that knows the problem, e.g. a backbone falling back below contact
+/// onset after a corner) and was cut where it turned back.
+enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed, StateBound, Retraced };
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
   switch (r) {
@@ -75,6 +81,7 @@ enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointF
     case StopReason::MaxPoints: return "point limit reached";
     case StopReason::InitialPointFailed: return "initial point did not converge";
     case StopReason::StateBound: return "state bound exceeded";
+    case StopReason::Retraced: return "branch retraced itself";
   }
   return "?";
 }
@@ -147,7 +154,9 @@ inline void PseudoArclengthOptions::validate() const {
 
 namespace detail {
 
-// The bordered matrix [[∂R/∂x̂, ∂R/∂λ̂]; [t_xᵀ/n, t_λ]] of the scaled problem.
+// The bordered matrix [[∂R/∂x̂, ∂R/∂λ̂]; [t_xᵀ/n, t_λ]] of the scaled problem, dense or sparse
+// (every entry of the border stored, so that its pattern depends on ∂R/∂x̂ only and the sparse
+// symbolic analysis can be reused).
 inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls) {
   const auto n = l.jacobian.rows();
   Eigen::MatrixXd b(n + 1, n + 1);
@@ -158,14 +167,8 @@ inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t
   return b;
 }
 
-// Solves the bordered system for one right-hand side; NaN if the sparse factorization fails.
-inline Eigen::VectorXd bordered_solve(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls,
-                                      const Eigen::VectorXd& rhs) {
-  return Eigen::PartialPivLU<Eigen::MatrixXd>(bordered(l, t, xs, ls)).solve(rhs);
-}
-
-inline Eigen::VectorXd bordered_solve(const SparseLinearization& l, const Eigen::VectorXd& t, double xs, double ls,
-                                      const Eigen::VectorXd& rhs) {
+inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const Eigen::VectorXd& t, double xs,
+                                            double ls) {
   const auto n = l.jacobian.rows();
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(static_cast<size_t>(l.jacobian.nonZeros() + 2 * n + 1));
@@ -175,15 +178,13 @@ inline Eigen::VectorXd bordered_solve(const SparseLinearization& l, const Eigen:
     }
   }
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (l.parameter_derivative(i) != 0.0) entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
-    if (t(i) != 0.0) entries.emplace_back(n, i, t(i) / static_cast<double>(n));
+    entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
+    entries.emplace_back(n, i, t(i) / static_cast<double>(n));
   }
   entries.emplace_back(n, n, t(n));
   Eigen::SparseMatrix<double> b(n + 1, n + 1);
   b.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(b);
-  if (lu.info() != Eigen::Success) return Eigen::VectorXd::Constant(n + 1, std::nan(""));
-  return lu.solve(rhs);
+  return b;
 }
 
 inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
@@ -201,13 +202,42 @@ inline Eigen::VectorXd row_change(const Eigen::SparseMatrix<double>& a, const Ei
   return d.cwiseAbs() * Eigen::VectorXd::Ones(d.cols());
 }
 
-inline Eigen::MatrixXd dense(const Eigen::MatrixXd& j) { return j; }
-inline Eigen::MatrixXd dense(const Eigen::SparseMatrix<double>& j) { return Eigen::MatrixXd(j); }
-
 inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   const auto n = a.size() - 1;
   return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
 }
+
+// The corrector of one step as a NonlinearSystem in the scaled ẑ (length n + 1), for newton():
+//   [R(x, λ); ⟨t, ẑ − ẑ_k⟩ − h] = 0, Jacobian the bordered matrix.
+// The last linearization is cached, so residual() and jacobian() at one ẑ linearize once, and
+// the tangent at the converged point reuses it.
+template <class S, class Lin>
+struct Corrector {
+  const S* system;
+  double xs, ls;
+  Eigen::VectorXd direction, z_last;
+  double step;
+  mutable Eigen::VectorXd cached_z;
+  mutable Lin cached;
+  [[nodiscard]] const Lin& at(const Eigen::VectorXd& z) const {
+    if (cached_z.size() != z.size() || cached_z != z) {
+      const auto n = z.size() - 1;
+      cached = system->linearize(z.head(n) * xs, z(n) * ls);
+      cached_z = z;
+    }
+    return cached;
+  }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& z) const {
+    const auto n = z.size() - 1;
+    const Lin& l = at(z);
+    Eigen::VectorXd r(n + 1);
+    r.head(n) = l.residual;
+    r(n) = inner(direction, z - z_last) - step;
+    if (!finite(l)) r(n) = std::nan("");  // a non-finite Jacobian stops the corrector
+    return r;
+  }
+  [[nodiscard]] auto jacobian(const Eigen::VectorXd& z) const { return bordered(at(z), direction, xs, ls); }
+};
 
 }  // namespace detail
 
@@ -218,8 +248,8 @@ template <ParametrizedSystem S>
 Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, const PseudoArclengthOptions& o) {
   o.validate();
   if (!(lambda0 >= o.parameter_min && lambda0 <= o.parameter_max)) {
-    throw std::invalid_argument("pseudo_arclength: λ0 = " + std::to_string(lambda0) + " outside [" +
-                                std::to_string(o.parameter_min) + ", " + std::to_string(o.parameter_max) + "]");
+    throw std::invalid_argument("pseudo_arclength: λ0 = " + format_number(lambda0) + " outside [" +
+                                format_number(o.parameter_min) + ", " + format_number(o.parameter_max) + "]");
   }
   const auto start = std::chrono::steady_clock::now();
   const double xs = o.state_scale, ls = o.parameter_scale;
@@ -243,21 +273,22 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     const S* s;
     double lambda;
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, lambda); }
-    [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
-      return detail::dense(s->linearize(x, lambda).jacobian);
-    }
+    [[nodiscard]] auto jacobian(const Eigen::VectorXd& x) const { return s->linearize(x, lambda).jacobian; }
   };
-  NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton);
+  using Lin = decltype(system.linearize(x0, lambda0));
+  // One linear solver for the whole branch (SparseLu keeps its symbolic analysis across steps).
+  std::conditional_t<std::is_same_v<Lin, SparseLinearization>, SparseLu, DenseLu> solver;
+  NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton, solver);
   if (!first.report.converged()) return finish(StopReason::InitialPointFailed, first.report.message);
 
   // Tangent at the first point, oriented by `direction`.
   Eigen::VectorXd seed = Eigen::VectorXd::Zero(n + 1);
   seed(n) = o.direction;
-  using Lin = decltype(system.linearize(x0, lambda0));
   auto tangent_at = [&](const Lin& l, const Eigen::VectorXd& previous) {
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + 1);
     rhs(n) = 1.0;
-    Eigen::VectorXd t = detail::bordered_solve(l, previous, xs, ls, rhs);
+    if (!solver.factorize(detail::bordered(l, previous, xs, ls))) return Eigen::VectorXd::Constant(n + 1, NAN).eval();
+    Eigen::VectorXd t = solver.solve(rhs);
     return Eigen::VectorXd(t / std::sqrt(detail::inner(t, t)));
   };
   BranchPoint p0;
@@ -278,28 +309,20 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     double rnorm = 0.0;
     Eigen::VectorXd z, tangent;
   };
+  // The corrector is newton() on the bordered system, without line search.
+  const NewtonOptions corrector_options{.tolerance = o.corrector_tolerance,
+                                        .max_iterations = o.max_corrector_iterations,
+                                        .line_search = false};
   auto attempt_along = [&](const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
     Attempt a;
-    a.z = z_last + step * direction;
-    Lin lin;
-    for (; a.iterations <= o.max_corrector_iterations; ++a.iterations) {
-      lin = system.linearize(a.z.head(n) * xs, a.z(n) * ls);
-      a.rnorm = lin.residual.norm();
-      if (!std::isfinite(a.rnorm) || !detail::finite(lin)) break;
-      if (a.rnorm <= o.corrector_tolerance) {
-        a.converged = true;
-        break;
-      }
-      if (a.iterations == o.max_corrector_iterations) break;
-      Eigen::VectorXd rhs(n + 1);
-      rhs.head(n) = -lin.residual;
-      rhs(n) = -(detail::inner(direction, a.z - z_last) - step);
-      const Eigen::VectorXd dz = detail::bordered_solve(lin, direction, xs, ls, rhs);
-      if (!dz.allFinite()) break;
-      a.z += dz;
-    }
+    const detail::Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
+    NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
+    a.converged = r.report.converged();
+    a.iterations = r.report.iterations;
+    a.rnorm = r.report.residual_norms.back();
+    a.z = std::move(r.x);
     if (a.converged) {
-      a.tangent = tangent_at(lin, direction);
+      a.tangent = tangent_at(corrector.at(a.z), direction);
       if (!a.tangent.allFinite()) a.converged = false;
     }
     return a;
@@ -396,8 +419,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       h *= 0.5;
       if (h < o.min_step) {
         return finish(StopReason::StepBelowMinimum,
-                      "step below minimum at λ = " + std::to_string(last.parameter) + " (h = " + std::to_string(h) +
-                          (converged ? ", tangent turning too fast)" : ", corrector failed, ‖R‖ = " + std::to_string(rnorm) + ")"));
+                      "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
+                          (converged ? ", tangent turning too fast)"
+                                     : ", corrector failed, ‖R‖ = " + format_number(rnorm) + ", tolerance " +
+                                           format_number(o.corrector_tolerance) + ")"));
       }
       continue;
     }
@@ -436,13 +461,13 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     branch.points.push_back(std::move(p));
     const double lambda = branch.points.back().parameter;
     if (o.max_state > 0.0 && branch.points.back().x.lpNorm<Eigen::Infinity>() / xs > o.max_state) {
-      return finish(StopReason::StateBound, "‖x‖∞/state_scale > " + std::to_string(o.max_state) + " at λ = " +
-                                                std::to_string(lambda));
+      return finish(StopReason::StateBound, "‖x‖∞/state_scale > " + format_number(o.max_state) + " at λ = " +
+                                                format_number(lambda));
     }
     if (lambda < o.parameter_min || lambda > o.parameter_max) {
-      return finish(StopReason::RangeReached, "λ = " + std::to_string(lambda) + " left [" +
-                                                  std::to_string(o.parameter_min) + ", " +
-                                                  std::to_string(o.parameter_max) + "]");
+      return finish(StopReason::RangeReached, "λ = " + format_number(lambda) + " left [" +
+                                                  format_number(o.parameter_min) + ", " +
+                                                  format_number(o.parameter_max) + "]");
     }
     h_accepted = h;
     const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);
@@ -454,7 +479,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     h = std::clamp(h * factor, o.min_step, std::max(o.min_step, h_max));
   }
   return finish(StopReason::MaxPoints, "point limit " + std::to_string(o.max_points) + " reached at λ = " +
-                                           std::to_string(branch.points.back().parameter));
+                                           format_number(branch.points.back().parameter));
 }
 
 }  // namespace wbm::solvers

@@ -19,7 +19,8 @@ struct MechanicalSystem {
   Eigen::SparseMatrix<double> damping;    // C [N·s/m]
   Eigen::SparseMatrix<double> stiffness;  // K [N/m]
   [[nodiscard]] int dofs() const { return static_cast<int>(mass.rows()); }
-  /// Throws std::invalid_argument if the matrices are not square of one size or not finite.
+  /// Throws std::invalid_argument if the matrices are not square of one size, not finite, or
+  /// not symmetric to 1e-12 of their largest entry (the message names the matrix and entry).
   void validate() const;
 };
 

@@ -1,41 +1,79 @@
 #pragma once
-/// Damped Newton–Raphson for R(x) = 0 with a backtracking (Armijo) line search.
+/// The one Newton core of the project: damped Newton–Raphson for R(x) = 0 with a backtracking
+/// (Armijo) line search, an optional Levenberg–Marquardt fallback, and a linear-solver policy
+/// (dense LU, or sparse LU that keeps its symbolic analysis while the sparsity pattern is
+/// unchanged). The forced response (weighted residuals), the continuation corrector, the
+/// nonlinear-mode stationarity solves and the fixed-energy KKT solves all run through newton().
 
+#include <algorithm>
 #include <cmath>
 #include <concepts>
-#include <sstream>
+#include <optional>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 
 #include <wbm/solvers/status.hpp>
 
 namespace wbm::solvers {
 
-/// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n, dense).
+/// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n), either
+/// dense (Eigen::MatrixXd) or sparse (Eigen::SparseMatrix<double>); the Jacobian's type picks
+/// the default linear solver (DenseLu or SparseLu).
 template <class S>
 concept NonlinearSystem = requires(const S& s, const Eigen::VectorXd& x) {
   { s.residual(x) } -> std::convertible_to<Eigen::VectorXd>;
-  { s.jacobian(x) } -> std::convertible_to<Eigen::MatrixXd>;
+  requires std::convertible_to<decltype(s.jacobian(x)), Eigen::MatrixXd> ||
+               std::convertible_to<decltype(s.jacobian(x)), Eigen::SparseMatrix<double>>;
 };
 
+/// The norm in which the convergence test ‖R(x)‖ ≤ tolerance is made (and residual_norms are
+/// reported). The line search always decreases the Euclidean norm.
+enum class ResidualNorm { Euclidean, Max };
+
 struct NewtonOptions {
-  double tolerance = 1e-10;   // converged when ‖R(x)‖₂ ≤ tolerance (R as scaled by the system)
+  double tolerance = 1e-10;   // converged when ‖R(x)‖ ≤ tolerance (R as scaled by the system)
   int max_iterations = 50;    // Newton steps, >= 0
   bool line_search = true;    // Armijo backtracking on ‖R‖₂ (halving, at most max_backtracks)
   int max_backtracks = 30;
-  double min_rcond = 1e-15;   // Jacobians with a smaller reciprocal condition estimate are singular
+  double min_rcond = 1e-15;   // dense Jacobians with a smaller reciprocal condition estimate are singular
+  /// When the line search finds no decrease: Levenberg–Marquardt steps
+  /// (JᵀJ + μ² I) d = −Jᵀ R, μ from 10⁻⁶ ‖J‖∞, ×0.3 after a decrease of ‖R‖₂ and ×4 after a
+  /// failure (at most max_lm_trials per iteration); once started they replace the Newton steps
+  /// for the rest of the solve. Dense normal equations: for small systems (nonlinear modes).
+  bool levenberg_marquardt = false;
+  int max_lm_trials = 20;
+  ResidualNorm norm = ResidualNorm::Euclidean;
 };
 
 struct NewtonReport {
   SolveStatus status = SolveStatus::MaxIterations;
   int iterations = 0;
-  std::vector<double> residual_norms;  // ‖R(x_k)‖₂ for k = 0..iterations
-  double jacobian_rcond = 0.0;         // LU reciprocal condition estimate of the last Jacobian
+  std::vector<double> residual_norms;  // ‖R(x_k)‖ for k = 0..iterations (NewtonOptions::norm)
+  double tolerance = 0.0;              // the tolerance the convergence test used
+  /// Reciprocal condition estimate of the last dense LU; absent for sparse LU (not estimated).
+  std::optional<double> jacobian_rcond;
+  int levenberg_marquardt_steps = 0;   // steps taken by the fallback
   std::string message;                 // why it stopped, with the last residual
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
+  /// One line, like Ceres' BriefReport: "converged in 4 iterations, ‖R‖ 3.2e-04 → 1.1e-12
+  /// (tolerance 1e-10)".
+  [[nodiscard]] std::string brief() const {
+    std::string s = std::string(to_string(status)) + " in " + std::to_string(iterations) + " iterations";
+    if (!residual_norms.empty()) {
+      s += ", ‖R‖ " + format_number(residual_norms.front()) + " → " + format_number(residual_norms.back());
+    }
+    s += " (tolerance " + format_number(tolerance) + ")";
+    if (levenberg_marquardt_steps > 0) s += ", " + std::to_string(levenberg_marquardt_steps) + " Levenberg–Marquardt steps";
+    return s;
+  }
 };
 
 struct NewtonResult {
@@ -43,70 +81,180 @@ struct NewtonResult {
   NewtonReport report;
 };
 
-/// Newton–Raphson from x0: J(x_k) Δ = −R(x_k), x_{k+1} = x_k + t Δ with t = 1, ½, ¼, … the
+/// Linear-solver policy for dense Jacobians: Eigen::PartialPivLU with its rcond() estimate.
+class DenseLu {
+ public:
+  /// Factorizes J; false if the factorization is unusable (non-finite).
+  bool factorize(const Eigen::MatrixXd& jacobian) {
+    lu_.compute(jacobian);
+    return true;
+  }
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const { return lu_.solve(rhs); }
+  [[nodiscard]] std::optional<double> rcond() const { return lu_.rcond(); }
+
+ private:
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+};
+
+/// Linear-solver policy for sparse Jacobians: Eigen::SparseLU (COLAMD). The symbolic analysis
+/// (ordering, elimination tree) is kept and reused while the sparsity pattern of J is unchanged,
+/// across Newton iterations and, when the same object is passed again, across solves (e.g. the
+/// steps of a continuation). A pattern that changes (an active-set change in a semismooth
+/// Newton) triggers a new analysis. symbolic_analyses() counts them.
+class SparseLu {
+ public:
+  bool factorize(const Eigen::SparseMatrix<double>& jacobian) {
+    Eigen::SparseMatrix<double> j = jacobian;
+    j.makeCompressed();
+    if (!same_pattern(j)) {
+      lu_.analyzePattern(j);
+      outer_.assign(j.outerIndexPtr(), j.outerIndexPtr() + j.outerSize() + 1);
+      inner_.assign(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros());
+      rows_ = j.rows();
+      ++analyses_;
+    }
+    lu_.factorize(j);
+    return lu_.info() == Eigen::Success;
+  }
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
+    return const_cast<Eigen::SparseLU<Eigen::SparseMatrix<double>>&>(lu_).solve(rhs);  // solve() is logically const
+  }
+  [[nodiscard]] static std::optional<double> rcond() { return std::nullopt; }
+  [[nodiscard]] int symbolic_analyses() const { return analyses_; }
+
+ private:
+  [[nodiscard]] bool same_pattern(const Eigen::SparseMatrix<double>& j) const {
+    if (analyses_ == 0 || j.rows() != rows_ || j.nonZeros() != static_cast<Eigen::Index>(inner_.size())) return false;
+    return std::equal(outer_.begin(), outer_.end(), j.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), j.innerIndexPtr());
+  }
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+  std::vector<int> outer_, inner_;
+  Eigen::Index rows_ = 0;
+  int analyses_ = 0;
+};
+
+namespace detail {
+template <class S>
+using SystemJacobian = std::decay_t<decltype(std::declval<const S&>().jacobian(std::declval<const Eigen::VectorXd&>()))>;
+template <class S>
+inline constexpr bool sparse_jacobian_v = std::is_base_of_v<Eigen::SparseMatrixBase<SystemJacobian<S>>, SystemJacobian<S>>;
+
+inline double residual_norm(const Eigen::VectorXd& r, ResidualNorm norm) {
+  return norm == ResidualNorm::Max ? r.lpNorm<Eigen::Infinity>() : r.norm();
+}
+template <class J>
+Eigen::MatrixXd as_dense(const J& j) {
+  return Eigen::MatrixXd(j);
+}
+}  // namespace detail
+
+/// The linear solver newton() uses by default for a system: SparseLu for a sparse Jacobian,
+/// DenseLu otherwise.
+template <class S>
+using DefaultLinearSolver = std::conditional_t<detail::sparse_jacobian_v<S>, SparseLu, DenseLu>;
+
+/// Newton–Raphson from x: J(x_k) Δ = −R(x_k), x_{k+1} = x_k + t Δ with t = 1, ½, ¼, … the
 /// first step length that reduces ‖R‖₂ by the factor (1 − 10⁻⁴ t) (Armijo), or t = 1 without
-/// line search.
-/// Stops with Converged, MaxIterations, Stagnated (no acceptable step),
-/// SingularJacobian (rcond < min_rcond) or NonFinite (NaN/inf in R or J); the returned x is then
-/// the last finite iterate. Never throws for non-convergence.
-template <NonlinearSystem S>
-NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& options = {}) {
+/// line search; with levenberg_marquardt, a failed line search switches to LM steps.
+/// `solver` is the linear-solver policy (DenseLu, SparseLu or any type with
+/// factorize(J) → bool, solve(rhs) and rcond() → optional<double>); pass the same object to
+/// successive calls to keep what it caches (SparseLu's symbolic analysis).
+/// Stops with Converged (‖R‖ ≤ tolerance, verified on the returned x), MaxIterations,
+/// Stagnated (no acceptable step), SingularJacobian (factorization failed or rcond < min_rcond)
+/// or NonFinite (NaN/inf in R, J or the step); the returned x is then the last finite iterate.
+/// Never throws for non-convergence.
+template <NonlinearSystem S, class Solver>
+NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& options, Solver& solver) {
   NewtonReport report;
+  report.tolerance = options.tolerance;
   auto finish = [&](SolveStatus status, const std::string& why) {
     report.status = status;
-    std::ostringstream os;
-    os << why << " after " << report.iterations << " iterations, last ||R|| = "
-       << (report.residual_norms.empty() ? NAN : report.residual_norms.back());
-    report.message = os.str();
+    report.message = why + " after " + std::to_string(report.iterations) + " iterations, last ||R|| = " +
+                     format_number(report.residual_norms.empty() ? NAN : report.residual_norms.back()) +
+                     " (tolerance " + format_number(options.tolerance) + ")";
     return NewtonResult{std::move(x), std::move(report)};
   };
   Eigen::VectorXd r = system.residual(x);
-  double norm = r.norm();
+  double norm = detail::residual_norm(r, options.norm);
   report.residual_norms.push_back(norm);
-
   if (!std::isfinite(norm)) return finish(SolveStatus::NonFinite, "non-finite residual at the initial guess");
+  double mu = 0.0;  // Levenberg–Marquardt damping; 0 while Newton steps are taken
   for (;;) {
     if (norm <= options.tolerance) return finish(SolveStatus::Converged, "converged");
-    if (report.iterations >= options.max_iterations) {
-      return finish(SolveStatus::MaxIterations, "iteration limit reached");
-    }
-    const Eigen::MatrixXd jac = system.jacobian(x);
-    if (!jac.allFinite()) return finish(SolveStatus::NonFinite, "non-finite Jacobian");
-    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(jac);
-    report.jacobian_rcond = lu.rcond();
-    if (!(report.jacobian_rcond >= options.min_rcond)) {
-      return finish(SolveStatus::SingularJacobian, "singular Jacobian (rcond " +
-                                                       std::to_string(report.jacobian_rcond) + ")");
-    }
-    const Eigen::VectorXd step = -lu.solve(r);
-    double t = 1.0;
+    if (report.iterations >= options.max_iterations) return finish(SolveStatus::MaxIterations, "iteration limit reached");
+    const auto jac = system.jacobian(x);
     bool accepted = false;
     Eigen::VectorXd x_new, r_new;
-    double norm_new = 0.0;
-    for (int b = 0; b <= options.max_backtracks; ++b, t *= 0.5) {
-      x_new = x + t * step;
-      r_new = system.residual(x_new);
-      norm_new = r_new.norm();
-      if (!options.line_search) {
-        accepted = std::isfinite(norm_new);
-        break;
+    bool finite_trial = true;
+    const double norm2 = r.norm();
+    if (mu == 0.0) {
+      if (!solver.factorize(jac)) return finish(SolveStatus::SingularJacobian, "the linear solver could not factorize the Jacobian");
+      report.jacobian_rcond = solver.rcond();
+      if (report.jacobian_rcond && !(*report.jacobian_rcond >= options.min_rcond)) {
+        return finish(SolveStatus::SingularJacobian, "singular Jacobian (rcond " + format_number(*report.jacobian_rcond) + ")");
       }
-      if (std::isfinite(norm_new) && norm_new <= (1.0 - 1e-4 * t) * norm) {
-        accepted = true;
-        break;
+      const Eigen::VectorXd step = -solver.solve(r);
+      if (!step.allFinite()) return finish(SolveStatus::NonFinite, "non-finite Newton step (Jacobian singular or non-finite)");
+      double t = 1.0;
+      for (int b = 0; b <= options.max_backtracks; ++b, t *= 0.5) {
+        x_new = x + t * step;
+        r_new = system.residual(x_new);
+        const double trial = r_new.norm();
+        finite_trial = std::isfinite(trial);
+        if (!options.line_search) {
+          accepted = finite_trial;
+          break;
+        }
+        if (finite_trial && trial <= (1.0 - 1e-4 * t) * norm2) {
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted && options.levenberg_marquardt) {
+        const Eigen::MatrixXd dense = detail::as_dense(jac);
+        mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
+      }
+    }
+    if (!accepted && mu > 0.0) {  // Levenberg–Marquardt on ½‖R‖₂²
+      const Eigen::MatrixXd dense = detail::as_dense(jac);
+      const Eigen::MatrixXd normal = dense.transpose() * dense;
+      const Eigen::VectorXd gradient = dense.transpose() * r;
+      for (int b = 0; b < options.max_lm_trials; ++b) {
+        Eigen::MatrixXd a = normal;
+        a.diagonal().array() += mu * mu;
+        const Eigen::VectorXd d = -a.ldlt().solve(gradient);
+        if (d.allFinite()) {
+          x_new = x + d;
+          r_new = system.residual(x_new);
+          finite_trial = r_new.allFinite();
+          if (finite_trial && r_new.norm() < norm2) {
+            accepted = true;
+            mu *= 0.3;
+            ++report.levenberg_marquardt_steps;
+            break;
+          }
+        }
+        mu *= 4.0;
       }
     }
     if (!accepted) {
-      return finish(std::isfinite(norm_new) ? SolveStatus::Stagnated : SolveStatus::NonFinite,
-                    std::isfinite(norm_new) ? "line search found no decrease"
-                                            : "non-finite residual along the Newton step");
+      return finish(finite_trial ? SolveStatus::Stagnated : SolveStatus::NonFinite,
+                    finite_trial ? "no step decreased ||R||" : "non-finite residual along the Newton step");
     }
     x = std::move(x_new);
     r = std::move(r_new);
-    norm = norm_new;
+    norm = detail::residual_norm(r, options.norm);
     ++report.iterations;
     report.residual_norms.push_back(norm);
   }
+}
+
+/// newton() with a fresh DefaultLinearSolver<S>.
+template <NonlinearSystem S>
+NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& options = {}) {
+  DefaultLinearSolver<S> solver;
+  return newton(system, std::move(x), options, solver);
 }
 
 }  // namespace wbm::solvers

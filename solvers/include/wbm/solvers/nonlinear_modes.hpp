@@ -51,6 +51,8 @@
 #include <wbm/contact/augmented_lagrangian.hpp>
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/newton.hpp>
+#include <wbm/solvers/status.hpp>
 
 namespace wbm::solvers {
 
@@ -68,8 +70,10 @@ struct NonlinearModeOptions {
   ModeAlgorithm algorithm = ModeAlgorithm::Simultaneous;
   contact::PowellParameters powell{};
   int max_powell_iterations = 200;
-  double stationarity_tolerance = 1e-10;  // ‖∇L_κ‖∞ of a primal solve (dimensionless)
-  int max_newton_iterations = 60;
+  /// ‖∇L_κ‖∞ of a primal solve (dimensionless); a level is converged only if its last primal
+  /// solve reached it (and Powell's measures are below powell.tolerance).
+  double stationarity_tolerance = 1e-10;
+  int max_newton_iterations = 60;     // per primal solve (newton() with Levenberg–Marquardt fallback)
   int phase_dof = -1;                 // DOF whose sin 2πτ coefficient is 0; −1: the first stop's
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate(int dofs) const;
@@ -81,7 +85,11 @@ struct ModeLevel {
   double frequency_hz = 0.0;          // ω/2π of the periodic orbit: √(r − μ ω₀² E)/2π (see below)
   double rayleigh_frequency_hz = 0.0; // √r/2π, the eigenvalue ω² = r(Û) of [LL11 Eq. (24a)]
   Eigen::MatrixXd coefficients;       // Y, n × (2N + 1) [m]
-  bool converged = false;
+  /// Converged only from a verified residual: Powell's measures and ‖∇L_κ‖∞ below their
+  /// tolerances (solve), or the KKT residual ‖R‖₂ below the tolerance (continuation levels).
+  SolveStatus status = SolveStatus::MaxIterations;
+  double residual_norm = 0.0;         // ‖∇L_κ‖∞ (solve) or KKT ‖R‖₂ (continuation), dimensionless
+  double tolerance = 0.0;             // the tolerance residual_norm was tested against
   std::string message;
   int powell_iterations = 0, newton_iterations = 0;
   double inequality_measure = 0.0;    // G_i [LL11 Eq. (25a)], in units of the gap
@@ -96,6 +104,7 @@ struct ModeLevel {
   /// sit on the few samples where u_c touches its gap.
   Eigen::VectorXd contact_force;
   double wall_time_s = 0.0;
+  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
 };
 
 struct Backbone {
@@ -105,6 +114,7 @@ struct Backbone {
   /// The levels at the energies asked for by `include`, in that order (first passage of the
   /// branch; a level that could not be reached is absent or has converged = false).
   std::vector<ModeLevel> included;
+  StopReason stop = StopReason::InitialPointFailed;  // continuation: why the branch ended
   int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
   int rejected_steps = 0;             // continuation steps retried with half the step
   bool complete = false;              // energy_max reached
@@ -122,7 +132,8 @@ struct BackboneContinuationOptions {
   double max_energy_step = 0.05;      // |ΔE| per step, for a dense curve
   int max_points = 5000;
   std::vector<double> include;        // energies landed on exactly (Backbone::included), e.g. 0.7, 1.8
-  double tolerance = 1e-10;           // ‖R‖₂ of the KKT residual below (dimensionless)
+  double tolerance = 1e-10;           // ‖R‖₂ of the KKT residual below (dimensionless), every level
+  int max_newton_iterations = 30;     // semismooth Newton at fixed E (first point, level_at)
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
 };
@@ -178,8 +189,10 @@ class NonlinearModes {
     [[nodiscard]] SparseLinearization linearize(const Eigen::VectorXd& x, double energy) const;
     /// The state of the linear mode at E ≤ 1 (an exact solution, no contact force).
     [[nodiscard]] Eigen::VectorXd linear_state(double energy) const;
-    /// The level at a converged state (frequencies, contact forces, diagnostics).
-    [[nodiscard]] ModeLevel level(const Eigen::VectorXd& x, double energy) const;
+    /// The level at state x (frequencies, contact forces, diagnostics); its status is
+    /// Converged only if the KKT residual ‖R(x, E)‖₂ ≤ tolerance (NonFinite for NaN/inf,
+    /// MaxIterations otherwise), with the residual and tolerance reported.
+    [[nodiscard]] ModeLevel level(const Eigen::VectorXd& x, double energy, double tolerance) const;
     [[nodiscard]] Eigen::Index size() const { return size_; }
 
    private:
@@ -195,9 +208,10 @@ class NonlinearModes {
     Eigen::Index ny_ = 0, size_ = 0;
   };
   /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
-  /// with sparse LU, at most 30 iterations to ‖R‖ ≤ 1e-10; converged = false (with the last
-  /// residual in the message) otherwise.
-  [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy) const;
+  /// (newton() without line search, SparseLu) to ‖R‖₂ ≤ options.tolerance in at most
+  /// options.max_newton_iterations; otherwise the level carries Newton's status and message.
+  [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy,
+                                   const BackboneContinuationOptions& options) const;
 
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
   [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
@@ -208,6 +222,8 @@ class NonlinearModes {
   [[nodiscard]] Evaluation evaluate(const Eigen::VectorXd& y, double energy, double omega2_fixed,
                                     const contact::AugmentedLagrangian& al, bool hessian) const;
   [[nodiscard]] Eigen::MatrixXd basis_values(int samples, int derivative) const;
+  // The stacked Y with the fixed phase coefficient (0) inserted back at phase_index_.
+  [[nodiscard]] Eigen::VectorXd with_phase(const Eigen::VectorXd& x) const;
 
   MechanicalSystem system_;
   std::vector<RigidStop> stops_;

@@ -4,12 +4,18 @@
 
 #include <vector>
 
+#include <string>
+
 #include <Eigen/Core>
 
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/time_basis.hpp>
 
 namespace wbm::solvers {
+
+/// Empty if evaluate_trial can give the velocity of `trial` (a pointwise first derivative, or
+/// Haar's delta pairs); else why not and what to use instead (DB4 has neither).
+[[nodiscard]] std::string velocity_unavailable(const TimeBasis& trial);
 
 /// Displacement (d = 0, [m]) or velocity in physical time (d = 1, [m/s]) of DOF `dof` at the
 /// normalized times tau, from an n × M trial coefficient matrix:

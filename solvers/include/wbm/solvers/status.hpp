@@ -1,13 +1,25 @@
 #pragma once
 /// Outcome of an iterative solve. Not converging is a reported outcome, never an exception.
+/// One vocabulary for every solver of the project (Newton, the continuation corrector, the
+/// nonlinear-mode levels, the forced response).
 
+#include <cmath>
+#include <cstdio>
+#include <string>
 #include <string_view>
 
 namespace wbm::solvers {
 
-enum class SolveStatus { Converged, MaxIterations, Stagnated, SingularJacobian, NonFinite };
+/// Converged: the residual was verified below the tolerance in force.
+/// MaxIterations: the iteration limit came first. Stagnated: no step reduced the residual.
+/// SingularJacobian: the linear solver could not factorize (or its reciprocal condition
+/// estimate was below the limit). NonFinite: NaN or inf in a residual, a Jacobian or a step.
+/// ResidualNotVerified: the reduced problem converged, but the residual of the full problem,
+/// recomputed from the solution, is above its stated tolerance.
+enum class SolveStatus { Converged, MaxIterations, Stagnated, SingularJacobian, NonFinite, ResidualNotVerified };
 
-/// "converged", "max-iterations", "stagnated", "singular-jacobian", "non-finite".
+/// "converged", "max-iterations", "stagnated", "singular-jacobian", "non-finite",
+/// "residual-not-verified".
 [[nodiscard]] constexpr std::string_view to_string(SolveStatus s) noexcept {
   switch (s) {
     case SolveStatus::Converged: return "converged";
@@ -15,8 +27,17 @@ enum class SolveStatus { Converged, MaxIterations, Stagnated, SingularJacobian, 
     case SolveStatus::Stagnated: return "stagnated";
     case SolveStatus::SingularJacobian: return "singular-jacobian";
     case SolveStatus::NonFinite: return "non-finite";
+    case SolveStatus::ResidualNotVerified: return "residual-not-verified";
   }
   return "unknown";
+}
+
+/// A number for a message: 4 significant digits, scientific notation when small or large
+/// ("3.2e-11", "1298", "0.0125"), "nan"/"inf" spelled out. Never "0.000000" for 3e-11.
+[[nodiscard]] inline std::string format_number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+  return buffer;
 }
 
 }  // namespace wbm::solvers

@@ -65,7 +65,12 @@ struct WeightedResidualOptions {
   int time_samples = 0;
   OperatorRule operators = OperatorRule::Automatic;
   LinearSolverPath linear_solver = LinearSolverPath::Automatic;
-  NewtonOptions newton{};
+  NewtonOptions newton{};  // on the condensed contact unknowns (scaled residual, see below)
+  /// A solve is Converged only if, besides Newton on the condensed unknowns, the full residual
+  /// recomputed from the solution satisfies ‖G a − b + n(a)‖₂ ≤ residual_tolerance · ‖b‖₂
+  /// (‖b‖₂ replaced by 1 N when b = 0); otherwise SolveStatus::ResidualNotVerified.
+  /// Throws std::invalid_argument (at construction) unless > 0.
+  double residual_tolerance = 1e-8;
 };
 
 /// The three time operators (M × M, dense; row = weighting j, column = trial k), including the
@@ -82,6 +87,7 @@ struct WeightedResidualSolution {
   double frequency_hz = 0.0;
   NewtonReport report;             // Newton on the contact unknowns (scaled residual)
   double relative_residual = 0.0;  // ‖G a − b + n(a)‖₂ / ‖b‖₂ of the full system, recomputed
+  double residual_tolerance = 0.0; // the bound relative_residual was verified against
   double max_penetration = 0.0;    // max over contacts and samples of u_c − g0 [m]
   double max_contact_force = 0.0;  // max over contacts and samples of f_c [N]
   int contact_unknowns = 0;        // n_c · M
