@@ -1,7 +1,11 @@
 #include <wbm/solvers/newton.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+
+#include <Eigen/SparseCore>
 
 #include <gtest/gtest.h>
 
@@ -59,4 +63,92 @@ TEST(Newton, ReportsFailureWithoutThrowing) {
   EXPECT_NE(r.report.message.find("last ||R||"), std::string::npos);
   const auto bad = newton(Nan{}, Eigen::VectorXd::Zero(3));
   EXPECT_EQ(bad.report.status, SolveStatus::NonFinite);
+}
+
+namespace {
+// x³ − 8 = 0 with a sparse (diagonal) Jacobian: the pattern never changes.
+struct SparseCubic {
+  Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return x.array().cube() - 8.0; }
+  Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+    Eigen::SparseMatrix<double> j(x.size(), x.size());
+    for (Eigen::Index i = 0; i < x.size(); ++i) j.insert(i, i) = 3.0 * x(i) * x(i);
+    return j;
+  }
+};
+// Semismooth: min(x₀, x₁) = 0, x₀ − x₁ − 2 = 0, unique root (2, 0). From (−1, 1) the min picks
+// x₀, after one step (0, −2) it picks x₁: the Jacobian's pattern changes on the way.
+struct Switching {
+  Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
+    return Eigen::Vector2d(std::min(x(0), x(1)), x(0) - x(1) - 2.0);
+  }
+  Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+    Eigen::SparseMatrix<double> j(2, 2);
+    j.insert(0, x(0) <= x(1) ? 0 : 1) = 1.0;  // the min picks x₀ or x₁
+    j.insert(1, 0) = 1.0;
+    j.insert(1, 1) = -1.0;
+    return j;
+  }
+};
+}  // namespace
+
+// The sparse policy reaches the same root, 2, and analyses the (constant) pattern once for the
+// whole solve, and once for a second solve with the same solver object.
+TEST(Newton, SparseLuKeepsItsSymbolicAnalysisWhileThePatternHolds) {
+  SparseLu solver;
+  const auto r = newton(SparseCubic{}, Eigen::VectorXd::Constant(5, 3.0), {.tolerance = 1e-13}, solver);
+  ASSERT_TRUE(r.report.converged()) << r.report.message;
+  EXPECT_LT((r.x.array() - 2.0).abs().maxCoeff(), 1e-14);
+  EXPECT_GE(r.report.iterations, 4);
+  EXPECT_EQ(solver.symbolic_analyses(), 1);
+  EXPECT_FALSE(r.report.jacobian_rcond.has_value());  // sparse LU estimates no condition number
+  const auto again = newton(SparseCubic{}, Eigen::VectorXd::Constant(5, 5.0), {.tolerance = 1e-13}, solver);
+  ASSERT_TRUE(again.report.converged());
+  EXPECT_EQ(solver.symbolic_analyses(), 1);
+}
+
+// A semismooth Newton whose active set changes: the pattern changes, a new analysis is made,
+// and the root (2, 0) is found in two steps.
+TEST(Newton, SparseLuReanalysesWhenThePatternChanges) {
+  SparseLu solver;
+  const auto r = newton(Switching{}, Eigen::Vector2d(-1.0, 1.0), {.line_search = false}, solver);
+  ASSERT_TRUE(r.report.converged()) << r.report.message;
+  EXPECT_EQ(r.report.iterations, 2);
+  EXPECT_NEAR(r.x(0), 2.0, 1e-12);
+  EXPECT_NEAR(r.x(1), 0.0, 1e-12);
+  EXPECT_EQ(solver.symbolic_analyses(), 2);
+}
+
+// From x₀ = 10 the full Newton step on arctan overshoots to −138 and, with no backtracking
+// allowed, the line search fails: plain Newton stagnates, the Levenberg–Marquardt fallback
+// (damped steps) reaches the root 0.
+TEST(Newton, LevenbergMarquardtRescuesAStalledLineSearch) {
+  const auto plain = newton(Arctan{}, Eigen::VectorXd::Constant(1, 10.0), {.max_backtracks = 0});
+  EXPECT_EQ(plain.report.status, SolveStatus::Stagnated);
+  const auto lm = newton(Arctan{}, Eigen::VectorXd::Constant(1, 10.0),
+                         {.max_backtracks = 0, .levenberg_marquardt = true, .max_lm_trials = 40});
+  ASSERT_TRUE(lm.report.converged()) << lm.report.message;
+  EXPECT_NEAR(lm.x(0), 0.0, 1e-10);
+  EXPECT_GT(lm.report.levenberg_marquardt_steps, 0);
+}
+
+// The convergence test uses the norm asked for: for R = x³ − 8 on two components from (3, 2.5),
+// ‖R‖∞ ≤ tol is reported, and the tolerance used is in the report.
+TEST(Newton, MaxNormConvergenceTestAndTheToleranceUsedAreReported) {
+  const auto r = newton(Cubic{}, Eigen::Vector2d(3.0, 2.5), {.tolerance = 1e-9, .norm = ResidualNorm::Max});
+  ASSERT_TRUE(r.report.converged());
+  EXPECT_EQ(r.report.tolerance, 1e-9);
+  EXPECT_LE(Cubic{}.residual(r.x).lpNorm<Eigen::Infinity>(), 1e-9);
+  EXPECT_DOUBLE_EQ(r.report.residual_norms.back(), Cubic{}.residual(r.x).lpNorm<Eigen::Infinity>());
+  EXPECT_NE(r.report.brief().find("converged in"), std::string::npos);
+}
+
+// Messages print small numbers in scientific notation (a step h = 3e-8 used to print as
+// "0.000000").
+TEST(Newton, MessagesPrintSmallNumbersInScientificNotation) {
+  EXPECT_EQ(format_number(3.2e-11), "3.2e-11");
+  EXPECT_EQ(format_number(1297.52), "1298");
+  EXPECT_EQ(format_number(0.0125), "0.0125");
+  const auto r = newton(NoRoot{}, Eigen::VectorXd::Constant(1, 0.5), {.tolerance = 1e-12, .max_iterations = 3});
+  EXPECT_NE(r.report.message.find("tolerance 1e-12"), std::string::npos) << r.report.message;
+  EXPECT_EQ(r.report.message.find("0.000000"), std::string::npos) << r.report.message;
 }

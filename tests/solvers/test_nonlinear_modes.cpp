@@ -286,3 +286,43 @@ TEST(NonlinearModes, ImpactOscillatorFrequencyConvergesToTheClosedForm) {
     EXPECT_LT(error[i - 1] / error[i], 2.3);
   }
 }
+
+// Statuses come from verified residuals: a level stopped by the Powell limit, a state moved off
+// the branch and a fixed-energy Newton given one iteration are each reported as not converged,
+// with the residual and the tolerance it was tested against.
+TEST(NonlinearModes, ANonConvergedLevelIsReportedAsSuch) {
+  const solvers::NonlinearModes limited(ll11_system(), {{tip_dof(), 1e-3}},
+                                        {.harmonics = 8, .samples = 256, .max_powell_iterations = 1});
+  const auto level = limited.solve(1.2);
+  EXPECT_FALSE(level.converged());
+  EXPECT_NE(level.message.find("Powell iteration limit"), std::string::npos) << level.message;
+
+  const auto nm = modes(1e-3, 4, 64);
+  const solvers::NonlinearModes::BackboneSystem system(nm, 0.0);
+  const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.3, .include = {1.2}});
+  ASSERT_TRUE(b.complete) << b.message;
+  const auto* at = included(b, 1.2);
+  ASSERT_NE(at, nullptr);
+  EXPECT_LE(at->residual_norm, at->tolerance);
+  // The linear mode at onset, moved by 1e-3 gaps in ten coefficients: not a mode at E = 1.2.
+  Eigen::VectorXd x = system.linear_state(1.0);
+  x(x.size() - 1) = 1.0;
+  x.head(10).array() += 1e-3;
+  const auto off = system.level(x, 1.2, 1e-10);
+  EXPECT_FALSE(off.converged());
+  EXPECT_GT(off.residual_norm, 1e-10);
+  EXPECT_NE(off.message.find("tolerance 1e-10"), std::string::npos) << off.message;
+  const auto one_step = nm.level_at(system, x, 1.2, {.tolerance = 1e-10, .max_newton_iterations = 1});
+  EXPECT_FALSE(one_step.converged());
+  EXPECT_EQ(one_step.status, solvers::SolveStatus::MaxIterations);
+  EXPECT_NE(one_step.message.find("semismooth Newton at fixed E = 1.2"), std::string::npos) << one_step.message;
+}
+
+// The modal eigensolver reads one triangle: a non-symmetric K is refused, naming the entry.
+TEST(NonlinearModes, RefusesANonSymmetricStiffness) {
+  auto system = ll11_system();
+  system.stiffness.coeffRef(3, 4) *= 1.01;
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { solvers::NonlinearModes nm(system, {{tip_dof(), 1e-3}}, {.harmonics = 4, .samples = 64}); },
+      {"stiffness is not symmetric", "(3, 4)", "(X + X^T)/2"});
+}

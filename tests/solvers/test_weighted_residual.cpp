@@ -307,6 +307,39 @@ TEST(WeightedResidual, RefusesInadmissiblePairs) {
                                            {"'mixed'", "distributional"});
 }
 
+// "Converged" needs the full residual ‖G a − b + n(a)‖ recomputed from the solution below the
+// stated bound, not only the condensed Newton: Case 1 (Fourier, M = 32) is verified at the default
+// 1e-8 and reported as not verified against an unattainable 1e-20.
+TEST(WeightedResidual, ConvergedRequiresTheVerifiedFullResidual) {
+  const auto s = case1();
+  const auto basis = TimeBasis::from_name("fourier", 32);
+  const auto ok = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), basis, basis);
+  ASSERT_TRUE(ok.converged()) << ok.report.message;
+  EXPECT_LE(ok.relative_residual, 1e-8);
+  EXPECT_EQ(ok.residual_tolerance, 1e-8);
+  const auto strict = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), basis,
+                                                       basis, {.residual_tolerance = 1e-20});
+  EXPECT_EQ(strict.report.status, solvers::SolveStatus::ResidualNotVerified);
+  EXPECT_NE(strict.report.message.find("residual_tolerance = 1e-20"), std::string::npos) << strict.report.message;
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), basis, basis,
+                                               {.residual_tolerance = 0.0});
+      },
+      {"residual_tolerance = 0", "must be > 0"});
+}
+
+// M, C and K must be symmetric (the modal path factorizes from one triangle).
+TEST(WeightedResidual, RefusesANonSymmetricStiffness) {
+  const auto s = case1();
+  auto system = s.system();
+  system.stiffness.coeffRef(2, 3) += 1e-6 * system.stiffness.coeffRef(2, 3);
+  const auto basis = TimeBasis::from_name("fourier", 8);
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::solve_weighted_residual(system, s.harmonic_forcing(), s.contact_points(), basis, basis); },
+      {"MechanicalSystem.stiffness is not symmetric", "(2, 3)"});
+}
+
 // The Haar delta-pair velocity [JL14 Sec. 5.2] in its box form is the difference quotient of
 // neighbouring cells: second order at the jumps τ = k/M for the cell averages of sin 2πτ.
 TEST(PostProcessing, HaarDeltaPairVelocityIsSecondOrderAtTheJumps) {
