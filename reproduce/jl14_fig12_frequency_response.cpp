@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include <wbm/solvers/response_curve.hpp>
@@ -48,6 +49,8 @@ int main(int argc, char** argv) {
       }
     }
     std::vector<Traced> traced;
+    const double max_parameter_step = run.quick() ? 10.0 : 2.0;  // Hz per step, for a dense curve
+    const solvers::ResponseCurveOptions defaults;
     for (const auto& c : combos) {
       const solvers::WeightedResidual base(system, scene.harmonic_forcing(kFrom), contacts,
                                            solvers::TimeBasis::from_name(c.trial, m),
@@ -56,7 +59,7 @@ int main(int argc, char** argv) {
       solvers::ResponseCurveOptions o;
       o.parameter_min = kFrom;
       o.parameter_max = kTo;
-      o.max_parameter_step = run.quick() ? 10.0 : 2.0;
+      o.max_parameter_step = max_parameter_step;
       o.max_state = 10.0;  // gaps: a branch beyond 14.5 cm of tip motion has left the physics (see the notes)
       o.observed_dof = tip;
       traced.push_back({c, solvers::trace_response(base, o)});
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
 
     // folds.csv and the statistics.
     std::vector<double> fold_id, fold_hz, fold_confirmed;
+    std::vector<double> peaks, peak_hzs;  // per combination
     nlohmann::json stats = nlohmann::json::array();
     std::ostringstream rows;
     for (size_t k = 0; k < traced.size(); ++k) {
@@ -119,6 +123,8 @@ int main(int argc, char** argv) {
         }
         unstable += p.stable ? 0 : 1;
       }
+      peaks.push_back(peak);
+      peak_hzs.push_back(peak_hz);
       const double pps = curve.points.size() / std::max(1e-9, curve.wall_time_s);
       stats.push_back({{"combination", traced[k].combination.label()},
                        {"points", curve.points.size()},
@@ -172,7 +178,7 @@ int main(int argc, char** argv) {
       const auto r = solvers::integrate_to_periodic(system, scene.harmonic_forcing(bdf_hz[i]), contacts,
                                                     {.samples_per_period = 512, .relative_tolerance = 1e-8,
                                                      .periodicity_tolerance = 1e-6});
-      if (!r.report.converged()) run.fail("BDF at " + std::to_string(bdf_hz[i]) + " Hz: " + r.report.message);
+      if (!r.report.converged()) run.fail("BDF at " + reproduce::format("%g", bdf_hz[i]) + " Hz: " + r.report.message);
       const Eigen::VectorXd u = r.displacement.row(tip).transpose();
       const auto k = static_cast<Eigen::Index>(i);
       bf(k) = bdf_hz[i];
@@ -189,7 +195,7 @@ int main(int argc, char** argv) {
     std::ostringstream bdf_rows;
     const auto& ff = traced.front().curve.points;
     for (Eigen::Index i = 0; i < bf.size(); ++i) {
-      double best = 1e300, best_amp = 0.0;
+      double best = 1e300, best_amp = NAN;  // NaN: no stable branch point at that frequency
       for (size_t j = 0; j + 1 < ff.size(); ++j) {
         const double f0 = ff[j].frequency_hz, f1 = ff[j + 1].frequency_hz;
         if ((f0 - bf(i)) * (f1 - bf(i)) > 0.0 || !ff[j].stable) continue;
@@ -201,8 +207,10 @@ int main(int argc, char** argv) {
         }
       }
       bdf_rows << "| " << reproduce::format("%.0f", bf(i)) << " | " << reproduce::format("%.4f", bamp(i) * 1e3) << " | "
-               << reproduce::format("%.4f", best_amp * 1e3) << " | "
-               << reproduce::format("%.1e", best_amp > 0 ? std::abs(best_amp - bamp(i)) / bamp(i) : 0.0) << " |\n";
+               << (std::isfinite(best_amp) ? reproduce::format("%.4f", best_amp * 1e3) : std::string("— (no stable point)"))
+               << " | "
+               << (std::isfinite(best_amp) ? reproduce::format("%.1e", std::abs(best_amp - bamp(i)) / bamp(i)) : std::string("—"))
+               << " |\n";
     }
 
     run.meta({{"figure", "JL14 Fig. 12"},
@@ -216,38 +224,78 @@ int main(int argc, char** argv) {
               {"combinations", stats},
               {"bdf", bdf_reports}});
 
+    // Statements of the text, computed from the Fourier:Fourier branch (the paper's first curve).
+    const auto& ff_curve = traced.front().curve;
+    const double gap = scene.contacts.front().gap;
+    double onset_hz = NAN;  // first point of the branch where the tip reaches the gap
+    for (const auto& p : ff_curve.points) {
+      if (p.max_displacement >= gap) {
+        onset_hz = p.frequency_hz;
+        break;
+      }
+    }
+    std::string ff_folds;
+    int ff_confirmed = 0;
+    for (size_t j = 0; j < ff_curve.folds.size(); ++j) {
+      ff_folds += (j ? ", " : "") + reproduce::format("%.1f", ff_curve.folds[j].parameter);
+      ff_confirmed += ff_curve.fold_confirmed[j] ? 1 : 0;
+    }
+    const bool peak_moves_up = peak_hzs.front() > linear_peak_hz;
+    const bool folds_confirmed = !ff_curve.folds.empty() && ff_confirmed == static_cast<int>(ff_curve.folds.size());
+    const auto& cs = scene.contacts.front();
     std::ostringstream md;
     md << "## JL14 Fig. 12: frequency response over the first resonance, " << scene.title << "\n\n"
        << "Files: `out/jl14_fig12/frequency_response.{png,pdf}` (Fourier:Fourier and Haar:Fourier, as in the paper), "
        << "`frequency_response_all.{png,pdf}` (every combination), `branches.csv`, `folds.csv`, `linear.csv`, "
-       << "`bdf.csv`, `meta.json`. Scene `reproduce/scenes/jl14_case2.toml` (Case 2, β = 5e-6 s, α = 20 1/m, "
-       << "g0 = 14.5 mm; the paper's caption says \"second fundamental frequency\", its text \"fundamental\": the "
-       << "first resonance of the rod, near 1273 Hz, is the one the range covers), M = " << m
-       << ", distributional form, pseudo-arclength continuation in f from " << kFrom << " to " << kTo
-       << " Hz (scaled steps ≤ 0.02 and ≤ 2 Hz), stability of every point from its monodromy matrix.\n\n"
+       << "`bdf.csv`, `meta.json`. Scene `reproduce/scenes/" << std::filesystem::path(scene.path).filename().string()
+       << "` (β = " << reproduce::format("%g", scene.damping.beta)
+       << " s, α = " << reproduce::format("%g", cs.exponent) << " 1/m, g0 = " << reproduce::format("%g", 1e3 * gap)
+       << " mm; the paper's caption says \"second fundamental frequency\", its text \"fundamental\": the first "
+       << "resonance of the rod, whose linear peak is at " << reproduce::format("%.0f", linear_peak_hz)
+       << " Hz, is the one the range covers), M = " << m << ", distributional form, pseudo-arclength continuation in "
+       << "f from " << kFrom << " to " << kTo << " Hz (scaled steps ≤ " << reproduce::format("%g", defaults.max_step)
+       << " and ≤ " << reproduce::format("%g", max_parameter_step) << " Hz), stability of every point from its "
+       << "monodromy matrix.\n\n"
        << "Paper: the penalty stiffens the response, so the resonant peak moves up in frequency from the no-contact "
        << "one; both combinations capture it [JL14 Sec. 5.6].\n\n"
        << "Ours: linear (no-contact) peak " << reproduce::format("%.3f", linear_peak * 1e3) << " mm at "
-       << reproduce::format("%.0f", linear_peak_hz) << " Hz. With the stop the response leaves the linear curve "
-       << "where the tip reaches the gap (≈ 1227 Hz), the peak is cut to about 16.7 mm and moves up by about 55 Hz, "
-       << "and the branch folds twice (1337–1338 Hz and 1315 Hz): between the folds two stable responses coexist "
-       << "and the middle one is unstable (a multiplier crosses +1 at each fold). Folds confirmed by a Floquet "
-       << "crossing are listed separately: a fold of the approximate branch without one is not a fold of the "
-       << "dynamics.\n\n"
+       << reproduce::format("%.0f", linear_peak_hz) << " Hz. With the stop (Fourier:Fourier) the tip first reaches "
+       << "the gap at " << (std::isfinite(onset_hz) ? reproduce::format("%.1f", onset_hz) + " Hz" : std::string("no point"))
+       << "; the peak is cut to " << reproduce::format("%.2f", peaks.front() * 1e3) << " mm at "
+       << reproduce::format("%.1f", peak_hzs.front()) << " Hz ("
+       << reproduce::format("%+.1f", peak_hzs.front() - linear_peak_hz) << " Hz from the linear peak: the paper's "
+       << "\"peak moves up\" " << (peak_moves_up ? "agrees" : "disagrees") << "). The branch has "
+       << ff_curve.folds.size() << " folds (" << (ff_folds.empty() ? std::string("none") : ff_folds + " Hz") << "), "
+       << ff_confirmed << " of them with a Floquet multiplier crossing +1 (claim \"every fold of the branch is a fold "
+       << "of the dynamics\": " << (folds_confirmed ? "agrees" : "disagrees") << "). Folds without a crossing are "
+       << "listed separately: a fold of the approximate branch without one is not a fold of the dynamics.\n\n"
        << "| combination | points | folds [Hz] | folds with a Floquet crossing [Hz] | peak amplitude | unstable points | "
           "continuation [s] | points/s | stability [s] | rejected steps / corners |\n"
        << "|---|---|---|---|---|---|---|---|---|---|\n"
        << rows.str()
        << "\nTime stepping from rest (GSL BDF, rtol 1e-8) against the stable Fourier:Fourier point at the same "
           "frequency:\n\n| f [Hz] | BDF amplitude [mm] | branch amplitude [mm] | relative difference |\n|---|---|---|---|\n"
-       << bdf_rows.str()
-       << "\nNotes. Haar:Fourier finds two extra turning points 0.01 Hz apart near 1335 Hz: a zigzag of the "
-          "piecewise-constant branch (one Haar cell entering contact), not a physical hysteresis. DB6:Fourier "
-          "follows the loop to its upper fold and then turns onto a branch whose amplitude grows without bound "
-          "at nearly fixed frequency (unstable, with folds that have no Floquet crossing); the run stops it at the "
-          "state bound of 10 gaps. Smaller steps send Fourier:Fourier onto a similar branch near 1310 Hz: these "
-          "branches of the truncated penalty system start at corners of the nonsmooth branch and are reported, "
-          "not plotted as responses (see docs/design.md).\n\n";
+       << bdf_rows.str() << "\n";
+    // Notes, from the branches: turning points closer than 0.1 Hz (a zigzag of a piecewise-constant
+    // branch when one cell enters contact, not a hysteresis), and branches stopped before the range end.
+    std::ostringstream notes;
+    for (const auto& t : traced) {
+      const auto& c = t.curve;
+      for (size_t j = 0; j + 1 < c.folds.size(); ++j) {
+        const double d = std::abs(c.folds[j + 1].parameter - c.folds[j].parameter);
+        if (d < 0.1) {
+          notes << "- " << t.combination.label() << ": two turning points " << reproduce::format("%.2g", d)
+                << " Hz apart near " << reproduce::format("%.1f", c.folds[j].parameter) << " Hz (a zigzag of the "
+                << "approximate branch, not a hysteresis of the dynamics).\n";
+        }
+      }
+      if (c.stop != solvers::StopReason::RangeReached) {
+        notes << "- " << t.combination.label() << ": stopped, " << solvers::to_string(c.stop) << " (" << c.message
+              << "); a branch of the truncated penalty system that leaves the physics, reported, not plotted as a "
+                 "response (see docs/design.md).\n";
+      }
+    }
+    if (!notes.str().empty()) md << "Notes.\n\n" << notes.str() << "\n";
     run.report(md.str());
   });
 }

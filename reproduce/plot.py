@@ -7,6 +7,7 @@ missing are skipped with a note (a failed run writes no folder).
 """
 import csv
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -26,10 +27,24 @@ MARKERS = ["o", "s", "^", "v", "D", "<", "x"]
 
 
 def read_csv(path):
+    """Numeric columns of a result CSV; an empty cell (a missing value) reads as NaN, and the
+    text column "status", which says why a value is missing, is left out (read_status)."""
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
-    header, data = rows[0], [[float(x) for x in r] for r in rows[1:]]
-    return header, [list(col) for col in zip(*data)]
+    header = rows[0]
+    keep = [i for i, h in enumerate(header) if h != "status"]
+    data = [[float(r[i]) if r[i] != "" else float("nan") for i in keep] for r in rows[1:]]
+    return [header[i] for i in keep], [list(col) for col in zip(*data)]
+
+
+def read_status(path):
+    """The "status" column of a result CSV (empty list if it has none)."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if "status" not in rows[0]:
+        return []
+    i = rows[0].index("status")
+    return [r[i] for r in rows[1:]]
 
 
 def save(fig, folder, stem):
@@ -66,15 +81,17 @@ def sweep(folder):
     """Figs. 10-11: a metric against M for both cases, one curve per combination."""
     meta = json.loads((folder / "meta.json").read_text())
     metric = meta["metric"]
-    column = {"tip_error": 3, "energy_norm": 4}[metric]
+    column_name = {"tip_error": "tip_error [-]", "energy_norm": "energy_norm [-]"}[metric]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
     for ax, case, tag in zip(axes, ("case1", "case2"), ("(a)", "(b)")):
         path = folder / f"sweep_{case}.csv"
         if not path.exists():
             continue
-        _, cols = read_csv(path)
+        header, cols = read_csv(path)
+        values = cols[header.index(column_name)]
         for i, name in enumerate(METHODS[:-1]):
-            pts = [(m, v) for c, m, ok, v in zip(cols[0], cols[1], cols[2], cols[column]) if int(c) == i and ok == 1.0]
+            # empty cells (read as NaN) are solves that did not converge: not drawn
+            pts = [(m, v) for c, m, v in zip(cols[0], cols[1], values) if int(c) == i and math.isfinite(v)]
             if pts:
                 ax.plot(*zip(*pts), marker=MARKERS[i], lw=1.0, label=name)
         ax.set_xscale("log", base=2)
@@ -99,13 +116,16 @@ def speed_accuracy(folder):
         if not path.exists():
             ax.set_visible(False)
             continue
-        _, cols = read_csv(path)
-        rows = list(zip(*cols))
+        header, cols = read_csv(path)
+        method, err, time, pareto = (cols[header.index(h)] for h in
+                                     ("method [-]", "tip_error [-]", "time [s]", "pareto [-]"))
+        rows = list(zip(method, err, time, pareto))
         for i, name in enumerate(METHODS):
-            pts = [(r[5], r[4]) for r in rows if int(r[0]) == i and r[3] == 1.0]
+            # empty cells (NaN) are runs that did not converge: not drawn
+            pts = [(t, e) for m, e, t, _ in rows if int(m) == i and math.isfinite(e)]
             if pts:
                 ax.plot(*zip(*sorted(pts)), marker=MARKERS[i], lw=0.8, label=name)
-        front = sorted((r[5], r[4]) for r in rows if r[7] == 1.0)
+        front = sorted((t, e) for _, e, t, p in rows if p == 1.0)
         if front:
             ax.step(*zip(*front), where="post", color="k", lw=1.5, alpha=0.4, label="Pareto front")
         ax.set_xscale("log")

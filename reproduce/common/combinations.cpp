@@ -76,6 +76,11 @@ CombinationResult solve_combination(const Reference& ref, const Combination& c, 
   return out;
 }
 
+namespace {
+// JSON null for a value that does not exist (NaN, inf): never 0 or −1.
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
 nlohmann::json to_json(const CombinationResult& r) {
   const auto& s = r.solution;
   return {{"combination", r.combination.label()},
@@ -84,14 +89,14 @@ nlohmann::json to_json(const CombinationResult& r) {
           {"status", std::string(solvers::to_string(s.report.status))},
           {"message", s.report.message},
           {"newton_iterations", s.report.iterations},
-          {"relative_residual", std::isfinite(s.relative_residual) ? s.relative_residual : -1.0},
-          {"condition_number", std::isfinite(s.condition_number) ? s.condition_number : -1.0},
+          {"relative_residual", finite_or_null(s.relative_residual)},
+          {"condition_number", finite_or_null(s.condition_number)},
           {"linear_solver", s.linear_solver},
           {"operators", s.operator_rule},
           {"median_solve_time_s", r.median_time_s},
-          {"tip_error", r.tip_error},
-          {"energy_norm", r.energy_norm},
-          {"max_penetration_m", std::isfinite(s.max_penetration) ? s.max_penetration : 0.0}};
+          {"tip_error", r.converged() ? finite_or_null(r.tip_error) : nlohmann::json(nullptr)},
+          {"energy_norm", r.converged() ? finite_or_null(r.energy_norm) : nlohmann::json(nullptr)},
+          {"max_penetration_m", r.converged() ? finite_or_null(s.max_penetration) : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json to_json(const Reference& r) {
@@ -106,14 +111,16 @@ nlohmann::json to_json(const Reference& r) {
                          {"status", std::string(solvers::to_string(rep.status))},
                          {"periods", rep.periods},
                          {"steps", rep.steps},
-                         {"periodicity", rep.periodicity.empty() ? 0.0 : rep.periodicity.back()},
+                         {"periodicity", rep.periodicity.empty() ? nlohmann::json(nullptr)
+                                                                 : finite_or_null(rep.periodicity.back())},
                          {"wall_time_s", rep.wall_time_s},
                          {"samples", r.response.tau.size()}}}};
 }
 
 void write_sweep(Run& run, const std::string& file, const std::vector<CombinationResult>& results) {
   const auto n = static_cast<Eigen::Index>(results.size());
-  Eigen::VectorXd index(n), m(n), ok(n), err(n), energy(n), time(n), iterations(n), cond(n);
+  Eigen::VectorXd index(n), m(n), err(n), energy(n), time(n), iterations(n), cond(n);
+  std::vector<std::string> status(static_cast<size_t>(n));
   const auto& combos = table2_combinations();
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& r = results[static_cast<size_t>(i)];
@@ -122,17 +129,19 @@ void write_sweep(Run& run, const std::string& file, const std::vector<Combinatio
     });
     index(i) = static_cast<double>(it - combos.begin());
     m(i) = r.dimension;
-    ok(i) = r.converged() ? 1.0 : 0.0;
-    err(i) = r.converged() ? r.tip_error : 0.0;
-    energy(i) = r.converged() ? r.energy_norm : 0.0;
+    // Missing values (empty cells, the status says why): errors of an iterate that is not a
+    // solution, an infinite condition estimate.
+    status[static_cast<size_t>(i)] = std::string(solvers::to_string(r.solution.report.status));
+    err(i) = r.converged() && std::isfinite(r.tip_error) ? r.tip_error : NAN;
+    energy(i) = r.converged() && std::isfinite(r.energy_norm) ? r.energy_norm : NAN;
     time(i) = r.median_time_s;
     iterations(i) = r.solution.report.iterations;
-    cond(i) = std::isfinite(r.solution.condition_number) ? r.solution.condition_number : 0.0;
+    cond(i) = std::isfinite(r.solution.condition_number) ? r.solution.condition_number : NAN;
   }
   run.table(file,
-            {"combination [-]", "M [-]", "converged [-]", "tip_error [-]", "energy_norm [-]", "solve_time [s]",
-             "newton_iterations [-]", "condition_number [-]"},
-            {index, m, ok, err, energy, time, iterations, cond});
+            {"combination [-]", "M [-]", "tip_error [-]", "energy_norm [-]", "solve_time [s]", "newton_iterations [-]",
+             "condition_number [-]"},
+            {index, m, err, energy, time, iterations, cond}, status);
 }
 
 namespace {

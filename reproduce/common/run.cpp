@@ -49,9 +49,9 @@ Run Run::from_args(int argc, char** argv, std::string id) {
 }
 
 void Run::table(const std::string& file, const std::vector<std::string>& header,
-                const std::vector<Eigen::VectorXd>& columns) {
+                const std::vector<Eigen::VectorXd>& columns, const std::vector<std::string>& status) {
   try {
-    scene::write_table(staging_ / file, {file, header, columns});
+    scene::write_table(staging_ / file, {file, header, columns, status});
   } catch (const std::exception& e) {
     fail(e.what());
   }
@@ -67,13 +67,19 @@ int Run::finish() {
   meta_["wall_time_s"] = now() - start_;
   meta_["build"] = scene::build_information();  // wbm, git describe, compiler, Eigen, FFTW, GSL, toml++
   meta_["failures"] = failures_;
+  try {
+    if (failures_.empty()) {
+      scene::write_text(staging_ / "meta.json", meta_.dump(2) + "\n");
+      scene::write_text(staging_ / "report.md", report_);
+    }
+  } catch (const std::exception& e) {
+    failures_.push_back(e.what());
+  }
   if (!failures_.empty()) {
     for (const auto& f : failures_) std::cerr << id_ << ": FAILED: " << f << "\n";
     std::filesystem::remove_all(staging_);
     return 1;
   }
-  std::ofstream(staging_ / "meta.json") << meta_.dump(2) << "\n";
-  std::ofstream(staging_ / "report.md") << report_;
   const auto target = out_ / id_;
   std::filesystem::remove_all(target);
   std::filesystem::rename(staging_, target);

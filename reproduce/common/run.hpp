@@ -24,9 +24,10 @@ class Run {
   [[nodiscard]] const std::string& id() const { return id_; }
 
   /// scene::write_table into the staging folder: header row (units in brackets), "%.17g". A column
-  /// with NaN or inf, or columns of unequal length, fail the run and write nothing.
+  /// with inf, NaN without a status column, or columns of unequal length fail the run and write
+  /// nothing. With `status` (one entry per row) NaN is a missing value, written as an empty cell.
   void table(const std::string& file, const std::vector<std::string>& header,
-             const std::vector<Eigen::VectorXd>& columns);
+             const std::vector<Eigen::VectorXd>& columns, const std::vector<std::string>& status = {});
   /// meta.json: merged with wall time and "build" (scene::build_information()) at finish().
   void meta(const nlohmann::json& meta);
   /// Markdown fragment for out/REPORT.md (appended).
@@ -35,7 +36,8 @@ class Run {
   void fail(const std::string& why);
 
   /// Moves the staged files into out/<id>/ if nothing failed; prints a summary; returns the
-  /// exit status (0 only if every solve converged and every file was written).
+  /// exit status (0 only if every solve converged and every file was written: a failed write of
+  /// meta.json or report.md fails the run and moves nothing).
   int finish();
   /// Runs `body(*this)`; an exception (bad scene file, invalid parameter) becomes a recorded
   /// failure with its message. Returns finish().

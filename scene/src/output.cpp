@@ -1,7 +1,9 @@
 #include <wbm/scene/output.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include <unistd.h>
@@ -14,27 +16,55 @@ void write_table(const std::filesystem::path& path, const Table& table) {
     throw std::invalid_argument(name + ": " + std::to_string(table.header.size()) + " header names for " +
                                 std::to_string(table.columns.size()) + " columns");
   }
-  for (size_t c = 0; c < table.columns.size(); ++c) {
-    if (table.columns[c].size() != table.columns[0].size()) {
-      throw std::invalid_argument(name + ": column \"" + table.header[c] + "\" has " +
-                                  std::to_string(table.columns[c].size()) + " rows, the first column " +
-                                  std::to_string(table.columns[0].size()));
-    }
-    if (!table.columns[c].allFinite()) {
-      throw std::invalid_argument(name + ": column \"" + table.header[c] + "\" contains NaN or inf; not written");
+  const bool with_status = !table.status.empty();
+  if (with_status && static_cast<Eigen::Index>(table.status.size()) != table.columns[0].size()) {
+    throw std::invalid_argument(name + ": status column has " + std::to_string(table.status.size()) +
+                                " rows, the first column " + std::to_string(table.columns[0].size()));
+  }
+  for (const auto& s : table.status) {
+    if (s.find_first_of(",\"\n") != std::string::npos) {
+      throw std::invalid_argument(name + ": status \"" + s + "\" contains a comma, quote or newline");
     }
   }
-  std::ofstream os(path);
+  for (size_t c = 0; c < table.columns.size(); ++c) {
+    const auto& col = table.columns[c];
+    if (col.size() != table.columns[0].size()) {
+      throw std::invalid_argument(name + ": column \"" + table.header[c] + "\" has " + std::to_string(col.size()) +
+                                  " rows, the first column " + std::to_string(table.columns[0].size()));
+    }
+    if (col.array().isInf().any()) {
+      throw std::invalid_argument(name + ": column \"" + table.header[c] + "\" contains inf; not written");
+    }
+    if (col.array().isNaN().any() && !with_status) {
+      throw std::invalid_argument(name + ": column \"" + table.header[c] +
+                                  "\" has missing values (NaN) but the table has no status column to say why; "
+                                  "not written");
+    }
+  }
+  std::ostringstream os;
   for (size_t c = 0; c < table.header.size(); ++c) os << (c ? "," : "") << table.header[c];
+  if (with_status) os << ",status";
   os << "\n";
   char buf[40];
   for (Eigen::Index r = 0; r < table.columns[0].size(); ++r) {
     for (size_t c = 0; c < table.columns.size(); ++c) {
-      std::snprintf(buf, sizeof buf, "%.17g", table.columns[c](r));
+      const double v = table.columns[c](r);
+      if (std::isnan(v)) {
+        buf[0] = '\0';  // missing: empty cell
+      } else {
+        std::snprintf(buf, sizeof buf, "%.17g", v);
+      }
       os << (c ? "," : "") << buf;
     }
+    if (with_status) os << "," << table.status[static_cast<size_t>(r)];
     os << "\n";
   }
+  write_text(path, os.str());
+}
+
+void write_text(const std::filesystem::path& path, const std::string& content) {
+  std::ofstream os(path);
+  os << content;
   os.close();
   if (!os) throw std::runtime_error(path.string() + ": write failed");
 }
@@ -60,10 +90,7 @@ void StagedOutput::table(const Table& table) {
 }
 
 void StagedOutput::text(const std::string& file, const std::string& content) {
-  std::ofstream os(staging_ / file);
-  os << content;
-  os.close();
-  if (!os) throw std::runtime_error((staging_ / file).string() + ": write failed");
+  write_text(staging_ / file, content);
   files_.push_back(file);
 }
 

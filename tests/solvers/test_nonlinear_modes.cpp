@@ -312,7 +312,7 @@ TEST(NonlinearModes, ANonConvergedLevelIsReportedAsSuch) {
   EXPECT_FALSE(off.converged());
   EXPECT_GT(off.residual_norm, 1e-10);
   EXPECT_NE(off.message.find("tolerance 1e-10"), std::string::npos) << off.message;
-  const auto one_step = nm.level_at(system, x, 1.2, {.tolerance = 1e-10, .max_newton_iterations = 1});
+  const auto one_step = nm.level_at(system, x, 1.2, {.include = {}, .tolerance = 1e-10, .max_newton_iterations = 1});
   EXPECT_FALSE(one_step.converged());
   EXPECT_EQ(one_step.status, solvers::SolveStatus::MaxIterations);
   EXPECT_NE(one_step.message.find("semismooth Newton at fixed E = 1.2"), std::string::npos) << one_step.message;

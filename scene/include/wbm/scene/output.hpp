@@ -10,17 +10,23 @@
 
 namespace wbm::scene {
 
-/// One CSV file: a header row ("name [unit]" per column) and equal-length numeric columns.
+/// One CSV file: a header row ("name [unit]" per column) and equal-length numeric columns,
+/// optionally followed by a text column "status" (one entry per row).
+/// Missing values: a NaN in a numeric column means "no value" (a solve that did not converge,
+/// an infinite condition number) and is written as an empty cell; it is allowed only in a table
+/// with a status column, which says why the row has no value. A missing value is never 0 or −1.
 struct Table {
   std::string file;                  // e.g. "displacement.csv"
-  std::vector<std::string> header;   // one entry per column
+  std::vector<std::string> header;   // one entry per numeric column
   std::vector<Eigen::VectorXd> columns;
+  std::vector<std::string> status = {};  // empty, or one entry per row (no commas or quotes)
 };
 
 /// Writes `table` to `path`: the header, then one row per sample, each value "%.17g" (round
-/// trip). Throws std::invalid_argument, writing nothing, if header and columns differ in count,
-/// columns differ in length, or a column holds NaN or inf (named in the message);
-/// std::runtime_error if the file cannot be written.
+/// trip), an empty cell for NaN, the status last. Throws std::invalid_argument, writing nothing,
+/// if header and columns differ in count, columns (or the status) differ in length, a column
+/// holds inf, or NaN without a status column (named in the message); std::runtime_error if the
+/// file cannot be written (stream state checked after close).
 void write_table(const std::filesystem::path& path, const Table& table);
 
 /// Files staged in `target/.wbm-staging-<pid>/` and moved into `target` by commit():
@@ -30,6 +36,10 @@ void write_table(const std::filesystem::path& path, const Table& table);
 /// So `<last>` exists only beside a complete set of files; an interrupted run leaves the old
 /// set or no marker. Files of `target` not staged are left alone. The destructor removes the
 /// staging folder if commit() was not reached.
+/// Writes `content` to `path`; throws std::runtime_error naming the file if the write fails
+/// (stream state checked after close).
+void write_text(const std::filesystem::path& path, const std::string& content);
+
 class StagedOutput {
  public:
   explicit StagedOutput(std::filesystem::path target);
@@ -38,7 +48,7 @@ class StagedOutput {
   StagedOutput& operator=(const StagedOutput&) = delete;
 
   void table(const Table& table);  // write_table into staging (throws as write_table)
-  void text(const std::string& file, const std::string& content);
+  void text(const std::string& file, const std::string& content);  // throws std::runtime_error on a failed write
   /// Moves the files into target (created if missing), `last` last; returns their final paths.
   std::vector<std::filesystem::path> commit(const std::string& last);
 
