@@ -34,8 +34,12 @@ int main(int argc, char** argv) {
       springs.push_back({stop.dof, std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kPenalty, stop.gap})});
     }
     std::vector<double> col_e, col_period, col_orbit, col_rayleigh;
-    std::ostringstream rows;
+    std::ostringstream rows, checks;
     nlohmann::json meta = nlohmann::json::array();
+    // The tolerances issue #7 stated for this check: a few 1e-3 at the first level (E = 1.2 in the
+    // scene), about 1e-2 over all periods at the larger energies.
+    const double first_level_tolerance = 5e-3, larger_energy_tolerance = 2e-2;
+    bool first_level = true;
     for (const auto& level : r.diagnostics["nnm"]["included"]) {
       if (!level.value("converged", false)) continue;
       const double energy = level["energy"];
@@ -75,8 +79,20 @@ int main(int argc, char** argv) {
         rows << format("%.1e", deviation[1][k]) << (k + 1 < deviation[1].size() ? ", " : " | ");
       }
       rows << format("%.1e", penetration) << " |\n";
+      const double worst = *std::max_element(deviation[0].begin(), deviation[0].end());
+      const double tolerance = first_level ? first_level_tolerance : larger_energy_tolerance;
+      const bool within = worst <= tolerance;
+      const bool rayleigh_drifts = deviation[1].back() > deviation[0].back();
+      checks << "- E = " << format("%g", energy) << ": largest deviation with the orbit frequency "
+             << format("%.1e", worst) << " over " << deviation[0].size() << " periods, stated tolerance "
+             << format("%.0e", tolerance) << ": " << (within ? "agrees" : "disagrees")
+             << "; with the Rayleigh frequency the last period deviates " << format("%.1e", deviation[1].back())
+             << " (claim \"the Rayleigh period drifts past the orbit's\": " << (rayleigh_drifts ? "agrees" : "disagrees")
+             << ").\n";
+      first_level = false;
       meta.push_back({{"energy", energy}, {"orbit_deviation", deviation[0]}, {"rayleigh_deviation", deviation[1]},
-                      {"penetration_gaps", penetration}, {"bdf_steps", steps}});
+                      {"penetration_gaps", penetration}, {"bdf_steps", steps}, {"tolerance", tolerance},
+                      {"checks", {{"within_tolerance", within}, {"rayleigh_drifts", rayleigh_drifts}}}});
     }
     auto column = [](const std::vector<double>& x) {
       return Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
@@ -99,8 +115,9 @@ int main(int argc, char** argv) {
        << "\nWith the orbit's frequency the motion stays on the computed mode within the first-period deviation "
           "(the truncation to N harmonics, which cannot represent the impacts exactly, and the spring's "
           "penetration), growing slowly; with the paper's Rayleigh-quotient frequency the phase drifts and the "
-          "deviation grows by about the same amount every period. The stated tolerance: a few 1e-3 at E = 1.2, "
-          "about 1e-2 over five periods at the larger energies.\n";
+          "deviation grows by about the same amount every period. Checks against the tolerances stated for this "
+          "check (a few 1e-3 at the first level, about 1e-2 at the larger energies):\n\n"
+       << checks.str();
     run.report(md.str());
   });
 }
