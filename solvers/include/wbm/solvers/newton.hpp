@@ -163,6 +163,7 @@ using DefaultLinearSolver = std::conditional_t<detail::sparse_jacobian_v<S>, Spa
 /// Stops with Converged (‖R‖ ≤ tolerance, verified on the returned x), MaxIterations,
 /// Stagnated (no acceptable step), SingularJacobian (factorization failed or rcond < min_rcond)
 /// or NonFinite (NaN/inf in R, J or the step); the returned x is then the last finite iterate.
+/// With levenberg_marquardt a singular Jacobian or a failed line search switches to LM steps.
 /// Never throws for non-convergence.
 template <NonlinearSystem S, class Solver>
 NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& options, Solver& solver) {
@@ -189,15 +190,23 @@ NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& opt
     bool finite_trial = true;
     const double norm2 = r.norm();
     if (mu == 0.0) {
-      if (!solver.factorize(jac)) return finish(SolveStatus::SingularJacobian, "the linear solver could not factorize the Jacobian");
-      report.jacobian_rcond = solver.rcond();
-      if (report.jacobian_rcond && !(*report.jacobian_rcond >= options.min_rcond)) {
-        return finish(SolveStatus::SingularJacobian, "singular Jacobian (rcond " + format_number(*report.jacobian_rcond) + ")");
+      // A singular or non-finite Newton step ends the solve, unless the LM fallback takes over.
+      SolveStatus failure = SolveStatus::Converged;
+      std::string why;
+      Eigen::VectorXd step;
+      if (!solver.factorize(jac)) {
+        failure = SolveStatus::SingularJacobian;
+        why = "the linear solver could not factorize the Jacobian";
+      } else if (report.jacobian_rcond = solver.rcond(); report.jacobian_rcond && !(*report.jacobian_rcond >= options.min_rcond)) {
+        failure = SolveStatus::SingularJacobian;
+        why = "singular Jacobian (rcond " + format_number(*report.jacobian_rcond) + ")";
+      } else if (step = -solver.solve(r); !step.allFinite()) {
+        failure = SolveStatus::NonFinite;
+        why = "non-finite Newton step (Jacobian singular or non-finite)";
       }
-      const Eigen::VectorXd step = -solver.solve(r);
-      if (!step.allFinite()) return finish(SolveStatus::NonFinite, "non-finite Newton step (Jacobian singular or non-finite)");
+      if (failure != SolveStatus::Converged && !options.levenberg_marquardt) return finish(failure, why);
       double t = 1.0;
-      for (int b = 0; b <= options.max_backtracks; ++b, t *= 0.5) {
+      for (int b = 0; failure == SolveStatus::Converged && b <= options.max_backtracks; ++b, t *= 0.5) {
         x_new = x + t * step;
         r_new = system.residual(x_new);
         const double trial = r_new.norm();
@@ -211,13 +220,10 @@ NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& opt
           break;
         }
       }
-      if (!accepted && options.levenberg_marquardt) {
-        const Eigen::MatrixXd dense = detail::as_dense(jac);
-        mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
-      }
     }
-    if (!accepted && mu > 0.0) {  // Levenberg–Marquardt on ½‖R‖₂²
+    if (!accepted && options.levenberg_marquardt) {  // Levenberg–Marquardt on ½‖R‖₂²
       const Eigen::MatrixXd dense = detail::as_dense(jac);
+      if (mu == 0.0) mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
       const Eigen::MatrixXd normal = dense.transpose() * dense;
       const Eigen::VectorXd gradient = dense.transpose() * r;
       for (int b = 0; b < options.max_lm_trials; ++b) {
