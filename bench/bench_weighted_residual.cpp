@@ -42,6 +42,15 @@ void BM_WeightedResidual_Assembly(benchmark::State& state) {
   label(state);
 }
 
+// The residual alone: the contact samples u_c(τ_q) and the projection of the sampled forces,
+// by FFTW for Fourier trial/weighting functions (issue #14), by dense sample matrices otherwise.
+void BM_WeightedResidual_Residual(benchmark::State& state) {
+  const auto wr = build(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response());
+  for (auto _ : state) benchmark::DoNotOptimize(wr.contact_residual(x));
+  label(state);
+}
+
 void BM_WeightedResidual_ResidualAndJacobian(benchmark::State& state) {
   const auto wr = build(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response());
@@ -71,12 +80,14 @@ void arguments(benchmark::internal::Benchmark* b) {
   for (int pair = 0; pair < 6; ++pair) {
     for (int m : {16, 32, 64, 128, 256}) b->Args({m, pair});
   }
+  b->Args({1024, 0});  // Fourier:Fourier only: the Petrov-Galerkin set-up is O(M^3) (issue #17)
   b->Unit(benchmark::kMillisecond);
 }
 
 }  // namespace
 
 BENCHMARK(BM_WeightedResidual_Assembly)->Apply(arguments);
+BENCHMARK(BM_WeightedResidual_Residual)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);
 BENCHMARK_MAIN();

@@ -16,6 +16,7 @@
 #include <Eigen/SparseLU>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
 
@@ -376,6 +377,11 @@ struct WeightedResidual::Impl {
   Eigen::MatrixXd theta, wq;
   std::vector<std::vector<int>> theta_nz, wq_nz;  // nonzero columns of each row
   bool sparse_rows = false;                       // rows have compact support (N by loops)
+  // FFTW on the same midpoint samples, when the trial or the weighting basis is Fourier: u_c(τ_q)
+  // (Fourier trial), the projection of the sampled forces (Fourier weighting) and, for
+  // Fourier:Fourier, the contact Jacobian blocks (Aft::jacobian) in O(Q log Q) instead of O(QM)
+  // and O(QM²). Shared with at_frequency copies (const use only).
+  std::shared_ptr<const spectral::Aft> aft;
 
   // Linear solve with G.
   bool modal = false;
@@ -429,6 +435,7 @@ struct WeightedResidual::Impl {
     wq = weighting.values(tau, 0) / static_cast<double>(q);
     assemble_time_operators(tau);
     sample_structure();
+    if (trial.is_fourier() || weighting.is_fourier()) aft = std::make_shared<const spectral::Aft>(m, q, 0.5);
     components = block_components(ops);
     if (weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional) {
       fourier_weighting = FourierWeighting::detect(ops);
@@ -466,7 +473,7 @@ struct WeightedResidual::Impl {
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
         ops(base.ops), theta(base.theta), wq(base.wq), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
-        sparse_rows(base.sparse_rows), phi(base.phi), lambda(base.lambda), components(base.components),
+        sparse_rows(base.sparse_rows), aft(base.aft), phi(base.phi), lambda(base.lambda), components(base.components),
         fourier_weighting(base.fourier_weighting), b(base.b),
         scale(base.scale),
         contact_rows(base.contact_rows) {
@@ -653,6 +660,7 @@ struct WeightedResidual::Impl {
 
   // Contact displacement samples U (n_c × Q) for stacked contact unknowns x.
   [[nodiscard]] Eigen::MatrixXd contact_samples(const Eigen::VectorXd& x) const {
+    if (trial.is_fourier()) return aft->to_time(spectral::as_coefficients(x, nc));
     return spectral::as_coefficients(x, nc) * theta.transpose();
   }
 
@@ -671,14 +679,18 @@ struct WeightedResidual::Impl {
         if (kc(r) != 0.0) active.push_back(r);
       }
       Eigen::MatrixXd block = Eigen::MatrixXd::Zero(m, m);  // block(j, k) = Σ_q w_j f' q_k
-      if (sparse_rows) {
+      if (active.empty()) {
+        // no sample in contact: N_c = 0
+      } else if (trial.is_fourier() && weighting.is_fourier()) {
+        block = aft->jacobian(kc);
+      } else if (sparse_rows) {
         for (int r : active) {
           for (int j : wq_nz[r]) {
             const double wj = wq(r, j) * kc(r);
             for (int k : theta_nz[r]) block(j, k) += wj * theta(r, k);
           }
         }
-      } else if (!active.empty()) {
+      } else {
         Eigen::MatrixXd wa(active.size(), m), ta(active.size(), m);
         for (size_t i = 0; i < active.size(); ++i) {
           wa.row(static_cast<Eigen::Index>(i)) = wq.row(active[i]) * kc(active[i]);
@@ -690,7 +702,7 @@ struct WeightedResidual::Impl {
         for (int j = 0; j < m; ++j) (*jac)(j * nc + c, k * nc + c) = block(j, k);
       }
     }
-    return spectral::stacked(force * wq);
+    return spectral::stacked(weighting.is_fourier() ? aft->project(force) : Eigen::MatrixXd(force * wq));
   }
 
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const {

@@ -1,73 +1,152 @@
 #include <wbm/spectral/aft.hpp>
 
+#include <cmath>
+#include <complex>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <fftw3.h>
 
 #include <wbm/spectral/fourier_basis.hpp>
 
 namespace wbm::spectral {
+namespace {
 
-// One RAII holder for the two FFTW plans and their aligned buffers.
-struct Aft::Plans {
-  int dimension;
-  int samples;
-  double* real = nullptr;             // Q samples
-  fftw_complex* spectrum = nullptr;   // Q/2 + 1 bins
-  fftw_plan forward = nullptr;        // r2c: real -> spectrum
-  fftw_plan backward = nullptr;       // c2r: spectrum -> real (destroys spectrum)
+using Complex = std::complex<double>;
 
-  Plans(int m, int q) : dimension(m), samples(q) {
-    real = fftw_alloc_real(static_cast<size_t>(q));
-    spectrum = fftw_alloc_complex(static_cast<size_t>(q / 2 + 1));
-    if (real == nullptr || spectrum == nullptr) throw std::bad_alloc();
-    forward = fftw_plan_dft_r2c_1d(q, real, spectrum, FFTW_ESTIMATE);
-    backward = fftw_plan_dft_c2r_1d(q, spectrum, real, FFTW_ESTIMATE);
+// Aligned FFTW work arrays for one call (so that const methods can run concurrently with FFTW's
+// new-array execute, which needs the alignment of the arrays the plans were made with).
+struct Buffers {
+  double* real;
+  fftw_complex* spectrum;
+  explicit Buffers(int q)
+      : real(fftw_alloc_real(static_cast<size_t>(q))),
+        spectrum(fftw_alloc_complex(static_cast<size_t>(q / 2 + 1))) {
+    if (real == nullptr || spectrum == nullptr) {
+      fftw_free(real);
+      fftw_free(spectrum);
+      throw std::bad_alloc();
+    }
   }
-  ~Plans() {
-    fftw_destroy_plan(forward);
-    fftw_destroy_plan(backward);
+  ~Buffers() {
     fftw_free(real);
     fftw_free(spectrum);
   }
-  Plans(const Plans&) = delete;
-  Plans& operator=(const Plans&) = delete;
-
-  // Σ_m Y_m e^{2πimq/Q} (Hermitian) equals Σ_k a_k q_k(τ_q) for
-  // Y_0 = a_0, Y_m = (a_cos − i a_sin)/2, and for the last function cos πMτ:
-  // Y_{M/2} = a/2, or a when M/2 is FFTW's Nyquist bin (Q = M), which c2r counts once.
-  void coefficients_to_samples(const double* a, Eigen::Index stride, double* out) {
-    const int half = dimension / 2;
-    for (int m = 0; m <= samples / 2; ++m) spectrum[m][0] = spectrum[m][1] = 0.0;
-    spectrum[0][0] = a[0];
-    for (int m = 1; m < half; ++m) {
-      spectrum[m][0] = 0.5 * a[(2 * m - 1) * stride];
-      spectrum[m][1] = -0.5 * a[(2 * m) * stride];
-    }
-    spectrum[half][0] = (2 * half == samples ? 1.0 : 0.5) * a[(dimension - 1) * stride];
-    fftw_execute(backward);
-    for (int q = 0; q < samples; ++q) out[q] = real[q];
-  }
-
-  // (1/Q) Σ_q q_j(τ_q) s_q from the unnormalized r2c output X_m = Σ_q s_q e^{−2πimq/Q}:
-  // constant Re X_0/Q, cos m: Re X_m/Q, sin m: −Im X_m/Q, cos πMτ: Re X_{M/2}/Q.
-  void samples_to_projection(const double* s, Eigen::Index stride, double* out_row,
-                             Eigen::Index out_stride) {
-    for (int q = 0; q < samples; ++q) real[q] = s[q * stride];
-    fftw_execute(forward);
-    const double inv_q = 1.0 / samples;
-    const int half = dimension / 2;
-    out_row[0] = spectrum[0][0] * inv_q;
-    for (int m = 1; m < half; ++m) {
-      out_row[(2 * m - 1) * out_stride] = spectrum[m][0] * inv_q;
-      out_row[(2 * m) * out_stride] = -spectrum[m][1] * inv_q;
-    }
-    out_row[(dimension - 1) * out_stride] = spectrum[half][0] * inv_q;
+  Buffers(const Buffers&) = delete;
+  Buffers& operator=(const Buffers&) = delete;
+  [[nodiscard]] Complex bin(int m) const { return {spectrum[m][0], spectrum[m][1]}; }
+  void set_bin(int m, Complex z) {
+    spectrum[m][0] = z.real();
+    spectrum[m][1] = z.imag();
   }
 };
 
-Aft::Aft(int dimension, int samples) {
+// The r2c and c2r plans of one length Q, made once per process and shared by every Aft of that
+// length: FFTW_ESTIMATE planning costs ~50 µs, more than a residual evaluation at M ≤ 64, and the
+// weighted residual builds an Aft per frequency. The planner is not thread-safe; the mutex
+// serializes it. Plans live until the process exits.
+struct FftwPlans {
+  fftw_plan forward = nullptr;   // r2c: real -> spectrum
+  fftw_plan backward = nullptr;  // c2r: spectrum -> real (destroys spectrum)
+  explicit FftwPlans(int q) {
+    Buffers b(q);
+    forward = fftw_plan_dft_r2c_1d(q, b.real, b.spectrum, FFTW_ESTIMATE);
+    backward = fftw_plan_dft_c2r_1d(q, b.spectrum, b.real, FFTW_ESTIMATE);
+    if (forward == nullptr || backward == nullptr) throw std::runtime_error("Aft: FFTW could not make a plan");
+  }
+  ~FftwPlans() {
+    fftw_destroy_plan(forward);
+    fftw_destroy_plan(backward);
+  }
+  FftwPlans(const FftwPlans&) = delete;
+  FftwPlans& operator=(const FftwPlans&) = delete;
+};
+
+const FftwPlans& plans_for(int q) {
+  static std::mutex mutex;
+  static std::map<int, std::unique_ptr<const FftwPlans>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto& entry = cache[q];
+  if (!entry) entry = std::make_unique<const FftwPlans>(q);
+  return *entry;
+}
+
+}  // namespace
+
+// The shared plans of length Q and the phase factors e^{2πimδ/Q}, m = 0 … Q/2.
+struct Aft::Plans {
+  int dimension;
+  int samples;
+  double offset;
+  std::vector<Complex> shift;
+  fftw_plan forward;
+  fftw_plan backward;
+
+  Plans(int m, int q, double delta) : dimension(m), samples(q), offset(delta) {
+    shift.resize(static_cast<size_t>(q / 2 + 1));
+    for (int k = 0; k <= q / 2; ++k) shift[k] = std::polar(1.0, 2.0 * std::numbers::pi * k * delta / q);
+    const FftwPlans& shared = plans_for(q);
+    forward = shared.forward;
+    backward = shared.backward;
+  }
+
+  // Σ_m Y_m e^{2πim(q+δ)/Q} (Hermitian) equals Σ_k a_k q_k(τ_q) for
+  // Y_0 = a_0, Y_m = (a_cos − i a_sin)/2, and for the last function cos πMτ:
+  // Y_{M/2} = a/2, or a when M/2 is FFTW's Nyquist bin (Q = M), which c2r counts once (and of
+  // which it keeps the real part: a cos πδ (−1)^q, the samples of cos πM(q+δ)/M).
+  void coefficients_to_samples(Buffers& w, const double* a, Eigen::Index stride, double* out,
+                               Eigen::Index out_stride) const {
+    const int half = dimension / 2;
+    for (int m = 0; m <= samples / 2; ++m) w.set_bin(m, 0.0);
+    w.set_bin(0, a[0]);
+    for (int m = 1; m < half; ++m) {
+      w.set_bin(m, 0.5 * Complex(a[(2 * m - 1) * stride], -a[(2 * m) * stride]) * shift[m]);
+    }
+    w.set_bin(half, (2 * half == samples ? 1.0 : 0.5) * a[(dimension - 1) * stride] * shift[half]);
+    fftw_execute_dft_c2r(backward, w.spectrum, w.real);
+    for (int q = 0; q < samples; ++q) out[q * out_stride] = w.real[q];
+  }
+
+  // C_m = (1/Q) Σ_q s_q e^{−2πim(q+δ)/Q} = e^{−2πimδ/Q} X_m / Q for m = 0 … Q/2, with X the
+  // unnormalized r2c output; then (1/Q) Σ_q s_q cos 2πmτ_q = Re C_m, … sin … = −Im C_m.
+  void transform(Buffers& w, const double* s, Eigen::Index stride) const {
+    for (int q = 0; q < samples; ++q) w.real[q] = s[q * stride];
+    fftw_execute_dft_r2c(forward, w.real, w.spectrum);
+    const double inv_q = 1.0 / samples;
+    for (int m = 0; m <= samples / 2; ++m) w.set_bin(m, w.bin(m) * std::conj(shift[m]) * inv_q);
+  }
+
+  // C_m for any m ≥ 0 from the transformed bins: C is Q-periodic in m up to the phase,
+  // C_{m} = e^{−2πimδ/Q} X_{m mod Q}/Q and X_{Q−m} = conj(X_m) for real samples.
+  [[nodiscard]] Complex coefficient(const Buffers& w, int m) const {
+    const int r = m % samples;
+    if (r <= samples / 2) {
+      const Complex unshifted = w.bin(r) * shift[r];  // e^{2πirδ/Q} C_r = X_r / Q
+      return unshifted * std::polar(1.0, -2.0 * std::numbers::pi * m * offset / samples);
+    }
+    const Complex unshifted = std::conj(w.bin(samples - r) * shift[samples - r]);
+    return unshifted * std::polar(1.0, -2.0 * std::numbers::pi * m * offset / samples);
+  }
+
+  void samples_to_projection(Buffers& w, const double* s, Eigen::Index stride, double* out_row,
+                             Eigen::Index out_stride) const {
+    transform(w, s, stride);
+    const int half = dimension / 2;
+    out_row[0] = w.spectrum[0][0];
+    for (int m = 1; m < half; ++m) {
+      out_row[(2 * m - 1) * out_stride] = w.spectrum[m][0];
+      out_row[(2 * m) * out_stride] = -w.spectrum[m][1];
+    }
+    out_row[(dimension - 1) * out_stride] = w.spectrum[half][0];
+  }
+};
+
+Aft::Aft(int dimension, int samples, double offset) {
   if (dimension < 2 || !is_power_of_two(dimension)) {
     throw std::invalid_argument("Aft(M = " + std::to_string(dimension) +
                                 "): M must be a power of two >= 2");
@@ -77,7 +156,11 @@ Aft::Aft(int dimension, int samples) {
                                 std::to_string(samples) +
                                 "): Q must be >= M; use Q >= 2M to avoid aliasing of the nonlinear term");
   }
-  plans_ = std::make_unique<Plans>(dimension, samples);
+  if (!(offset >= 0.0 && offset < 1.0)) {
+    throw std::invalid_argument("Aft: sample offset delta = " + std::to_string(offset) +
+                                " must be in [0, 1) (0: tau_q = q/Q, 0.5: midpoints (q + 1/2)/Q)");
+  }
+  plans_ = std::make_unique<Plans>(dimension, samples, offset);
 }
 
 Aft::~Aft() = default;
@@ -86,6 +169,7 @@ Aft& Aft::operator=(Aft&&) noexcept = default;
 
 int Aft::dimension() const noexcept { return plans_->dimension; }
 int Aft::samples() const noexcept { return plans_->samples; }
+double Aft::offset() const noexcept { return plans_->offset; }
 
 Eigen::MatrixXd Aft::to_time(const Eigen::MatrixXd& coefficients) const {
   if (coefficients.cols() != plans_->dimension) {
@@ -93,12 +177,10 @@ Eigen::MatrixXd Aft::to_time(const Eigen::MatrixXd& coefficients) const {
                                 std::to_string(coefficients.cols()) + " columns, expected M = " +
                                 std::to_string(plans_->dimension));
   }
-  // Work on rows: copy each row contiguous, then write the Q samples into a row-major buffer.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(
-      coefficients.rows(), plans_->samples);
+  Eigen::MatrixXd out(coefficients.rows(), plans_->samples);
+  Buffers w(plans_->samples);
   for (Eigen::Index i = 0; i < coefficients.rows(); ++i) {
-    plans_->coefficients_to_samples(coefficients.data() + i, coefficients.rows(),
-                                    out.row(i).data());
+    plans_->coefficients_to_samples(w, coefficients.data() + i, coefficients.rows(), out.data() + i, out.rows());
   }
   return out;
 }
@@ -109,19 +191,71 @@ Eigen::MatrixXd Aft::project(const Eigen::MatrixXd& samples) const {
                                 " columns, expected Q = " + std::to_string(plans_->samples));
   }
   Eigen::MatrixXd out(samples.rows(), plans_->dimension);
+  Buffers w(plans_->samples);
   for (Eigen::Index i = 0; i < samples.rows(); ++i) {
-    plans_->samples_to_projection(samples.data() + i, samples.rows(), out.data() + i, out.rows());
+    plans_->samples_to_projection(w, samples.data() + i, samples.rows(), out.data() + i, out.rows());
   }
   return out;
 }
 
 Eigen::MatrixXd Aft::to_frequency(const Eigen::MatrixXd& samples) const {
   Eigen::MatrixXd a = project(samples);
-  // Divide by the Q-point Gram matrix diag(1, ½, …, ½, g_last), g_last = 1 if Q = M else ½.
+  // Divide by the Q-point Gram matrix diag(1, ½, …, ½, g_last): g_last = ½ if Q > M, else the
+  // mean of cos² π(q + δ) = cos² πδ.
   const int m = plans_->dimension;
   a.middleCols(1, m - 2) *= 2.0;
-  if (plans_->samples > m) a.col(m - 1) *= 2.0;
+  if (plans_->samples > m) {
+    a.col(m - 1) *= 2.0;
+  } else {
+    const double g_last = std::pow(std::cos(std::numbers::pi * plans_->offset), 2);
+    if (g_last < 1e-12) {
+      throw std::domain_error("Aft::to_frequency: with Q = M = " + std::to_string(m) + " and sample offset " +
+                              std::to_string(plans_->offset) +
+                              " the last function cos(pi M tau) vanishes at every sample; use Q > M");
+    }
+    a.col(m - 1) /= g_last;
+  }
   return a;
+}
+
+Eigen::MatrixXd Aft::jacobian(const Eigen::VectorXd& derivative_samples) const {
+  if (derivative_samples.size() != plans_->samples) {
+    throw std::invalid_argument("Aft::jacobian: " + std::to_string(derivative_samples.size()) +
+                                " derivative samples, expected Q = " + std::to_string(plans_->samples));
+  }
+  const int m = plans_->dimension;
+  Buffers w(plans_->samples);
+  plans_->transform(w, derivative_samples.data(), 1);
+  // c_h = (1/Q) Σ κ cos 2πhτ_q, s_h = (1/Q) Σ κ sin 2πhτ_q for h = 0 … M.
+  Eigen::VectorXd c(m + 1), s(m + 1);
+  for (int h = 0; h <= m; ++h) {
+    const Complex z = plans_->coefficient(w, h);
+    c(h) = z.real();
+    s(h) = -z.imag();
+  }
+  // Function k is cos or sin of harmonic h_k (ordering of FourierBasis).
+  const auto harmonic = [m](int k) { return k == 0 ? 0 : (k == m - 1 ? m / 2 : (k + 1) / 2); };
+  const auto is_sine = [m](int k) { return k > 0 && k < m - 1 && k % 2 == 0; };
+  Eigen::MatrixXd jac(m, m);
+  for (int k = 0; k < m; ++k) {
+    const int b = harmonic(k);
+    const bool sk = is_sine(k);
+    for (int j = 0; j < m; ++j) {
+      const int a = harmonic(j);
+      const bool sj = is_sine(j);
+      const int d = std::abs(a - b);
+      if (!sj && !sk) {
+        jac(j, k) = 0.5 * (c(d) + c(a + b));  // cos a cos b
+      } else if (sj && sk) {
+        jac(j, k) = 0.5 * (c(d) - c(a + b));  // sin a sin b
+      } else if (!sj) {
+        jac(j, k) = 0.5 * (s(a + b) + (b > a ? s(d) : -s(d)));  // cos a sin b
+      } else {
+        jac(j, k) = 0.5 * (s(a + b) + (a > b ? s(d) : -s(d)));  // sin a cos b
+      }
+    }
+  }
+  return jac;
 }
 
 }  // namespace wbm::spectral

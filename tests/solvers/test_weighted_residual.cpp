@@ -205,7 +205,8 @@ TEST(WeightedResidual, TimeOperatorsMatchBruteForceQuadrature) {
 // at a state in contact over part of the period.
 TEST(WeightedResidual, CondensedJacobianMatchesFiniteDifferences) {
   const auto s = case1();
-  for (const Pair pair : {Pair{"db6", "fourier"}, Pair{"haar", "bspline"}, Pair{"bspline", "bspline"}}) {
+  for (const Pair pair : {Pair{"db6", "fourier"}, Pair{"haar", "bspline"}, Pair{"bspline", "bspline"},
+                          Pair{"fourier", "fourier"}, Pair{"haar", "fourier"}}) {
     const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name(pair.trial, 16),
                                        TimeBasis::from_name(pair.weighting, 16));
     const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response()) * 1.02;
@@ -215,6 +216,40 @@ TEST(WeightedResidual, CondensedJacobianMatchesFiniteDifferences) {
       Eigen::MatrixXd jacobian(const Eigen::VectorXd& y) const { return wr->contact_jacobian(y); }
     };
     wbm::testing::expect_jacobian_matches_fd(Condensed{&wr}, x, 1e-5, 1e-7, 1e-6);
+  }
+}
+
+// Slow reference path for the FFTW transforms in the residual: the contact term
+// n(a) = R(a) − R_no-contact(a) against the direct sum (1/Q) Σ_q p_j(τ_q) f_c(u_c(τ_q)) on the
+// midpoints τ_q = (q + ½)/Q with u_c = Σ_k a_{c,k} q_k(τ_q), for Q = M (the Nyquist bin), Q < 2M
+// and Q not a power of two.
+TEST(WeightedResidual, ContactTermMatchesTheDirectSumOverSamples) {
+  const auto s = case1();
+  for (const Pair pair : {Pair{"fourier", "fourier"}, Pair{"haar", "fourier"}, Pair{"fourier", "bspline"}}) {
+    for (const int q : {32, 48, 100}) {
+      const int m = 32;
+      const auto trial = TimeBasis::from_name(pair.trial, m), weighting = TimeBasis::from_name(pair.weighting, m);
+      const solvers::WeightedResidualOptions options{.time_samples = q};
+      const solvers::WeightedResidual with(s.system(), s.harmonic_forcing(), s.contact_points(), trial, weighting, options);
+      const solvers::WeightedResidual without(s.system(), s.harmonic_forcing(), {}, trial, weighting, options);
+      const Eigen::VectorXd a = with.linear_response() * 1.05;
+      const Eigen::VectorXd contact_term = with.residual(a) - without.residual(a);
+
+      Eigen::VectorXd tau(q);
+      for (int k = 0; k < q; ++k) tau(k) = (k + 0.5) / q;
+      const Eigen::MatrixXd coefficients = spectral::as_coefficients(a, with.dofs());
+      Eigen::VectorXd expected = Eigen::VectorXd::Zero(a.size());
+      for (const auto& contact : s.contact_points()) {
+        const Eigen::VectorXd u = trial.values(tau) * coefficients.row(contact.dof).transpose();
+        Eigen::VectorXd force(q), stiffness(q);
+        contact.law->evaluate(u, force, stiffness);
+        const Eigen::VectorXd projected = weighting.values(tau).transpose() * force / q;
+        for (int j = 0; j < m; ++j) expected(spectral::stacked_index(j, contact.dof, with.dofs())) += projected(j);
+      }
+      ASSERT_GT(expected.lpNorm<Eigen::Infinity>(), 0.0) << "the state must be in contact";
+      EXPECT_LT((contact_term - expected).lpNorm<Eigen::Infinity>(), 1e-9 * expected.lpNorm<Eigen::Infinity>())
+          << pair.trial << ":" << pair.weighting << " Q = " << q;
+    }
   }
 }
 
