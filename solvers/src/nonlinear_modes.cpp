@@ -11,6 +11,7 @@
 #include <Eigen/LU>
 #include <Eigen/SparseLU>
 
+#include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 
 namespace wbm::solvers {
@@ -93,17 +94,9 @@ Eigen::VectorXd NonlinearModes::with_phase(const Eigen::VectorXd& x) const {
 }
 
 Eigen::MatrixXd NonlinearModes::basis_values(int samples, int derivative) const {
-  Eigen::MatrixXd v(samples, f_);
-  for (int s = 0; s < samples; ++s) {
-    const double tau = static_cast<double>(s) / samples;
-    v(s, 0) = derivative == 0 ? 1.0 : 0.0;
-    for (int h = 1; h <= n_harm_; ++h) {
-      const double w = 2.0 * std::numbers::pi * h, c = std::cos(w * tau), sn = std::sin(w * tau);
-      v(s, 2 * h - 1) = derivative == 0 ? c : -w * sn;
-      v(s, 2 * h) = derivative == 0 ? sn : w * c;
-    }
-  }
-  return v;
+  // LL11 Eq. (21): harmonics 0 … N, each cosine with its sine (spectral's 2N + 1 form).
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(samples, 0.0, samples - 1.0) / samples;
+  return spectral::FourierBasis::with_harmonics(n_harm_).values(tau, derivative);
 }
 
 NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, double energy, double omega2_fixed,
@@ -393,6 +386,7 @@ NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, doub
   }
   const auto& o = modes.options_;
   penalty_ = penalty_stiffness / (o.samples * modes.omega0_ * modes.omega0_ * modes.m_ref_);
+  if (penalty_ > 0.0) penalty_law_.emplace(contact::LinearPenaltyParameters{.stiffness = penalty_, .gap = 0.0});
   ny_ = static_cast<Eigen::Index>(modes.n_) * modes.f_ - 1;
   size_ = ny_ + 1 + (penalty_ > 0.0 ? 0 : static_cast<Eigen::Index>(modes.stops_.size()) * o.samples);
 }
@@ -424,7 +418,13 @@ NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(
     const auto& stop = nm.stops_[static_cast<size_t>(c)];
     u.g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
   }
-  u.lambda = penalty_ == 0.0 ? Eigen::VectorXd(x.tail(n_stops * ms)) : Eigen::VectorXd(penalty_ * u.g.cwiseMax(0.0));
+  if (penalty_ == 0.0) {
+    u.lambda = x.tail(n_stops * ms);
+  } else {  // λ = κ (g)₊ with g the normalized gap function: contact's linear penalty at gap 0
+    u.lambda.resize(u.g.size());
+    u.penalty_stiffness.resize(u.g.size());
+    penalty_law_->evaluate(u.g, u.lambda, u.penalty_stiffness);
+  }
   return u;
 }
 
@@ -518,8 +518,8 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
           }
         }
       }
-    } else {  // penalty: ∂HB(k, d)/∂Y(l, d) = κ Σ_s θ_sk θ_sl [g_s > 0]
-      const Eigen::VectorXd on = (g.segment(c * ms, ms).array() > 0.0).cast<double>() * penalty_;
+    } else {  // penalty: ∂HB(k, d)/∂Y(l, d) = Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
+      const Eigen::VectorXd on = state.penalty_stiffness.segment(c * ms, ms);
       if (on.isZero(0.0)) continue;
       const Eigen::MatrixXd block = nm.theta_.transpose() * on.asDiagonal() * nm.theta_;
       for (int k = 0; k < f; ++k) {

@@ -37,6 +37,10 @@ TimeBasis TimeBasis::fourier(int dimension) {
   return {check.dimension(), nullptr};
 }
 
+TimeBasis TimeBasis::fourier_harmonics(int harmonics) {
+  return fourier(spectral::FourierBasis::with_harmonics(harmonics).dimension());
+}
+
 TimeBasis TimeBasis::wavelet(const wavelets::Family& family, int dimension) {
   const int level = level_of(dimension, family.name());
   return {dimension, std::make_shared<const wavelets::PeriodizedBasis>(family, level)};

@@ -99,15 +99,19 @@ struct Aft::Plans {
   // Y_0 = a_0, Y_m = (a_cos − i a_sin)/2, and for the last function cos πMτ:
   // Y_{M/2} = a/2, or a when M/2 is FFTW's Nyquist bin (Q = M), which c2r counts once (and of
   // which it keeps the real part: a cos πδ (−1)^q, the samples of cos πM(q+δ)/M).
+  // For M = 2H + 1 there is no top function: Y_m for m = 1 … H only (H < Q/2 since Q ≥ M).
+  [[nodiscard]] bool top() const { return dimension % 2 == 0; }
+  [[nodiscard]] int paired() const { return top() ? dimension / 2 - 1 : dimension / 2; }
+
   void coefficients_to_samples(Buffers& w, const double* a, Eigen::Index stride, double* out,
                                Eigen::Index out_stride) const {
     const int half = dimension / 2;
     for (int m = 0; m <= samples / 2; ++m) w.set_bin(m, 0.0);
     w.set_bin(0, a[0]);
-    for (int m = 1; m < half; ++m) {
+    for (int m = 1; m <= paired(); ++m) {
       w.set_bin(m, 0.5 * Complex(a[(2 * m - 1) * stride], -a[(2 * m) * stride]) * shift[m]);
     }
-    w.set_bin(half, (2 * half == samples ? 1.0 : 0.5) * a[(dimension - 1) * stride] * shift[half]);
+    if (top()) w.set_bin(half, (2 * half == samples ? 1.0 : 0.5) * a[(dimension - 1) * stride] * shift[half]);
     fftw_execute_dft_c2r(backward, w.spectrum, w.real);
     for (int q = 0; q < samples; ++q) out[q * out_stride] = w.real[q];
   }
@@ -138,18 +142,18 @@ struct Aft::Plans {
     transform(w, s, stride);
     const int half = dimension / 2;
     out_row[0] = w.spectrum[0][0];
-    for (int m = 1; m < half; ++m) {
+    for (int m = 1; m <= paired(); ++m) {
       out_row[(2 * m - 1) * out_stride] = w.spectrum[m][0];
       out_row[(2 * m) * out_stride] = -w.spectrum[m][1];
     }
-    out_row[(dimension - 1) * out_stride] = w.spectrum[half][0];
+    if (top()) out_row[(dimension - 1) * out_stride] = w.spectrum[half][0];
   }
 };
 
 Aft::Aft(int dimension, int samples, double offset) {
-  if (dimension < 2 || !is_power_of_two(dimension)) {
+  if (!is_fourier_dimension(dimension)) {
     throw std::invalid_argument("Aft(M = " + std::to_string(dimension) +
-                                "): M must be a power of two >= 2");
+                                "): M must be a power of two >= 2 or odd >= 3 (2H + 1, H harmonics)");
   }
   if (samples < dimension) {
     throw std::invalid_argument("Aft(M = " + std::to_string(dimension) + ", Q = " +
@@ -200,10 +204,11 @@ Eigen::MatrixXd Aft::project(const Eigen::MatrixXd& samples) const {
 
 Eigen::MatrixXd Aft::to_frequency(const Eigen::MatrixXd& samples) const {
   Eigen::MatrixXd a = project(samples);
-  // Divide by the Q-point Gram matrix diag(1, ½, …, ½, g_last): g_last = ½ if Q > M, else the
-  // mean of cos² π(q + δ) = cos² πδ.
+  // Divide by the Q-point Gram matrix diag(1, ½, …, ½, g_last): g_last (top function only) = ½
+  // if Q > M, else the mean of cos² π(q + δ) = cos² πδ.
   const int m = plans_->dimension;
-  a.middleCols(1, m - 2) *= 2.0;
+  a.middleCols(1, 2 * plans_->paired()) *= 2.0;
+  if (!plans_->top()) return a;
   if (plans_->samples > m) {
     a.col(m - 1) *= 2.0;
   } else {
@@ -234,15 +239,20 @@ Eigen::MatrixXd Aft::jacobian(const Eigen::VectorXd& derivative_samples) const {
     s(h) = -z.imag();
   }
   // Function k is cos or sin of harmonic h_k (ordering of FourierBasis).
-  const auto harmonic = [m](int k) { return k == 0 ? 0 : (k == m - 1 ? m / 2 : (k + 1) / 2); };
-  const auto is_sine = [m](int k) { return k > 0 && k < m - 1 && k % 2 == 0; };
+  const FourierBasis basis(m);
+  std::vector<int> harmonic(static_cast<size_t>(m));
+  std::vector<bool> sine(static_cast<size_t>(m));
+  for (int k = 0; k < m; ++k) {
+    harmonic[k] = basis.harmonic(k);
+    sine[k] = basis.is_sine(k);
+  }
   Eigen::MatrixXd jac(m, m);
   for (int k = 0; k < m; ++k) {
-    const int b = harmonic(k);
-    const bool sk = is_sine(k);
+    const int b = harmonic[k];
+    const bool sk = sine[k];
     for (int j = 0; j < m; ++j) {
-      const int a = harmonic(j);
-      const bool sj = is_sine(j);
+      const int a = harmonic[j];
+      const bool sj = sine[j];
       const int d = std::abs(a - b);
       if (!sj && !sk) {
         jac(j, k) = 0.5 * (c(d) + c(a + b));  // cos a cos b

@@ -9,10 +9,24 @@
 namespace wbm::spectral {
 
 FourierBasis::FourierBasis(int dimension) : dimension_(dimension) {
-  if (dimension < 2 || !is_power_of_two(dimension)) {
+  if (!is_fourier_dimension(dimension)) {
     throw std::invalid_argument("FourierBasis(M = " + std::to_string(dimension) +
-                                "): M must be a power of two >= 2 (M = 2^J, J >= 1)");
+                                "): M must be a power of two >= 2 (M = 2^J, the paper's basis) or odd >= 3 "
+                                "(M = 2H + 1, H harmonics)");
   }
+}
+
+FourierBasis FourierBasis::with_harmonics(int harmonics) {
+  if (harmonics < 1 || harmonics > (1 << 28)) {
+    throw std::invalid_argument("FourierBasis::with_harmonics(H = " + std::to_string(harmonics) +
+                                "): H must lie in [1, 2^28]");
+  }
+  return FourierBasis(2 * harmonics + 1);
+}
+
+bool FourierBasis::is_sine(int k) const {
+  (void)harmonic(k);  // range check
+  return k > 0 && k % 2 == 0 && !(has_top_function() && k == dimension_ - 1);
 }
 
 int FourierBasis::harmonic(int k) const {
@@ -20,7 +34,7 @@ int FourierBasis::harmonic(int k) const {
     throw std::out_of_range("FourierBasis::harmonic(k = " + std::to_string(k) +
                             "): k must lie in [0, " + std::to_string(dimension_) + ")");
   }
-  if (k == dimension_ - 1) return dimension_ / 2;
+  if (has_top_function() && k == dimension_ - 1) return dimension_ / 2;
   return (k + 1) / 2;
 }
 
@@ -31,11 +45,11 @@ double FourierBasis::value(int k, double tau, int derivative) const {
   }
   const int m = harmonic(k);
   if (m == 0) return derivative == 0 ? 1.0 : 0.0;
-  const bool is_sine = (k != dimension_ - 1) && (k % 2 == 0);
+  const bool sine = is_sine(k);
   const double w = 2.0 * std::numbers::pi * m;
   // d^d/dτ^d of cos(wτ) = w^d cos(wτ + dπ/2); of sin(wτ) = w^d sin(wτ + dπ/2).
   const double phase = w * tau + derivative * std::numbers::pi / 2.0;
-  return std::pow(w, derivative) * (is_sine ? std::sin(phase) : std::cos(phase));
+  return std::pow(w, derivative) * (sine ? std::sin(phase) : std::cos(phase));
 }
 
 Eigen::MatrixXd FourierBasis::values(const Eigen::VectorXd& tau, int derivative) const {
@@ -55,7 +69,8 @@ Eigen::SparseMatrix<double> FourierBasis::galerkin_operator(int derivative) cons
   std::vector<Eigen::Triplet<double>> t;
   const double pi = std::numbers::pi;
   if (derivative == 0) t.emplace_back(0, 0, 1.0);
-  for (int m = 1; m < big_m / 2; ++m) {
+  const int paired = has_top_function() ? big_m / 2 - 1 : big_m / 2;  // harmonics with a sine partner
+  for (int m = 1; m <= paired; ++m) {
     const int c = 2 * m - 1, s = 2 * m;
     const double w = 2.0 * pi * m;
     switch (derivative) {
@@ -72,10 +87,12 @@ Eigen::SparseMatrix<double> FourierBasis::galerkin_operator(int derivative) cons
         t.emplace_back(s, s, -0.5 * w * w);
     }
   }
-  const int last = big_m - 1;
-  const double w_last = pi * big_m;
-  if (derivative == 0) t.emplace_back(last, last, 0.5);
-  if (derivative == 2) t.emplace_back(last, last, -0.5 * w_last * w_last);
+  if (has_top_function()) {
+    const int last = big_m - 1;
+    const double w_last = pi * big_m;
+    if (derivative == 0) t.emplace_back(last, last, 0.5);
+    if (derivative == 2) t.emplace_back(last, last, -0.5 * w_last * w_last);
+  }
   Eigen::SparseMatrix<double> a(big_m, big_m);
   a.setFromTriplets(t.begin(), t.end());
   return a;

@@ -29,8 +29,10 @@ struct Grid {
   double offset;
 };
 // Q = M (Nyquist bin), Q < 2M (aliased products), Q not a power of two, and three offsets.
+// M = 2H + 1 with Q = M and Q even.
 const Grid kGrids[] = {{8, 8, 0.0},    {8, 32, 0.0},  {64, 256, 0.0}, {16, 48, 0.0}, {8, 8, 0.5},
-                       {8, 32, 0.5},   {64, 256, 0.5}, {16, 48, 0.5}, {16, 24, 0.3}, {2, 2, 0.25}};
+                       {8, 32, 0.5},   {64, 256, 0.5}, {16, 48, 0.5}, {16, 24, 0.3}, {2, 2, 0.25},
+                       {7, 7, 0.0},    {7, 7, 0.5},    {9, 32, 0.5},  {25, 64, 0.0}};
 }  // namespace
 
 // Slow oracle: the FFT path against the direct O(QM) sum Σ_k A(i,k) q_k(τ_q).
@@ -86,7 +88,7 @@ TEST(Aft, JacobianIsTheDerivativeOfTheSampledForce) {
 // Identity: to_frequency is the left inverse of to_time, including Q = M (Nyquist bin).
 TEST(Aft, RoundTripRecoversCoefficients) {
   for (const auto& [m, q, offset] : {Grid{2, 2, 0.0}, {8, 8, 0.0}, {64, 128, 0.0}, {256, 1024, 0.0}, {64, 128, 0.5},
-                                     {8, 8, 0.3}}) {
+                                     {8, 8, 0.3}, {7, 7, 0.5}, {9, 20, 0.0}}) {
     const Aft aft(m, q, offset);
     const Eigen::MatrixXd a = random_matrix(5, m, 3);
     EXPECT_LT((aft.to_frequency(aft.to_time(a)) - a).cwiseAbs().maxCoeff(), 1e-13) << "M=" << m;
@@ -108,7 +110,7 @@ TEST(Aft, RejectsTooFewSamples) {
   wbm::testing::expect_throw_with<std::invalid_argument>([] { Aft aft(64, 32); },
                                                          {"Q = 32", "Q must be >= M"});
   wbm::testing::expect_throw_with<std::invalid_argument>([] { Aft aft(6, 32); },
-                                                         {"M = 6", "power of two"});
+                                                         {"M = 6", "power of two", "odd >= 3"});
   wbm::testing::expect_throw_with<std::invalid_argument>([] { Aft aft(8, 16, 1.0); },
                                                          {"offset", "[0, 1)"});
 }

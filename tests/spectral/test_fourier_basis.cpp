@@ -24,16 +24,41 @@ TEST(FourierBasis, FunctionsFollowTheDocumentedOrdering) {
   EXPECT_EQ(basis.harmonic(7), 4);
 }
 
+// M = 2H + 1: harmonics 0 … H, each cosine with its sine, no top function.
+TEST(FourierBasis, HarmonicFormHasEveryHarmonicWithItsPair) {
+  const FourierBasis basis = FourierBasis::with_harmonics(3);
+  const double tau = 0.4321;
+  const double pi = std::numbers::pi;
+  ASSERT_EQ(basis.dimension(), 7);
+  EXPECT_FALSE(basis.has_top_function());
+  EXPECT_EQ(basis.highest_harmonic(), 3);
+  EXPECT_NEAR(basis.value(5, tau), std::cos(6 * pi * tau), 1e-15);
+  EXPECT_NEAR(basis.value(6, tau), std::sin(6 * pi * tau), 1e-15);
+  EXPECT_TRUE(basis.is_sine(6));
+  EXPECT_FALSE(FourierBasis(8).is_sine(7));  // the top function of M = 2^J is a cosine
+}
+
+// The top function's damping row is zero for M = 2^J (its derivative leaves the span), while
+// every harmonic of M = 2H + 1 has A₁ = ±πm on its (cos, sin) pair.
+TEST(FourierBasis, OnlyTheTopFunctionEscapesTheFirstDerivativeOperator) {
+  const Eigen::MatrixXd top(FourierBasis(8).galerkin_operator(1));
+  EXPECT_EQ(top.row(7).cwiseAbs().sum(), 0.0);
+  const Eigen::MatrixXd paired(FourierBasis::with_harmonics(4).galerkin_operator(1));
+  for (int k = 1; k < 9; ++k) EXPECT_GT(paired.row(k).cwiseAbs().sum(), 1.0) << "row " << k;
+}
+
 // Derivatives against central differences of the values (step 1e-5, error O(h²·w³) ≈ 1e-6).
 TEST(FourierBasis, DerivativesMatchCentralDifferences) {
-  const FourierBasis basis(16);
-  const double h = 1e-5;
-  for (int k = 0; k < 16; ++k) {
-    for (double tau : {0.0, 0.3, 0.77}) {
-      for (int d = 1; d <= 2; ++d) {
-        const double fd = (basis.value(k, tau + h, d - 1) - basis.value(k, tau - h, d - 1)) / (2 * h);
-        const double scale = std::pow(2 * std::numbers::pi * basis.harmonic(k), d) + 1.0;
-        EXPECT_NEAR(basis.value(k, tau, d), fd, 1e-6 * scale) << "k=" << k << " d=" << d;
+  for (const int dim : {16, 17}) {
+    const FourierBasis basis(dim);
+    const double h = 1e-5;
+    for (int k = 0; k < dim; ++k) {
+      for (double tau : {0.0, 0.3, 0.77}) {
+        for (int d = 1; d <= 2; ++d) {
+          const double fd = (basis.value(k, tau + h, d - 1) - basis.value(k, tau - h, d - 1)) / (2 * h);
+          const double scale = std::pow(2 * std::numbers::pi * basis.harmonic(k), d) + 1.0;
+          EXPECT_NEAR(basis.value(k, tau, d), fd, 1e-6 * scale) << "M=" << dim << " k=" << k << " d=" << d;
+        }
       }
     }
   }
@@ -42,15 +67,17 @@ TEST(FourierBasis, DerivativesMatchCentralDifferences) {
 // Slow oracle: A_d(j,k) = ∫ q_j q_k^{(d)} by a 4M-point rectangle rule, exact for these
 // trigonometric polynomials (degree ≤ M < 4M).
 TEST(FourierBasis, GalerkinOperatorsMatchQuadrature) {
-  const int m = 16, q = 4 * m;
-  const FourierBasis basis(m);
-  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(q, 0.0, 1.0 - 1.0 / q);
-  const Eigen::MatrixXd v0 = basis.values(tau, 0);
-  for (int d = 0; d <= 2; ++d) {
-    const Eigen::MatrixXd quad = v0.transpose() * basis.values(tau, d) / q;
-    const Eigen::MatrixXd exact(basis.galerkin_operator(d));
-    const double scale = std::pow(std::numbers::pi * m, d);
-    EXPECT_LT((quad - exact).cwiseAbs().maxCoeff(), 1e-12 * scale) << "d = " << d;
+  for (const int m : {16, 15}) {
+    const int q = 4 * m;
+    const FourierBasis basis(m);
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(q, 0.0, 1.0 - 1.0 / q);
+    const Eigen::MatrixXd v0 = basis.values(tau, 0);
+    for (int d = 0; d <= 2; ++d) {
+      const Eigen::MatrixXd quad = v0.transpose() * basis.values(tau, d) / q;
+      const Eigen::MatrixXd exact(basis.galerkin_operator(d));
+      const double scale = std::pow(std::numbers::pi * m, d);
+      EXPECT_LT((quad - exact).cwiseAbs().maxCoeff(), 1e-12 * scale) << "M = " << m << " d = " << d;
+    }
   }
 }
 
@@ -65,9 +92,11 @@ TEST(FourierBasis, DerivativeOperatorsHaveIntegrationByPartsSymmetry) {
   EXPECT_GT(a1.cwiseAbs().maxCoeff(), 1.0);  // not trivially zero
 }
 
-TEST(FourierBasis, RejectsDimensionsThatAreNotPowersOfTwo) {
-  for (int m : {0, 1, 3, 12, -4}) {
+TEST(FourierBasis, RejectsDimensionsThatAreNeitherPowersOfTwoNorOdd) {
+  for (int m : {0, 1, 6, 12, -4}) {
     wbm::testing::expect_throw_with<std::invalid_argument>([m] { FourierBasis b(m); },
-                                                           {"M = " + std::to_string(m), "power of two"});
+                                                           {"M = " + std::to_string(m), "power of two", "odd >= 3"});
   }
+  wbm::testing::expect_throw_with<std::invalid_argument>([] { (void)FourierBasis::with_harmonics(0); },
+                                                         {"H = 0", "[1, 2^28]"});
 }

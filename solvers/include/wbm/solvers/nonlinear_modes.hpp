@@ -41,6 +41,7 @@
 /// points and the corners where contact samples change state (to E = 10 on the LL11 rod with
 /// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,7 @@
 #include <Eigen/SparseCore>
 
 #include <wbm/contact/augmented_lagrangian.hpp>
+#include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/newton.hpp>
@@ -200,11 +202,13 @@ class NonlinearModes {
     // values g and the contact multipliers λ (stop-major, m per stop).
     struct Unpacked {
       Eigen::VectorXd y, g, lambda;
+      Eigen::VectorXd penalty_stiffness;  // f′(g) of the penalty law (penalty only)
     };
     [[nodiscard]] Unpacked unpack(const Eigen::VectorXd& x) const;
     [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian) const;
     const NonlinearModes* nm_;
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
+    std::optional<contact::LinearPenalty> penalty_law_;  // κ (g)₊ on the normalized gap (penalty only)
     Eigen::Index ny_ = 0, size_ = 0;
   };
   /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
@@ -221,6 +225,7 @@ class NonlinearModes {
   struct Evaluation;
   [[nodiscard]] Evaluation evaluate(const Eigen::VectorXd& y, double energy, double omega2_fixed,
                                     const contact::AugmentedLagrangian& al, bool hessian) const;
+  // P × F values of spectral::FourierBasis::with_harmonics(N) (or its d-th τ-derivative) at τ_p = p/P.
   [[nodiscard]] Eigen::MatrixXd basis_values(int samples, int derivative) const;
   // The stacked Y with the fixed phase coefficient (0) inserted back at phase_index_.
   [[nodiscard]] Eigen::VectorXd with_phase(const Eigen::VectorXd& x) const;

@@ -16,13 +16,18 @@
 
 namespace wbm::solvers {
 
-/// One basis of dimension M = 2^J on the circle: Fourier (ordering of spectral::FourierBasis) or
-/// the L²-orthonormal periodized scaling functions φ_{J,k} of a wavelet family (ordering by
-/// shift k, wavelets::PeriodizedBasis). Immutable, cheap to copy.
+/// One basis of dimension M on the circle: Fourier (ordering of spectral::FourierBasis; M = 2^J
+/// with the paper's top function cos πMτ, or M = 2H + 1 for H harmonics) or the L²-orthonormal
+/// periodized scaling functions φ_{J,k} of a wavelet family (M = 2^J, ordering by shift k,
+/// wavelets::PeriodizedBasis). Immutable, cheap to copy.
 class TimeBasis {
  public:
-  /// Fourier basis of dimension M (power of two ≥ 2).
+  /// Fourier basis of dimension M (power of two ≥ 2, or odd ≥ 3 = 2H + 1). Throws
+  /// std::invalid_argument otherwise.
   [[nodiscard]] static TimeBasis fourier(int dimension);
+  /// Harmonic balance as usually written: harmonics 0 … H, dimension 2H + 1, every harmonic
+  /// with its sine (no undamped top function). Throws std::invalid_argument unless H ≥ 1.
+  [[nodiscard]] static TimeBasis fourier_harmonics(int harmonics);
   /// Periodized scaling functions of `family` with M = `dimension` = 2^J functions.
   [[nodiscard]] static TimeBasis wavelet(const wavelets::Family& family, int dimension);
   /// By name, case-insensitive: "fourier", "haar", "db4" … "db20" (or "daubechies6" …),

@@ -8,7 +8,7 @@
 namespace wbm::spectral {
 
 /// Alternating frequency/time transfer [CG89] for the real Fourier basis of dimension M
-/// (ordering of FourierBasis), on Q equispaced samples τ_q = (q + δ)/Q, q = 0 … Q−1, Q ≥ M,
+/// (ordering of FourierBasis: M = 2^J with the top function cos πMτ, or M = 2H + 1), on Q equispaced samples τ_q = (q + δ)/Q, q = 0 … Q−1, Q ≥ M,
 /// with the offset δ ∈ [0, 1): δ = 0 samples the period's start, δ = ½ the midpoints (the
 /// weighted residual's rule [JL14 Sec. 4.1], which never samples a Haar breakpoint).
 /// Coefficient matrices are n × M (row = DOF, column = basis function: the column-major view
@@ -30,7 +30,8 @@ namespace wbm::spectral {
 /// per process and shared (~50 µs each time otherwise; the planner, not thread-safe, runs under a
 /// mutex); the const methods execute them on their own buffers (FFTW's new-array execute), so
 /// one Aft may be shared by threads. Move-only.
-/// Throws std::invalid_argument if M is not a power of two ≥ 2, Q < M or δ ∉ [0, 1).
+/// Throws std::invalid_argument if M is not a FourierBasis dimension (is_fourier_dimension),
+/// Q < M or δ ∉ [0, 1).
 class Aft {
  public:
   Aft(int dimension, int samples, double offset = 0.0);

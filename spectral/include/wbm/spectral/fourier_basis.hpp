@@ -8,20 +8,33 @@
 
 namespace wbm::spectral {
 
-/// Real Fourier basis of dimension M = 2^J, M ≥ 2 [JL14 Sec. 3.1], ordered
-///   q_0 = 1,  q_{2m−1} = cos 2πmτ,  q_{2m} = sin 2πmτ  (m = 1 … M/2 − 1),  q_{M−1} = cos πMτ,
-/// so that it has the same dimension as the periodized wavelet bases at the same level J.
+/// Real Fourier basis on τ ∈ [0, 1), in one of two forms, told apart by the parity of M:
+///  - M = 2^J, M ≥ 2 [JL14 Sec. 3.1], the paper's form, with the dimension of the periodized
+///    wavelet bases at the same level J:
+///      q_0 = 1,  q_{2m−1} = cos 2πmτ,  q_{2m} = sin 2πmτ  (m = 1 … M/2 − 1),  q_{M−1} = cos πMτ.
+///    The last ("top") function cos πMτ has no sine partner: its derivative −πM sin πMτ is
+///    outside the span, so its Galerkin first-derivative row and column are zero and a damping
+///    term C u̇ does not reach it (an undamped harmonic, issue #19).
+///  - M = 2H + 1, H ≥ 1 (with_harmonics(H)): harmonic balance as usually written [LL11 Eq. (21)],
+///    q_0 = 1, q_{2m−1} = cos 2πmτ, q_{2m} = sin 2πmτ (m = 1 … H); every harmonic has its pair.
 /// The functions are not normalized: ∫₀¹ q_j q_k dτ = diag(1, ½, …, ½).
-/// The last function, cos πMτ (harmonic M/2), has its derivative −πM sin πMτ outside the span:
-/// its Galerkin first-derivative row and column are zero.
-/// Throws std::invalid_argument if M is not a power of two or M < 2.
+/// Throws std::invalid_argument if M is neither a power of two ≥ 2 nor an odd number ≥ 3.
 class FourierBasis {
  public:
   explicit FourierBasis(int dimension);
+  /// The 2H + 1 functions of harmonics 0 … H. Throws std::invalid_argument unless H ≥ 1.
+  [[nodiscard]] static FourierBasis with_harmonics(int harmonics);
 
   [[nodiscard]] int dimension() const noexcept { return dimension_; }
-  /// Harmonic number m of function k (0 for the constant, M/2 for the last function).
+  /// True for M = 2^J (the lone top function cos πMτ), false for M = 2H + 1.
+  [[nodiscard]] bool has_top_function() const noexcept { return dimension_ % 2 == 0; }
+  /// Highest harmonic: M/2 for M = 2^J, H for M = 2H + 1.
+  [[nodiscard]] int highest_harmonic() const noexcept { return dimension_ / 2; }
+  /// Harmonic number m of function k (0 for the constant, M/2 for the top function).
+  /// Throws std::out_of_range for k outside [0, M).
   [[nodiscard]] int harmonic(int k) const;
+  /// True if q_k is a sine (k even, 0 < k, and not the top function).
+  [[nodiscard]] bool is_sine(int k) const;
 
   /// d-th τ-derivative of q_k at τ, d ≥ 0. Throws std::out_of_range for k outside [0, M).
   [[nodiscard]] double value(int k, double tau, int derivative = 0) const;
@@ -39,5 +52,9 @@ class FourierBasis {
 
 /// True if n is a power of two (1, 2, 4, ...).
 [[nodiscard]] constexpr bool is_power_of_two(long n) noexcept { return n > 0 && (n & (n - 1)) == 0; }
+/// True if M is a valid FourierBasis dimension: a power of two ≥ 2 or an odd number ≥ 3.
+[[nodiscard]] constexpr bool is_fourier_dimension(long m) noexcept {
+  return (m >= 2 && is_power_of_two(m)) || (m >= 3 && m % 2 == 1);
+}
 
 }  // namespace wbm::spectral
