@@ -12,6 +12,14 @@
 
 namespace {
 
+// Backbone continuation options over [E_min, E_max], the other fields at their defaults.
+wbm::solvers::BackboneContinuationOptions range(double energy_min, double energy_max) {
+  wbm::solvers::BackboneContinuationOptions o;
+  o.energy_min = energy_min;
+  o.energy_max = energy_max;
+  return o;
+}
+
 const wbm::scene::ModeProblem& ll11() {
   static const auto problem =
       wbm::scene::mode_problem(wbm::scene::load_scene(wbm::reproduce::scene_directory() / "ll11_rod.toml"));
@@ -28,7 +36,7 @@ void BM_NonlinearModes_Fig3Backbone(benchmark::State& state) {
   size_t levels = 0;
   double seconds = 0.0;
   for (auto _ : state) {
-    const auto b = nm.continue_backbone({.energy_min = 0.5, .energy_max = 10.0});
+    const auto b = nm.continue_backbone(range(0.5, 10.0));
     if (!b.complete) state.SkipWithError(b.message.c_str());
     levels = b.levels.size();
     seconds = b.wall_time_s;

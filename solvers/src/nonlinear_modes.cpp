@@ -408,7 +408,7 @@ NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(
     throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
                                 std::to_string(size_));
   }
-  const Eigen::Index p = nm.phase_index_, ms = nm.options_.samples;
+  const Eigen::Index ms = nm.options_.samples;
   Unpacked u;
   u.y = nm.with_phase(x.head(ny_));
   const Eigen::Map<const Eigen::MatrixXd> ym(u.y.data(), nm.n_, nm.f_);

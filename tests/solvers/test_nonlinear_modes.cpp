@@ -22,6 +22,14 @@
 
 namespace {
 
+// Backbone continuation options over [E_min, E_max], the other fields at their defaults.
+wbm::solvers::BackboneContinuationOptions range(double energy_min, double energy_max) {
+  wbm::solvers::BackboneContinuationOptions o;
+  o.energy_min = energy_min;
+  o.energy_max = energy_max;
+  return o;
+}
+
 using namespace wbm;
 
 // [LL11 Sec. 5.1], from the scene every reproduction uses, with the stop's gap replaced.
@@ -149,7 +157,7 @@ TEST(NonlinearModes, AugmentedLagrangianAndKktContinuationAgree) {
 // complementarity), the normalization holds, and the frequency never drops below the linear one.
 TEST(NonlinearModes, BackboneToTenTimesOnsetKeepsTheKktConditions) {
   const auto nm = modes(1e-3, 8, 64);
-  const auto b = nm.continue_backbone({.energy_min = 0.5, .energy_max = 10.0});
+  const auto b = nm.continue_backbone(range(0.5, 10.0));
   ASSERT_TRUE(b.complete) << b.message;
   EXPECT_NEAR(b.levels.back().energy, 10.0, 1e-9);
   for (const auto& l : b.levels) {
@@ -158,7 +166,9 @@ TEST(NonlinearModes, BackboneToTenTimesOnsetKeepsTheKktConditions) {
     EXPECT_LE(l.normalization_error, 1e-10) << "E = " << l.energy;
     EXPECT_GE(l.contact_force.minCoeff(), 0.0);
     EXPECT_GE(l.frequency_hz, nm.linear_frequency_hz() * (1.0 - 1e-12));
-    if (l.energy < 1.0) EXPECT_EQ(l.contact_force.maxCoeff(), 0.0);
+    if (l.energy < 1.0) {
+      EXPECT_EQ(l.contact_force.maxCoeff(), 0.0);
+    }
   }
   EXPECT_GT(b.levels.back().frequency_hz, nm.linear_frequency_hz() + 1.0);  // hardening
 }
