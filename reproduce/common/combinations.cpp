@@ -23,6 +23,7 @@ const std::vector<Combination>& table2_combinations() {
 }
 
 std::string format(const char* spec, double value) {
+  if (std::isnan(value)) return "—";  // a missing value, never printed as a number
   char b[64];
   std::snprintf(b, sizeof b, spec, value);
   return b;
@@ -144,34 +145,94 @@ void write_sweep(Run& run, const std::string& file, const std::vector<Combinatio
             {index, m, err, energy, time, iterations, cond}, status);
 }
 
+const CombinationResult* find_converged(const std::vector<CombinationResult>& results, const std::string& key,
+                                        int dimension) {
+  for (const auto& r : results) {
+    if (r.combination.key() == key && (dimension == 0 || r.dimension == dimension) && r.converged()) return &r;
+  }
+  return nullptr;
+}
+
 namespace {
-
-const Eigen::VectorXd& pick(const Reference& r, const std::string& q) {
-  return q == "displacement" ? r.tip_displacement : q == "velocity" ? r.tip_velocity : r.contact_force;
+void check_quantity(const std::string& q) {
+  if (q != "displacement" && q != "velocity" && q != "force") {
+    throw std::invalid_argument("history: quantity '" + q + "' must be displacement, velocity or force");
+  }
 }
-const Eigen::VectorXd& pick(const CombinationResult& r, const std::string& q) {
-  return q == "displacement" ? r.tip_displacement : q == "velocity" ? r.tip_velocity : r.contact_force;
+double history_scale(const Reference& r, const std::string& q) {
+  return q == "force" ? 1.0 / r.scene.forcing->amplitude : 1.0;
 }
-
 }  // namespace
 
-void history_figure(Run& run, const std::string& scene_name, const std::string& figure, const std::string& quantity,
-                    const std::string& paper_note) {
-  if (quantity != "displacement" && quantity != "velocity" && quantity != "force") {
-    throw std::invalid_argument("history_figure: quantity '" + quantity + "' must be displacement, velocity or force");
+Eigen::VectorXd history(const Reference& r, const std::string& q) {
+  check_quantity(q);
+  const Eigen::VectorXd& v = q == "displacement" ? r.tip_displacement : q == "velocity" ? r.tip_velocity : r.contact_force;
+  return history_scale(r, q) * v;
+}
+
+Eigen::VectorXd history(const Reference& ref, const CombinationResult& r, const std::string& q) {
+  check_quantity(q);
+  const Eigen::VectorXd& v = q == "displacement" ? r.tip_displacement : q == "velocity" ? r.tip_velocity : r.contact_force;
+  return history_scale(ref, q) * v;
+}
+
+double fraction_above(const Eigen::VectorXd& u, double threshold) {
+  return u.size() == 0 ? NAN : static_cast<double>((u.array() > threshold).count()) / static_cast<double>(u.size());
+}
+
+double total_variation(const Eigen::VectorXd& v) {
+  double tv = 0.0;
+  for (Eigen::Index q = 0; q < v.size(); ++q) tv += std::abs(v((q + 1) % v.size()) - v(q));
+  return tv;
+}
+
+double rms_relative_error_on(const Eigen::VectorXd& v, const Eigen::VectorXd& reference, const std::vector<bool>& mask) {
+  double num = 0.0, den = 0.0;
+  long count = 0;
+  for (Eigen::Index q = 0; q < v.size(); ++q) {
+    if (!mask[static_cast<size_t>(q)]) continue;
+    num += (v(q) - reference(q)) * (v(q) - reference(q));
+    den += reference(q) * reference(q);
+    ++count;
   }
-  const Reference ref = solve_reference(run, scene_name);
-  const int m = run.quick() ? 16 : 64;
-  const double scale = quantity == "force" ? 1.0 / ref.scene.forcing->amplitude : 1.0;
+  return count == 0 || den == 0.0 ? NAN : std::sqrt(num / den);
+}
+
+std::string claims_markdown(const std::vector<Claim>& claims) {
+  std::ostringstream md;
+  int agree = 0, disagree = 0, unchecked = 0;
+  md << "Against the paper's text:\n\n";
+  for (const auto& c : claims) {
+    md << "- \"" << c.statement << "\": " << c.numbers << ": ";
+    if (!c.agrees.has_value()) {
+      md << "not checked.\n";
+      ++unchecked;
+    } else {
+      md << (*c.agrees ? "agrees" : "disagrees") << ".\n";
+      ++(*c.agrees ? agree : disagree);
+    }
+  }
+  md << "\n" << agree << " agree, " << disagree << " disagree, " << unchecked << " not checked.\n\n";
+  return md.str();
+}
+
+HistoryFigure history_figure(Run& run, const std::string& scene_name, const std::string& figure,
+                             const std::string& quantity, const std::string& paper_note) {
+  check_quantity(quantity);
+  HistoryFigure out{solve_reference(run, scene_name), {}, run.quick() ? 16 : 64};
+  const Reference& ref = out.reference;
+  const int m = out.dimension;
   const std::string unit = quantity == "displacement" ? "[m]" : quantity == "velocity" ? "[m/s]" : "[-]";
   const std::string prefix = quantity == "displacement" ? "u_tip_" : quantity == "velocity" ? "v_tip_" : "f_contact_";
 
   std::vector<std::string> header = {"tau [-]", prefix + "bdf " + unit};
-  std::vector<Eigen::VectorXd> columns = {ref.tau(), scale * pick(ref, quantity)};
+  const Eigen::VectorXd v_ref = history(ref, quantity);
+  std::vector<Eigen::VectorXd> columns = {ref.tau(), v_ref};
   nlohmann::json solves = nlohmann::json::array();
   std::ostringstream rows;
   for (const auto& c : table2_combinations()) {
-    const auto r = solve_combination(ref, c, m);
+    out.results.push_back(solve_combination(ref, c, m));
+    const auto& r = out.results.back();
     solves.push_back(to_json(r));
     rows << "| " << c.label() << " | " << solvers::to_string(r.solution.report.status) << " | "
          << r.solution.report.iterations << " | ";
@@ -179,8 +240,7 @@ void history_figure(Run& run, const std::string& scene_name, const std::string& 
       rows << "— | — | " << r.solution.report.message << " |\n";
       continue;
     }
-    const Eigen::VectorXd v = scale * pick(r, quantity);
-    const Eigen::VectorXd v_ref = scale * pick(ref, quantity);
+    const Eigen::VectorXd v = history(ref, r, quantity);
     header.push_back(prefix + c.key() + " " + unit);
     columns.push_back(v);
     rows << format("%.3e", solvers::rms_relative_error(v, v_ref)) << " | "
@@ -212,78 +272,26 @@ void history_figure(Run& run, const std::string& scene_name, const std::string& 
      << unit << " | note |\n|---|---|---|---|---|---|\n"
      << rows.str() << "\n";
   run.report(md.str());
+  return out;
 }
 
 }  // namespace wbm::reproduce
 
 namespace wbm::reproduce {
 
-namespace {
-
-// The paper's statements on Fig. 11 [JL14 Sec. 5.5], checked against our sweep.
-std::string paper_checks(const std::vector<CombinationResult>& results, const std::vector<int>& dims) {
-  const auto at = [&](const std::string& key, int m) -> const CombinationResult* {
-    for (const auto& r : results) {
-      if (r.combination.key() == key && r.dimension == m && r.converged()) return &r;
-    }
-    return nullptr;
-  };
-  std::ostringstream md;
-  md << "Against the paper's text:\n\n";
-  std::vector<std::pair<double, std::string>> at8;
-  for (const auto& c : table2_combinations()) {
-    if (const auto* r = at(c.key(), dims.front())) at8.emplace_back(r->tip_error, c.label());
-  }
-  std::sort(at8.begin(), at8.end());
-  if (at8.size() >= 2) {
-    md << "- Lowest error at M = " << dims.front() << " (paper: HBM and Galerkin B-spline): ours " << at8[0].second
-       << " (" << format("%.2e", at8[0].first) << ") and " << at8[1].second << " (" << format("%.2e", at8[1].first)
-       << ").\n";
-  }
-  const auto* db16 = at("db6_db6", 16);
-  const auto* db8 = at("db6_db6", 8);
-  const auto* db64 = at("db6_db6", 64);
-  const auto* hb64 = at("fourier_fourier", 64);
-  if (db16 && db8 && db64 && hb64) {
-    md << "- Galerkin DB6 poor at M = 16, then comparable to HBM (paper): ours " << format("%.2e", db16->tip_error)
-       << " at 16 against " << format("%.2e", db8->tip_error) << " at 8; at 64 " << format("%.2e", db64->tip_error)
-       << " against HBM " << format("%.2e", hb64->tip_error) << ".\n";
-  }
-  const auto* bs = at("bspline_bspline", dims.back());
-  const auto* hb = at("fourier_fourier", dims.back());
-  if (bs && hb) {
-    md << "- Galerkin B-spline behind HBM at large M (paper): at M = " << dims.back() << " "
-       << format("%.2e", bs->tip_error) << " against " << format("%.2e", hb->tip_error) << ".\n";
-  }
-  double haar = std::numeric_limits<double>::infinity(), other = 0.0;  // smallest Haar, largest other
-  for (const auto& r : results) {
-    if (r.dimension != 128 || !r.converged()) continue;
-    if (r.combination.trial == "haar") {
-      haar = std::min(haar, r.tip_error);
-    } else {
-      other = std::max(other, r.tip_error);
-    }
-  }
-  if (std::isfinite(haar)) {
-    md << "- Haar trial functions have the highest error (paper): at M = 128 the smallest Haar error "
-       << format("%.2e", haar) << " against the largest other " << format("%.2e", other) << ": "
-       << (haar > other ? "agrees" : "disagrees") << " (Haar converges at first order in M).\n\n";
-  }
-  return md.str();
-}
-
-}  // namespace
-
-void convergence_figure(Run& run, const std::string& figure, const std::string& metric, const std::string& paper_note) {
+ConvergenceFigure convergence_figure(Run& run, const std::string& figure, const std::string& metric,
+                                     const std::string& paper_note) {
   if (metric != "energy_norm" && metric != "tip_error") {
     throw std::invalid_argument("convergence_figure: metric '" + metric + "' must be energy_norm or tip_error");
   }
-  const std::vector<int> dims = run.quick() ? std::vector<int>{8, 16} : std::vector<int>{8, 16, 32, 64, 128, 256};
+  ConvergenceFigure out;
+  out.dimensions = run.quick() ? std::vector<int>{8, 16} : std::vector<int>{8, 16, 32, 64, 128, 256};
+  const std::vector<int>& dims = out.dimensions;
   std::ostringstream md;
   md << "## " << figure << ": " << (metric == "energy_norm" ? "energy norm rms(E)/rms(E_BDF)" : "rms relative tip error")
      << " against M, distributional form\n\n"
      << "Files: `out/" << run.id() << "/sweep_case{1,2}.csv` (long format: combination index in the order of "
-     << "Table 2, M, converged, tip error, energy norm, solve time, Newton iterations, condition estimate), "
+     << "Table 2, M, tip error, energy norm, solve time, Newton iterations, condition estimate, status; a value that does not exist is an empty cell), "
      << "`" << metric << ".{png,pdf}`, `meta.json`.\n\nPaper: " << paper_note << "\n\n";
   nlohmann::json meta = nlohmann::json::object();
   meta["combinations"] = nlohmann::json::array();
@@ -293,7 +301,7 @@ void convergence_figure(Run& run, const std::string& figure, const std::string& 
   for (int case_id : {1, 2}) {
     const std::string name = "jl14_case" + std::to_string(case_id);
     const Reference ref = solve_reference(run, name);
-    std::vector<CombinationResult> results;
+    std::vector<CombinationResult>& results = out.cases[static_cast<size_t>(case_id - 1)];
     nlohmann::json solves = nlohmann::json::array();
     md << "### " << ref.scene.title << "\n\n| combination |";
     for (int m : dims) md << " M = " << m << " |";
@@ -314,13 +322,13 @@ void convergence_figure(Run& run, const std::string& figure, const std::string& 
       md << "\n";
     }
     md << "\n";
-    if (metric == "tip_error" && !run.quick()) md << paper_checks(results, dims);
     write_sweep(run, "sweep_case" + std::to_string(case_id) + ".csv", results);
     meta["case" + std::to_string(case_id)] = to_json(ref);
     meta["case" + std::to_string(case_id)]["solves"] = solves;
   }
   run.meta(meta);
   run.report(md.str());
+  return out;
 }
 
 }  // namespace wbm::reproduce

@@ -3,6 +3,8 @@
 /// Table 2, the speed/accuracy study): the BDF reference of a scene, the trial:weighting
 /// combinations of Table 2 solved on it, and their post-processed errors. Units: SI.
 
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,20 +69,58 @@ struct CombinationResult {
 /// Scene parameters and BDF diagnostics for meta.json.
 [[nodiscard]] nlohmann::json to_json(const Reference& reference);
 
-/// Writes a long-format sweep table (one row per combination and M): combination index into
-/// `combinations`, M, converged (1/0), tip error, energy norm, median solve time, Newton
-/// iterations, condition estimate; rows that did not converge carry 0 in the value columns
-/// (never NaN) and are listed in meta.json with their messages.
+/// Writes a long-format sweep table (one row per combination and M): combination index in the
+/// order of Table 2, M, tip error, energy norm, median solve time, Newton iterations, condition
+/// estimate, and the solve's status. Values that do not exist (errors of a solve that did not
+/// converge, an infinite condition estimate) are empty cells beside the status.
 void write_sweep(Run& run, const std::string& file, const std::vector<CombinationResult>& results);
 
-/// Time-history figure (Figs. 6–9): the BDF reference and every Table 2 combination at M = 64
-/// (16 with --quick) of `quantity` ("displacement" [m], "velocity" [m/s] or "force", the contact
-/// force divided by F [-]) in one CSV, with the report fragment. A combination that does not
-/// converge is left out of the CSV and reported with its status and message.
-void history_figure(Run& run, const std::string& scene, const std::string& figure, const std::string& quantity,
-                    const std::string& paper_note);
+/// The converged result of `key` ("db6_fourier") at M (any M if 0) in `results`, else nullptr.
+[[nodiscard]] const CombinationResult* find_converged(const std::vector<CombinationResult>& results,
+                                                      const std::string& key, int dimension = 0);
 
-/// Printf-style formatting of one number, for report tables.
+/// A time history of the tip of one combination (or the reference) as the figures draw it.
+/// "displacement" [m], "velocity" [m/s] or "force" (the contact force over F [-]).
+[[nodiscard]] Eigen::VectorXd history(const Reference& reference, const std::string& quantity);
+[[nodiscard]] Eigen::VectorXd history(const Reference& reference, const CombinationResult& result,
+                                      const std::string& quantity);
+
+/// Time-history figure (Figs. 6–9): solves the BDF reference of `scene` and every Table 2
+/// combination at M = 64 (16 with --quick), writes `quantity` of each in one CSV, meta.json and
+/// the report table (status, rms and max difference to BDF). A combination that does not
+/// converge is left out of the CSV and reported with its status and message. Returns the
+/// results (in Table 2 order) so that the executable checks its paper's statements.
+struct HistoryFigure {
+  Reference reference;
+  std::vector<CombinationResult> results;
+  int dimension = 0;
+};
+[[nodiscard]] HistoryFigure history_figure(Run& run, const std::string& scene, const std::string& figure,
+                                           const std::string& quantity, const std::string& paper_note);
+
+/// One statement of a paper, checked: `agrees` is computed from `numbers` (printed beside it);
+/// no value means it could not be checked (a missing solve, a qualitative statement) and
+/// `numbers` says why.
+struct Claim {
+  std::string statement;
+  std::optional<bool> agrees;
+  std::string numbers;
+};
+/// "Against the paper's text:" and one bullet per claim: statement, numbers, agrees/disagrees/not
+/// checked; then the count of each.
+[[nodiscard]] std::string claims_markdown(const std::vector<Claim>& claims);
+
+/// Signal measures for the claims, on samples over one period:
+///  - fraction of samples with u > threshold;
+///  - periodic total variation Σ_q |v_{q+1} − v_q| (with v_Q = v_0);
+///  - rms relative difference rms(v − v_ref)/rms(v_ref) restricted to the samples where
+///    `mask` is true (NaN if none).
+[[nodiscard]] double fraction_above(const Eigen::VectorXd& u, double threshold);
+[[nodiscard]] double total_variation(const Eigen::VectorXd& v);
+[[nodiscard]] double rms_relative_error_on(const Eigen::VectorXd& v, const Eigen::VectorXd& reference,
+                                           const std::vector<bool>& mask);
+
+/// Printf-style formatting of one number, for report tables; NaN (a missing value) prints "—".
 [[nodiscard]] std::string format(const char* spec, double value);
 
 }  // namespace wbm::reproduce
@@ -89,7 +129,13 @@ namespace wbm::reproduce {
 
 /// Convergence figure (Figs. 10–11): Cases 1 and 2, every Table 2 combination at M = 8 … 256
 /// (8, 16 with --quick), written as sweep_case1.csv and sweep_case2.csv (write_sweep) with a report
-/// table of `metric` ("energy_norm" or "tip_error") per combination and M.
-void convergence_figure(Run& run, const std::string& figure, const std::string& metric, const std::string& paper_note);
+/// table of `metric` ("energy_norm" or "tip_error") per combination and M. Returns the results
+/// of each case and the M used, for the executable's checks of the paper's statements.
+struct ConvergenceFigure {
+  std::vector<int> dimensions;
+  std::array<std::vector<CombinationResult>, 2> cases;  // Case 1, Case 2
+};
+[[nodiscard]] ConvergenceFigure convergence_figure(Run& run, const std::string& figure, const std::string& metric,
+                                                   const std::string& paper_note);
 
 }  // namespace wbm::reproduce

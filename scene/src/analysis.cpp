@@ -345,6 +345,7 @@ nlohmann::json to_json(const solvers::ModeLevel& l) {
           {"tolerance", l.tolerance},
           {"frequency_hz", finite_or_null(l.frequency_hz)},
           {"rayleigh_frequency_hz", finite_or_null(l.rayleigh_frequency_hz)},
+          {"equality_multiplier", finite_or_null(l.equality_multiplier)},
           {"max_penetration_gaps", finite_or_null(l.max_penetration)},
           {"complementarity_gaps", finite_or_null(l.complementarity)},
           {"normalization_error", finite_or_null(l.normalization_error)},
