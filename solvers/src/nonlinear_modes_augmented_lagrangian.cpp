@@ -1,0 +1,276 @@
+// Nonlinear modes by the augmented Lagrangian with Powell's updates [LL11 Secs. 3–4, Algs. 1–3]:
+// the primal evaluation (gradient and Hessian of L_κ), one energy level, and the energy-stepping
+// backbone.
+#include <wbm/solvers/nonlinear_modes.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+#include <wbm/spectral/fourier_basis.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::solvers {
+
+struct NonlinearModes::Evaluation {
+  Eigen::VectorXd gradient;   // reduced (phase coefficient removed)
+  Eigen::MatrixXd hessian;    // reduced, if asked
+  Eigen::VectorXd g;          // constraint values, stop-major: g(c·m + k)
+  double h = 0.0;             // ½m̂/γ_c − E
+  double r = 0.0;             // Rayleigh quotient [(rad/s)²]
+};
+
+NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, double energy, double omega2_fixed,
+                                                    const contact::AugmentedLagrangian& al, bool hessian) const {
+  const bool simultaneous = options_.algorithm == ModeAlgorithm::Simultaneous;
+  const Eigen::Map<const Eigen::MatrixXd> ym(y.data(), n_, f_);
+  const Eigen::MatrixXd ky = k_ * ym, my = m_ * ym;
+  double kh = 0.0, mh = 0.0;
+  for (int k = 0; k < f_; ++k) {
+    kh += weight_(k) * ym.col(k).dot(ky.col(k));
+    mh += weight_(k) * nu_(k) * nu_(k) * ym.col(k).dot(my.col(k));
+  }
+  Evaluation e;
+  e.r = kh / mh;
+  e.h = mh / m_c_ - energy;
+  const Eigen::VectorXd wnu2 = (weight_.array() * nu_.array().square()).matrix();
+  const Eigen::MatrixXd dk = 2.0 * ky * weight_.asDiagonal(), dm = 2.0 * my * wnu2.asDiagonal();  // ∇k̂, ∇m̂ (n × F)
+  const double w02 = omega0_ * omega0_;
+  const double m_target = energy * m_c_;
+  const double omega2 = simultaneous ? e.r : omega2_fixed;
+  const double denominator = w02 * (simultaneous ? mh : m_target);
+  Eigen::MatrixXd grad = (dk - omega2 * dm) / denominator;  // ∇ρ (simultaneous) or ∇Q (sequential)
+  // Constraints g_ck = u_c(τ_k) − g_c (units of g_ref) [LL11 Eq. (24b)].
+  const auto ms = static_cast<Eigen::Index>(options_.samples);
+  e.g.resize(static_cast<Eigen::Index>(stops_.size()) * ms);
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    e.g.segment(static_cast<Eigen::Index>(c) * ms, ms) =
+        (theta_ * ym.row(stops_[c].dof).transpose()).array() - stops_[c].gap / g_ref_;
+  }
+  const Eigen::VectorXd lambda = al.inequality_gradient(e.g);
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    grad.row(stops_[c].dof) += (theta_.transpose() * lambda.segment(static_cast<Eigen::Index>(c) * ms, ms)).transpose();
+  }
+  const double mu = al.equality_gradient(e.h);
+  grad += (mu / m_c_) * dm;
+  Eigen::VectorXd full = spectral::stacked(grad);
+  e.gradient.resize(full.size() - 1);
+  e.gradient << full.head(phase_index_), full.tail(full.size() - phase_index_ - 1);
+  if (!hessian) return e;
+
+  const Eigen::Index size = static_cast<Eigen::Index>(n_) * f_;
+  Eigen::MatrixXd hs = Eigen::MatrixXd::Zero(size, size);
+  for (int k = 0; k < f_; ++k) {  // (2K̃ − 2ω² M̃)/denominator, block diagonal
+    hs.block(k * n_, k * n_, n_, n_) = (2.0 * weight_(k) * k_ - 2.0 * omega2 * wnu2(k) * m_) / denominator;
+  }
+  const Eigen::VectorXd dmv = spectral::stacked(dm);
+  if (simultaneous) {  // − (∇m̂ ∇rᵀ + ∇r ∇m̂ᵀ)/(ω₀² m̂), ∇r = (∇k̂ − r ∇m̂)/m̂
+    const Eigen::VectorXd dr = spectral::stacked((dk - e.r * dm) / mh);
+    hs.noalias() -= (dmv * dr.transpose() + dr * dmv.transpose()) / (w02 * mh);
+  }
+  const Eigen::VectorXd curvature = al.inequality_curvature(e.g);
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    const Eigen::VectorXd cc = curvature.segment(static_cast<Eigen::Index>(c) * ms, ms);
+    if (cc.isZero(0.0)) continue;
+    const Eigen::MatrixXd block = theta_.transpose() * cc.asDiagonal() * theta_;  // F × F
+    const int d = stops_[c].dof;
+    for (int k = 0; k < f_; ++k) {
+      for (int l = 0; l < f_; ++l) hs(k * n_ + d, l * n_ + d) += block(k, l);
+    }
+  }
+  // Equality: κ_e ∇h ∇hᵀ + μ ∇²h, ∇h = ∇m̂/m_c, ∇²h = 2M̃/m_c.
+  hs.noalias() += (al.equality_curvature() / (m_c_ * m_c_)) * dmv * dmv.transpose();
+  for (int k = 0; k < f_; ++k) hs.block(k * n_, k * n_, n_, n_) += (2.0 * mu * wnu2(k) / m_c_) * m_;
+  // Remove the phase coefficient's row and column.
+  const Eigen::Index p = phase_index_, rest = size - p - 1;
+  e.hessian.resize(size - 1, size - 1);
+  e.hessian.topLeftCorner(p, p) = hs.topLeftCorner(p, p);
+  e.hessian.topRightCorner(p, rest) = hs.topRightCorner(p, rest);
+  e.hessian.bottomLeftCorner(rest, p) = hs.bottomLeftCorner(rest, p);
+  e.hessian.bottomRightCorner(rest, rest) = hs.bottomRightCorner(rest, rest);
+  return e;
+}
+
+ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!(energy > 0.0) || !std::isfinite(energy)) {
+    throw std::invalid_argument("NonlinearModes::solve: energy " + format_number(energy) + " must be > 0");
+  }
+  ModeLevel level;
+  level.energy = energy;
+  // Initial guess: the start level scaled by √(E/E_start), or the linear mode (cos 2πτ).
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n_) * f_);
+  if (start != nullptr && start->coefficients.size() == y.size()) {
+    y = spectral::stacked(start->coefficients) * (std::sqrt(energy / start->energy) / g_ref_);
+  } else {
+    y.segment(n_, n_) = onset_ * (std::sqrt(energy) / g_ref_);
+  }
+  y(phase_index_) = 0.0;
+  auto reduce = [&](const Eigen::VectorXd& full) {
+    Eigen::VectorXd x(full.size() - 1);
+    x << full.head(phase_index_), full.tail(full.size() - phase_index_ - 1);
+    return x;
+  };
+  auto expand = [&](const Eigen::VectorXd& x) { return with_phase(x); };
+  contact::AugmentedLagrangian al(static_cast<int>(stops_.size()) * options_.samples, options_.powell);
+  if (start != nullptr && start->multipliers.size() == static_cast<Eigen::Index>(stops_.size()) * options_.samples) {
+    al.warm_start(start->multipliers, start->equality_multiplier);  // contact forces vary continuously with E
+  }
+  Eigen::VectorXd x = reduce(y);
+  double omega2 = start != nullptr ? std::pow(2.0 * std::numbers::pi * start->frequency_hz, 2) : omega0_ * omega0_;
+  const NewtonOptions primal_options{.tolerance = options_.stationarity_tolerance,
+                                     .max_iterations = options_.max_newton_iterations,
+                                     .max_backtracks = 3,
+                                     .levenberg_marquardt = true,
+                                     .norm = ResidualNorm::Max};
+  NewtonReport last_primal;
+  std::string why = "Powell iteration limit reached";
+  for (int j = 0; j < options_.max_powell_iterations; ++j) {
+    ++level.powell_iterations;
+    // LL11 Alg. 3, l. 3: the primal problem ∇L_κ = 0, by the Newton core: line search on
+    // ‖∇L_κ‖₂, and Levenberg–Marquardt steps on ½‖∇L_κ‖² once it stalls (a change of the active
+    // set). A stalled solve is not final: the outer update changes the problem.
+    struct Stationarity {
+      const NonlinearModes* nm;
+      double energy, omega2;
+      const contact::AugmentedLagrangian* al;
+      [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
+        return nm->evaluate(nm->with_phase(x), energy, omega2, *al, false).gradient;
+      }
+      [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
+        return nm->evaluate(nm->with_phase(x), energy, omega2, *al, true).hessian;
+      }
+    };
+    const NewtonResult primal = newton(Stationarity{this, energy, omega2, &al}, x, primal_options);
+    level.newton_iterations += primal.report.iterations;
+    x = primal.x;
+    last_primal = primal.report;
+    const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
+    // l. 4–5: constraints and Powell's measures; Alg. 2 updates ω from the Rayleigh quotient.
+    bool omega_settled = true;
+    if (options_.algorithm == ModeAlgorithm::Sequential) {
+      omega_settled = std::abs(e.r - omega2) <= options_.powell.tolerance * omega2;
+      omega2 = e.r;
+    }
+    level.inequality_measure = al.inequality_measure(e.g);
+    level.equality_measure = contact::AugmentedLagrangian::equality_measure(e.h);
+    // A level converges only on a verified stationarity residual (‖∇L_κ‖∞ ≤ tolerance).
+    const bool stationary = e.gradient.lpNorm<Eigen::Infinity>() <= options_.stationarity_tolerance;
+    if (al.update(e.g, e.h) && omega_settled && stationary) {
+      level.status = SolveStatus::Converged;
+      why = "converged";
+      break;
+    }
+  }
+  // Report on the final iterate.
+  const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
+  level.residual_norm = e.gradient.lpNorm<Eigen::Infinity>();
+  level.tolerance = options_.stationarity_tolerance;
+  if (!level.converged()) {
+    level.status = last_primal.converged() ? SolveStatus::MaxIterations : last_primal.status;
+    why += "; last primal solve " + last_primal.brief();
+  }
+  level.rayleigh_frequency_hz = std::sqrt(e.r) / (2.0 * std::numbers::pi);
+  // The orbit's frequency from the stationarity ∇k̂ − (r − μ ω₀² m̂/m̂_c) ∇m̂ + m̂ ω₀² Θᵀλ = 0,
+  // which is the harmonic balance of the free motion with contact forces (continue_backbone).
+  const double m_ratio = e.h + energy;  // m̂/m̂_c
+  level.frequency_hz =
+      std::sqrt(e.r - al.equality_gradient(e.h) * omega0_ * omega0_ * m_ratio) / (2.0 * std::numbers::pi);
+  level.coefficients = spectral::as_coefficients(expand(x) * g_ref_, n_);
+  level.max_penetration = e.g.maxCoeff();
+  const Eigen::VectorXd lambda = al.inequality_gradient(e.g);
+  level.multipliers = lambda;
+  level.equality_multiplier = al.equality_gradient(e.h);
+  level.contact_force = lambda * (0.5 * m_ratio * m_c_ / m_ref_) *
+                        (options_.samples * omega0_ * omega0_ * m_ref_ * g_ref_);  // λ_AL m̂/(2 m_ref) f_ref
+  const double lmax = lambda.size() > 0 ? lambda.maxCoeff() : 0.0;
+  level.complementarity = lmax > 0.0 ? (lambda.array() * e.g.array()).abs().maxCoeff() / lmax : 0.0;
+  level.normalization_error = std::abs(e.h);
+  if (!std::isfinite(level.frequency_hz) || !level.coefficients.allFinite()) {
+    level.status = SolveStatus::NonFinite;
+    why = "non-finite iterate";
+  }
+  std::ostringstream os;
+  os << why << " after " << level.powell_iterations << " Powell and " << level.newton_iterations
+     << " Newton iterations: G_i = " << format_number(level.inequality_measure)
+     << ", G_e = " << format_number(level.equality_measure) << ", ‖∇L‖∞ = " << format_number(level.residual_norm)
+     << " (tolerances " << format_number(options_.powell.tolerance) << ", "
+     << format_number(options_.stationarity_tolerance) << ")";
+  level.message = os.str();
+  level.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return level;
+}
+
+Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!(o.energy_min > 0.0 && o.energy_min < o.energy_max) || !(o.min_step > 0.0 && o.min_step <= o.initial_step &&
+                                                                 o.initial_step <= o.max_step)) {
+    throw std::invalid_argument("BackboneOptions: need 0 < energy_min < energy_max and 0 < min_step <= initial_step "
+                                "<= max_step");
+  }
+  std::vector<double> include = o.include;
+  std::sort(include.begin(), include.end());
+  Backbone b;
+  double step = o.initial_step, energy = o.energy_min;
+  while (true) {
+    // Secant predictor through the last two levels, scaled start from one.
+    ModeLevel predictor;
+    const ModeLevel* start = nullptr;
+    if (b.levels.size() >= 2) {
+      const auto& l0 = b.levels[b.levels.size() - 2];
+      const auto& l1 = b.levels.back();
+      const double s = (energy - l1.energy) / (l1.energy - l0.energy);
+      predictor.energy = energy;
+      predictor.coefficients = l1.coefficients + s * (l1.coefficients - l0.coefficients);
+      predictor.frequency_hz = l1.frequency_hz + s * (l1.frequency_hz - l0.frequency_hz);
+      predictor.multipliers = l1.multipliers + s * (l1.multipliers - l0.multipliers);
+      predictor.equality_multiplier = l1.equality_multiplier + s * (l1.equality_multiplier - l0.equality_multiplier);
+      start = &predictor;
+    } else if (!b.levels.empty()) {
+      start = &b.levels.back();
+    }
+    ModeLevel level = solve(energy, start);
+    if (level.converged()) {
+      b.levels.push_back(std::move(level));
+      if (energy >= o.energy_max) break;
+      if (b.levels.back().powell_iterations <= 8) step = std::min(o.max_step, 1.5 * step);
+    } else {
+      b.failed_energies.push_back(energy);
+      if (b.levels.empty()) {
+        b.message = "the first level E = " + format_number(energy) + " did not converge: " + level.message;
+        break;
+      }
+      step *= 0.5;
+      if (step < o.min_step) {
+        b.message = "energy step below minimum after E = " + format_number(b.levels.back().energy) + ": " + level.message;
+        break;
+      }
+    }
+    double next = b.levels.back().energy + step;
+    for (double e : include) {
+      if (e > b.levels.back().energy + 1e-12 && e < next) next = e;
+    }
+    energy = std::min(next, o.energy_max);
+  }
+  if (b.message.empty()) {
+    b.message = "reached E = " + format_number(o.energy_max);
+    b.complete = true;
+  }
+  for (double e : o.include) {
+    for (const auto& l : b.levels) {
+      if (std::abs(l.energy - e) <= 1e-12 * e) {
+        b.included.push_back(l);
+        break;
+      }
+    }
+  }
+  b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return b;
+}
+
+}  // namespace wbm::solvers

@@ -1,0 +1,333 @@
+// Nonlinear modes by pseudo-arclength continuation of the KKT conditions (harmonic-balance form):
+// BackboneSystem, level_at and continue_backbone [LL11 Eqs. (21)–(24), nonlinear_modes.hpp].
+#include <wbm/solvers/nonlinear_modes.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+#include <wbm/spectral/fourier_basis.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::solvers {
+
+void BackboneContinuationOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("BackboneContinuationOptions." + what); };
+  if (!(energy_min > 0.0 && energy_min < energy_max) || !std::isfinite(energy_max)) {
+    fail("energy range [" + format_number(energy_min) + ", " + format_number(energy_max) +
+         "]: need 0 < energy_min < energy_max, finite");
+  }
+  if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
+    fail("penalty_stiffness = " + format_number(penalty_stiffness) + ": must be >= 0 [N/m] (0: exact contact)");
+  }
+  if (!(max_energy_step > 0.0)) fail("max_energy_step = " + format_number(max_energy_step) + ": must be > 0");
+  if (!(tolerance > 0.0)) fail("tolerance = " + format_number(tolerance) + ": must be > 0");
+  if (max_points < 2) fail("max_points = " + std::to_string(max_points) + ": must be >= 2");
+  if (max_newton_iterations < 1) {
+    fail("max_newton_iterations = " + std::to_string(max_newton_iterations) + ": must be >= 1");
+  }
+}
+
+NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
+  if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
+    throw std::invalid_argument("BackboneSystem: penalty_stiffness = " + format_number(penalty_stiffness) +
+                                ": must be >= 0 [N/m]");
+  }
+  const auto& o = modes.options_;
+  penalty_ = penalty_stiffness / (o.samples * modes.omega0_ * modes.omega0_ * modes.m_ref_);
+  if (penalty_ > 0.0) penalty_law_.emplace(contact::LinearPenaltyParameters{.stiffness = penalty_, .gap = 0.0});
+  ny_ = static_cast<Eigen::Index>(modes.n_) * modes.f_ - 1;
+  size_ = ny_ + 1 + (penalty_ > 0.0 ? 0 : static_cast<Eigen::Index>(modes.stops_.size()) * o.samples);
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) const {
+  const auto& nm = *nm_;
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(ny_ + 1);
+  full.segment(nm.n_, nm.n_) = nm.onset_ * (std::sqrt(energy) / nm.g_ref_);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(size_);
+  x.head(nm.phase_index_) = full.head(nm.phase_index_);
+  x.segment(nm.phase_index_, ny_ - nm.phase_index_) = full.tail(ny_ - nm.phase_index_);
+  x(ny_) = 1.0;
+  return x;
+}
+
+NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(const Eigen::VectorXd& x) const {
+  const auto& nm = *nm_;
+  if (x.size() != size_) {
+    throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
+                                std::to_string(size_));
+  }
+  const Eigen::Index ms = nm.options_.samples;
+  Unpacked u;
+  u.y = nm.with_phase(x.head(ny_));
+  const Eigen::Map<const Eigen::MatrixXd> ym(u.y.data(), nm.n_, nm.f_);
+  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
+  u.g.resize(n_stops * ms);
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const auto& stop = nm.stops_[static_cast<size_t>(c)];
+    u.g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
+  }
+  if (penalty_ == 0.0) {
+    u.lambda = x.tail(n_stops * ms);
+  } else {  // λ = κ (g)₊ with g the normalized gap function: contact's linear penalty at gap 0
+    u.lambda.resize(u.g.size());
+    u.penalty_stiffness.resize(u.g.size());
+    penalty_law_->evaluate(u.g, u.lambda, u.penalty_stiffness);
+  }
+  return u;
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::residual(const Eigen::VectorXd& x, double energy) const {
+  return evaluate(x, energy, false).residual;
+}
+
+SparseLinearization NonlinearModes::BackboneSystem::linearize(const Eigen::VectorXd& x, double energy) const {
+  return evaluate(x, energy, true);
+}
+
+SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::VectorXd& x, double energy,
+                                                             bool jacobian) const {
+  const auto& nm = *nm_;
+  const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
+  const Eigen::Index p = nm.phase_index_;
+  const Unpacked state = unpack(x);
+  const Eigen::VectorXd& g = state.g;
+  const Eigen::VectorXd& lambda = state.lambda;
+  // The map full stacked index -> reduced index (−1: the phase coefficient, removed).
+  auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
+  const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
+  const double s = x(ny_);
+  const bool exact = penalty_ == 0.0;
+  const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
+
+  // Harmonic balance rows, full size: w_k (K̂ − ν_k² s M̂) Y_k + Σ_s θ_sk λ_s e_c.
+  const Eigen::MatrixXd ky = nm.ks_ * ym, my = nm.ms_ * ym;
+  Eigen::MatrixXd hb(n, f);
+  for (int k = 0; k < f; ++k) hb.col(k) = nm.weight_(k) * (ky.col(k) - nm.nu_(k) * nm.nu_(k) * s * my.col(k));
+  for (Eigen::Index c = 0; c < n_stops; ++c) {  // contact forces on the stop DOFs
+    hb.row(nm.stops_[static_cast<size_t>(c)].dof) += (nm.theta_.transpose() * lambda.segment(c * ms, ms)).transpose();
+  }
+  double mh = 0.0;
+  for (int k = 0; k < f; ++k) mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(my.col(k)) * nm.m_ref_;
+  SparseLinearization out;
+  out.residual.resize(size_);
+  const Eigen::VectorXd hbs = spectral::stacked(hb);
+  out.residual.head(p) = hbs.head(p);
+  out.residual.segment(p, ny_ - p) = hbs.tail(ny_ - p);
+  out.residual(ny_) = mh / nm.m_c_ - energy;
+  // Signorini at every sample: min(λ_s, −g_s) = 0 (λ in units of f_ref).
+  if (exact) {
+    for (Eigen::Index i = 0; i < n_stops * ms; ++i) out.residual(ny_ + 1 + i) = std::min(lambda(i), -g(i));
+  }
+  out.parameter_derivative = Eigen::VectorXd::Zero(size_);
+  out.parameter_derivative(ny_) = -1.0;
+  if (!jacobian) return out;
+
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<size_t>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros() + 2 * n) +
+            static_cast<size_t>(n_stops * ms) * (f + 2) + static_cast<size_t>(f * f * n_stops));
+  auto add = [&](Eigen::Index row_full, Eigen::Index col_full, double v) {
+    const Eigen::Index r = reduced(row_full), c = reduced(col_full);
+    if (r >= 0 && c >= 0) t.emplace_back(r, c, v);
+  };
+  auto add_row = [&](Eigen::Index row_full, Eigen::Index col, double v) {  // column already in state units
+    const Eigen::Index r = reduced(row_full);
+    if (r >= 0) t.emplace_back(r, col, v);
+  };
+  for (int k = 0; k < f; ++k) {
+    const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
+    for (int pass = 0; pass < 2; ++pass) {
+      const Eigen::SparseMatrix<double>& a = pass == 0 ? nm.ks_ : nm.ms_;
+      const double factor = pass == 0 ? w : -w * nu2 * s;
+      for (Eigen::Index col = 0; col < a.outerSize(); ++col) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it) {
+          add(static_cast<Eigen::Index>(k) * n + it.row(), static_cast<Eigen::Index>(k) * n + it.col(), factor * it.value());
+        }
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Index row = static_cast<Eigen::Index>(k) * n + i;
+      add_row(row, ny_, -w * nu2 * my(i, k));                                         // ∂/∂s
+      const double dn = 2.0 * w * nu2 * my(i, k) * nm.m_ref_ / nm.m_c_;                // ∂(m̂/m̂_c)/∂Y
+      if (reduced(row) >= 0) t.emplace_back(ny_, reduced(row), dn);
+    }
+  }
+  for (Eigen::Index c = 0; c < n_stops; ++c) {
+    const int d = nm.stops_[static_cast<size_t>(c)].dof;
+    if (exact) {
+      for (int smp = 0; smp < ms; ++smp) {
+        const Eigen::Index i = c * ms + smp, col = ny_ + 1 + i;
+        for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, nm.theta_(smp, k));  // ∂HB/∂λ
+        if (lambda(i) <= -g(i)) {
+          t.emplace_back(col, col, 1.0);  // the min picks λ_s
+        } else {
+          for (int k = 0; k < f; ++k) {  // the min picks −g_s
+            const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
+            if (r >= 0) t.emplace_back(col, r, -nm.theta_(smp, k));
+          }
+        }
+      }
+    } else {  // penalty: ∂HB(k, d)/∂Y(l, d) = Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
+      const Eigen::VectorXd on = state.penalty_stiffness.segment(c * ms, ms);
+      if (on.isZero(0.0)) continue;
+      const Eigen::MatrixXd block = nm.theta_.transpose() * on.asDiagonal() * nm.theta_;
+      for (int k = 0; k < f; ++k) {
+        for (int l = 0; l < f; ++l) {
+          add(static_cast<Eigen::Index>(k) * n + d, static_cast<Eigen::Index>(l) * n + d, block(k, l));
+        }
+      }
+    }
+  }
+  out.jacobian.resize(size_, size_);
+  out.jacobian.setFromTriplets(t.begin(), t.end());
+  return out;
+}
+
+ModeLevel NonlinearModes::BackboneSystem::level(const Eigen::VectorXd& x, double energy, double tolerance) const {
+  const auto& nm = *nm_;
+  const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
+  Unpacked state = unpack(x);
+  const Eigen::VectorXd& g = state.g;
+  Eigen::VectorXd& lambda = state.lambda;
+  const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
+  ModeLevel l;
+  l.energy = energy;
+  l.residual_norm = residual(x, energy).norm();
+  l.tolerance = tolerance;
+  l.status = !std::isfinite(l.residual_norm) ? SolveStatus::NonFinite
+             : l.residual_norm <= tolerance  ? SolveStatus::Converged
+                                             : SolveStatus::MaxIterations;
+  l.coefficients = ym * nm.g_ref_;
+  l.frequency_hz = std::sqrt(x(ny_)) * nm.omega0_ / (2.0 * std::numbers::pi);
+  double kh = 0.0, mh = 0.0;
+  for (int k = 0; k < f; ++k) {
+    kh += nm.weight_(k) * ym.col(k).dot(nm.k_ * ym.col(k));
+    mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(nm.m_ * ym.col(k));
+  }
+  l.rayleigh_frequency_hz = std::sqrt(kh / mh) / (2.0 * std::numbers::pi);
+  l.normalization_error = std::abs(mh / nm.m_c_ - energy);
+  // Inactive samples carry rounding (|λ| ~ 1e-20 of the active ones) from the linear solves.
+  const double active = 1e-12 * std::max(0.0, lambda.maxCoeff());
+  lambda = (lambda.array() > active).select(lambda, 0.0);
+  const double f_ref = ms * nm.omega0_ * nm.omega0_ * nm.m_ref_ * nm.g_ref_;
+  l.contact_force = lambda * f_ref;
+  l.max_penetration = g.maxCoeff();
+  const double lmax = lambda.maxCoeff();
+  l.complementarity = lmax > 0.0 ? (lambda.array() * g.array()).abs().maxCoeff() / lmax : 0.0;
+  l.inequality_measure = std::max(0.0, l.max_penetration);
+  l.equality_measure = l.normalization_error;
+  // The Lagrangian's multipliers (see solve()): λ_AL = 2 m_ref λ/(m̂), μ = (r/ω₀² − s)/E.
+  l.multipliers = lambda * (2.0 * nm.m_ref_ / (mh));
+  l.equality_multiplier = (kh / mh / (nm.omega0_ * nm.omega0_) - x(ny_)) / energy;
+  l.message = std::string(to_string(l.status)) + ": KKT residual ‖R‖₂ = " + format_number(l.residual_norm) +
+              " (tolerance " + format_number(tolerance) + ")";
+  return l;
+}
+
+ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy,
+                                   const BackboneContinuationOptions& options) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  // Semismooth Newton at fixed E (no line search: x is a converged point of the branch less
+  // than one step away), through the Newton core with sparse LU.
+  struct Fixed {
+    const BackboneSystem* s;
+    double energy;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, energy); }
+    [[nodiscard]] Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+      return s->linearize(x, energy).jacobian;
+    }
+  };
+  const NewtonResult r = newton(Fixed{&system, energy}, std::move(x),
+                                {.tolerance = options.tolerance, .max_iterations = options.max_newton_iterations,
+                                 .line_search = false});
+  ModeLevel l = system.level(r.x, energy, options.tolerance);
+  l.newton_iterations = r.report.iterations;
+  if (!r.report.converged()) {
+    l.status = r.report.status;
+    l.message = "semismooth Newton at fixed E = " + format_number(energy) + ": " + r.report.message;
+  }
+  l.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return l;
+}
+
+Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o) const {
+  o.validate();
+  const auto t0 = std::chrono::steady_clock::now();
+  const BackboneSystem system(*this, o.penalty_stiffness);
+  Backbone b;
+  // Start below contact on the linear mode (an exact solution); above onset, from the linear
+  // mode corrected by Newton at fixed E.
+  const double e0 = o.energy_min;
+  const Eigen::VectorXd x0 = system.linear_state(std::min(e0, 1.0));
+  PseudoArclengthOptions pa;
+  pa.parameter_min = 0.5 * e0;
+  pa.parameter_max = o.energy_max;
+  pa.parameter_scale = 1.0;
+  pa.state_scale = 1.0;
+  pa.initial_step = o.initial_step;
+  pa.min_step = o.min_step;
+  pa.max_step = o.max_step;
+  pa.max_parameter_step = o.max_energy_step;
+  pa.max_points = o.max_points;
+  pa.corrector_tolerance = o.tolerance;
+  pa.max_corrector_iterations = 12;
+  pa.kink_step = 1e-5;
+  pa.corner_restart = true;
+  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
+  Branch branch = pseudo_arclength(system, x0, e0, pa);
+  // A branch that comes back below contact onset after contact has retraced the backbone (the
+  // linear mode is the only solution there): keep it up to where it turned back, and say so.
+  bool retraced = false;
+  double highest = 0.0;
+  for (size_t k = 0; k < branch.points.size(); ++k) {
+    const double e = branch.points[k].parameter;
+    if (highest > 1.0 + 1e-6 && e < 1.0) {
+      size_t top = 0;
+      for (size_t j = 1; j < k; ++j) {
+        if (branch.points[j].parameter > branch.points[top].parameter) top = j;
+      }
+      branch.points.resize(top + 1);
+      std::erase_if(branch.folds, [&](const Fold& f) { return f.after >= top; });
+      branch.stop = StopReason::Retraced;
+      branch.message = "the branch turned back at a corner near E = " + format_number(branch.points[top].parameter) +
+                       " and retraced the backbone down to the linear mode; kept up to that energy";
+      retraced = true;
+      break;
+    }
+    highest = std::max(highest, e);
+  }
+  for (const auto& pt : branch.points) {
+    if (pt.parameter > o.energy_max) {  // the last point overshoots the range: land on energy_max
+      ModeLevel last = level_at(system, pt.x, o.energy_max, o);
+      if (last.converged()) b.levels.push_back(std::move(last));
+      break;
+    }
+    ModeLevel l = system.level(pt.x, pt.parameter, o.tolerance);
+    l.newton_iterations = pt.corrector_iterations;
+    b.levels.push_back(std::move(l));
+  }
+  for (double e : o.include) {  // first passage of the branch through e, then Newton at fixed e
+    for (size_t k = 0; k + 1 < branch.points.size(); ++k) {
+      const auto &p0 = branch.points[k], &p1 = branch.points[k + 1];
+      if ((p0.parameter - e) * (p1.parameter - e) > 0.0) continue;
+      const double t = p1.parameter == p0.parameter ? 0.0 : (e - p0.parameter) / (p1.parameter - p0.parameter);
+      b.included.push_back(level_at(system, p0.x + t * (p1.x - p0.x), e, o));
+      break;
+    }
+  }
+  for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
+  b.kinks = branch.kinks;
+  b.rejected_steps = branch.rejected_steps;
+  b.stop = branch.stop;
+  b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
+               b.levels.back().energy >= o.energy_max * (1.0 - 1e-12);
+  b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
+  b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return b;
+}
+
+}  // namespace wbm::solvers
