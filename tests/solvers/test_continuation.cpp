@@ -418,3 +418,14 @@ TEST(Continuation, ExtremesCompleteOrStopWithAReasonAndValidPoints) {
                 curve.folds.size(), std::string(solvers::to_string(curve.stop)).c_str(), curve.message.c_str());
   }
 }
+
+// The fold of a step is the extremum of the cubic Hermite interpolant of λ̂(s): exact for a cubic.
+// λ(s) = 1 − (s − 0.3)² + 0.5 (s − 0.3)³ on [0, 1] has λ'(0.3) = 0, λ(0.3) = 1, and λ' changes sign
+// there only (λ'(s) = −2u + 1.5u², u = s − 0.3, zero again at u = 4/3, outside the step).
+TEST(Continuation, FoldIsTheExtremumOfTheHermiteCubic) {
+  const auto lambda = [](double s) { return 1.0 - std::pow(s - 0.3, 2) + 0.5 * std::pow(s - 0.3, 3); };
+  const auto slope = [](double s) { return -2.0 * (s - 0.3) + 1.5 * std::pow(s - 0.3, 2); };
+  EXPECT_NEAR(wbm::solvers::detail::fold_parameter(lambda(0.0), lambda(1.0), slope(0.0), slope(1.0), 1.0), 1.0, 1e-14);
+  // A quadratic over a step of length 2 with its top at s = 1.5: λ = 3 − (s − 1.5)².
+  EXPECT_NEAR(wbm::solvers::detail::fold_parameter(3.0 - 2.25, 3.0 - 0.25, 3.0, -1.0, 2.0), 3.0, 1e-14);
+}

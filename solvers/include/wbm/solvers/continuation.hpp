@@ -40,34 +40,13 @@
 #include <Eigen/SparseCore>
 #include <Eigen/SparseLU>
 
+#include <wbm/solvers/detail/continuation_corner.hpp>
+#include <wbm/solvers/detail/continuation_corrector.hpp>
+#include <wbm/solvers/detail/continuation_fold.hpp>
+#include <wbm/solvers/linearization.hpp>
 #include <wbm/solvers/newton.hpp>
 
 namespace wbm::solvers {
-
-/// Residual R (n), Jacobian ∂R/∂x (n × n) and parameter derivative ∂R/∂λ (n) at (x, λ).
-struct Linearization {
-  Eigen::VectorXd residual;
-  Eigen::MatrixXd jacobian;
-  Eigen::VectorXd parameter_derivative;
-};
-
-/// The same with a sparse Jacobian: the bordered systems are then solved by sparse LU
-/// (Eigen::SparseLU, COLAMD ordering), for large systems with few couplings, e.g. harmonic
-/// balance of an FE model whose nonlinearity sits on a few DOFs.
-struct SparseLinearization {
-  Eigen::VectorXd residual;
-  Eigen::SparseMatrix<double> jacobian;
-  Eigen::VectorXd parameter_derivative;
-};
-
-/// A square system along one parameter: residual(x, λ) and linearize(x, λ), the latter
-/// returning a Linearization (dense) or a SparseLinearization.
-template <class S>
-concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, double p) {
-  { s.residual(x, p) } -> std::convertible_to<Eigen::VectorXd>;
-  requires std::same_as<decltype(s.linearize(x, p)), Linearization> ||
-               std::same_as<decltype(s.linearize(x, p)), SparseLinearization>;
-};
 
 /// Why a branch ended. Retraced: the branch came back along a piece it had already traced
 /// (detected by the caller that knows the problem, e.g. a backbone falling back below contact
@@ -152,94 +131,6 @@ inline void PseudoArclengthOptions::validate() const {
   if (!(kink_step >= min_step)) fail("kink_step must be >= min_step");
 }
 
-namespace detail {
-
-// The bordered matrix [[∂R/∂x̂, ∂R/∂λ̂]; [t_xᵀ/n, t_λ]] of the scaled problem, dense or sparse
-// (every entry of the border stored, so that its pattern depends on ∂R/∂x̂ only and the sparse
-// symbolic analysis can be reused).
-inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls) {
-  const auto n = l.jacobian.rows();
-  Eigen::MatrixXd b(n + 1, n + 1);
-  b.topLeftCorner(n, n) = l.jacobian * xs;
-  b.topRightCorner(n, 1) = l.parameter_derivative * ls;
-  b.bottomLeftCorner(1, n) = t.head(n).transpose() / static_cast<double>(n);
-  b(n, n) = t(n);
-  return b;
-}
-
-inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const Eigen::VectorXd& t, double xs,
-                                            double ls) {
-  const auto n = l.jacobian.rows();
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(l.jacobian.nonZeros() + 2 * n + 1));
-  for (Eigen::Index c = 0; c < l.jacobian.outerSize(); ++c) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(l.jacobian, c); it; ++it) {
-      entries.emplace_back(it.row(), it.col(), it.value() * xs);
-    }
-  }
-  for (Eigen::Index i = 0; i < n; ++i) {
-    entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
-    entries.emplace_back(n, i, t(i) / static_cast<double>(n));
-  }
-  entries.emplace_back(n, n, t(n));
-  Eigen::SparseMatrix<double> b(n + 1, n + 1);
-  b.setFromTriplets(entries.begin(), entries.end());
-  return b;
-}
-
-inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
-inline bool finite(const SparseLinearization& l) {
-  return Eigen::Map<const Eigen::VectorXd>(l.jacobian.valuePtr(), l.jacobian.nonZeros()).allFinite() &&
-         l.parameter_derivative.allFinite();
-}
-
-// Σ_j |a_ij − b_ij| per row.
-inline Eigen::VectorXd row_change(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  return (a - b).cwiseAbs().rowwise().sum();
-}
-inline Eigen::VectorXd row_change(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
-  const Eigen::SparseMatrix<double> d = a - b;
-  return d.cwiseAbs() * Eigen::VectorXd::Ones(d.cols());
-}
-
-inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  const auto n = a.size() - 1;
-  return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
-}
-
-// The corrector of one step as a NonlinearSystem in the scaled ẑ (length n + 1), for newton():
-//   [R(x, λ); ⟨t, ẑ − ẑ_k⟩ − h] = 0, Jacobian the bordered matrix.
-// The last linearization is cached, so residual() and jacobian() at one ẑ linearize once, and
-// the tangent at the converged point reuses it.
-template <class S, class Lin>
-struct Corrector {
-  const S* system;
-  double xs, ls;
-  Eigen::VectorXd direction, z_last;
-  double step;
-  mutable Eigen::VectorXd cached_z;
-  mutable Lin cached;
-  [[nodiscard]] const Lin& at(const Eigen::VectorXd& z) const {
-    if (cached_z.size() != z.size() || cached_z != z) {
-      const auto n = z.size() - 1;
-      cached = system->linearize(z.head(n) * xs, z(n) * ls);
-      cached_z = z;
-    }
-    return cached;
-  }
-  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& z) const {
-    const auto n = z.size() - 1;
-    const Lin& l = at(z);
-    Eigen::VectorXd r(n + 1);
-    r.head(n) = l.residual;
-    r(n) = inner(direction, z - z_last) - step;
-    if (!finite(l)) r(n) = std::nan("");  // a non-finite Jacobian stops the corrector
-    return r;
-  }
-  [[nodiscard]] auto jacobian(const Eigen::VectorXd& z) const { return bordered(at(z), direction, xs, ls); }
-};
-
-}  // namespace detail
 
 /// Traces the branch through (x0, λ0): x0 is corrected at fixed λ0 first (initial_newton), then
 /// continued until a StopReason. Throws std::invalid_argument for invalid options or λ0 outside
@@ -284,106 +175,28 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   // Tangent at the first point, oriented by `direction`.
   Eigen::VectorXd seed = Eigen::VectorXd::Zero(n + 1);
   seed(n) = o.direction;
-  auto tangent_at = [&](const Lin& l, const Eigen::VectorXd& previous) {
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + 1);
-    rhs(n) = 1.0;
-    if (!solver.factorize(detail::bordered(l, previous, xs, ls))) return Eigen::VectorXd::Constant(n + 1, NAN).eval();
-    Eigen::VectorXd t = solver.solve(rhs);
-    return Eigen::VectorXd(t / std::sqrt(detail::inner(t, t)));
-  };
   BranchPoint p0;
   p0.parameter = lambda0;
   p0.x = first.x;
   p0.residual_norm = first.report.residual_norms.back();
   p0.corrector_iterations = first.report.iterations;
-  p0.tangent = tangent_at(system.linearize(p0.x, lambda0), seed);
+  p0.tangent = detail::tangent(solver, system.linearize(p0.x, lambda0), seed, xs, ls);
   branch.points.push_back(p0);
 
   const double cos_turn = std::cos(o.max_turn_degrees * 3.14159265358979323846 / 180.0);
   double h = o.initial_step;
   double h_accepted = h;  // the step of the last accepted point, for jumps over kinks
-  // One predictor–corrector step of length `step` from the last point along its tangent.
-  struct Attempt {
-    bool converged = false;
-    int iterations = 0;
-    double rnorm = 0.0;
-    Eigen::VectorXd z, tangent;
-  };
   // The corrector is newton() on the bordered system, without line search.
   const NewtonOptions corrector_options{.tolerance = o.corrector_tolerance,
                                         .max_iterations = o.max_corrector_iterations,
                                         .line_search = false};
   auto attempt_along = [&](const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
-    Attempt a;
-    const detail::Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
-    NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
-    a.converged = r.report.converged();
-    a.iterations = r.report.iterations;
-    a.rnorm = r.report.residual_norms.back();
-    a.z = std::move(r.x);
-    if (a.converged) {
-      a.tangent = tangent_at(corrector.at(a.z), direction);
-      if (!a.tangent.allFinite()) a.converged = false;
-    }
-    return a;
-  };
-  auto attempt = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, double step) {
-    return attempt_along(last.tangent, z_last, step);
-  };
-  // A corner where the corrector fails for every small step (a complementarity condition
-  // switching, the new piece turning back by more than 90°, so that no hyperplane normal to the
-  // old tangent meets it): the Jacobian a little beyond the corner along the old tangent already
-  // has the new piece's active set; its null direction is the new tangent. The rows in which
-  // that Jacobian differs from the last point's by more than a tenth of the largest difference
-  // are the switching rows; the corner is located by bisection along the old tangent (where
-  // they switch). Both orientations of the new tangent are tried from the corner, with steps
-  // from 1000 kink_step down to kink_step, and a landing is taken only if its Jacobian's switching
-  // rows are the new piece's (closer to those beyond the corner than to the last point's) and no
-  // other row switched (a landing across another corner, e.g. on a piece passed earlier, is
-  // refused): pieces can meet at a fraction of a degree, so directions cannot tell them apart.
-  auto restart_at_corner = [&](const BranchPoint& last, const Eigen::VectorXd& z_last, Attempt& out) {
-    const Eigen::VectorXd probe = z_last + o.kink_step * last.tangent;
-    const Lin beyond = system.linearize(probe.head(n) * xs, probe(n) * ls);
-    const Lin here = system.linearize(z_last.head(n) * xs, z_last(n) * ls);
-    if (!detail::finite(beyond) || !detail::finite(here)) return false;
-    const Eigen::VectorXd change = detail::row_change(beyond.jacobian, here.jacobian);
-    if (!(change.maxCoeff() > 0.0)) return false;  // no switching row: not a corner
-    const Eigen::ArrayXd switching = (change.array() > 0.1 * change.maxCoeff()).cast<double>();
-    const Eigen::VectorXd t_new = tangent_at(beyond, last.tangent);
-    if (!t_new.allFinite()) return false;
-    // The corner itself, to first order: bisection along the old tangent for where the
-    // switching rows change; the restarts leave from there.
-    double lo = 0.0, hi = o.kink_step;
-    const double total = (change.array() * switching).sum();
-    for (int k = 0; k < 30; ++k) {
-      const double mid = 0.5 * (lo + hi);
-      const Eigen::VectorXd z = z_last + mid * last.tangent;
-      const Lin l = system.linearize(z.head(n) * xs, z(n) * ls);
-      ((detail::row_change(l.jacobian, here.jacobian).array() * switching).sum() > 0.5 * total ? hi : lo) = mid;
-    }
-    const Eigen::VectorXd z_corner = z_last + hi * last.tangent;
-    for (double sign : {1.0, -1.0}) {
-      for (double step = std::min(o.max_step, 1e3 * o.kink_step); step >= o.kink_step; step *= 0.25) {
-        Attempt c = attempt_along(sign * t_new, z_corner, step);
-        branch.corrector_iterations += c.iterations;
-        if (!c.converged) continue;
-        const Lin landed = system.linearize(c.z.head(n) * xs, c.z(n) * ls);
-        const Eigen::ArrayXd from_here = detail::row_change(landed.jacobian, here.jacobian).array();
-        const double to_new = (detail::row_change(landed.jacobian, beyond.jacobian).array() * switching).sum();
-        const double to_old = (from_here * switching).sum();
-        if (!(to_new < to_old)) continue;  // back on the old piece
-        if ((from_here * (1.0 - switching)).maxCoeff() > 0.1 * change.maxCoeff()) continue;  // beyond another corner
-
-        out = std::move(c);
-        return true;
-      }
-    }
-    return false;
+    return detail::attempt_along<S, Lin>(system, solver, xs, ls, corrector_options, direction, z_last, step);
   };
   while (static_cast<int>(branch.points.size()) < o.max_points) {
     const BranchPoint& last = branch.points.back();
     const Eigen::VectorXd z_last = scaled(last.x, last.parameter);
-    Attempt a = attempt(last, z_last, h);
+    detail::Attempt a = attempt_along(last.tangent, z_last, h);
     branch.corrector_iterations += a.iterations;
     // A sharp turn halves h, down to kink_step: below it the turn is a corner of a nonsmooth
     // branch (a contact sample changing state). The corner is then jumped: one step of the last
@@ -393,7 +206,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     bool sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
     if (sharp && h <= o.kink_step) {
       ++branch.kinks;
-      Attempt jump = attempt(last, z_last, h_accepted);
+      detail::Attempt jump = attempt_along(last.tangent, z_last, h_accepted);
       branch.corrector_iterations += jump.iterations;
       if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
         a = std::move(jump);
@@ -402,8 +215,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       }
     }
     if (!a.converged && h <= o.kink_step && o.corner_restart) {
-      Attempt c;
-      if (restart_at_corner(last, z_last, c)) {
+      detail::Attempt c;
+      if (detail::restart_at_corner(system, solver, xs, ls, last.tangent, z_last, o.kink_step, o.max_step, attempt_along,
+                                    branch.corrector_iterations, c)) {
         ++branch.kinks;
         a = std::move(c);
         sharp = false;
@@ -439,23 +253,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     // Fold: the λ-component of the tangent changes sign; Hermite cubic λ̂(s) on [0, ds].
     const double d0 = last.parameter_tangent(), d1 = p.parameter_tangent();
     if (d0 * d1 < 0.0) {
-      const double l0 = z_last(n), l1 = z(n);
-      // λ̂'(s) = d0 + s (6 Δ/ds² − (4 d0 + 2 d1)/ds) + s² (3(d0 + d1)/ds² − 6 Δ/ds³), Δ = l1 − l0.
-      const double delta = l1 - l0;
-      const double a = 3.0 * (d0 + d1) / (ds * ds) - 6.0 * delta / (ds * ds * ds);
-      const double b = 6.0 * delta / (ds * ds) - (4.0 * d0 + 2.0 * d1) / ds;
-      double s_star = -d0 / b;
-      if (std::abs(a) > 1e-14 * std::abs(b)) {
-        const double disc = std::sqrt(std::max(0.0, b * b - 4.0 * a * d0));
-        for (double root : {(-b + disc) / (2.0 * a), (-b - disc) / (2.0 * a)}) {
-          if (root >= 0.0 && root <= ds) s_star = root;
-        }
-      }
-      s_star = std::clamp(s_star, 0.0, ds);
-      const double u = s_star / ds;
-      const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
-      const double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
-      const double lambda_fold = h00 * l0 + h10 * ds * d0 + h01 * l1 + h11 * ds * d1;
+      const double lambda_fold = detail::fold_parameter(z_last(n), z(n), d0, d1, ds);
       branch.folds.push_back({lambda_fold * ls, branch.points.size() - 1});
     }
     branch.points.push_back(std::move(p));

@@ -1,0 +1,135 @@
+#pragma once
+/// Pieces of pseudo_arclength (continuation.hpp), not API: the bordered matrix of the scaled
+/// problem, the inner product of the arclength metric, the corrector as a NonlinearSystem for
+/// newton(), the tangent, and one predictor–corrector attempt.
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <wbm/solvers/linearization.hpp>
+#include <wbm/solvers/newton.hpp>
+
+namespace wbm::solvers::detail {
+
+// The bordered matrix [[∂R/∂x̂, ∂R/∂λ̂]; [t_xᵀ/n, t_λ]] of the scaled problem, dense or sparse
+// (every entry of the border stored, so that its pattern depends on ∂R/∂x̂ only and the sparse
+// symbolic analysis can be reused).
+inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t, double xs, double ls) {
+  const auto n = l.jacobian.rows();
+  Eigen::MatrixXd b(n + 1, n + 1);
+  b.topLeftCorner(n, n) = l.jacobian * xs;
+  b.topRightCorner(n, 1) = l.parameter_derivative * ls;
+  b.bottomLeftCorner(1, n) = t.head(n).transpose() / static_cast<double>(n);
+  b(n, n) = t(n);
+  return b;
+}
+
+inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const Eigen::VectorXd& t, double xs,
+                                            double ls) {
+  const auto n = l.jacobian.rows();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(l.jacobian.nonZeros() + 2 * n + 1));
+  for (Eigen::Index c = 0; c < l.jacobian.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(l.jacobian, c); it; ++it) {
+      entries.emplace_back(it.row(), it.col(), it.value() * xs);
+    }
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
+    entries.emplace_back(n, i, t(i) / static_cast<double>(n));
+  }
+  entries.emplace_back(n, n, t(n));
+  Eigen::SparseMatrix<double> b(n + 1, n + 1);
+  b.setFromTriplets(entries.begin(), entries.end());
+  return b;
+}
+
+inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
+inline bool finite(const SparseLinearization& l) {
+  return Eigen::Map<const Eigen::VectorXd>(l.jacobian.valuePtr(), l.jacobian.nonZeros()).allFinite() &&
+         l.parameter_derivative.allFinite();
+}
+
+inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const auto n = a.size() - 1;
+  return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
+}
+
+// The corrector of one step as a NonlinearSystem in the scaled ẑ (length n + 1), for newton():
+//   [R(x, λ); ⟨t, ẑ − ẑ_k⟩ − h] = 0, Jacobian the bordered matrix.
+// The last linearization is cached, so residual() and jacobian() at one ẑ linearize once, and
+// the tangent at the converged point reuses it.
+template <class S, class Lin>
+struct Corrector {
+  const S* system;
+  double xs, ls;
+  Eigen::VectorXd direction, z_last;
+  double step;
+  mutable Eigen::VectorXd cached_z;
+  mutable Lin cached;
+  [[nodiscard]] const Lin& at(const Eigen::VectorXd& z) const {
+    if (cached_z.size() != z.size() || cached_z != z) {
+      const auto n = z.size() - 1;
+      cached = system->linearize(z.head(n) * xs, z(n) * ls);
+      cached_z = z;
+    }
+    return cached;
+  }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& z) const {
+    const auto n = z.size() - 1;
+    const Lin& l = at(z);
+    Eigen::VectorXd r(n + 1);
+    r.head(n) = l.residual;
+    r(n) = inner(direction, z - z_last) - step;
+    if (!finite(l)) r(n) = std::nan("");  // a non-finite Jacobian stops the corrector
+    return r;
+  }
+  [[nodiscard]] auto jacobian(const Eigen::VectorXd& z) const { return bordered(at(z), direction, xs, ls); }
+};
+
+// The unit tangent at a linearization: the bordered matrix with the previous tangent as its last
+// row, solved for the right-hand side (0, 1), so that ⟨previous, t⟩ > 0. NaN if the bordered
+// matrix is singular. Solver: DenseLu or SparseLu (its symbolic analysis is reused).
+template <class Lin, class Solver>
+Eigen::VectorXd tangent(Solver& solver, const Lin& l, const Eigen::VectorXd& previous, double xs, double ls) {
+  const auto n = previous.size() - 1;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + 1);
+  rhs(n) = 1.0;
+  if (!solver.factorize(bordered(l, previous, xs, ls))) return Eigen::VectorXd::Constant(n + 1, NAN);
+  const Eigen::VectorXd t = solver.solve(rhs);
+  return t / std::sqrt(inner(t, t));
+}
+
+// One predictor–corrector attempt: the scaled point ẑ reached, its tangent, and the corrector's
+// outcome.
+struct Attempt {
+  bool converged = false;
+  int iterations = 0;
+  double rnorm = 0.0;
+  Eigen::VectorXd z, tangent;
+};
+
+// Predictor ẑ⁰ = ẑ_last + step·direction, corrector newton() without line search on the
+// bordered system, then the tangent at the converged point (from the cached linearization).
+template <class S, class Lin, class Solver>
+Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector_options,
+                      const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
+  Attempt a;
+  const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
+  NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
+  a.converged = r.report.converged();
+  a.iterations = r.report.iterations;
+  a.rnorm = r.report.residual_norms.back();
+  a.z = std::move(r.x);
+  if (a.converged) {
+    a.tangent = tangent(solver, corrector.at(a.z), direction, xs, ls);
+    if (!a.tangent.allFinite()) a.converged = false;
+  }
+  return a;
+}
+
+}  // namespace wbm::solvers::detail
