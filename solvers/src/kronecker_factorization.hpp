@@ -1,0 +1,63 @@
+#pragma once
+// Private to wbm_solvers: the factorization of the weighted-residual operator
+//   G(f) = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K   (size n·M, stacked layout of layout.hpp)
+// along LinearSolverPath (weighted_residual.hpp): sparse LU of the assembled Kronecker sum, or
+// the modal path — n independent M × M blocks A + λ_i B — with the block structures it exploits
+// (components of the time operators' sparsity graph; the factored Fourier-weighting form).
+// Solves with G and Gᵀ, the condensed compliance H = P G⁻¹ Pᵀ on contact rows, and ‖G‖₁.
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/weighted_residual.hpp>
+
+namespace wbm::solvers::detail {
+
+class KroneckerFactorization {
+ public:
+  /// Frequency-independent set-up: whether the modal path applies (C Rayleigh, LinearSolverPath),
+  /// the modal basis K Φ = M Φ Λ, Φᵀ M Φ = I, the components of the time operators' sparsity
+  /// graph, and (if `fourier_weighting` — distributional form, Fourier weighting, wavelet trial)
+  /// the factored Fourier-weighting structure when its identities hold. Nothing is factorized.
+  /// Throws std::invalid_argument for LinearSolverPath::Modal with non-Rayleigh C, or if the
+  /// generalized eigenproblem fails.
+  KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops, LinearSolverPath path,
+                         bool fourier_weighting);
+  /// The same set-up (shared, not recomputed), not factorized: for another frequency.
+  [[nodiscard]] KroneckerFactorization unfactorized() const;
+
+  /// Factorizes G(f). Returns false (and factorized() is false) if G is singular.
+  bool factorize(const MechanicalSystem& system, const TimeOperators& ops, double frequency_hz);
+  [[nodiscard]] bool factorized() const { return factorized_; }
+  [[nodiscard]] bool modal() const;
+  /// G⁻¹ v, or G⁻ᵀ v, for a stacked v of length n·M. Requires factorized().
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
+  /// H = P G⁻¹ Pᵀ, n_c·M square in the contact ordering x(k·n_c + c): contact c at DOF
+  /// contact_dofs[c], whose unknown k sits at stacked row contact_rows[k·n_c + c].
+  [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<int>& contact_dofs,
+                                           const std::vector<Eigen::Index>& contact_rows) const;
+  /// ‖G(f)‖₁: from the assembled G (sparse LU path) or from the Kronecker factors (modal path,
+  /// computed on first use).
+  [[nodiscard]] double norm1(const MechanicalSystem& system, const TimeOperators& ops) const;
+
+ private:
+  struct Setup;
+  class ModeBlock;
+  explicit KroneckerFactorization(std::shared_ptr<const Setup> setup);
+  std::shared_ptr<const Setup> setup_;
+  double frequency_hz_ = 0.0;
+  bool factorized_ = false;
+  Eigen::SparseMatrix<double> g_;  // SparseLU path only
+  // SparseLU::transpose() is not const in Eigen 3.4 (it only stores a pointer): held by pointer.
+  std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>> lu_;
+  std::vector<std::shared_ptr<const ModeBlock>> blocks_;
+  mutable double norm1_ = -1.0;  // < 0: not computed yet
+};
+
+}  // namespace wbm::solvers::detail
