@@ -71,14 +71,14 @@ int main(int argc, char** argv) {
     nlohmann::json alg_meta = nlohmann::json::array();
     double worst_alg_gap = 0.0;
     int alg_levels = 0, alg_missing = 0;  // levels compared; levels with no continuation counterpart
-    for (const std::string algorithm : {"simultaneous", "sequential"}) {
-      if (run.quick() && algorithm == "sequential") continue;
+    for (const scene::NnmAlgorithm algorithm : {scene::NnmAlgorithm::Simultaneous, scene::NnmAlgorithm::Sequential}) {
+      if (run.quick() && algorithm == scene::NnmAlgorithm::Sequential) continue;
       scene::Scene sa = s8;
       sa.analysis.algorithm = algorithm;
       sa.analysis.energy_min = alg_min;
       sa.analysis.energy_max = alg_max;
       sa.analysis.max_energy_step = alg_step;
-      const std::string prefix = algorithm == "simultaneous" ? "alg1_" : "alg2_";
+      const std::string prefix = algorithm == scene::NnmAlgorithm::Simultaneous ? "alg1_" : "alg2_";
       const auto ra = reproduce::run_modes(run, sa, prefix);
       const Eigen::VectorXd& ea = reproduce::result_column(ra, "backbone.csv", "energy [-]");
       const Eigen::VectorXd& fa = reproduce::result_column(ra, "backbone.csv", "frequency [Hz]");
@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
         } else {
           ++alg_missing;  // counted and shown, never dropped from the maximum silently
         }
-        alg_rows << "| " << (algorithm == "simultaneous" ? "1" : "2") << " | " << format("%.2f", ea(i)) << " | "
+        alg_rows << "| " << (algorithm == scene::NnmAlgorithm::Simultaneous ? "1" : "2") << " | " << format("%.2f", ea(i)) << " | "
                  << format("%.5f", fa(i)) << " | "
                  << (std::isfinite(fc) ? format("%.5f", fc) : std::string("— (not reached)")) << " | "
                  << format("%.0f", pa(i)) << " | "

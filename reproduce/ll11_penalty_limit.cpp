@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
     auto trace = [&](double k, const std::string& prefix) {
       scene::Scene sp = s;
       for (auto& c : sp.contacts) {
-        c.law = k > 0.0 ? "linear" : "rigid";
+        c.law = k > 0.0 ? wbm::scene::ContactLawKind::Linear : wbm::scene::ContactLawKind::Rigid;
         c.stiffness = k;
       }
       const auto problem = scene::mode_problem(sp);
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> col_status;
     std::vector<std::vector<double>> difference_by_probe(probes.size());  // |f_penalty − f_exact| per k
     for (double k : stiffness) {
-      const auto b = trace(k, "k" + format("%.0e", k) + "_");
+      const auto b = trace(k, format("k%.0e_", k));
       double worst = 0.0, worst_pen = 0.0;
       rows << "| " << format("%.0e", k);
       for (size_t i = 0; i < probes.size() && i < b.included.size() && i < exact.included.size(); ++i) {

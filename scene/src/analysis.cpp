@@ -362,7 +362,7 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
   const Analysis& a = scene.analysis;
   const solvers::NonlinearModes modes(problem.system, problem.stops, problem.options);
   solvers::Backbone b;
-  const bool continuation = a.algorithm == "continuation";
+  const bool continuation = a.algorithm == NnmAlgorithm::Continuation;
   if (continuation) {
     solvers::BackboneContinuationOptions o;
     o.energy_min = a.energy_min;
@@ -461,7 +461,7 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
     worst_comp = std::max(worst_comp, l.complementarity);
   }
   nlohmann::json failed = b.failed_energies;
-  out.diagnostics["nnm"] = {{"algorithm", a.algorithm},
+  out.diagnostics["nnm"] = {{"algorithm", std::string(to_string(a.algorithm))},
                             {"linear_frequency_hz", modes.linear_frequency_hz()},
                             {"levels", b.levels.size()},
                             {"complete", b.complete},
@@ -476,7 +476,7 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
                             {"wall_time_s", b.wall_time_s}};
   const auto& last = b.levels.empty() ? solvers::ModeLevel{} : b.levels.back();
   out.summary = "first nonlinear mode, N = " + std::to_string(problem.options.harmonics) + ", m = " +
-                std::to_string(problem.options.samples) + ", " + a.algorithm + ": " + std::to_string(b.levels.size()) +
+                std::to_string(problem.options.samples) + ", " + std::string(to_string(a.algorithm)) + ": " + std::to_string(b.levels.size()) +
                 " levels, linear " + format("%.3f", modes.linear_frequency_hz()) + " Hz, E = " +
                 format("%g", last.energy) + ": " + format("%.3f", last.frequency_hz) + " Hz; " + b.message + " (" +
                 format("%.2f", b.wall_time_s) + " s)";
@@ -493,11 +493,11 @@ ModeProblem mode_problem(const Scene& scene) {
   p.system.damping = Eigen::SparseMatrix<double>(p.system.dofs(), p.system.dofs());
   for (const auto& c : scene.contacts) {
     p.stops.push_back({c.dof, c.gap});
-    if (c.law == "linear") p.penalty_stiffness = c.stiffness;
+    if (c.law == ContactLawKind::Linear) p.penalty_stiffness = c.stiffness;
   }
   p.options.harmonics = scene.analysis.harmonics;
   p.options.samples = scene.analysis.samples;
-  if (scene.analysis.algorithm == "sequential") p.options.algorithm = solvers::ModeAlgorithm::Sequential;
+  if (scene.analysis.algorithm == NnmAlgorithm::Sequential) p.options.algorithm = solvers::ModeAlgorithm::Sequential;
   return p;
 }
 

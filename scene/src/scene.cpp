@@ -22,19 +22,66 @@ using detail::Range;
 using detail::Reader;
 constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 
+// One table per enumerated scene value: the parser's list of choices, the value it stands for,
+// and the name the JSON echo and messages print are read from the same entry.
+template <class E>
+using NameTable = std::vector<std::pair<E, std::string_view>>;
+
+const NameTable<AnalysisKind>& analysis_table() {
+  static const NameTable<AnalysisKind> t = {{AnalysisKind::Solve, "solve"},
+                                            {AnalysisKind::Timestep, "timestep"},
+                                            {AnalysisKind::BasisPlot, "basis-plot"},
+                                            {AnalysisKind::Continuation, "continuation"},
+                                            {AnalysisKind::NonlinearModes, "nnm"}};
+  return t;
+}
+const NameTable<ContactLawKind>& law_table() {
+  static const NameTable<ContactLawKind> t = {
+      {ContactLawKind::Exponential, "exponential"}, {ContactLawKind::Linear, "linear"}, {ContactLawKind::Rigid, "rigid"}};
+  return t;
+}
+const NameTable<NnmAlgorithm>& nnm_algorithm_table() {
+  static const NameTable<NnmAlgorithm> t = {{NnmAlgorithm::Continuation, "continuation"},
+                                            {NnmAlgorithm::Simultaneous, "simultaneous"},
+                                            {NnmAlgorithm::Sequential, "sequential"}};
+  return t;
+}
+const NameTable<solvers::LinearSolverPath>& linear_solver_table() {
+  static const NameTable<solvers::LinearSolverPath> t = {{solvers::LinearSolverPath::Automatic, "automatic"},
+                                                         {solvers::LinearSolverPath::SparseLU, "sparse-lu"},
+                                                         {solvers::LinearSolverPath::Modal, "modal"}};
+  return t;
+}
+
+template <class E>
+std::vector<std::string> names(const NameTable<E>& t) {
+  std::vector<std::string> out;
+  for (const auto& [value, name] : t) out.emplace_back(name);
+  return out;
+}
+// The name of a value; the table lists every enumerator.
+template <class E>
+std::string_view name_of(const NameTable<E>& t, E value) {
+  for (const auto& [v, name] : t) {
+    if (v == value) return name;
+  }
+  return t.front().second;
+}
+// The value of a name already checked by Reader::choice against names(t).
+template <class E>
+E value_of(const NameTable<E>& t, const std::string& name) {
+  for (const auto& [v, n] : t) {
+    if (n == name) return v;
+  }
+  return t.front().first;
+}
+
 const std::vector<std::string>& analysis_names() {
-  static const std::vector<std::string> n = {"solve", "timestep", "basis-plot", "continuation", "nnm"};
+  static const std::vector<std::string> n = names(analysis_table());
   return n;
 }
 
-std::string linear_solver_name(solvers::LinearSolverPath p) {
-  switch (p) {
-    case solvers::LinearSolverPath::SparseLU: return "sparse-lu";
-    case solvers::LinearSolverPath::Modal: return "modal";
-    case solvers::LinearSolverPath::Automatic: break;
-  }
-  return "automatic";
-}
+std::string linear_solver_name(solvers::LinearSolverPath p) { return std::string(name_of(linear_solver_table(), p)); }
 
 bool is_power_of_two(long long m) { return m >= 1 && (m & (m - 1)) == 0; }
 
@@ -73,10 +120,11 @@ class Parser {
       }
       structure(root);
       contacts(root);
-      const bool penalty = std::any_of(s_.contacts.begin(), s_.contacts.end(), [](const Contact& c) { return c.law == "linear"; });
-      if (penalty && s_.analysis.algorithm != "continuation") {
+      const bool penalty = std::any_of(s_.contacts.begin(), s_.contacts.end(),
+                                       [](const Contact& c) { return c.law == ContactLawKind::Linear; });
+      if (penalty && s_.analysis.algorithm != NnmAlgorithm::Continuation) {
         r_.error(root.source(), "analysis.algorithm",
-                 "\"" + s_.analysis.algorithm + "\" (augmented Lagrangian, LL11 Alg. 1/2) imposes exact contact: use "
+                 "\"" + std::string(to_string(s_.analysis.algorithm)) + "\" (augmented Lagrangian, LL11 Alg. 1/2) imposes exact contact: use "
                  "law = \"rigid\", or algorithm = \"continuation\" for penalty stops");
       }
       if (root.get("contact") == nullptr) {
@@ -105,12 +153,7 @@ class Parser {
     r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization", "max_step", "max_frequency_step_hz",
                              "max_points", "max_state", "stability", "energy", "harmonics", "samples", "algorithm",
                              "max_energy_step", "levels"});
-    const std::string kind = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
-    s_.analysis.kind = kind == "timestep"       ? AnalysisKind::Timestep
-                       : kind == "basis-plot"   ? AnalysisKind::BasisPlot
-                       : kind == "continuation" ? AnalysisKind::Continuation
-                       : kind == "nnm"          ? AnalysisKind::NonlinearModes
-                                                : AnalysisKind::Solve;
+    s_.analysis.kind = value_of(analysis_table(), r_.choice(*t, "analysis", "type", analysis_names(), "solve"));
     auto only_for = [&](AnalysisKind kind, std::initializer_list<const char*> keys) {
       if (s_.analysis.kind == kind) return;
       for (const char* key : keys) {
@@ -167,7 +210,8 @@ class Parser {
                "m = " + std::to_string(a.samples) + " must exceed 2N = " + std::to_string(2 * a.harmonics) +
                    " (the contact conditions are imposed at m samples of a degree-N trigonometric polynomial)");
     }
-    a.algorithm = r_.choice(t, "analysis", "algorithm", {"continuation", "simultaneous", "sequential"}, a.algorithm);
+    a.algorithm = value_of(nnm_algorithm_table(), r_.choice(t, "analysis", "algorithm", names(nnm_algorithm_table()),
+                                                            std::string(to_string(a.algorithm))));
     a.max_step = r_.number(t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
                            5e-2);
     a.max_energy_step = r_.number(t, "analysis", "max_energy_step", detail::positive("normalized energy"),
@@ -507,31 +551,31 @@ class Parser {
     const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
     for (const auto& [t, section] : tables) {
       Contact c;
-      c.law = r_.choice(*t, section, "law", {"exponential", "linear", "rigid"});
+      c.law = value_of(law_table(), r_.choice(*t, section, "law", names(law_table())));
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
-      if (c.law == "rigid" && !modes) {
+      if (c.law == ContactLawKind::Rigid && !modes) {
         r_.error(t->get("law")->source(), section + ".law",
                  "\"rigid\" (exact contact) is solved by analysis \"nnm\" only; the forced-response solvers need a "
                  "penalty law: \"exponential\" or \"linear\"");
       }
-      if (c.law == "exponential" && modes) {
+      if (c.law == ContactLawKind::Exponential && modes) {
         r_.error(t->get("law")->source(), section + ".law",
                  "analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)");
       }
-      if (modes && !s_.contacts.empty() && (c.law == "rigid") != (s_.contacts.front().law == "rigid")) {
+      if (modes && !s_.contacts.empty() && (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
         r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
       }
-      if (c.law == "rigid") {
+      if (c.law == ContactLawKind::Rigid) {
         r_.only(*t, section, {"law", "gap", "node", "dof"});
-      } else if (c.law == "exponential") {
+      } else if (c.law == ContactLawKind::Exponential) {
         r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof"});
         c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
         c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
-      } else if (c.law == "linear") {
+      } else if (c.law == ContactLawKind::Linear) {
         r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof"});
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
-        if (modes && !s_.contacts.empty() && s_.contacts.front().law == "linear" &&
+        if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
             c.stiffness != s_.contacts.front().stiffness) {
           r_.error(t->get("stiffness")->source(), section + ".stiffness",
                    "nnm penalty stops share one stiffness (" + detail::number_text(s_.contacts.front().stiffness) +
@@ -659,10 +703,8 @@ class Parser {
     n.tolerance = r_.number(*t, "solver", "tolerance", detail::positive(""), n.tolerance);
     n.max_iterations = static_cast<int>(r_.integer(*t, "solver", "max_iterations", 0, 100000, n.max_iterations));
     n.line_search = r_.boolean(*t, "solver", "line_search", n.line_search);
-    const std::string path = r_.choice(*t, "solver", "linear_solver", {"automatic", "sparse-lu", "modal"}, "automatic");
-    s_.solver.linear_solver = path == "modal"       ? solvers::LinearSolverPath::Modal
-                              : path == "sparse-lu" ? solvers::LinearSolverPath::SparseLU
-                                                    : solvers::LinearSolverPath::Automatic;
+    s_.solver.linear_solver = value_of(linear_solver_table(),
+                                       r_.choice(*t, "solver", "linear_solver", names(linear_solver_table()), "automatic"));
     if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
         s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
       r_.warn(t->get("linear_solver")->source(),
@@ -790,16 +832,9 @@ nlohmann::json matrix_json(const Eigen::SparseMatrix<double>& a, const std::stri
 
 }  // namespace
 
-std::string_view to_string(AnalysisKind kind) noexcept {
-  switch (kind) {
-    case AnalysisKind::Timestep: return "timestep";
-    case AnalysisKind::BasisPlot: return "basis-plot";
-    case AnalysisKind::Continuation: return "continuation";
-    case AnalysisKind::NonlinearModes: return "nnm";
-    case AnalysisKind::Solve: break;
-  }
-  return "solve";
-}
+std::string_view to_string(AnalysisKind kind) noexcept { return name_of(analysis_table(), kind); }
+std::string_view to_string(ContactLawKind law) noexcept { return name_of(law_table(), law); }
+std::string_view to_string(NnmAlgorithm algorithm) noexcept { return name_of(nnm_algorithm_table(), algorithm); }
 
 int Structure::dofs() const { return kind == StructureKind::Rod ? rod.elements : static_cast<int>(mass.rows()); }
 
@@ -845,11 +880,11 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
   std::vector<solvers::ContactPoint> points;
   for (const auto& c : contacts) {
     std::shared_ptr<const contact::ContactLaw> law;
-    if (c.law == "rigid") {
+    if (c.law == ContactLawKind::Rigid) {
       throw std::logic_error("Scene::contact_points: a rigid stop has no penalty law (analysis \"nnm\" reads "
                              "Scene::contacts directly)");
     }
-    if (c.law == "exponential") {
+    if (c.law == ContactLawKind::Exponential) {
       law = std::make_shared<contact::ExponentialPenalty>(
           contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
     } else {
@@ -950,7 +985,7 @@ nlohmann::json to_json(const Scene& s) {
     analysis["energy"] = {s.analysis.energy_min, s.analysis.energy_max};
     analysis["harmonics"] = s.analysis.harmonics;
     analysis["samples"] = s.analysis.samples;
-    analysis["algorithm"] = s.analysis.algorithm;
+    analysis["algorithm"] = std::string(to_string(s.analysis.algorithm));
     analysis["max_step"] = s.analysis.max_step;
     analysis["max_energy_step"] = s.analysis.max_energy_step;
     analysis["max_points"] = s.analysis.max_points;
@@ -997,11 +1032,11 @@ nlohmann::json to_json(const Scene& s) {
   if (!s.contacts.empty()) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& c : s.contacts) {
-      nlohmann::json o = {{"law", c.law}, {"gap", c.gap}};
-      if (c.law == "exponential") {
+      nlohmann::json o = {{"law", std::string(to_string(c.law))}, {"gap", c.gap}};
+      if (c.law == ContactLawKind::Exponential) {
         o["coefficient"] = c.coefficient;
         o["exponent"] = c.exponent;
-      } else if (c.law == "linear") {
+      } else if (c.law == ContactLawKind::Linear) {
         o["stiffness"] = c.stiffness;
       }
       where(o, c.dof);

@@ -88,8 +88,18 @@ struct Forcing {
   [[nodiscard]] std::vector<double> frequencies_hz() const;
 };
 
+/// The law of a [contact] entry: "exponential" [JL14 Eq. (5)], "linear" (penalty spring) or
+/// "rigid" (exact Signorini contact, nnm only).
+enum class ContactLawKind { Exponential, Linear, Rigid };
+[[nodiscard]] std::string_view to_string(ContactLawKind law) noexcept;
+
+/// The outer algorithm of type = "nnm": "continuation" (pseudo-arclength on the KKT
+/// conditions), "simultaneous" or "sequential" ([LL11 Algs. 1, 2], energy stepping).
+enum class NnmAlgorithm { Continuation, Simultaneous, Sequential };
+[[nodiscard]] std::string_view to_string(NnmAlgorithm algorithm) noexcept;
+
 struct Contact {
-  std::string law;           // "exponential" [JL14 Eq. (5)], "linear" or "rigid" (nnm only)
+  ContactLawKind law = ContactLawKind::Exponential;
   double coefficient = 0.0;  // a_c [N] (exponential)
   double exponent = 0.0;     // α [1/m] (exponential)
   double stiffness = 0.0;    // k [N/m] (linear)
@@ -126,7 +136,7 @@ struct Analysis {
   double energy_min = 0.5, energy_max = 0.0;  // normalized energy range (1 = contact onset)
   int harmonics = 16;               // N
   int samples = 256;                // m time samples of the contact conditions, > 2N
-  std::string algorithm = "continuation";  // "continuation" | "simultaneous" | "sequential" (LL11 Alg. 1/2)
+  NnmAlgorithm algorithm = NnmAlgorithm::Continuation;
   double max_energy_step = 0.05;    // |ΔE| per step
   std::vector<double> levels;       // energies whose mode shapes are written
 };
