@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <fstream>
 #include <limits>
 #include <regex>
@@ -83,6 +84,44 @@ const std::vector<std::string>& analysis_names() {
 
 std::string linear_solver_name(solvers::LinearSolverPath p) { return std::string(name_of(linear_solver_table(), p)); }
 
+// Every [analysis] key, once: the analysis types that read it (empty: every type) and its value
+// in the JSON echo (null: not echoed as such). The parser's list of known keys, its "only used
+// by type = …" errors and to_json() all read this table.
+struct AnalysisKey {
+  const char* key;
+  std::vector<AnalysisKind> kinds;
+  std::function<nlohmann::json(const Analysis&)> echo;
+};
+
+const std::vector<AnalysisKey>& analysis_keys() {
+  using K = AnalysisKind;
+  static const std::vector<AnalysisKey> keys = {
+      {"type", {}, nullptr},
+      {"functions", {K::BasisPlot},
+       [](const Analysis& a) { return a.functions.empty() ? nlohmann::json() : nlohmann::json(a.functions); }},
+      {"derivative", {K::BasisPlot}, [](const Analysis& a) { return nlohmann::json(a.derivative); }},
+      {"normalization", {K::BasisPlot},
+       [](const Analysis& a) { return nlohmann::json(a.unit_integral ? "unit-integral" : "orthonormal"); }},
+      {"max_step", {K::Continuation, K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_step); }},
+      {"max_frequency_step_hz", {K::Continuation},
+       [](const Analysis& a) { return nlohmann::json(a.max_frequency_step_hz); }},
+      {"max_points", {K::Continuation, K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_points); }},
+      {"max_state", {K::Continuation}, [](const Analysis& a) { return nlohmann::json(a.max_state); }},
+      {"stability", {K::Continuation}, [](const Analysis& a) { return nlohmann::json(a.stability); }},
+      {"energy", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json({a.energy_min, a.energy_max}); }},
+      {"harmonics", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.harmonics); }},
+      {"samples", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.samples); }},
+      {"algorithm", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(std::string(to_string(a.algorithm))); }},
+      {"max_energy_step", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_energy_step); }},
+      {"levels", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.levels); }},
+  };
+  return keys;
+}
+
+bool reads(const AnalysisKey& k, AnalysisKind kind) {
+  return k.kinds.empty() || std::find(k.kinds.begin(), k.kinds.end(), kind) != k.kinds.end();
+}
+
 bool is_power_of_two(long long m) { return m >= 1 && (m & (m - 1)) == 0; }
 
 // Reads one scene table into a Scene, reporting into a Reader.
@@ -150,28 +189,18 @@ class Parser {
   void analysis(const toml::table& root) {
     const toml::table* t = r_.table(root, "analysis", false);
     if (t == nullptr) return;
-    r_.only(*t, "analysis", {"type", "functions", "derivative", "normalization", "max_step", "max_frequency_step_hz",
-                             "max_points", "max_state", "stability", "energy", "harmonics", "samples", "algorithm",
-                             "max_energy_step", "levels"});
+    std::vector<std::string> known;
+    for (const auto& k : analysis_keys()) known.emplace_back(k.key);
+    r_.only(*t, "analysis", known);
     s_.analysis.kind = value_of(analysis_table(), r_.choice(*t, "analysis", "type", analysis_names(), "solve"));
-    auto only_for = [&](AnalysisKind kind, std::initializer_list<const char*> keys) {
-      if (s_.analysis.kind == kind) return;
-      for (const char* key : keys) {
-        if (const toml::node* n = t->get(key)) {
-          r_.error(n->source(), std::string("analysis.") + key,
-                   "only used by type = \"" + std::string(to_string(kind)) + "\"; remove it");
-        }
+    for (const auto& k : analysis_keys()) {
+      const toml::node* n = t->get(k.key);
+      if (n == nullptr || reads(k, s_.analysis.kind)) continue;
+      std::string types;
+      for (size_t i = 0; i < k.kinds.size(); ++i) {
+        types += (i == 0 ? "" : " or ") + std::string("\"") + std::string(to_string(k.kinds[i])) + "\"";
       }
-    };
-    only_for(AnalysisKind::BasisPlot, {"functions", "derivative", "normalization"});
-    only_for(AnalysisKind::Continuation, {"max_frequency_step_hz", "max_state", "stability"});
-    only_for(AnalysisKind::NonlinearModes, {"energy", "harmonics", "samples", "algorithm", "max_energy_step", "levels"});
-    if (s_.analysis.kind != AnalysisKind::Continuation && s_.analysis.kind != AnalysisKind::NonlinearModes) {
-      for (const char* key : {"max_step", "max_points"}) {
-        if (const toml::node* n = t->get(key)) {
-          r_.error(n->source(), std::string("analysis.") + key, "only used by type = \"continuation\" or \"nnm\"; remove it");
-        }
-      }
+      r_.error(n->source(), std::string("analysis.") + k.key, "only used by type = " + types + "; remove it");
     }
     if (s_.analysis.kind == AnalysisKind::NonlinearModes) nnm(*t);
     if (s_.analysis.kind == AnalysisKind::Continuation) {
@@ -969,27 +998,9 @@ nlohmann::json to_json(const Scene& s) {
   nlohmann::json j;
   j["title"] = s.title;
   nlohmann::json analysis = {{"type", std::string(to_string(s.analysis.kind))}};
-  if (s.analysis.kind == AnalysisKind::BasisPlot) {
-    if (!s.analysis.functions.empty()) analysis["functions"] = s.analysis.functions;
-    analysis["derivative"] = s.analysis.derivative;
-    analysis["normalization"] = s.analysis.unit_integral ? "unit-integral" : "orthonormal";
-  }
-  if (s.analysis.kind == AnalysisKind::Continuation) {
-    analysis["max_step"] = s.analysis.max_step;
-    analysis["max_frequency_step_hz"] = s.analysis.max_frequency_step_hz;
-    analysis["max_points"] = s.analysis.max_points;
-    analysis["max_state"] = s.analysis.max_state;
-    analysis["stability"] = s.analysis.stability;
-  }
-  if (s.analysis.kind == AnalysisKind::NonlinearModes) {
-    analysis["energy"] = {s.analysis.energy_min, s.analysis.energy_max};
-    analysis["harmonics"] = s.analysis.harmonics;
-    analysis["samples"] = s.analysis.samples;
-    analysis["algorithm"] = std::string(to_string(s.analysis.algorithm));
-    analysis["max_step"] = s.analysis.max_step;
-    analysis["max_energy_step"] = s.analysis.max_energy_step;
-    analysis["max_points"] = s.analysis.max_points;
-    analysis["levels"] = s.analysis.levels;
+  for (const auto& k : analysis_keys()) {
+    if (!k.echo || !reads(k, s.analysis.kind)) continue;
+    if (nlohmann::json v = k.echo(s.analysis); !v.is_null()) analysis[k.key] = std::move(v);
   }
   j["analysis"] = analysis;
   const bool rod = s.structure && s.structure->kind == StructureKind::Rod;
