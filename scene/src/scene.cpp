@@ -631,22 +631,47 @@ class Parser {
       if (plot) r_.error(root.source(), "[basis]", "missing table: basis-plot draws the [basis] trial family");
       return;
     }
-    r_.only(*t, "basis", {"trial", "weighting", "dimension", "level", "formulation", "time_samples", "operators"});
+    r_.only(*t, "basis",
+            {"trial", "weighting", "dimension", "level", "harmonics", "formulation", "time_samples", "operators"});
     Basis& b = s_.basis;
     const std::string trial = r_.text(*t, "basis", "trial", b.trial);
     const std::string weighting = r_.text(*t, "basis", "weighting", trial);
-    if (t->contains("dimension") && t->contains("level")) {
-      r_.error(t->get("level")->source(), "basis.level", "give dimension = M or level = J (M = 2^J), not both");
+    const auto fourier = [](const std::string& name) {
+      try {
+        return solvers::TimeBasis::from_name(name, 2).is_fourier();
+      } catch (const std::invalid_argument&) {
+        return false;  // reported below with the list of names
+      }
+    };
+    const bool harmonic_balance = fourier(trial) && (plot || fourier(weighting));
+    const int given = static_cast<int>(t->contains("dimension")) + static_cast<int>(t->contains("level")) +
+                      static_cast<int>(t->contains("harmonics"));
+    if (given > 1) {
+      r_.error(t->source(), "basis", "give one of dimension = M, level = J (M = 2^J) or harmonics = H (M = 2H + 1)");
+    } else if (t->contains("harmonics")) {
+      const long long h = r_.integer(*t, "basis", "harmonics", 1, 1 << 19);
+      if (!harmonic_balance) {
+        r_.error(t->get("harmonics")->source(), "basis.harmonics",
+                 "H harmonics (2H + 1 functions) is the Fourier:Fourier basis; wavelet bases and mixed pairs take "
+                 "dimension = M = 2^J");
+      } else {
+        b.harmonics = static_cast<int>(h);
+        b.dimension = 2 * b.harmonics + 1;
+      }
     } else if (t->contains("level")) {
       b.dimension = 1 << r_.integer(*t, "basis", "level", 0, 20);
-    } else {
+    } else if (t->contains("dimension")) {
       const long long m = r_.integer(*t, "basis", "dimension", 1, 1 << 20, b.dimension);
       if (!is_power_of_two(m)) {
         r_.error(t->get("dimension")->source(), "basis.dimension",
-                 "M = " + std::to_string(m) + " is not a power of two (M = 2^J: 2, 4, …, 64, …)");
+                 "M = " + std::to_string(m) + " is not a power of two (M = 2^J: 2, 4, …, 64, …; for Fourier:Fourier "
+                 "with H harmonics give harmonics = H)");
       } else {
         b.dimension = static_cast<int>(m);
       }
+    } else if (harmonic_balance) {  // no top function without damping by default (issue #19)
+      b.harmonics = Basis::kDefaultHarmonics;
+      b.dimension = 2 * b.harmonics + 1;
     }
     const std::string form =
         r_.choice(*t, "basis", "formulation", {"strong", "weak", "distributional"}, "distributional");
@@ -1056,7 +1081,12 @@ nlohmann::json to_json(const Scene& s) {
     j["contact"] = list;
   }
   if (s.analysis.kind != AnalysisKind::Timestep && s.analysis.kind != AnalysisKind::NonlinearModes) {
-    nlohmann::json b = {{"trial", s.basis.trial}, {"dimension", s.basis.dimension}};
+    nlohmann::json b = {{"trial", s.basis.trial}};
+    if (s.basis.harmonics > 0) {
+      b["harmonics"] = s.basis.harmonics;
+    } else {
+      b["dimension"] = s.basis.dimension;
+    }
     if (s.analysis.kind != AnalysisKind::BasisPlot) {
       b["weighting"] = s.basis.weighting;
       b["formulation"] = std::string(solvers::to_string(s.basis.formulation));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <stdexcept>
 
@@ -30,11 +31,23 @@ const WeightedResidual& ForcedResponseFamily::at(double lambda) const {
   return *cache_;
 }
 
+// A predictor can overshoot to a frequency ≤ 0 (or non-finite) on a steep branch: no problem
+// exists there, so the residual is NaN and the corrector fails, and the step is halved, instead
+// of at_frequency throwing out of the continuation.
+bool ForcedResponseFamily::outside(double lambda) const {
+  return parameter_ == ContinuationParameter::Frequency && !(lambda > 0.0 && std::isfinite(lambda));
+}
+
 Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double lambda) const {
+  if (outside(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
   return at(lambda).contact_residual(x, load(lambda));
 }
 
 Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double lambda) const {
+  if (outside(lambda)) {
+    return {Eigen::VectorXd::Constant(x.size(), NAN), Eigen::MatrixXd::Constant(x.size(), x.size(), NAN),
+            Eigen::VectorXd::Constant(x.size(), NAN)};
+  }
   const WeightedResidual& wr = at(lambda);
   Linearization l;
   l.residual = wr.contact_residual(x, load(lambda));

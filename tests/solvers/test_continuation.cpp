@@ -12,6 +12,8 @@
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/scene.hpp>
 
 #include "scene.hpp"
 #include "testing.hpp"
@@ -428,4 +430,72 @@ TEST(Continuation, FoldIsTheExtremumOfTheHermiteCubic) {
   EXPECT_NEAR(wbm::solvers::detail::fold_parameter(lambda(0.0), lambda(1.0), slope(0.0), slope(1.0), 1.0), 1.0, 1e-14);
   // A quadratic over a step of length 2 with its top at s = 1.5: λ = 3 − (s − 1.5)².
   EXPECT_NEAR(wbm::solvers::detail::fold_parameter(3.0 - 2.25, 3.0 - 0.25, 3.0, -1.0, 2.0), 3.0, 1e-14);
+}
+
+// The undamped top function (issue #19). A peer's nondimensional rod (E = ρ = S = L = 1, C = βK
+// with β = 0.04/π, tip force 0.01, linear stop k = 10 at g0 = 0.1), 0.2–0.4 Hz across its first
+// resonance (0.25 Hz). With M = 2^J the lone top function cos πMτ has no damping; for 20 elements
+// and M = 32, 16 f meets the 8th mode near 0.2486 Hz and the branch follows that undamped
+// resonance (hundreds of gaps, point limit). With H harmonics (2H + 1 functions, every harmonic
+// damped) the branch crosses the range; its peak amplitude is converged in H (H = 16 against 32,
+// and M = 128 where (M/2)f meets no mode in the range), so it is not a truncation artefact.
+TEST(Continuation, HarmonicFourierBasisTracesTheBranchTheUndampedTopFunctionDerails) {
+  // Largest tip amplitude along the branch [gaps], as `wbm run` traces it; `stop` as it reports it.
+  const auto peak = [](const std::string& basis, int max_points, std::string& stop) {
+    const auto s = scene::parse_scene(R"(
+[structure]
+young_modulus = 1.0
+density = 1.0
+area = 1.0
+length = 1.0
+elements = 20
+[damping]
+beta = 0.012732395447351627
+[forcing]
+amplitude = 0.01
+frequency_hz = [0.2, 0.4]
+[contact]
+law = "linear"
+stiffness = 10.0
+gap = 0.1
+[analysis]
+type = "continuation"
+stability = false
+max_points = )" + std::to_string(max_points) + R"(
+[basis]
+trial = "fourier"
+)" + basis + "\n",
+                                      "peer_rod.toml");
+    const auto result = scene::run_analysis(s);
+    stop = result.diagnostics["continuation"]["stop"].get<std::string>();
+    const auto& branch = result.tables.front();
+    EXPECT_EQ(branch.header[3], "amplitude_node20 [m]");
+    if (basis == "harmonics = 16") {
+      // The same branch with ResponseCurveOptions' defaults: a predictor there overshoots to f < 0,
+      // which must be a failed step (halved), not an exception out of the continuation.
+      solvers::ResponseCurveOptions o;
+      o.parameter_min = 0.2;
+      o.parameter_max = 0.4;
+      o.stability = false;
+      const solvers::WeightedResidual base(s.system(), s.harmonic_forcing(0.2), s.contact_points(), s.trial(), s.weighting());
+      const auto curve = solvers::trace_response(base, o);
+      EXPECT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
+      double best = 0.0;
+      for (const auto& p : curve.points) best = std::max(best, p.amplitude);
+      EXPECT_NEAR(best, branch.columns[3].maxCoeff(), 2e-3 * best);
+    }
+    return branch.columns[3].maxCoeff() / 0.1;
+  };
+  std::string stop16, stop32, stop128, stop_top;
+  const double h16 = peak("harmonics = 16", 2000, stop16), h32 = peak("harmonics = 32", 2000, stop32);
+  const double m128 = peak("dimension = 128", 2000, stop128);
+  EXPECT_EQ(stop16, "range reached");
+  EXPECT_EQ(stop32, "range reached");
+  EXPECT_EQ(stop128, "range reached");
+  EXPECT_NEAR(h16, h32, 2e-3 * h32);
+  EXPECT_NEAR(m128, h32, 2e-3 * h32);
+  EXPECT_LT(h32, 2.0);  // the stop limits the tip to about 1.3 gaps
+  const double top = peak("dimension = 32", 600, stop_top);
+  EXPECT_NE(stop_top, "range reached");
+  EXPECT_GT(top, 50.0) << "M = 32 follows the undamped resonance of its top function";
 }

@@ -110,7 +110,13 @@ struct Contact {
 struct Basis {
   std::string trial = "fourier";
   std::string weighting = "fourier";
-  int dimension = 64;  // M = 2^J
+  int dimension = 64;  // M: 2^J, or 2H + 1 when harmonics > 0
+  /// H for Fourier:Fourier as harmonic balance is usually written (harmonics 0 … H, 2H + 1
+  /// functions, every harmonic damped); 0: the M = 2^J form of the paper, whose top function
+  /// cos πMτ has no damping (spectral/fourier_basis.hpp). The Fourier:Fourier default when
+  /// neither dimension, level nor harmonics is given: H = kDefaultHarmonics.
+  int harmonics = 0;
+  static constexpr int kDefaultHarmonics = 32;
   solvers::Formulation formulation = solvers::Formulation::Distributional;
   int time_samples = 0;  // Q; 0 = max(256, 2M)
   solvers::OperatorRule operators = solvers::OperatorRule::Automatic;

@@ -26,7 +26,9 @@ enum class ContinuationParameter {
 ///   linearize(x, λ) = {r, ∂r/∂x, ∂r/∂λ} with ∂r/∂f from contact_residual_frequency_derivative
 ///   and ∂r/∂F = −x_lin/(F₀ s_r).
 /// The WeightedResidual of the last frequency asked for is cached (continuation asks each f
-/// several times). Not thread-safe (the cache is mutable).
+/// several times). At a frequency ≤ 0 or non-finite (a predictor overshooting on a steep branch)
+/// residual and linearization are NaN, so the corrector fails there and the step is halved.
+/// Not thread-safe (the cache is mutable).
 class ForcedResponseFamily {
  public:
   ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter);
@@ -39,6 +41,7 @@ class ForcedResponseFamily {
   [[nodiscard]] ContinuationParameter parameter() const { return parameter_; }
 
  private:
+  [[nodiscard]] bool outside(double lambda) const;
   const WeightedResidual* base_;
   ContinuationParameter parameter_;
   double base_amplitude_;
