@@ -267,6 +267,7 @@ void basis_plot(const Scene& scene, AnalysisResult& out) {
 }
 
 void continuation(const Scene& scene, AnalysisResult& out) {
+  const auto started = std::chrono::steady_clock::now();
   const auto& range = *scene.forcing->range;
   const solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz), scene.contact_points(),
                                        scene.trial(), scene.weighting(), scene.weighted_residual_options());
@@ -334,7 +335,10 @@ void continuation(const Scene& scene, AnalysisResult& out) {
   out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
                 ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
                 std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +
-                std::string(solvers::to_string(curve.stop)) + " (" + format("%.3f", curve.wall_time_s) + " s)";
+                std::string(solvers::to_string(curve.stop)) + " (" +
+                format("%.3f", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()) +
+                " s in all: continuation " + format("%.3f", curve.wall_time_s) + " s, stability " +
+                format("%.3f", curve.stability_time_s) + " s)";
 }
 
 nlohmann::json to_json(const solvers::ModeLevel& l) {

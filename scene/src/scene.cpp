@@ -565,7 +565,15 @@ class Parser {
 
   void contacts(const toml::table& root) {
     const toml::node* n = root.get("contact");
-    if (n == nullptr) return;
+    if (n == nullptr) {
+      if (s_.analysis.kind == AnalysisKind::Continuation) {
+        r_.error(root.source(), "[contact]",
+                 "missing: analysis \"continuation\" traces the branch of a nonlinear response and needs at least "
+                 "one [contact]; without contact the response is linear: use type = \"solve\" with frequency_hz = "
+                 "[from, to] and points = N (a sweep)");
+      }
+      return;
+    }
     std::vector<std::pair<const toml::table*, std::string>> tables;
     if (n->is_table()) {
       tables.emplace_back(n->as_table(), "contact");

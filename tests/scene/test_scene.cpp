@@ -188,6 +188,20 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"linear\"\nstiffness = "
                                                                            "1e6\ngap = 0.0\ndof = 3\n"); },
                                            {"contact.dof: the rod is located by node"});
+  // Continuation traces a nonlinear branch: without contact `check` refuses it (as `run` would).
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n[analysis]\ntype = \"continuation\"\n");
+      },
+      {"[contact]: missing: analysis \"continuation\"", "use type = \"solve\" with frequency_hz = [from, to]"});
+  // Fourier:Fourier takes harmonics = H; one of dimension, level and harmonics; not for wavelets.
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[basis]\ntrial = \"db6\"\nharmonics = 8\n"); },
+                                           {"basis.harmonics: H harmonics (2H + 1 functions) is the Fourier:Fourier basis"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + "[basis]\ntrial = \"fourier\"\nharmonics = 8\ndimension = 16\n"); },
+      {"basis: give one of dimension = M, level = J (M = 2^J) or harmonics = H (M = 2H + 1)"});
+  EXPECT_EQ(parse(rod + force + "[basis]\ntrial = \"fourier\"\n").basis.dimension, 2 * wbm::scene::Basis::kDefaultHarmonics + 1);
+  EXPECT_EQ(parse(rod + force + "[basis]\ntrial = \"fourier\"\nharmonics = 5\n").basis.dimension, 11);
   // nnm: an energy range and a stop are required; the forced-response laws and solvers are not theirs.
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[analysis]\ntype = \"nnm\"\n"); },
                                            {"analysis.energy: missing; give energy = [from, to]",

@@ -170,6 +170,7 @@ TEST(Continuation, LinearRodFollowsTheDirectFrequencyResponse) {
   ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
   EXPECT_TRUE(curve.folds.empty());
   EXPECT_GT(curve.points.size(), 20u);
+  EXPECT_EQ(curve.points.back().frequency_hz, o.parameter_max) << "the branch stops on the range end (landed there)";
   for (const auto& p : curve.points) {
     auto forcing = s.harmonic_forcing(p.frequency_hz);
     const double exact = std::abs(solvers::frequency_response(s.system(), forcing)(forcing.dof));

@@ -98,7 +98,9 @@ struct ResponseCurveOptions {
 };
 
 /// Traces the response of `base` (its frequency and amplitude are the start) over the range of
-/// the parameter. Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
+/// the parameter. With StopReason::RangeReached the last point lies on the range end: the step
+/// that left the range is replaced by Newton at the end's λ (unless a fold lies on that step;
+/// a failed landing keeps the overshooting point and says so in the message). Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
 /// without contact (a linear curve needs no continuation: frequency_response()).
