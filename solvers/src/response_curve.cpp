@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <optional>
 #include <stdexcept>
+
+#include <Eigen/Eigenvalues>
 
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -105,6 +108,45 @@ void land_on_range_end(const ForcedResponseFamily& family, Branch& branch, const
   branch.message = "landed on the range end λ = " + format_number(end);
 }
 
+// The M = 2^J Fourier basis ends on cos πMτ without its sine: C u̇ never reaches it, so when
+// (M/2) f nears a natural frequency f_k it resonates undamped, driven by the contact forces, and
+// the branch follows that resonance (hundreds of gaps, thousands of points). Such a point is
+// recognized by the top function's coefficient dominating the contact displacement: the branch
+// is cut before the first point where |x_top| > kTopShare · max_k |x_k| (a genuine response
+// decays with the harmonic: well below 1 % there), and the message names the mode.
+constexpr double kTopShare = 0.5;
+
+void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch) {
+  const int m = base.dimension();
+  if (!base.trial().is_fourier() || m % 2 == 1) return;
+  const auto nc = static_cast<Eigen::Index>(base.contacts().size());
+  for (size_t i = 0; i < branch.points.size(); ++i) {
+    const Eigen::MatrixXd x = spectral::as_coefficients(branch.points[i].x, nc);  // n_c × M
+    const double top = x.col(m - 1).cwiseAbs().maxCoeff(), all = x.cwiseAbs().maxCoeff();
+    if (!(top > kTopShare * all)) continue;
+    const double f = branch.points[i].parameter;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(base.system().stiffness),
+                                                                        Eigen::MatrixXd(base.system().mass),
+                                                                        Eigen::EigenvaluesOnly);
+    const double f_top = 0.5 * m * f;
+    Eigen::Index k = 0;
+    (eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi) - Eigen::VectorXd::Constant(eig.eigenvalues().size(), f_top))
+        .cwiseAbs()
+        .minCoeff(&k);
+    const double f_k = std::sqrt(std::max(0.0, eig.eigenvalues()(k))) / (2.0 * std::numbers::pi);
+    branch.points.resize(std::max<size_t>(i, 1));
+    std::erase_if(branch.folds, [&](const Fold& fold) { return fold.after + 1 >= branch.points.size(); });
+    branch.stop = StopReason::UndampedResonance;
+    branch.message = "at f = " + format_number(f) + " Hz the top Fourier function cos(pi M tau) (harmonic M/2 = " +
+                     std::to_string(m / 2) + ", " + format_number(f_top) + " Hz) carries " +
+                     format_number(100.0 * top / all) + " % of the contact displacement: it resonates with mode " +
+                     std::to_string(k + 1) + " (" + format_number(f_k) +
+                     " Hz) without damping (it has no sine partner); use harmonics = H (2H + 1 functions, "
+                     "every harmonic damped) or another M; branch cut there";
+    return;
+  }
+}
+
 }  // namespace
 
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
@@ -149,6 +191,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.corrector_tolerance = o.corrector_tolerance;
   pa.initial_newton.tolerance = o.corrector_tolerance;
   Branch branch = pseudo_arclength(family, x0, lambda0, pa);
+  cut_at_undamped_top_resonance(base, branch);
   land_on_range_end(family, branch, o);
   curve.folds = branch.folds;
   curve.stop = branch.stop;

@@ -50,8 +50,18 @@ namespace wbm::solvers {
 
 /// Why a branch ended. Retraced: the branch came back along a piece it had already traced
 /// (detected by the caller that knows the problem, e.g. a backbone falling back below contact
-/// onset after a corner) and was cut where it turned back.
-enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointFailed, StateBound, Retraced };
+/// onset after a corner) and was cut where it turned back. UndampedResonance: a forced response
+/// with the M = 2^J Fourier basis followed the undamped resonance of its top function cos πMτ
+/// (response_curve.hpp) and was cut where that function took over.
+enum class StopReason {
+  RangeReached,
+  StepBelowMinimum,
+  MaxPoints,
+  InitialPointFailed,
+  StateBound,
+  Retraced,
+  UndampedResonance
+};
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
   switch (r) {
@@ -61,6 +71,7 @@ enum class StopReason { RangeReached, StepBelowMinimum, MaxPoints, InitialPointF
     case StopReason::InitialPointFailed: return "initial point did not converge";
     case StopReason::StateBound: return "state bound exceeded";
     case StopReason::Retraced: return "branch retraced itself";
+    case StopReason::UndampedResonance: return "undamped resonance of the top Fourier function";
   }
   return "?";
 }
