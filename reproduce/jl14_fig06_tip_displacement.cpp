@@ -35,7 +35,10 @@ int main(int argc, char** argv) {
     const Eigen::VectorXd u_ref = fig.reference.tip_displacement;
     const double g0 = fig.reference.scene.contacts.front().gap;
     std::vector<bool> contact(static_cast<size_t>(u_ref.size())), free(contact.size());
-    for (Eigen::Index q = 0; q < u_ref.size(); ++q) free[q] = !(contact[q] = u_ref(q) > g0);
+    for (Eigen::Index q = 0; q < u_ref.size(); ++q) {
+      contact[static_cast<size_t>(q)] = u_ref(q) > g0;
+      free[static_cast<size_t>(q)] = !contact[static_cast<size_t>(q)];
+    }
     std::vector<Claim> claims;
     const auto* hb = find_converged(fig.results, "fourier_fourier");
     const auto* hf = find_converged(fig.results, "haar_fourier");
