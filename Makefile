@@ -2,6 +2,8 @@
 BUILD ?= build
 JOBS  ?= 2
 OUT   ?= $(CURDIR)/out
+# Extra CMake arguments for the Release build, e.g. CMAKE_ARGS=-DWBM_WERROR=ON (.ci/run).
+CMAKE_ARGS ?=
 
 .PHONY: deps configure build test check-sanitize reproduce bench clean
 
@@ -9,7 +11,7 @@ deps:
 	@./scripts/install-deps
 
 configure: deps
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DWBM_OUT_DIR=$(OUT) > $(BUILD).configure.log 2>&1 \
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DWBM_OUT_DIR=$(OUT) $(CMAKE_ARGS) > $(BUILD).configure.log 2>&1 \
 	  || { cat $(BUILD).configure.log; exit 1; }
 
 build: configure
