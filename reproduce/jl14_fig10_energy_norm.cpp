@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
       std::sort(at.begin(), at.end());
       const bool fast = at.size() >= 2 && ((at[0].second == "fourier_fourier" && at[1].second == "bspline_bspline") ||
                                            (at[1].second == "fourier_fourier" && at[0].second == "bspline_bspline"));
-      claims.push_back({std::string(c == 0 ? "at 150 Hz" : "at 1275 Hz") +
+      claims.push_back({"at " + fig.frequency_label(c) +
                             ", HBM and Galerkin B-spline are closest to unity with few functions",
                         fast, "two smallest |E − 1| at M = " + std::string(c == 0 ? "8" : "16") + ": " +
                                   (at.size() >= 2 ? at[0].second + " " + format("%.3f", at[0].first) + ", " + at[1].second +
@@ -61,13 +61,15 @@ int main(int argc, char** argv) {
     }
     for (const char* key : {"haar_fourier", "haar_bspline"}) {
       const auto* res = find_converged(fig.cases[0], key, 8);
-      claims.push_back({std::string("Haar trial functions over-predict the energy with few functions (") + key + ", 150 Hz)",
+      claims.push_back({std::string("Haar trial functions over-predict the energy with few functions (") + key + ", " +
+                            fig.frequency_label(0) + ")",
                         res == nullptr ? std::optional<bool>{} : std::optional<bool>{res->energy_norm > 1.0},
                         res == nullptr ? "did not converge at M = 8" : "E/E_BDF at M = 8: " + format("%.3f", res->energy_norm)});
     }
     for (int m : {8, 16}) {
       const double df = dev(0, "db6_fourier", m), dd = dev(0, "db6_db6", m);
-      claims.push_back({"at 150 Hz DB6:Fourier approximates the energy norm better than DB6:DB6 (M = " + std::to_string(m) + ")",
+      claims.push_back({"at " + fig.frequency_label(0) + " DB6:Fourier approximates the energy norm better than DB6:DB6 (M = " +
+                            std::to_string(m) + ")",
                         std::isnan(df) || std::isnan(dd) ? std::optional<bool>{} : std::optional<bool>{df < dd},
                         "|E − 1| " + format("%.3f", df) + " against " + format("%.3f", dd)});
     }
@@ -85,11 +87,14 @@ int main(int argc, char** argv) {
     }
     mean1 /= std::max(n1, 1);
     mean2 /= std::max(n2, 1);
-    claims.push_back({"at 1275 Hz the combinations converge to a common energy norm more slowly", mean2 > mean1,
-                      "mean |E − 1| at M = 32: " + format("%.3f", mean2) + " against " + format("%.3f", mean1) + " at 150 Hz"});
+    claims.push_back({"at " + fig.frequency_label(1) + " the combinations converge to a common energy norm more slowly",
+                      mean2 > mean1,
+                      "mean |E − 1| at M = 32: " + format("%.3f", mean2) + " against " + format("%.3f", mean1) + " at " +
+                          fig.frequency_label(0)});
     for (const char* key : {"haar_fourier", "haar_bspline"}) {
       const double d1 = dev(0, key, 8), d2 = dev(1, key, 8);
-      claims.push_back({std::string("Haar trial functions differ more at 1275 Hz than at 150 Hz (") + key + ")",
+      claims.push_back({"Haar trial functions differ more at " + fig.frequency_label(1) + " than at " + fig.frequency_label(0) +
+                            " (" + key + ")",
                         std::isnan(d1) || std::isnan(d2) ? std::optional<bool>{} : std::optional<bool>{d2 > d1},
                         "|E − 1| at M = 8: " + format("%.3f", d2) + " against " + format("%.3f", d1)});
     }

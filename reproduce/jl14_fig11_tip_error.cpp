@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
       if (const double e = err(0, k.key(), 8); !std::isnan(e)) at8.emplace_back(e, k.key());
     }
     std::sort(at8.begin(), at8.end());
-    claims.push_back({"HBM and Galerkin B-spline have the lowest error with 8 basis functions (150 Hz)",
+    claims.push_back({"HBM and Galerkin B-spline have the lowest error with 8 basis functions (" + fig.frequency_label(0) + ")",
                       at8.size() >= 2 && ((at8[0].second == "fourier_fourier" && at8[1].second == "bspline_bspline") ||
                                           (at8[0].second == "bspline_bspline" && at8[1].second == "fourier_fourier")),
                       at8.size() >= 2 ? at8[0].second + " " + format("%.2e", at8[0].first) + ", " + at8[1].second + " " +
@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
       numbers += (numbers.empty() ? "" : "; ") + std::string("M = ") + std::to_string(m) + ": " + format("%.2e", bs) +
                  " against " + format("%.2e", hb);
     }
-    claims.push_back({"as M increases Galerkin B-spline does not perform as well as HBM (150 Hz)", behind, numbers});
+    claims.push_back({"as M increases Galerkin B-spline does not perform as well as HBM (" + fig.frequency_label(0) + ")", behind,
+                      numbers});
     const double db8 = err(0, "db6_db6", 8), db16 = err(0, "db6_db6", 16), db64 = err(0, "db6_db6", 64),
                  hb16 = err(0, "fourier_fourier", 16), hb64 = err(0, "fourier_fourier", 64);
     claims.push_back({"Galerkin DB6 performs poorly using 16 functions", known({db16, hb16, db8}) && db16 > hb16 && db16 > db8,
@@ -70,13 +71,13 @@ int main(int argc, char** argv) {
           other = std::max(other, res.tip_error);
         }
       }
-      claims.push_back({std::string("the error using Haar trial functions is the highest (") + (c == 0 ? "150" : "1275") + " Hz)",
+      claims.push_back({"the error using Haar trial functions is the highest (" + fig.frequency_label(c) + ")",
                         std::isfinite(haar) ? std::optional<bool>{haar > other} : std::optional<bool>{},
                         "at M = 128 the smallest Haar error " + format("%.2e", haar) + " against the largest other " +
                             format("%.2e", other)});
     }
     const double bs32 = err(1, "bspline_bspline", 32), bs128 = err(1, "bspline_bspline", 128);
-    claims.push_back({"at 1275 Hz the Galerkin B-spline error stays reasonably constant from 32 to 128",
+    claims.push_back({"at " + fig.frequency_label(1) + " the Galerkin B-spline error stays reasonably constant from 32 to 128",
                       known({bs32, bs128}) ? std::optional<bool>{bs128 / bs32 >= kConstant} : std::optional<bool>{},
                       "e(128)/e(32) = " + format("%.2f", bs128 / bs32) + " (constant: >= " + format("%g", kConstant) + ")"});
     r.report(claims_markdown(claims));

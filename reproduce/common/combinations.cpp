@@ -279,6 +279,10 @@ HistoryFigure history_figure(Run& run, const std::string& scene_name, const std:
 
 namespace wbm::reproduce {
 
+std::string ConvergenceFigure::frequency_label(int c) const {
+  return format("%g", frequencies_hz[static_cast<size_t>(c)]) + " Hz";
+}
+
 ConvergenceFigure convergence_figure(Run& run, const std::string& figure, const std::string& metric,
                                      const std::string& paper_note) {
   if (metric != "energy_norm" && metric != "tip_error") {
@@ -301,6 +305,7 @@ ConvergenceFigure convergence_figure(Run& run, const std::string& figure, const 
   for (int case_id : {1, 2}) {
     const std::string name = "jl14_case" + std::to_string(case_id);
     const Reference ref = solve_reference(run, name);
+    out.frequencies_hz[static_cast<size_t>(case_id - 1)] = ref.scene.forcing->frequency_hz;
     std::vector<CombinationResult>& results = out.cases[static_cast<size_t>(case_id - 1)];
     nlohmann::json solves = nlohmann::json::array();
     md << "### " << ref.scene.title << "\n\n| combination |";

@@ -134,6 +134,9 @@ namespace wbm::reproduce {
 struct ConvergenceFigure {
   std::vector<int> dimensions;
   std::array<std::vector<CombinationResult>, 2> cases;  // Case 1, Case 2
+  std::array<double, 2> frequencies_hz{};                // each case's forcing frequency (its scene)
+  /// "150 Hz" for case c (0, 1), formatted from the scene, for claim labels.
+  [[nodiscard]] std::string frequency_label(int c) const;
 };
 [[nodiscard]] ConvergenceFigure convergence_figure(Run& run, const std::string& figure, const std::string& metric,
                                                    const std::string& paper_note);
