@@ -97,6 +97,7 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
                          {"scene_file", std::filesystem::absolute(scene_path).lexically_normal().string()},
                          {"scene", wbm::scene::to_json(*scene)},
                          {"warnings", scene->warnings},
+                         {"run_warnings", result.warnings},
                          {"converged", result.converged},
                          {"diagnostics", result.diagnostics},
                          {"build", wbm::scene::build_information()}};
@@ -113,6 +114,7 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
     std::cerr << "wbm: " << out << ": " << e.what() << "; nothing written\n";
     return kNotConverged;
   }
+  for (const auto& w : result.warnings) std::cerr << "wbm: warning: " << w << "\n";
   if (!quiet) {
     std::cout << result.summary << "\n";
     std::cout << (result.converged ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "

@@ -54,26 +54,38 @@ def save(fig, folder, stem):
 
 
 def history(folder):
-    """Figs. 6-9: one quantity over a period, BDF and every converged combination."""
+    """Figs. 6-9 as the paper draws them: one panel per combination of Table 2, (a)-(f) in the
+    paper's order, each over the BDF reference; a combination missing from the CSV (not
+    converged) keeps its panel, with its status from meta.json."""
     meta = json.loads((folder / "meta.json").read_text())
-    stem = {"displacement": "tip_displacement", "velocity": "tip_velocity", "force": "contact_force"}[meta["quantity"]]
+    quantity = meta["quantity"]
+    stem = {"displacement": "tip_displacement", "velocity": "tip_velocity", "force": "contact_force"}[quantity]
     header, cols = read_csv(folder / f"{stem}.csv")
-    scale = 1e3 if meta["quantity"] == "displacement" else 1.0
-    fig, ax = plt.subplots(figsize=(7.2, 4.4))
-    for name, col in zip(header[1:], cols[1:]):
-        key = name.split(" ")[0].split("_", 2)[-1]
-        style = {"color": "k", "lw": 2.5, "alpha": 0.4} if key == "bdf" else {"lw": 0.9}
-        label = LABELS.get(key, key)
-        if key != "bdf":
-            label += f", M = {meta['figure_dimension']}"
-        ax.plot(cols[0], [scale * v for v in col], label=label, **style)
-    if meta["quantity"] == "displacement":
-        ax.axhline(1e3 * meta["gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
-    ax.set_xlabel("normalized time τ [-]")
-    ax.set_ylabel({"displacement": "tip displacement [mm]", "velocity": "tip velocity [m/s]",
-                   "force": "contact force / F [-]"}[meta["quantity"]])
-    ax.set_title(f"{meta['figure']}: {meta['scene']['title']}")
-    ax.legend(loc="best", ncol=2)
+    scale = 1e3 if quantity == "displacement" else 1.0
+    series = {name.split(" ")[0].split("_", 2)[-1]: col for name, col in zip(header[1:], cols[1:])}
+    statuses = {r.get("combination"): r.get("status") for r in meta.get("combinations", []) if isinstance(r, dict)}
+    keys = [k for k in LABELS if k != "bdf"]
+    fig, axes = plt.subplots(2, 3, figsize=(12.0, 6.4), sharex=True, sharey=True)
+    ylabel = {"displacement": "tip displacement [mm]", "velocity": "tip velocity [m/s]",
+              "force": "contact force / F [-]"}[quantity]
+    for i, (ax, key) in enumerate(zip(axes.flat, keys)):
+        if "bdf" in series:
+            ax.plot(cols[0], [scale * v for v in series["bdf"]], color="k", lw=2.5, alpha=0.35, label=LABELS["bdf"])
+        if key in series:
+            ax.plot(cols[0], [scale * v for v in series[key]], color="C0", lw=0.9,
+                    label=f"{LABELS[key]}, M = {meta['figure_dimension']}")
+        else:
+            ax.text(0.5, 0.5, f"{LABELS[key]}: {statuses.get(LABELS[key], 'not in the CSV')}",
+                    transform=ax.transAxes, ha="center", va="center", fontsize=8)
+        if quantity == "displacement":
+            ax.axhline(1e3 * meta["gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
+        ax.set_title(f"({'abcdef'[i]}) {LABELS[key]}", fontsize=9)
+        ax.legend(loc="best", fontsize=6)
+        if i >= 3:
+            ax.set_xlabel("normalized time τ [-]")
+        if i % 3 == 0:
+            ax.set_ylabel(ylabel)
+    fig.suptitle(f"{meta['figure']}: {meta['scene']['title']}", fontsize=10)
     save(fig, folder, stem)
 
 

@@ -89,6 +89,7 @@ nlohmann::json to_json(const CombinationResult& r) {
           {"formulation", std::string(solvers::to_string(kFigureFormulation))},
           {"status", std::string(solvers::to_string(s.report.status))},
           {"message", s.report.message},
+          {"path", std::string(solvers::to_string(s.path))},
           {"newton_iterations", s.report.iterations},
           {"relative_residual", finite_or_null(s.relative_residual)},
           {"condition_number", finite_or_null(s.condition_number)},

@@ -32,9 +32,19 @@ nlohmann::json to_json(const solvers::NewtonReport& r) {
           {"message", r.message}};
 }
 
+nlohmann::json to_json(const solvers::HomotopyReport& h) {
+  if (!h.tried) return nullptr;
+  return {{"reached", h.reached},          {"sigma_reached", h.sigma_reached}, {"lambda_start", h.lambda_start},
+          {"points", h.points},            {"folds", h.folds},                 {"corrector_iterations", h.corrector_iterations},
+          {"stop", h.stop}};
+}
+
 nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
   return {{"frequency_hz", s.frequency_hz},
           {"newton", to_json(s.report)},
+          {"path", std::string(solvers::to_string(s.path))},
+          {"contact_homotopy", to_json(s.homotopy)},
+          {"rounding_floor", finite_or_null(s.rounding_floor)},
           {"relative_residual", finite_or_null(s.relative_residual)},
           {"max_penetration_m", finite_or_null(s.max_penetration)},
           {"max_contact_force_N", finite_or_null(s.max_contact_force)},
@@ -147,7 +157,10 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   std::vector<std::vector<double>> rows;
   nlohmann::json points = nlohmann::json::array();
   Eigen::VectorXd previous;  // contact unknowns of the last converged point
-  int failed = 0;
+  double previous_amplitude = NAN;  // (max − min)/2 of the forced DOF at the last converged point
+  int failed = 0, restarts = 0;
+  nlohmann::json restarted_points = nlohmann::json::array();
+  const int forced = scene.harmonic_forcing(frequencies.front()).dof;
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < frequencies.size(); ++i) {
     const double f = frequencies[i];
@@ -155,8 +168,10 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
                                        scene.weighted_residual_options());
     auto solution = wr.solve(previous.size() > 0 ? &previous : nullptr);
     bool restarted = false;
+    std::string continued_status;
     if (!solution.report.converged() && previous.size() > 0) {
-      solution = wr.solve();  // from the linear response, with load stepping
+      continued_status = std::string(solvers::to_string(solution.report.status));
+      solution = wr.solve();  // from the linear response: contact homotopy, then load stepping
       restarted = true;
     }
     nlohmann::json point = to_json(solution);
@@ -166,9 +181,28 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     if (!solution.report.converged()) {
       ++failed;
       previous.resize(0);
+      previous_amplitude = NAN;
       continue;
     }
     previous = wr.contact_unknowns(spectral::stacked(solution.coefficients));
+    const Eigen::VectorXd u_forced = solvers::evaluate_trial(trial, solution.coefficients, forced, tau, f);
+    const double amplitude = 0.5 * (u_forced.maxCoeff() - u_forced.minCoeff());
+    if (restarted) {
+      // A restart from the linear response may land on another branch: say so with the jump.
+      ++restarts;
+      const double jump = amplitude - previous_amplitude;
+      restarted_points.push_back({{"frequency_hz", f},
+                                  {"continued_status", continued_status},
+                                  {"amplitude_before_m", finite_or_null(previous_amplitude)},
+                                  {"amplitude_after_m", amplitude}});
+      out.warnings.push_back(
+          "sweep: at f = " + format("%.6g", f) + " Hz the solve continued from the previous point ended " +
+          continued_status + "; restarted from the linear response (" + std::string(solvers::to_string(solution.path)) +
+          "): amplitude of " + scene.structure->dof_name(forced) + " " + format("%.4g", previous_amplitude) + " m -> " +
+          format("%.4g", amplitude) + " m (" + (jump >= 0 ? "+" : "") + format("%.3g", jump) +
+          " m); the sweep may have left its branch (a fold?): use [analysis] type = \"continuation\" to follow it");
+    }
+    previous_amplitude = amplitude;
     std::vector<double> row = {f};
     for (int dof : dofs) {
       const Eigen::VectorXd u = solvers::evaluate_trial(trial, solution.coefficients, dof, tau, f);
@@ -176,6 +210,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     }
     row.push_back(contacts.empty() ? 0.0 : solution.max_contact_force);
     row.push_back(solution.report.iterations);
+    row.push_back(restarted ? 1.0 : 0.0);
     rows.push_back(row);
   }
   Table t{"frequency_response.csv", {"frequency [Hz]"}, {}};
@@ -183,7 +218,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     const std::string name = scene.structure->dof_name(dof);
     t.header.insert(t.header.end(), {"max_u_" + name + " [m]", "min_u_" + name + " [m]", "rms_u_" + name + " [m]"});
   }
-  t.header.insert(t.header.end(), {"max_contact_force [N]", "newton_iterations [-]"});
+  t.header.insert(t.header.end(), {"max_contact_force [N]", "newton_iterations [-]", "restarted_from_linear [-]"});
   for (size_t c = 0; c < t.header.size(); ++c) {
     Eigen::VectorXd column(static_cast<Eigen::Index>(rows.size()));
     for (size_t r = 0; r < rows.size(); ++r) column(static_cast<Eigen::Index>(r)) = rows[r][c];
@@ -194,11 +229,14 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   out.diagnostics["points"] = points;
   out.diagnostics["converged_points"] = rows.size();
   out.diagnostics["failed_points"] = failed;
+  out.diagnostics["restarted_points"] = restarted_points;
   out.diagnostics["wall_time_s"] = seconds_since(start);
   out.summary = trial.name() + ":" + weighting.name() + ", M = " + std::to_string(trial.dimension()) + ", sweep " +
                 format("%g", frequencies.front()) + " … " + format("%g", frequencies.back()) + " Hz: " +
                 std::to_string(rows.size()) + " of " + std::to_string(frequencies.size()) + " points converged in " +
-                format("%.3f", seconds_since(start)) + " s";
+                format("%.3f", seconds_since(start)) + " s" +
+                (restarts > 0 ? ", " + std::to_string(restarts) + " restarted from the linear response (see warnings)"
+                              : std::string());
 }
 
 void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out) {

@@ -13,6 +13,7 @@
 
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
@@ -211,7 +212,9 @@ struct WeightedResidual::Impl {
       h = g->compliance(contact_dofs(), contact_rows);
       double gmax = 0.0;
       for (const auto& ct : contacts) gmax = std::max(gmax, std::abs(ct.law->gap()));
-      scale = gmax > 0.0 ? gmax : x_lin.lpNorm<Eigen::Infinity>();
+      // The larger of the gap and the linear response: a 1 nm gap beside a millimetre motion
+      // must not ask Newton for 1e-19 m.
+      scale = std::max(gmax, x_lin.lpNorm<Eigen::Infinity>());
       if (!(scale > 0.0) || !std::isfinite(scale)) scale = 1.0;
     }
   }
@@ -519,6 +522,107 @@ NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& 
   return last;
 }
 
+Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorXd& x, double lambda) const {
+  const auto& p = *problem->impl_;
+  p.require_factorized();
+  return (x - p.x_lin + std::pow(10.0, lambda) * (p.h * p.contact_forces(x, nullptr))) / p.scale;
+}
+
+Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd& x, double lambda) const {
+  const auto& p = *problem->impl_;
+  p.require_factorized();
+  const double sigma = std::pow(10.0, lambda);
+  Eigen::MatrixXd nj;
+  const Eigen::VectorXd hn = p.h * p.contact_forces(x, &nj);
+  Linearization l;
+  l.residual = (x - p.x_lin + sigma * hn) / p.scale;
+  l.jacobian = (sigma / p.scale) * (p.h * nj);
+  l.jacobian.diagonal().array() += 1.0 / p.scale;
+  l.parameter_derivative = (std::log(10.0) * sigma / p.scale) * hn;  // dσ/dλ = σ ln 10
+  return l;
+}
+
+NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& report) const {
+  const auto& p = *impl_;
+  report.tried = true;
+  // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
+  Eigen::MatrixXd nj;
+  (void)p.contact_forces(p.x_lin, &nj);
+  const double coupling = (p.h * nj).lpNorm<Eigen::Infinity>();
+  const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
+  report.lambda_start = lambda0;
+  PseudoArclengthOptions o;
+  o.parameter_min = lambda0 - 1.0;  // a path turning back below λ₀ has ended
+  o.parameter_max = 0.0;
+  o.parameter_scale = 1.0;     // decades of σ
+  o.state_scale = p.scale;     // metres, as the residual
+  o.initial_step = 0.05;
+  o.max_step = 0.5;
+  o.min_step = 1e-9;
+  o.kink_step = 1e-6;
+  o.corner_restart = true;     // piecewise laws (linear penalty) have corners in σ
+  o.max_points = p.options.homotopy_max_points;
+  o.corrector_tolerance = p.options.newton.tolerance;
+  o.initial_newton = p.options.newton;
+  const Branch branch = pseudo_arclength(contact_homotopy(), p.x_lin, lambda0, o);
+  report.points = static_cast<int>(branch.points.size());
+  report.folds = static_cast<int>(branch.folds.size());
+  report.corrector_iterations = branch.corrector_iterations;
+  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
+  double lambda_max = -std::numeric_limits<double>::infinity();
+  for (const auto& bp : branch.points) lambda_max = std::max(lambda_max, bp.parameter);
+  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(lambda_max, 0.0));
+  NewtonResult out;
+  if (branch.stop != StopReason::RangeReached || branch.points.back().parameter < 0.0) {
+    out.x = branch.points.empty() ? p.x_lin : branch.points.back().x;
+    out.report.status = SolveStatus::PathEnded;
+    out.report.iterations = static_cast<int>(branch.corrector_iterations);
+    out.report.message = "contact homotopy ended at σ = " + format_number(report.sigma_reached) + " (from σ₀ = " +
+                         format_number(std::pow(10.0, lambda0)) + ", " + std::to_string(report.points) +
+                         " points, " + std::to_string(report.folds) + " folds in σ): " + report.stop;
+    return out;
+  }
+  // The last step crossed σ = 1: interpolate x linearly in λ onto λ = 0, then Newton at σ = 1.
+  const auto& b = branch.points.back();
+  const auto& a = branch.points[branch.points.size() - 2];
+  const double w = b.parameter > a.parameter ? (0.0 - a.parameter) / (b.parameter - a.parameter) : 1.0;
+  Eigen::VectorXd guess = a.x + std::clamp(w, 0.0, 1.0) * (b.x - a.x);
+  out = newton(Condensed{this, 1.0}, std::move(guess), p.options.newton);
+  out.report.iterations += static_cast<int>(branch.corrector_iterations);
+  report.reached = out.report.converged();
+  if (report.reached) report.sigma_reached = 1.0;
+  out.report.message = "contact homotopy from σ₀ = " + format_number(std::pow(10.0, lambda0)) + " (" +
+                       std::to_string(report.points) + " points, " + std::to_string(report.folds) +
+                       " folds in σ), then Newton at σ = 1: " + out.report.message;
+  return out;
+}
+
+double WeightedResidual::rounding_floor(const Eigen::VectorXd& x) const {
+  const auto& p = *impl_;
+  const double bnorm = p.b.norm() > 0.0 ? p.b.norm() : 1.0;
+  const Eigen::VectorXd r0 = residual(expand(x));
+  double floor = 0.0;
+  for (int pattern = 0; pattern < 2; ++pattern) {
+    Eigen::VectorXd xe = x;
+    for (Eigen::Index i = 0; i < xe.size(); ++i) {
+      const double sign = ((i + pattern) % 2 == 0) ? 1.0 : -1.0;
+      xe(i) *= 1.0 + sign * std::numeric_limits<double>::epsilon();
+    }
+    floor = std::max(floor, (residual(expand(xe)) - r0).norm() / bnorm);
+  }
+  return floor;
+}
+
+std::string_view to_string(SolutionPath path) noexcept {
+  switch (path) {
+    case SolutionPath::DirectNewton: return "direct Newton";
+    case SolutionPath::ContactHomotopy: return "contact homotopy";
+    case SolutionPath::LoadStepping: return "load stepping";
+    case SolutionPath::Linear: return "linear";
+  }
+  return "unknown";
+}
+
 WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) const {
   const auto start = std::chrono::steady_clock::now();
   const auto& p = *impl_;
@@ -543,19 +647,40 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
                                   std::to_string(start_x.size()) + ", expected n_c*M = " + std::to_string(p.nc * p.m));
     }
     NewtonResult result = newton(Condensed{this, 1.0}, start_x, p.options.newton);
+    s.path = SolutionPath::DirectNewton;
+    std::string history = "direct Newton: " + result.report.message;
+    int iterations = result.report.iterations;
+    if (!result.report.converged() && x0 == nullptr && p.options.contact_homotopy) {
+      NewtonResult h = solve_with_contact_homotopy(s.homotopy);
+      iterations += h.report.iterations;
+      history += "; " + h.report.message;
+      if (h.report.converged()) {
+        s.path = SolutionPath::ContactHomotopy;
+        h.report.iterations = iterations;
+        h.report.message = history;
+      }
+      result = std::move(h);
+    }
     if (!result.report.converged() && x0 == nullptr) {
       int steps = 0;
+      const SolveStatus before = result.report.status;
       NewtonResult stepped = solve_with_load_stepping(Eigen::VectorXd::Zero(start_x.size()), steps);
-      const std::string first = result.report.message;
-      stepped.report.iterations += result.report.iterations;
-      stepped.report.message = "direct Newton: " + first + "; load stepping (" + std::to_string(steps) +
-                               " steps): " + stepped.report.message;
+      iterations += stepped.report.iterations;
+      stepped.report.iterations = iterations;
+      stepped.report.message = history + "; load stepping (" + std::to_string(steps) + " steps): " +
+                               stepped.report.message;
+      if (stepped.report.converged()) {
+        s.path = SolutionPath::LoadStepping;
+      } else if (before == SolveStatus::PathEnded) {
+        stepped.report.status = SolveStatus::PathEnded;  // the homotopy's diagnosis stands
+      }
       result = std::move(stepped);
     }
     x = std::move(result.x);
     s.report = std::move(result.report);
   } else {
     s.report.status = SolveStatus::Converged;
+    s.path = SolutionPath::Linear;
     s.report.message = "linear problem (no contact): one solve";
     s.report.residual_norms = {0.0};
   }
@@ -583,6 +708,8 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
                        format_number(s.relative_residual) + " ‖b‖ exceeds residual_tolerance = " +
                        format_number(p.options.residual_tolerance) +
                        " (ill-conditioned G? condition estimate " + format_number(s.condition_number) + ")";
+    s.rounding_floor = rounding_floor(x);
+    s.report.message += "; rounding floor of the residual at this solution " + format_number(s.rounding_floor);
   }
   s.wall_time_s = elapsed(start);
   return s;

@@ -295,6 +295,40 @@ TEST(Scene, OscillatorSolveAndSweepMatchClosedForm) {
   }
 }
 
+// Regression (issue #19): a sweep over the resonance of an oscillator against a stop 100 times
+// stiffer than its spring stalls where it continues from the contact branch, restarts from the
+// linear response and lands on the no-contact branch. That switch must be reported: a 1 in the
+// CSV's restarted_from_linear column, a warning naming the frequency, diagnostics listing it.
+// The landed point is the closed-form linear amplitude F/|k − mω² + iωc| (below the gap), while
+// the point before it was in contact (above the gap): a genuine branch switch, not a relabel.
+TEST(Scene, SweepReportsARestartThatLeavesTheBranch) {
+  const double m = 1.0, k = 4e4, alpha = 5.0, f = 5.0, gap = 2e-3;
+  const auto r = wbm::scene::run_analysis(parse(
+      "structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+      "forcing = { amplitude = 5.0, frequency_hz = [15.0, 60.0], points = 91 }\n"
+      "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\noutput = { samples = 4096 }\n"));
+  const Eigen::VectorXd& hz = column(r, "frequency_response.csv", 0);
+  const Eigen::VectorXd& max_u = column(r, "frequency_response.csv", 1);
+  const Eigen::VectorXd& restarted = column(r, "frequency_response.csv", 6);
+  ASSERT_EQ(r.tables.front().header.at(6), "restarted_from_linear [-]");
+  int switches = 0;
+  for (Eigen::Index i = 1; i < hz.size(); ++i) {
+    if (restarted(i) != 1.0) continue;
+    if (max_u(i - 1) > gap && max_u(i) < gap) {
+      ++switches;
+      const double linear = oscillator_amplitude(m, alpha * m, k, f, hz(i));
+      EXPECT_NEAR(max_u(i), linear, 1e-6 * linear) << hz(i) << " Hz";
+    }
+  }
+  EXPECT_GE(switches, 1);
+  ASSERT_EQ(r.warnings.size(), r.diagnostics["restarted_points"].size());
+  ASSERT_GE(r.warnings.size(), 1u);
+  const double first = r.diagnostics["restarted_points"][0]["frequency_hz"].get<double>();
+  EXPECT_NE(r.warnings[0].find("at f = " + std::to_string(static_cast<int>(first))), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("continuation"), std::string::npos);
+  EXPECT_NE(r.summary.find("restarted from the linear response"), std::string::npos) << r.summary;
+}
+
 // Time stepping from a scene: BDF on the same oscillator reaches the closed-form amplitude.
 TEST(Scene, TimestepMatchesClosedForm) {
   const auto r = wbm::scene::run_analysis(parse("structure = { mass = 2.0, stiffness = 8e4 }\n"

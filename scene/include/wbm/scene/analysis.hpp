@@ -24,6 +24,10 @@ struct AnalysisResult {
   nlohmann::json diagnostics;   // status, iterations, residuals, condition estimate, timings
   std::vector<Table> tables;    // the CSV files, in the order written
   std::string summary;          // a few lines for the terminal
+  /// What the user must know although the run converged (a sweep that restarted from the
+  /// linear response and may have left its branch); `wbm run` prints them on stderr and writes
+  /// them to result.json.
+  std::vector<std::string> warnings;
 };
 
 /// Runs `scene.analysis`:
@@ -33,9 +37,11 @@ struct AnalysisResult {
 ///    other than Haar), contact_force.csv (with contact), energy.csv [JL14 Eq. (35)],
 ///    coefficients.csv (the trial coefficients of the output DOFs, one row per basis function).
 ///  - solve, frequency range: one solve per frequency, each started from the previous converged
-///    contact unknowns (load stepping from the linear response if that fails); files
-///    frequency_response.csv (max, min and rms displacement of each output DOF per frequency).
-///    A sweep does not pass folds: that is pseudo-arclength continuation (issue #6).
+///    contact unknowns; if that fails, from the linear response (contact homotopy, then load
+///    stepping). Such a restart may land on another branch: it is a column of the CSV
+///    (restarted_from_linear), a warning with the jump of the forced DOF's amplitude, and
+///    diagnostics.restarted_points. Files: frequency_response.csv (max, min and rms displacement
+///    of each output DOF per frequency). A sweep does not pass folds: that is continuation.
 ///  - timestep: GSL BDF from rest to the periodic state [JL14 Sec. 4]; the same per-period files
 ///    as solve, from the last period.
 ///  - basis-plot: basis_functions.csv, values (or first τ-derivatives) of the trial basis'

@@ -15,11 +15,21 @@ namespace wbm::solvers {
 /// SingularJacobian: the linear solver could not factorize (or its reciprocal condition
 /// estimate was below the limit). NonFinite: NaN or inf in a residual, a Jacobian or a step.
 /// ResidualNotVerified: the reduced problem converged, but the residual of the full problem,
-/// recomputed from the solution, is above its stated tolerance.
-enum class SolveStatus { Converged, MaxIterations, Stagnated, SingularJacobian, NonFinite, ResidualNotVerified };
+/// recomputed from the solution, is above its stated tolerance. PathEnded: a homotopy or
+/// continuation meant to reach the problem from an easier one stopped before it (its report
+/// says where and why, e.g. the contact homotopy of weighted_residual.hpp).
+enum class SolveStatus {
+  Converged,
+  MaxIterations,
+  Stagnated,
+  SingularJacobian,
+  NonFinite,
+  ResidualNotVerified,
+  PathEnded
+};
 
 /// "converged", "max-iterations", "stagnated", "singular-jacobian", "non-finite",
-/// "residual-not-verified".
+/// "residual-not-verified", "path-ended".
 [[nodiscard]] constexpr std::string_view to_string(SolveStatus s) noexcept {
   switch (s) {
     case SolveStatus::Converged: return "converged";
@@ -28,6 +38,7 @@ enum class SolveStatus { Converged, MaxIterations, Stagnated, SingularJacobian, 
     case SolveStatus::SingularJacobian: return "singular-jacobian";
     case SolveStatus::NonFinite: return "non-finite";
     case SolveStatus::ResidualNotVerified: return "residual-not-verified";
+    case SolveStatus::PathEnded: return "path-ended";
   }
   return "unknown";
 }

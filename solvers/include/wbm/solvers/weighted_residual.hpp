@@ -3,6 +3,7 @@
 /// distributional form [JL14 Secs. 2, 4.1, Eqs. (14)–(17)], with the contact forces evaluated
 /// on time samples (alternating frequency/time for any basis). Units: SI; τ = f t normalized.
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -10,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include <wbm/solvers/linearization.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/newton.hpp>
 #include <wbm/solvers/time_basis.hpp>
@@ -58,6 +60,33 @@ enum class LinearSolverPath { Automatic, SparseLU, Modal };
 [[nodiscard]] std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting,
                                           Formulation formulation, OperatorRule rule = OperatorRule::Automatic);
 
+/// How solve() reached its answer, in the order it tries them (each only if the one before did
+/// not converge, and the last two only when solve() chose the starting point itself).
+///  - DirectNewton: Newton on the contact unknowns from the given x0 or from x_lin.
+///  - ContactHomotopy: pseudo-arclength continuation (continuation.hpp) of
+///      r_σ(x) = (x − x_lin + σ H n_c(x)) / s_r = 0
+///    in λ = log₁₀ σ, from λ₀ = clamp(log₁₀(0.1 / ‖H N(x_lin)‖∞), −12, −1), where x ≈ x_lin
+///    solves it, to σ = 1, then Newton at σ = 1. σ scales every contact force (for the penalty
+///    laws, the penalty coefficient): continuation in the contact stiffness, which passes the
+///    folds in the forcing amplitude that stall load stepping. Folds in σ are passed too.
+///  - LoadStepping: forcing s·F, s: 0 → 1, adaptive steps, Newton at each.
+///  - Linear: no contact, one solve.
+enum class SolutionPath { DirectNewton, ContactHomotopy, LoadStepping, Linear };
+/// "direct Newton", "contact homotopy", "load stepping", "linear".
+[[nodiscard]] std::string_view to_string(SolutionPath p) noexcept;
+
+/// The σ path of the contact homotopy (SolutionPath::ContactHomotopy), for reports.
+struct HomotopyReport {
+  bool tried = false;
+  bool reached = false;            // the path reached σ = 1 and Newton converged there
+  double sigma_reached = 0.0;      // largest σ on the path (1 if reached)
+  double lambda_start = 0.0;       // λ₀ = log₁₀ σ₀
+  int points = 0;                  // continuation points
+  int folds = 0;                   // turning points in σ on the path
+  long corrector_iterations = 0;
+  std::string stop;                // the branch's StopReason and message
+};
+
 struct WeightedResidualOptions {
   Formulation formulation = Formulation::Distributional;  // the paper's Figs. 10–11 form
   /// Q time samples τ_q = (q + ½)/Q (midpoint rule) for the contact forces, the forcing and
@@ -71,6 +100,9 @@ struct WeightedResidualOptions {
   /// (‖b‖₂ replaced by 1 N when b = 0); otherwise SolveStatus::ResidualNotVerified.
   /// Throws std::invalid_argument (at construction) unless > 0.
   double residual_tolerance = 1e-8;
+  /// Contact homotopy fallback (SolutionPath::ContactHomotopy): on/off and its point limit.
+  bool contact_homotopy = true;
+  int homotopy_max_points = 2000;
 };
 
 /// The three time operators (M × M, dense; row = weighting j, column = trial k), including the
@@ -94,6 +126,14 @@ struct WeightedResidualSolution {
   double condition_number = 0.0;   // 1-norm condition estimate of G (Hager–Higham), inf if G is singular
   std::string linear_solver;       // "sparse-lu" or "modal"
   std::string operator_rule;       // TimeOperators::rule
+  SolutionPath path = SolutionPath::DirectNewton;  // the route that gave `report`
+  HomotopyReport homotopy;         // the σ path, when it was tried
+  /// Only for a solve whose full residual was not verified (SolveStatus::ResidualNotVerified):
+  /// the rounding floor of the relative residual at this solution, measured as the largest
+  /// change of ‖G a − b + n(a)‖/‖b‖ when the contact unknowns x move by their own rounding
+  /// (x ⊙ (1 ± ε), two signs patterns, ε = 2⁻⁵²); NaN otherwise. A residual within 10× of
+  /// it cannot be reduced in double precision (a penalty too stiff for the arithmetic).
+  double rounding_floor = std::numeric_limits<double>::quiet_NaN();
   double wall_time_s = 0.0;        // set-up and solve
   [[nodiscard]] bool converged() const { return report.converged(); }
 };
@@ -111,8 +151,9 @@ struct WeightedResidualSolution {
 /// (LinearSolverPath), and Newton runs on the n_c·M contact unknowns x = P a only:
 ///   r(x) = (x − x_lin + H n_c(x)) / s,   H = P G⁻¹ Pᵀ,   x_lin = P G⁻¹ b,
 ///   ∂r/∂x = (I + H N(x)) / s,   N = blockdiag_c((1/Q) Σ_{q: f_c' ≠ 0} p(τ_q) f_c'(u_c(τ_q)) q(τ_q)ᵀ),
-/// scaled by s = max_c |g0_c| (or ‖x_lin‖∞ when every gap is 0). N sums over the samples in
-/// contact only, and over the basis functions nonzero there (compact support).
+/// scaled by s_r = max(max_c |g0_c|, ‖x_lin‖∞) (1 m if both vanish; metres, so that a 1 nm gap
+/// does not ask Newton for 1e-19 m). N sums over the samples in contact only, and over the
+/// basis functions nonzero there (compact support).
 ///
 /// Throws std::invalid_argument for invalid inputs, for M differing between trial and weighting,
 /// and for a pair/formulation that needs a derivative a basis lacks; the message names the
@@ -174,9 +215,23 @@ class WeightedResidual {
   [[nodiscard]] Eigen::VectorXd contact_residual_frequency_derivative(const Eigen::VectorXd& x,
                                                                       double load = 1.0) const;
 
+  /// The contact homotopy of SolutionPath::ContactHomotopy as a ParametrizedSystem
+  /// (linearization.hpp) in λ = log₁₀ σ, on the contact unknowns x (length n_c·M):
+  ///   r(x, λ) = (x − x_lin + σ H n_c(x)) / s_r,   ∂r/∂x = (I + σ H N(x)) / s_r,
+  ///   ∂r/∂λ = ln 10 · σ H n_c(x) / s_r,   σ = 10^λ.
+  /// r(x, 0) = contact_residual(x). Refers to this object, which must outlive it.
+  struct ContactHomotopy {
+    const WeightedResidual* problem;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const;
+    [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const;
+  };
+  [[nodiscard]] ContactHomotopy contact_homotopy() const { return {this}; }
+
   /// Newton on the contact unknowns from x0 (default x_lin); without x0 a failed Newton falls
-  /// back on load stepping (forcing s·F, s: 0 → 1, adaptive). Non-convergence is reported in
-  /// the solution's report, never thrown.
+  /// back on the contact homotopy, then on load stepping (SolutionPath; `path` says which gave
+  /// the answer). Non-convergence is reported in the solution's report, never thrown: a
+  /// homotopy that ends before σ = 1 (and load stepping that stalls after it) gives
+  /// SolveStatus::PathEnded with the σ reached and the branch's stop reason.
   [[nodiscard]] WeightedResidualSolution solve(const Eigen::VectorXd* x0 = nullptr) const;
 
  private:
@@ -184,6 +239,8 @@ class WeightedResidual {
   struct Condensed;
   explicit WeightedResidual(std::unique_ptr<Impl> impl);
   NewtonResult solve_with_load_stepping(Eigen::VectorXd x, int& steps) const;
+  NewtonResult solve_with_contact_homotopy(HomotopyReport& report) const;
+  double rounding_floor(const Eigen::VectorXd& x) const;
   std::unique_ptr<Impl> impl_;
 };
 
