@@ -5,7 +5,7 @@ OUT   ?= $(CURDIR)/out
 # Extra CMake arguments for the Release build, e.g. CMAKE_ARGS=-DWBM_WERROR=ON (.ci/run).
 CMAKE_ARGS ?=
 
-.PHONY: deps configure build test check-sanitize reproduce bench clean
+.PHONY: deps configure build test check-sanitize check-fuzz reproduce bench clean
 
 deps:
 	@./scripts/install-deps
@@ -36,6 +36,36 @@ check-sanitize: deps
 	@cd $(SANITIZE_BUILD) && ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -L 'wavelets|spectral|fem|contact|solvers|scene'
 
+# libFuzzer (clang-14) on the scene parser and the Matrix Market reader, each for FUZZ_SECONDS,
+# the libraries instrumented with ASan + UBSan and assertions on; seeds are our own scenes and
+# matrices, copied into a fresh corpus so that the source tree is never written. A crash, a
+# sanitizer report, a timeout (10 s per input) or more than 2 GB of memory fails the run and
+# leaves the input in $(FUZZ_BUILD)/findings/. Prints each target's executions.
+FUZZ_BUILD   ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_CXX     ?= clang++-14
+FUZZ_FLAGS    = -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+check-fuzz:
+	@./scripts/install-deps fuzz
+	@command -v $(FUZZ_CXX) > /dev/null || { echo "check-fuzz: $(FUZZ_CXX) not found: run scripts/install-deps fuzz"; exit 1; }
+	@cmake -S . -B $(FUZZ_BUILD) -DCMAKE_CXX_COMPILER=$(FUZZ_CXX) -DCMAKE_BUILD_TYPE=Debug \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_CXX_FLAGS="$(FUZZ_FLAGS)" \
+	  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DWBM_BUILD_FUZZ=ON -DWBM_BUILD_TESTS=OFF \
+	  -DWBM_BUILD_BENCH=OFF -DWBM_BUILD_REPRODUCE=OFF > $(FUZZ_BUILD).configure.log 2>&1 \
+	  || { cat $(FUZZ_BUILD).configure.log; exit 1; }
+	@cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_scene fuzz_matrix_market
+	@rm -rf $(FUZZ_BUILD)/corpus && mkdir -p $(FUZZ_BUILD)/corpus/scene $(FUZZ_BUILD)/corpus/matrix_market \
+	  $(FUZZ_BUILD)/findings
+	@cp reproduce/scenes/*.toml examples/scenes/*.toml $(FUZZ_BUILD)/corpus/scene/
+	@cp examples/scenes/*.mtx $(FUZZ_BUILD)/corpus/matrix_market/
+	@for t in scene matrix_market; do \
+	  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(FUZZ_BUILD)/tests/fuzz/fuzz_$$t \
+	    -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+	    -artifact_prefix=$(FUZZ_BUILD)/findings/$$t- $(FUZZ_BUILD)/corpus/$$t > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 \
+	    || { tail -60 $(FUZZ_BUILD)/fuzz_$$t.log; echo "check-fuzz: fuzz_$$t found a failure (input in $(FUZZ_BUILD)/findings/)"; exit 1; }; \
+	  echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_BUILD)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
+	done
+
 reproduce: build
 	@cmake --build $(BUILD) --target reproduce
 
@@ -43,4 +73,5 @@ bench: build
 	@cmake --build $(BUILD) --target bench
 
 clean:
-	@rm -rf $(BUILD) $(BUILD).configure.log $(SANITIZE_BUILD) $(SANITIZE_BUILD).configure.log
+	@rm -rf $(BUILD) $(BUILD).configure.log $(SANITIZE_BUILD) $(SANITIZE_BUILD).configure.log $(FUZZ_BUILD) \
+	  $(FUZZ_BUILD).configure.log

@@ -2,6 +2,7 @@
 // Private: typed access to a toml++ table that collects every problem of a file, each as
 // "file:line: key: what was expected", and throws them together in finish().
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -45,6 +46,13 @@ class Reader {
   [[nodiscard]] const std::string& file() const { return file_; }
   [[nodiscard]] bool failed() const { return !errors_.empty(); }
   [[nodiscard]] size_t error_count() const { return errors_.size(); }
+
+  /// Where `key` of `t` is, or `t` itself when the key is absent: a message never dereferences
+  /// a missing node (found by fuzz_scene, issue #19).
+  [[nodiscard]] static toml::source_region source_of(const toml::table& t, std::string_view key) {
+    const toml::node* n = t.get(key);
+    return n != nullptr ? n->source() : t.source();
+  }
 
   void error(const toml::source_region& where, const std::string& key, const std::string& what) {
     std::ostringstream os;
@@ -124,6 +132,9 @@ class Reader {
     const long long v = n.as_integer()->get();
     if (v < lo || v > hi) {
       error(n.source(), full, "value " + std::to_string(v) + " out of range: expected an integer " + span(lo, hi) + hint);
+      // Reported; the scene is refused at the end. Until then the parser goes on with a value
+      // in range, so nothing computes with the bad one (e.g. 1 << level; found by fuzz_scene).
+      return std::clamp(v, lo, hi);
     }
     return v;
   }

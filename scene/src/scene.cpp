@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include <Eigen/SparseCholesky>
-#include <unsupported/Eigen/SparseExtra>
+#include <wbm/fem/matrix_market.hpp>
 #include <toml++/toml.h>
 
 #include "reader.hpp"
@@ -21,7 +21,6 @@ namespace {
 
 using detail::Range;
 using detail::Reader;
-constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 
 // One table per enumerated scene value: the parser's list of choices, the value it stands for,
 // and the name the JSON echo and messages print are read from the same entry.
@@ -235,7 +234,7 @@ class Parser {
     a.harmonics = static_cast<int>(r_.integer(t, "analysis", "harmonics", 1, 512, a.harmonics));
     a.samples = static_cast<int>(r_.integer(t, "analysis", "samples", 3, 1 << 16, std::max(a.samples, 8 * a.harmonics)));
     if (a.samples <= 2 * a.harmonics) {
-      r_.error(t.get("samples") != nullptr ? t.get("samples")->source() : t.source(), "analysis.samples",
+      r_.error(Reader::source_of(t, "samples"), "analysis.samples",
                "m = " + std::to_string(a.samples) + " must exceed 2N = " + std::to_string(2 * a.harmonics) +
                    " (the contact conditions are imposed at m samples of a degree-N trigonometric polynomial)");
     }
@@ -354,43 +353,18 @@ class Parser {
     return a;
   }
 
-  // Matrix Market coordinate format, real or integer, general or symmetric (Eigen's reader).
+  // Matrix Market coordinate format, real or integer, general or symmetric (fem::read_matrix_market).
   void read_market(const toml::node& n, const std::string& full, const std::filesystem::path& p,
                    Eigen::SparseMatrix<double>& a) {
-    std::ifstream in(p);
-    std::string header;
-    if (!in || !std::getline(in, header)) {
-      r_.error(n.source(), full, "cannot read Matrix Market file " + p.string());
+    try {
+      a = fem::read_matrix_market_file(p.string());
+    } catch (const std::exception& e) {
+      r_.error(n.source(), full, e.what());
       return;
     }
-    std::istringstream words(header);
-    std::string banner, object, format, field, symmetry;
-    words >> banner >> object >> format >> field >> symmetry;
-    auto lower = [](std::string w) {
-      std::transform(w.begin(), w.end(), w.begin(), [](unsigned char c) { return std::tolower(c); });
-      return w;
-    };
-    if (banner != "%%MatrixMarket" || lower(object) != "matrix" || lower(format) != "coordinate" ||
-        (lower(field) != "real" && lower(field) != "integer") ||
-        (lower(symmetry) != "general" && lower(symmetry) != "symmetric")) {
-      r_.error(n.source(), full, p.string() + ": header \"" + header + "\" is not supported; expected "
-                                 "\"%%MatrixMarket matrix coordinate real|integer general|symmetric\"");
-      return;
-    }
-    Eigen::SparseMatrix<double> read;
-    if (!Eigen::loadMarket(read, p.string())) {
-      r_.error(n.source(), full, "cannot read Matrix Market file " + p.string());
-      return;
-    }
-    if (lower(symmetry) == "symmetric") {
-      // The file holds the lower triangle only [Matrix Market format]; mirror it.
-      a = read.selfadjointView<Eigen::Lower>();
-    } else {
-      a = read;
-    }
-    if (a.rows() != a.cols() || a.rows() == 0) {
+    if (a.rows() != a.cols()) {
       r_.error(n.source(), full, p.string() + " is " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()) +
-                                     "; expected a non-empty square matrix");
+                                     "; expected a square matrix");
     }
   }
 
@@ -398,19 +372,21 @@ class Parser {
     const auto n = st.mass.rows();
     auto check = [&](const Eigen::SparseMatrix<double>& a, const std::string& key, const std::string& symbol) {
       if (a.rows() != n || a.cols() != n) {
-        r_.error(t.get(key)->source(), "structure." + key,
+        r_.error(Reader::source_of(t, key), "structure." + key,
                  symbol + " is " + std::to_string(a.rows()) + " x " + std::to_string(a.cols()) + "; M is " +
                      std::to_string(n) + " x " + std::to_string(n) + ": every matrix must have the size of M");
         return;
       }
+      // Sparse throughout: a large FE matrix is never made dense.
       const Eigen::SparseMatrix<double> at = a.transpose();
-      const Eigen::MatrixXd diff = Eigen::MatrixXd(a - at);
-      const double scale = Eigen::MatrixXd(a).cwiseAbs().maxCoeff();
-      if (diff.cwiseAbs().maxCoeff() > 1e-12 * scale) {
+      const Eigen::SparseMatrix<double> diff = a - at;
+      const double asymmetry = diff.nonZeros() > 0 ? diff.coeffs().cwiseAbs().maxCoeff() : 0.0;
+      const double scale = a.nonZeros() > 0 ? a.coeffs().cwiseAbs().maxCoeff() : 0.0;
+      if (asymmetry > 1e-12 * scale) {
         std::ostringstream os;
-        os << symbol << " is not symmetric (max |" << symbol << " - " << symbol << "^T| = " << diff.cwiseAbs().maxCoeff()
+        os << symbol << " is not symmetric (max |" << symbol << " - " << symbol << "^T| = " << asymmetry
            << "); the solvers need symmetric matrices";
-        r_.error(t.get(key)->source(), "structure." + key, os.str());
+        r_.error(Reader::source_of(t, key), "structure." + key, os.str());
       }
     };
     const size_t errors = r_.error_count();
@@ -420,7 +396,7 @@ class Parser {
     if (r_.error_count() != errors) return;
     const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(st.mass);
     if (llt.info() != Eigen::Success) {
-      r_.error(t.get("mass")->source(), "structure.mass",
+      r_.error(Reader::source_of(t, "mass"), "structure.mass",
                "M is not positive definite (Cholesky failed): every DOF needs mass; condense massless DOFs out first");
     }
   }
@@ -553,7 +529,7 @@ class Parser {
                "analysis \"continuation\" follows the branch over a range: give frequency_hz = [from, to]");
     }
     if (f.range && s_.analysis.kind == AnalysisKind::Continuation && t->contains("points")) {
-      r_.error(t->get("points")->source(), "forcing.points",
+      r_.error(Reader::source_of(*t, "points"), "forcing.points",
                "continuation chooses its own points (analysis.max_step, max_frequency_step_hz); remove it");
     }
     if (f.range && s_.analysis.kind == AnalysisKind::Timestep) {
@@ -592,12 +568,12 @@ class Parser {
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
       if (c.law == ContactLawKind::Rigid && !modes) {
-        r_.error(t->get("law")->source(), section + ".law",
+        r_.error(Reader::source_of(*t, "law"), section + ".law",
                  "\"rigid\" (exact contact) is solved by analysis \"nnm\" only; the forced-response solvers need a "
                  "penalty law: \"exponential\" or \"linear\"");
       }
       if (c.law == ContactLawKind::Exponential && modes) {
-        r_.error(t->get("law")->source(), section + ".law",
+        r_.error(Reader::source_of(*t, "law"), section + ".law",
                  "analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)");
       }
       if (modes && !s_.contacts.empty() && (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
@@ -614,7 +590,7 @@ class Parser {
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
         if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
             c.stiffness != s_.contacts.front().stiffness) {
-          r_.error(t->get("stiffness")->source(), section + ".stiffness",
+          r_.error(Reader::source_of(*t, "stiffness"), section + ".stiffness",
                    "nnm penalty stops share one stiffness (" + detail::number_text(s_.contacts.front().stiffness) +
                        " N/m in the first [[contact]])");
         }
@@ -637,10 +613,16 @@ class Parser {
     }
     if (t == nullptr) {
       if (plot) r_.error(root.source(), "[basis]", "missing table: basis-plot draws the [basis] trial family");
+      // Fourier:Fourier with H harmonics, as for a [basis] without a size: never the M = 2^J
+      // basis with its undamped top function by default (issue #19).
+      s_.basis.harmonics = Basis::kDefaultHarmonics;
+      s_.basis.dimension = 2 * s_.basis.harmonics + 1;
+      s_.basis.contact_quadrature = solvers::ContactQuadrature::CellAverage;
       return;
     }
     r_.only(*t, "basis",
-            {"trial", "weighting", "dimension", "level", "harmonics", "formulation", "time_samples", "operators"});
+            {"trial", "weighting", "dimension", "level", "harmonics", "formulation", "time_samples", "operators",
+             "contact_quadrature"});
     Basis& b = s_.basis;
     const std::string trial = r_.text(*t, "basis", "trial", b.trial);
     const std::string weighting = r_.text(*t, "basis", "weighting", trial);
@@ -659,7 +641,7 @@ class Parser {
     } else if (t->contains("harmonics")) {
       const long long h = r_.integer(*t, "basis", "harmonics", 1, 1 << 19);
       if (!harmonic_balance) {
-        r_.error(t->get("harmonics")->source(), "basis.harmonics",
+        r_.error(Reader::source_of(*t, "harmonics"), "basis.harmonics",
                  "H harmonics (2H + 1 functions) is the Fourier:Fourier basis; wavelet bases and mixed pairs take "
                  "dimension = M = 2^J");
       } else {
@@ -671,7 +653,7 @@ class Parser {
     } else if (t->contains("dimension")) {
       const long long m = r_.integer(*t, "basis", "dimension", 1, 1 << 20, b.dimension);
       if (!is_power_of_two(m)) {
-        r_.error(t->get("dimension")->source(), "basis.dimension",
+        r_.error(Reader::source_of(*t, "dimension"), "basis.dimension",
                  "M = " + std::to_string(m) + " is not a power of two (M = 2^J: 2, 4, …, 64, …; for Fourier:Fourier "
                  "with H harmonics give harmonics = H)");
       } else {
@@ -686,23 +668,33 @@ class Parser {
     b.formulation = solvers::parse_formulation(form);
     b.time_samples = static_cast<int>(r_.integer(*t, "basis", "time_samples", 0, 1 << 24, 0, " (0: max(256, 2M))"));
     if (b.time_samples > 0 && b.time_samples < b.dimension) {
-      r_.error(t->get("time_samples")->source(), "basis.time_samples",
+      r_.error(Reader::source_of(*t, "time_samples"), "basis.time_samples",
                "Q = " + std::to_string(b.time_samples) + " < M = " + std::to_string(b.dimension) +
                    ": the Q-point rule needs Q >= M (0 picks max(256, 2M))");
     }
     b.operators = r_.choice(*t, "basis", "operators", {"automatic", "discrete"}, "automatic") == "discrete"
                       ? solvers::OperatorRule::Discrete
                       : solvers::OperatorRule::Automatic;
+    const std::string quadrature =
+        r_.choice(*t, "basis", "contact_quadrature", {"automatic", "midpoint", "cell-average"}, "automatic");
     // Names and M through the solvers' own parser, so the message lists every valid name.
     std::optional<solvers::TimeBasis> tb, wb;
     try {
       tb = solvers::TimeBasis::from_name(trial, b.dimension);
       b.trial = tb->key();
     } catch (const std::invalid_argument& e) {
-      r_.error(t->contains("trial") ? t->get("trial")->source() : t->source(), "basis.trial", e.what());
+      r_.error(Reader::source_of(*t, "trial"), "basis.trial", e.what());
+    }
+    b.contact_quadrature = quadrature == "cell-average" || (quadrature == "automatic" && b.harmonics > 0)
+                               ? solvers::ContactQuadrature::CellAverage
+                               : solvers::ContactQuadrature::Midpoint;
+    if (tb && quadrature == "cell-average" && tb->max_derivative() < 1) {
+      r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",
+               "\"cell-average\" averages the contact law along the slope of the trial functions; " + tb->name() +
+                   " has no pointwise derivative: use \"midpoint\" (the paper's rule)");
     }
     if (plot) {
-      if (t->contains("weighting")) r_.warn(t->get("weighting")->source(), "basis.weighting is not used by basis-plot");
+      if (t->contains("weighting")) r_.warn(Reader::source_of(*t, "weighting"), "basis.weighting is not used by basis-plot");
       b.weighting = b.trial;
       return;
     }
@@ -711,12 +703,12 @@ class Parser {
       wb = solvers::TimeBasis::from_name(weighting, b.dimension);
       b.weighting = wb->key();
     } catch (const std::invalid_argument& e) {
-      r_.error(t->contains("weighting") ? t->get("weighting")->source() : t->source(), "basis.weighting", e.what());
+      r_.error(Reader::source_of(*t, "weighting"), "basis.weighting", e.what());
     }
     if (tb && wb) {
       const std::string why = solvers::inadmissibility(*tb, *wb, b.formulation, b.operators);
       if (!why.empty()) {
-        r_.error(t->contains("formulation") ? t->get("formulation")->source() : t->source(), "basis",
+        r_.error(Reader::source_of(*t, "formulation"), "basis",
                  "not admissible: " + why);
       }
     }
@@ -747,7 +739,7 @@ class Parser {
     a.unit_integral =
         r_.choice(*t, "analysis", "normalization", {"orthonormal", "unit-integral"}, "orthonormal") == "unit-integral";
     if (a.unit_integral && s_.basis.trial == "fourier") {
-      r_.error(t->get("normalization")->source(), "analysis.normalization",
+      r_.error(Reader::source_of(*t, "normalization"), "analysis.normalization",
                "\"unit-integral\" is the wavelet normalization ∫₀¹ φ_{J,k} = 1 [JL14 Sec. 3.3]; Fourier functions "
                "are plotted as they are");
     }
@@ -769,7 +761,7 @@ class Parser {
                                        r_.choice(*t, "solver", "linear_solver", names(linear_solver_table()), "automatic"));
     if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
         s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
-      r_.warn(t->get("linear_solver")->source(),
+      r_.warn(Reader::source_of(*t, "linear_solver"),
               "linear_solver = \"modal\" needs Rayleigh damping; the solve fails if the given C is not αM + βK");
     }
   }
@@ -964,6 +956,7 @@ solvers::WeightedResidualOptions Scene::weighted_residual_options() const {
   return {.formulation = basis.formulation,
           .time_samples = basis.time_samples,
           .operators = basis.operators,
+          .contact_quadrature = basis.contact_quadrature,
           .linear_solver = solver.linear_solver,
           .newton = solver.newton};
 }
@@ -1100,6 +1093,7 @@ nlohmann::json to_json(const Scene& s) {
       b["formulation"] = std::string(solvers::to_string(s.basis.formulation));
       b["time_samples"] = s.basis.time_samples;
       b["operators"] = s.basis.operators == solvers::OperatorRule::Discrete ? "discrete" : "automatic";
+      b["contact_quadrature"] = std::string(solvers::to_string(s.basis.contact_quadrature));
     }
     j["basis"] = b;
   }

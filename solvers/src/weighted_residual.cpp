@@ -85,6 +85,27 @@ std::string why_not(const TimeBasis& trial, const TimeBasis& weighting, Formulat
   return {};
 }
 
+// ContactQuadrature::CellAverage at one sample: the law averaged over the cell along the tangent
+// of u, f̄ = (P(u + δ/2) − P(u − δ/2))/δ, and its partial derivatives in u and δ:
+//   ∂f̄/∂u = (f(u + δ/2) − f(u − δ/2))/δ,   ∂f̄/∂δ = ((f(u + δ/2) + f(u − δ/2))/2 − f̄)/δ.
+// Where the potential difference would lose more than four digits to cancellation
+// (|ΔP| ≤ 1e-4 max|P|: a short cell deep inside one smooth piece of the law, or δ = 0), the
+// midpoint value f(u) is used; it differs from f̄ by f''δ²/24 there.
+void cell_average(const contact::ContactLaw& law, double u, double delta, double& f, double& dfdu, double& dfdd) {
+  const double up = u + 0.5 * delta, um = u - 0.5 * delta;
+  const double pp = law.potential(up), pm = law.potential(um);
+  if (!(std::abs(pp - pm) > 1e-4 * std::max(std::abs(pp), std::abs(pm)))) {
+    f = law.force(u);
+    dfdu = law.stiffness(u);
+    dfdd = 0.0;
+    return;
+  }
+  f = (pp - pm) / delta;
+  const double fp = law.force(up), fm = law.force(um);
+  dfdu = (fp - fm) / delta;
+  dfdd = (0.5 * (fp + fm) - f) / delta;
+}
+
 double elapsed(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
@@ -106,6 +127,14 @@ Formulation parse_formulation(const std::string& name) {
   }
   throw std::invalid_argument("formulation '" + name + "' is unknown; use strong (JL14 Eq. 14), weak (Eq. 15) "
                               "or distributional (Eq. 16)");
+}
+
+std::string_view to_string(ContactQuadrature q) noexcept {
+  switch (q) {
+    case ContactQuadrature::Midpoint: return "midpoint";
+    case ContactQuadrature::CellAverage: return "cell-average";
+  }
+  return "unknown";
 }
 
 std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting, Formulation formulation,
@@ -136,6 +165,8 @@ struct WeightedResidual::Impl {
 
   // Samples τ_q = (q + ½)/Q: theta(q, k) = q_k(τ_q) (trial), wq(q, j) = p_j(τ_q) / Q (weighting).
   Eigen::MatrixXd theta, wq;
+  Eigen::MatrixXd theta_d;  // q̇_k(τ_q) (trial, d/dτ), only for ContactQuadrature::CellAverage
+  bool cell_average_rule = false;
   std::vector<std::vector<int>> theta_nz, wq_nz;  // nonzero columns of each row
   bool sparse_rows = false;                       // rows have compact support (N by loops)
   // FFTW on the same midpoint samples, when the trial or the weighting basis is Fourier: u_c(τ_q)
@@ -181,9 +212,16 @@ struct WeightedResidual::Impl {
     const std::string why = inadmissibility(trial, weighting, options.formulation, options.operators);
     if (!why.empty()) throw std::invalid_argument(why);
 
+    cell_average_rule = options.contact_quadrature == ContactQuadrature::CellAverage;
+    if (cell_average_rule && trial.max_derivative() < 1) {
+      throw std::invalid_argument("WeightedResidualOptions.contact_quadrature = cell-average averages the contact law "
+                                  "along the slope u̇ of the trial functions; the trial basis " + trial.name() +
+                                  " has no pointwise derivative: use ContactQuadrature::Midpoint (the paper's rule)");
+    }
     Eigen::VectorXd tau(q);
     for (int k = 0; k < q; ++k) tau(k) = (k + 0.5) / q;
     theta = trial.values(tau, 0);
+    if (cell_average_rule) theta_d = trial.values(tau, 1);
     wq = weighting.values(tau, 0) / static_cast<double>(q);
     assemble_time_operators(tau);
     sample_structure();
@@ -224,7 +262,8 @@ struct WeightedResidual::Impl {
   Impl(const Impl& base, double frequency_hz)
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
-        ops(base.ops), theta(base.theta), wq(base.wq), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
+        ops(base.ops), theta(base.theta), wq(base.wq), theta_d(base.theta_d),
+        cell_average_rule(base.cell_average_rule), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
         sparse_rows(base.sparse_rows), aft(base.aft), g(base.g->unfactorized()), b(base.b), scale(base.scale),
         contact_rows(base.contact_rows) {
     forcing.frequency_hz = frequency_hz;
@@ -295,19 +334,27 @@ struct WeightedResidual::Impl {
     return spectral::as_coefficients(x, nc) * theta.transpose();
   }
 
-  // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x; optionally N(x) (n_c·M square).
+  // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
+  // N(x) (n_c·M square).
   Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, Eigen::MatrixXd* jac) const {
     const Eigen::MatrixXd u = contact_samples(x);
+    Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
+    if (cell_average_rule) slope = spectral::as_coefficients(x, nc) * theta_d.transpose() / static_cast<double>(q);
     Eigen::MatrixXd force(nc, q);
     if (jac != nullptr) jac->setZero(nc * m, nc * m);
-    Eigen::VectorXd fc(q), kc(q);
+    Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
     for (int c = 0; c < nc; ++c) {
-      contacts[c].law->evaluate(u.row(c).transpose(), fc, kc);
+      if (cell_average_rule) {
+        for (int r = 0; r < q; ++r) cell_average(*contacts[c].law, u(c, r), slope(c, r), fc(r), kc(r), kd(r));
+      } else {
+        contacts[c].law->evaluate(u.row(c).transpose(), fc, kc);
+      }
       force.row(c) = fc.transpose();
       if (jac == nullptr) continue;
-      std::vector<int> active;
+      std::vector<int> active, sloped;
       for (int r = 0; r < q; ++r) {
         if (kc(r) != 0.0) active.push_back(r);
+        if (kd(r) != 0.0) sloped.push_back(r);
       }
       Eigen::MatrixXd block = Eigen::MatrixXd::Zero(m, m);  // block(j, k) = Σ_q w_j f' q_k
       if (active.empty()) {
@@ -328,6 +375,15 @@ struct WeightedResidual::Impl {
           ta.row(static_cast<Eigen::Index>(i)) = theta.row(active[i]);
         }
         block.noalias() = wa.transpose() * ta;
+      }
+      if (!sloped.empty()) {
+        // CellAverage: + Σ_q p_j(τ_q) ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the law's kink.
+        Eigen::MatrixXd wa(sloped.size(), m), td(sloped.size(), m);
+        for (size_t i = 0; i < sloped.size(); ++i) {
+          wa.row(static_cast<Eigen::Index>(i)) = wq.row(sloped[i]) * (kd(sloped[i]) / q);
+          td.row(static_cast<Eigen::Index>(i)) = theta_d.row(sloped[i]);
+        }
+        block.noalias() += wa.transpose() * td;
       }
       for (int k = 0; k < m; ++k) {
         for (int j = 0; j < m; ++j) (*jac)(j * nc + c, k * nc + c) = block(j, k);

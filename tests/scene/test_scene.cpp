@@ -329,6 +329,77 @@ TEST(Scene, SweepReportsARestartThatLeavesTheBranch) {
   EXPECT_NE(r.summary.find("restarted from the linear response"), std::string::npos) << r.summary;
 }
 
+// Regressions for what fuzz_scene found (issue #19), each now a reported error with file, line
+// and key instead of undefined behaviour: (1) an nnm scene whose [contact] has no `law` key (the
+// default law is refused) dereferenced the missing node to place the message; (2) `level = 71`
+// was reported out of range but still used in 1 << level.
+TEST(Scene, FuzzFindingsAreReportedErrors) {
+  expect_throw_with<std::invalid_argument>(
+      [] {
+        (void)parse("[structure]\nyoung_modulus = 7e10\ndensity = 2700.0\narea = 2.5e-3\nlength = 1.0\nelements = 4\n"
+                    "[contact]\ngap = 1e-3\nnode = \"tip\"\n[analysis]\ntype = \"nnm\"\nenergy = [0.5, 2.0]\n");
+      },
+      {"inline.toml:", "contact.law", "\"rigid\""});
+  expect_throw_with<std::invalid_argument>(
+      [] { (void)parse("[basis]\ntrial = \"db6\"\nlevel = 71\n[analysis]\ntype = \"basis-plot\"\n"); },
+      {"inline.toml:3", "basis.level", "value 71 out of range", "[0, 20]"});
+}
+
+// A scene without a [basis] table gets harmonic balance with H = 32 (2H + 1 functions, every
+// harmonic damped) and the cell-average contact quadrature, as a [basis] without a size does;
+// never the M = 2^J basis with its undamped top function (issue #19).
+TEST(Scene, NoBasisTableGivesHarmonicBalanceWithDampedHarmonics) {
+  const Scene s = parse("structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+                        "forcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                        "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n");
+  EXPECT_EQ(s.basis.harmonics, wbm::scene::Basis::kDefaultHarmonics);
+  EXPECT_EQ(s.basis.dimension, 2 * wbm::scene::Basis::kDefaultHarmonics + 1);
+  EXPECT_EQ(s.basis.contact_quadrature, wbm::solvers::ContactQuadrature::CellAverage);
+  const Scene paper = parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                            "basis = { dimension = 64 }\n");
+  EXPECT_EQ(paper.basis.contact_quadrature, wbm::solvers::ContactQuadrature::Midpoint);
+  expect_throw_with<std::invalid_argument>(
+      [] {
+        (void)parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                    "basis = { trial = \"haar\", weighting = \"fourier\", dimension = 16, contact_quadrature = \"cell-average\" }\n");
+      },
+      {"basis.contact_quadrature", "Haar", "\"midpoint\""});
+}
+
+// The newcomer's stiff-stop scene (examples/scenes/stiff_stop_continuation.toml, issue #19): a stop
+// 100 times stiffer than the spring, continuation with every default. The branch reaches the
+// range end with the resonance's two folds only (the midpoint rule stalled at 35.26 Hz on a
+// sample crossing the gap), both confirmed by a Floquet multiplier crossing +1, and the folds do
+// not move with Q (256 → 1024) nor with H (32 → 64) by more than 0.01 Hz: they are the
+// oscillator's, not the discretization's.
+TEST(Scene, StiffStopContinuationRunsWithDefaults) {
+  const std::string head = "structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+                           "forcing = { amplitude = 5.0, frequency_hz = [15.0, 60.0] }\n"
+                           "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n"
+                           "analysis = { type = \"continuation\" }\n";
+  auto folds = [](const wbm::scene::AnalysisResult& r) {
+    for (const auto& t : r.tables) {
+      if (t.file == "folds.csv") return std::pair{t.columns.at(0), t.columns.at(1)};
+    }
+    return std::pair{Eigen::VectorXd(), Eigen::VectorXd()};
+  };
+  const auto r = wbm::scene::run_analysis(parse(head));
+  ASSERT_TRUE(r.converged) << r.summary;
+  const auto [hz, crossing] = folds(r);
+  ASSERT_EQ(hz.size(), 2) << r.summary;
+  EXPECT_EQ(crossing(0), 1.0);
+  EXPECT_EQ(crossing(1), 1.0);
+  EXPECT_GT(hz(0), hz(1));  // the upper (jump-down) fold above the lower (jump-up) one
+  for (const std::string basis : {"basis = { harmonics = 32, time_samples = 1024 }\n", "basis = { harmonics = 64 }\n"}) {
+    const auto finer = wbm::scene::run_analysis(parse(head + basis));
+    ASSERT_TRUE(finer.converged) << basis << finer.summary;
+    const auto [hz2, crossing2] = folds(finer);
+    ASSERT_EQ(hz2.size(), 2) << basis;
+    EXPECT_NEAR(hz2(0), hz(0), 0.01) << basis;
+    EXPECT_NEAR(hz2(1), hz(1), 0.01) << basis;
+  }
+}
+
 // Time stepping from a scene: BDF on the same oscillator reaches the closed-form amplitude.
 TEST(Scene, TimestepMatchesClosedForm) {
   const auto r = wbm::scene::run_analysis(parse("structure = { mass = 2.0, stiffness = 8e4 }\n"

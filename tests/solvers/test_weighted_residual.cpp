@@ -548,3 +548,68 @@ TEST(WeightedResidual, NearRigidStopIsDiagnosedAsRoundingFloorOrEndedPath) {
                                                           TimeBasis::from_name("fourier", 16))
                              .rounding_floor));
 }
+
+// ContactQuadrature::CellAverage: the condensed Jacobian, with its extra Σ p_j ∂f̄/∂δ q̇_k/Q
+// term, against central differences, for the exponential law of Case 1 and a linear law (kinked
+// at the gap) whose gap is set so that cells straddle it; Fourier (2H + 1 and 2^J) and B-spline
+// trial functions. The cell average may give four digits of P(u + δ/2) − P(u − δ/2) to
+// cancellation (residual noise ≈ 1e4 ε relative), so the difference step is 1e-4, the optimum
+// (1e4 ε)^{1/3} of a central difference, instead of the 1e-7 of the midpoint test.
+TEST(WeightedResidual, CellAverageJacobianMatchesFiniteDifferences) {
+  const auto s = case1();
+  const double g0 = s.contacts.front().gap;
+  const std::vector<std::shared_ptr<const contact::ContactLaw>> laws = {
+      s.contact_points().front().law, std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e9, g0})};
+  for (const auto& law : laws) {
+    for (const auto& [pair, m] : {std::pair{Pair{"fourier", "fourier"}, 15}, std::pair{Pair{"fourier", "fourier"}, 16},
+                                  std::pair{Pair{"bspline", "bspline"}, 16}, std::pair{Pair{"db6", "fourier"}, 16}}) {
+      const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), {{s.harmonic_forcing().dof, law}},
+                                         TimeBasis::from_name(pair.trial, m), TimeBasis::from_name(pair.weighting, m),
+                                         {.contact_quadrature = solvers::ContactQuadrature::CellAverage});
+      const Eigen::VectorXd x = wr.contact_unknowns(wr.linear_response()) * 1.02;
+      struct Condensed {
+        const solvers::WeightedResidual* wr;
+        Eigen::VectorXd residual(const Eigen::VectorXd& y) const { return wr->contact_residual(y); }
+        Eigen::MatrixXd jacobian(const Eigen::VectorXd& y) const { return wr->contact_jacobian(y); }
+      };
+      SCOPED_TRACE(law->describe() + ", " + pair.trial + ":" + pair.weighting + ", M = " + std::to_string(m));
+      wbm::testing::expect_jacobian_matches_fd(Condensed{&wr}, x, 1e-5, 1e-4, 1e-6);
+    }
+  }
+}
+
+// Both contact quadratures are consistent rules for the same integral: on Case 1 (Fourier:Fourier,
+// H = 16) their solutions approach each other as Q grows, at about first order in 1/Q (the
+// integrand has kinks where the contact opens and closes: O(1/Q) for midpoint sums of a kinked
+// integrand; the difference shrinks at least 3× per 4× in Q).
+TEST(WeightedResidual, CellAverageAndMidpointRulesConvergeTogether) {
+  const auto s = case1();
+  auto tip_difference = [&](int q) {
+    auto solve = [&](solvers::ContactQuadrature rule) {
+      const auto sol = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(),
+                                                        TimeBasis::fourier_harmonics(16), TimeBasis::fourier_harmonics(16),
+                                                        {.time_samples = q, .contact_quadrature = rule});
+      EXPECT_TRUE(sol.converged()) << sol.report.message;
+      return Eigen::VectorXd(sol.coefficients.row(s.harmonic_forcing().dof).transpose());
+    };
+    const Eigen::VectorXd mid = solve(solvers::ContactQuadrature::Midpoint);
+    return (solve(solvers::ContactQuadrature::CellAverage) - mid).norm() / mid.norm();
+  };
+  const double d64 = tip_difference(64), d256 = tip_difference(256), d1024 = tip_difference(1024);
+  EXPECT_LT(d256, d64 / 3.0) << d64 << " " << d256;
+  EXPECT_LT(d1024, d256 / 3.0) << d256 << " " << d1024;
+  EXPECT_LT(d1024, 1e-3);
+}
+
+// The cell average needs the trial functions' slope: Haar trial functions are refused, naming the
+// option and the rule that works.
+TEST(WeightedResidual, CellAverageRefusesHaarTrialFunctions) {
+  const auto s = case1();
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::WeightedResidual(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name("haar", 16),
+                                        TimeBasis::from_name("fourier", 16),
+                                        {.contact_quadrature = solvers::ContactQuadrature::CellAverage});
+      },
+      {"contact_quadrature = cell-average", "Haar", "ContactQuadrature::Midpoint"});
+}

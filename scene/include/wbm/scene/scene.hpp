@@ -14,8 +14,8 @@
 ///                              or [from, to] with points for a sweep)
 ///   [contact] / [[contact]]    law ("exponential": coefficient, exponent; "linear": stiffness;
 ///                              "rigid": exact Signorini contact, nnm only), gap, node | dof
-///   [basis]                    trial, weighting, dimension | level, formulation, time_samples,
-///                              operators
+///   [basis]                    trial, weighting, dimension | level | harmonics, formulation,
+///                              time_samples, operators, contact_quadrature
 ///   [solver]                   Newton on the contact unknowns (tolerance, max_iterations,
 ///                              line_search, linear_solver)
 ///   [timestep]                 BDF reference (relative_tolerance, absolute_tolerance,
@@ -120,6 +120,11 @@ struct Basis {
   solvers::Formulation formulation = solvers::Formulation::Distributional;
   int time_samples = 0;  // Q; 0 = max(256, 2M)
   solvers::OperatorRule operators = solvers::OperatorRule::Automatic;
+  /// Resolved from [basis] contact_quadrature = "automatic" (default) | "midpoint" |
+  /// "cell-average": automatic is cell-average for harmonics = H (a C¹ discrete residual, so that
+  /// continuation passes a stiff stop smoothly) and the paper's midpoint rule for M = 2^J and the
+  /// wavelet bases (the reproductions keep the paper's discretization).
+  solvers::ContactQuadrature contact_quadrature = solvers::ContactQuadrature::Midpoint;
 };
 
 struct Solver {

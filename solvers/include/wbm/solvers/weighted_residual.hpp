@@ -60,6 +60,25 @@ enum class LinearSolverPath { Automatic, SparseLU, Modal };
 [[nodiscard]] std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting,
                                           Formulation formulation, OperatorRule rule = OperatorRule::Automatic);
 
+/// How the contact term (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) samples the law on the Q cells
+/// [(q, q + 1)/Q] of the period.
+///  - Midpoint: f_c(u_c(τ_q)) at τ_q = (q + ½)/Q, the paper's rule [JL14 Sec. 4.1]. The
+///    discrete residual is nonsmooth wherever a sample crosses the gap: each crossing changes the
+///    Jacobian by k_c/Q. Against a stop much stiffer than the structure that turns a branch back
+///    at a crossing, and continuation stalls or zig-zags; more samples move the stall but do not
+///    remove it.
+///  - CellAverage: the law integrated exactly over each cell along the tangent of u_c,
+///    u_c(τ) ≈ u_q + u̇_q (τ − τ_q), with the law's potential P (ContactLaw::potential):
+///      f̄_q = (P(u_q + δ_q/2) − P(u_q − δ_q/2)) / δ_q,   δ_q = u̇_c(τ_q)/Q (u̇ = du/dτ),
+///    f̄_q = f_c(u_q) where the potential difference would lose four digits to cancellation
+///    (|ΔP| ≤ 1e-4 max|P|: a short cell inside one smooth piece of the law). It has the midpoint
+///    rule's order and is C¹ in the unknowns for a continuous law, so samples enter contact
+///    smoothly. Its Jacobian adds Σ_q p_j ∂f̄/∂δ q̇_k(τ_q)/Q. Needs the trial basis' first
+///    derivative: refused for Haar (std::invalid_argument naming the way out).
+enum class ContactQuadrature { Midpoint, CellAverage };
+/// "midpoint", "cell-average".
+[[nodiscard]] std::string_view to_string(ContactQuadrature q) noexcept;
+
 /// How solve() reached its answer, in the order it tries them (each only if the one before did
 /// not converge, and the last two only when solve() chose the starting point itself).
 ///  - DirectNewton: Newton on the contact unknowns from the given x0 or from x_lin.
@@ -93,6 +112,7 @@ struct WeightedResidualOptions {
   /// discrete inner products; 0 selects max(256, 2M) (256 as in [JL14 Sec. 4.1]); else Q ≥ M.
   int time_samples = 0;
   OperatorRule operators = OperatorRule::Automatic;
+  ContactQuadrature contact_quadrature = ContactQuadrature::Midpoint;
   LinearSolverPath linear_solver = LinearSolverPath::Automatic;
   NewtonOptions newton{};  // on the condensed contact unknowns (scaled residual, see below)
   /// A solve is Converged only if, besides Newton on the condensed unknowns, the full residual

@@ -1,0 +1,160 @@
+#include <wbm/fem/matrix_market.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+namespace wbm::fem {
+namespace {
+
+// 10⁸ rows: beyond the largest FE models exchanged this way (~10⁷ DOFs), and within Eigen's int
+// StorageIndex; a 30-byte size line must not make the reader allocate gigabytes.
+constexpr long long kMaxDimension = 100'000'000;
+constexpr size_t kMaxReserve = size_t{1} << 20;
+
+std::vector<std::string_view> words(std::string_view line) {
+  std::vector<std::string_view> w;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+    const size_t start = i;
+    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+    if (i > start) w.push_back(line.substr(start, i - start));
+  }
+  return w;
+}
+
+std::string lower(std::string_view w) {
+  std::string s(w);
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool parse_integer(std::string_view w, long long& out) {
+  const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), out);
+  return ec == std::errc() && end == w.data() + w.size();
+}
+
+bool parse_real(std::string_view w, double& out) {
+  const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), out);
+  return ec == std::errc() && end == w.data() + w.size() && std::isfinite(out);
+}
+
+// A short, printable excerpt of a line for messages (fuzzed input may hold anything).
+std::string excerpt(std::string_view line) {
+  std::string s;
+  for (char c : line.substr(0, 60)) s += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  return line.size() > 60 ? s + "..." : s;
+}
+
+}  // namespace
+
+Eigen::SparseMatrix<double> read_matrix_market(std::istream& in, const std::string& source) {
+  long long line_number = 0;
+  auto fail = [&](const std::string& what) -> void {
+    throw std::invalid_argument(source + ":" + std::to_string(line_number) + ": " + what);
+  };
+  std::string line;
+  auto next = [&]() {
+    if (!std::getline(in, line)) return false;
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return true;
+  };
+
+  if (!next()) fail("empty file; expected the header \"%%MatrixMarket matrix coordinate real general\"");
+  const auto header = words(line);
+  const std::string supported = "\"%%MatrixMarket matrix coordinate real|integer general|symmetric\"";
+  if (header.size() != 5 || header[0] != "%%MatrixMarket" || lower(header[1]) != "matrix" ||
+      lower(header[2]) != "coordinate" || (lower(header[3]) != "real" && lower(header[3]) != "integer") ||
+      (lower(header[4]) != "general" && lower(header[4]) != "symmetric")) {
+    fail("header \"" + excerpt(line) + "\" is not supported; expected " + supported +
+         " (dense 'array', complex, pattern, hermitian and skew-symmetric files are not read)");
+  }
+  const bool integer_field = lower(header[3]) == "integer";
+  const bool symmetric = lower(header[4]) == "symmetric";
+
+  // Size line: the first line that is neither a comment nor blank.
+  long long rows = 0, cols = 0, entries = 0;
+  bool sized = false;
+  while (next()) {
+    const auto w = words(line);
+    if (w.empty() || w[0].front() == '%') continue;
+    if (w.size() != 3 || !parse_integer(w[0], rows) || !parse_integer(w[1], cols) || !parse_integer(w[2], entries)) {
+      fail("size line \"" + excerpt(line) + "\": expected three integers \"rows cols entries\"");
+    }
+    if (rows < 1 || cols < 1 || rows > kMaxDimension || cols > kMaxDimension) {
+      fail("size " + std::to_string(rows) + " x " + std::to_string(cols) + ": rows and cols must lie in [1, " +
+           std::to_string(kMaxDimension) + "]");
+    }
+    if (symmetric && rows != cols) {
+      fail("a symmetric matrix must be square; the size line says " + std::to_string(rows) + " x " + std::to_string(cols));
+    }
+    // entries ≤ rows·cols (or the lower triangle), computed without overflow.
+    const long double capacity = symmetric ? 0.5L * static_cast<long double>(rows) * static_cast<long double>(rows + 1)
+                                           : static_cast<long double>(rows) * static_cast<long double>(cols);
+    if (entries < 0 || static_cast<long double>(entries) > capacity) {
+      fail(std::to_string(entries) + " entries for a " + std::to_string(rows) + " x " + std::to_string(cols) + " " +
+           (symmetric ? "symmetric (lower triangle) " : "") + "matrix: must lie in [0, " +
+           std::to_string(static_cast<long long>(std::min<long double>(capacity, 9.2e18L))) + "]");
+    }
+    sized = true;
+    break;
+  }
+  if (!sized) fail("no size line \"rows cols entries\" after the header");
+
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(static_cast<size_t>(std::min<long long>(entries, static_cast<long long>(kMaxReserve))) *
+                   (symmetric ? 2 : 1));
+  long long read = 0;
+  while (next()) {
+    const auto w = words(line);
+    if (w.empty() || w[0].front() == '%') continue;
+    if (read == entries) {
+      fail("more entries than the " + std::to_string(entries) + " the size line states: \"" + excerpt(line) + "\"");
+    }
+    long long i = 0, j = 0;
+    double v = 0.0;
+    long long iv = 0;
+    const bool value_ok = w.size() == 3 && (integer_field ? parse_integer(w[2], iv) : parse_real(w[2], v));
+    if (w.size() != 3 || !parse_integer(w[0], i) || !parse_integer(w[1], j) || !value_ok) {
+      fail("entry \"" + excerpt(line) + "\": expected \"i j value\" with integer indices and a finite " +
+           (integer_field ? "integer" : "real") + " value");
+    }
+    if (integer_field) v = static_cast<double>(iv);
+    if (i < 1 || i > rows || j < 1 || j > cols) {
+      fail("entry (" + std::to_string(i) + ", " + std::to_string(j) + ") outside the " + std::to_string(rows) + " x " +
+           std::to_string(cols) + " matrix (indices are 1-based)");
+    }
+    if (symmetric && i < j) {
+      fail("entry (" + std::to_string(i) + ", " + std::to_string(j) +
+           ") lies above the diagonal; a symmetric file holds the lower triangle (i >= j) only");
+    }
+    const auto r = static_cast<int>(i - 1), c = static_cast<int>(j - 1);
+    triplets.emplace_back(r, c, v);
+    if (symmetric && r != c) triplets.emplace_back(c, r, v);
+    ++read;
+  }
+  if (read != entries) {
+    fail("the size line states " + std::to_string(entries) + " entries, the file holds " + std::to_string(read));
+  }
+  Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+  a.setFromTriplets(triplets.begin(), triplets.end());
+  a.makeCompressed();
+  return a;
+}
+
+Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read Matrix Market file " + path);
+  return read_matrix_market(in, path);
+}
+
+}  // namespace wbm::fem

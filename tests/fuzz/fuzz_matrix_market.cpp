@@ -1,0 +1,33 @@
+// libFuzzer target: fem::read_matrix_market on arbitrary bytes. Its contract (matrix_market.hpp)
+// allows a matrix or std::invalid_argument; anything else (another exception, a sanitizer
+// report, a timeout, more memory than the input justifies) is a finding. A returned matrix has
+// the stated shape, only finite values, and is symmetric when the header says so.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <wbm/fem/matrix_market.hpp>
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  std::istringstream in(text);
+  try {
+    const Eigen::SparseMatrix<double> a = wbm::fem::read_matrix_market(in, "fuzz.mtx");
+    if (a.rows() < 1 || a.cols() < 1) std::abort();
+    for (Eigen::Index k = 0; k < a.nonZeros(); ++k) {
+      if (!std::isfinite(a.valuePtr()[k])) std::abort();
+    }
+    if (text.find("symmetric") != std::string::npos && text.rfind("%%MatrixMarket", 0) == 0 &&
+        text.substr(0, text.find('\n')).find("symmetric") != std::string::npos) {
+      const Eigen::SparseMatrix<double> at = a.transpose();
+      if ((a - at).norm() != 0.0) std::abort();
+    }
+  } catch (const std::invalid_argument&) {
+    // bad input, reported with its line: the contract
+  }
+  return 0;
+}
