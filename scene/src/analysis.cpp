@@ -324,9 +324,17 @@ void continuation(const Scene& scene, AnalysisResult& out) {
   const auto curve = solvers::trace_response(base, o);
   const std::string dof = scene.structure->dof_name(scene.forcing->dof);
   const auto n = static_cast<Eigen::Index>(curve.points.size());
-  Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), its(n);
+  Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), mu_error(n), steps(n), its(n);
+  std::vector<std::string> verdict(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& p = curve.points[static_cast<size_t>(i)];
+    // The error estimate is missing (empty cell) where it could not be formed (floquet.hpp).
+    mu_error(i) = std::isfinite(p.max_multiplier_error) ? p.max_multiplier_error : NAN;
+    steps(i) = p.monodromy_steps;
+    verdict[static_cast<size_t>(i)] = !std::isfinite(p.max_multiplier_error) ? "no error estimate"
+                                      : std::abs(p.max_multiplier - 1.0) > 2.0 * p.max_multiplier_error
+                                          ? "settled"
+                                          : "within its error estimate";
     f(i) = p.frequency_hz;
     umax(i) = p.max_displacement;
     umin(i) = p.min_displacement;
@@ -341,12 +349,17 @@ void continuation(const Scene& scene, AnalysisResult& out) {
                                        "amplitude_" + dof + " [m]", "max_contact_force [N]"};
     std::vector<Eigen::VectorXd> columns = {f, umax, umin, amp, force};
     if (o.stability) {
-      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]"});
-      columns.insert(columns.end(), {stable, mu});
+      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]",
+                                   "monodromy_steps [-]"});
+      columns.insert(columns.end(), {stable, mu, mu_error, steps});
     }
     header.push_back("corrector_iterations [-]");
     columns.push_back(its);
-    out.tables.push_back({"branch.csv", header, columns});
+    if (o.stability) {
+      out.tables.push_back({"branch.csv", header, columns, verdict});
+    } else {
+      out.tables.push_back({"branch.csv", header, columns});
+    }
   }
   nlohmann::json folds = nlohmann::json::array();
   Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(curve.folds.size())), fold_ok = fold_hz;
@@ -369,7 +382,14 @@ void continuation(const Scene& scene, AnalysisResult& out) {
                                      {"corners", curve.kinks},
                                      {"corrector_iterations", curve.corrector_iterations},
                                      {"continuation_time_s", curve.wall_time_s},
-                                     {"stability_time_s", curve.stability_time_s}};
+                                     {"stability_time_s", curve.stability_time_s},
+                                     {"unsettled_stability_points", curve.unsettled_points}};
+  if (curve.unsettled_points > 0) {
+    out.warnings.push_back("continuation: at " + std::to_string(curve.unsettled_points) +
+                           " point(s) a Floquet multiplier lies within twice its error estimate of the unit circle "
+                           "even with 16x the monodromy steps; their stability verdict may be wrong (branch.csv, "
+                           "status column); raise [output] samples");
+  }
   out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
                 ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
                 std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +

@@ -209,7 +209,7 @@ class Parser {
       a.max_frequency_step_hz = r_.number(*t, "analysis", "max_frequency_step_hz", detail::non_negative("Hz"),
                                           a.max_frequency_step_hz);
       a.max_points = static_cast<int>(r_.integer(*t, "analysis", "max_points", 2, 1000000, a.max_points));
-      a.max_state = r_.number(*t, "analysis", "max_state", detail::non_negative("gaps; 0 = no bound"), a.max_state);
+      a.max_state = r_.number(*t, "analysis", "max_state", detail::non_negative("times s_r = max(gap, linear response); 0 = no bound"), a.max_state);
       a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
     }
   }

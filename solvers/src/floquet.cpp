@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -22,25 +24,12 @@ int count_outside(const FloquetResult& r, double tolerance) {
 
 }  // namespace
 
-FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
-                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
-  system.validate();
-  ContactPoint::validate(contacts, system.dofs());
+namespace {
+// Φ = Y(T) by the stepping of floquet.hpp on the P = contact_displacement.cols() samples.
+Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
+                             const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   const Eigen::Index p_count = contact_displacement.cols();
-  if (p_count < 8) {
-    throw std::invalid_argument("floquet_multipliers: " + std::to_string(p_count) +
-                                " samples per period; need P >= 8 (the steps of the monodromy integration)");
-  }
-  if (contact_displacement.rows() != nc) {
-    throw std::invalid_argument("floquet_multipliers: contact_displacement has " +
-                                std::to_string(contact_displacement.rows()) + " rows for " + std::to_string(nc) +
-                                " contacts");
-  }
-  if (!contact_displacement.allFinite()) throw std::invalid_argument("floquet_multipliers: non-finite samples");
-  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
-    throw std::invalid_argument("floquet_multipliers: f = " + std::to_string(frequency_hz) + " Hz; must be > 0");
-  }
   const Eigen::Index n = system.dofs();
   const Eigen::MatrixXd mass(system.mass);
   const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
@@ -82,10 +71,68 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
       if (steps & 1) y = powers[j] * y;
     }
   };
+  // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end):
+  //   (I − (hs/2) K_b) Y ← e^{A₀ hs} (I + (hs/2) K_a) Y, the inverse by Woodbury.
+  auto trapezoid = [&](const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka, const Eigen::VectorXd& kb) {
+    if (!ka.isZero(0.0)) y += u * ((0.5 * hs) * ka.asDiagonal() * rows(y));
+    y = exp_step * y;
+    if (!kb.isZero(0.0)) {
+      const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
+      const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
+      y += u * small.partialPivLu().solve(d * rows(y));
+    }
+  };
+  // Fractions θ ∈ (0, 1) of step p where a contact displacement, interpolated linearly between
+  // the samples, crosses its gap (where the law's stiffness jumps), sorted.
+  auto crossings = [&](Eigen::Index p) {
+    std::vector<double> theta;
+    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const double g = contacts[static_cast<size_t>(c)].law->gap();
+      const double d0 = contact_displacement(c, q0) - g, d1 = contact_displacement(c, q1) - g;
+      if ((d0 > 0.0) != (d1 > 0.0) && d0 != d1) {
+        const double t = d0 / (d0 - d1);
+        if (t > 0.0 && t < 1.0) theta.push_back(t);
+      }
+    }
+    std::sort(theta.begin(), theta.end());
+    return theta;
+  };
+  // Stiffnesses at fraction θ of step p, from the linear interpolant of the samples.
+  auto stiffness_at = [&](Eigen::Index p, double theta) {
+    Eigen::VectorXd k(nc);
+    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const double uc = (1.0 - theta) * contact_displacement(c, q0) + theta * contact_displacement(c, q1);
+      k(c) = contacts[static_cast<size_t>(c)].law->stiffness(uc);
+    }
+    return k;
+  };
   Eigen::Index free_run = 0;
   Eigen::VectorXd k_now = stiffness(0);
   for (Eigen::Index p = 0; p < p_count; ++p) {
     const Eigen::VectorXd k_next = stiffness(p + 1);
+    const std::vector<double> theta = crossings(p);
+    if (!theta.empty()) {
+      // A contact opens or closes inside the step: the jump of its stiffness is placed at the
+      // interpolated crossing, each piece integrated with one-sided stiffnesses (evaluated a
+      // relative 1e-9 inside the piece). Without this split the switch sits at a sample, which
+      // is first order in h, with an error growing with the stop's stiffness (issue #19).
+      advance_free(free_run);
+      free_run = 0;
+      std::vector<double> edges = {0.0};
+      edges.insert(edges.end(), theta.begin(), theta.end());
+      edges.push_back(1.0);
+      for (size_t i = 0; i + 1 < edges.size(); ++i) {
+        const double a = edges[i], b = edges[i + 1], inside = 1e-9 * (b - a);
+        if (!(b > a)) continue;
+        const double hs = (b - a) * h;
+        trapezoid((a0 * hs).exp(), hs, i == 0 ? k_now : stiffness_at(p, a + inside),
+                  i + 2 == edges.size() ? k_next : stiffness_at(p, b - inside));
+      }
+      k_now = k_next;
+      continue;
+    }
     if (k_now.isZero(0.0) && k_next.isZero(0.0)) {
       ++free_run;
       k_now = k_next;
@@ -93,26 +140,67 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
     }
     advance_free(free_run);
     free_run = 0;
-    // (I + (h/2) K_p) Y
-    if (!k_now.isZero(0.0)) y += u * ((0.5 * h) * k_now.asDiagonal() * rows(y));
-    y = step * y;
-    // (I − (h/2) K_{p+1})⁻¹ Z = Z + U (I − D E U)⁻¹ D E Z, D = (h/2) diag(k_{p+1})  (Woodbury)
-    if (!k_next.isZero(0.0)) {
-      const Eigen::MatrixXd d = (0.5 * h) * k_next.asDiagonal();
-      const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
-      y += u * small.partialPivLu().solve(d * rows(y));
-    }
+    // (I + (h/2) K_p), e^{A₀h}, then (I − (h/2) K_{p+1})⁻¹ Z = Z + U (I − D E U)⁻¹ D E Z,
+    // D = (h/2) diag(k_{p+1}) (Woodbury)
+    trapezoid(step, h, k_now, k_next);
     k_now = k_next;
   }
   advance_free(free_run);
 
+  return y;
+}
+}  // namespace
+
+FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
+                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+  system.validate();
+  ContactPoint::validate(contacts, system.dofs());
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  const Eigen::Index p_count = contact_displacement.cols();
+  if (p_count < 8) {
+    throw std::invalid_argument("floquet_multipliers: " + std::to_string(p_count) +
+                                " samples per period; need P >= 8 (the steps of the monodromy integration)");
+  }
+  if (contact_displacement.rows() != nc) {
+    throw std::invalid_argument("floquet_multipliers: contact_displacement has " +
+                                std::to_string(contact_displacement.rows()) + " rows for " + std::to_string(nc) +
+                                " contacts");
+  }
+  if (!contact_displacement.allFinite()) throw std::invalid_argument("floquet_multipliers: non-finite samples");
+  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
+    throw std::invalid_argument("floquet_multipliers: f = " + std::to_string(frequency_hz) + " Hz; must be > 0");
+  }
   FloquetResult out;
-  out.monodromy = y;
-  const Eigen::EigenSolver<Eigen::MatrixXd> eig(y, false);
-  Eigen::VectorXcd mu = eig.eigenvalues();
-  std::sort(mu.data(), mu.data() + mu.size(), [](const auto& a, const auto& b) { return std::abs(a) > std::abs(b); });
-  out.multipliers = mu;
-  out.max_modulus = mu.size() > 0 ? std::abs(mu(0)) : 0.0;
+  out.steps = static_cast<int>(p_count);
+  out.monodromy = monodromy_of(system, contacts, contact_displacement, frequency_hz);
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(out.monodromy, true);
+  const Eigen::VectorXcd mu = eig.eigenvalues();
+  std::vector<Eigen::Index> order(static_cast<size_t>(mu.size()));
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return std::abs(mu(a)) > std::abs(mu(b)); });
+  out.multipliers.resize(mu.size());
+  for (size_t i = 0; i < order.size(); ++i) out.multipliers(static_cast<Eigen::Index>(i)) = mu(order[i]);
+  out.max_modulus = mu.size() > 0 ? std::abs(out.multipliers(0)) : 0.0;
+  // Error estimate: Φ_P − Φ_{P/2} ≈ 3 (Φ_P − Φ) for a second-order scheme (Richardson), mapped to
+  // each multiplier by first-order perturbation, δμ_i = (V⁻¹ δΦ V)_ii (V: right eigenvectors,
+  // rows of V⁻¹: left ones). Near a collision of two multipliers V is ill-conditioned and the
+  // estimate grows, as the multipliers' sensitivity does. Comparing |μ| of P and P/2 would not
+  // do: a complex pair has |μ|² = det Φ, which is nearly the same for every P.
+  out.multiplier_errors = Eigen::VectorXd::Constant(mu.size(), std::numeric_limits<double>::infinity());
+  if (p_count % 2 == 0 && p_count >= 16 && mu.size() > 0) {
+    Eigen::MatrixXd half(contact_displacement.rows(), p_count / 2);
+    for (Eigen::Index q = 0; q < p_count / 2; ++q) half.col(q) = contact_displacement.col(2 * q);
+    const Eigen::MatrixXcd delta = (out.monodromy - monodromy_of(system, contacts, half, frequency_hz)).cast<std::complex<double>>() / 3.0;
+    const Eigen::MatrixXcd v = eig.eigenvectors();
+    const Eigen::PartialPivLU<Eigen::MatrixXcd> vlu(v);
+    const double rcond = vlu.rcond();
+    if (rcond > 1e-14) {
+      const Eigen::MatrixXcd projected = vlu.solve(delta * v);
+      for (size_t i = 0; i < order.size(); ++i) {
+        out.multiplier_errors(static_cast<Eigen::Index>(i)) = std::abs(projected(order[i], order[i]));
+      }
+    }
+  }
   return out;
 }
 

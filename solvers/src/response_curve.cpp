@@ -196,6 +196,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   curve.folds = branch.folds;
   curve.stop = branch.stop;
   curve.message = branch.message;
+  if (branch.stop == StopReason::StateBound) {
+    curve.message += " (a contact coefficient exceeds max_state = " + format_number(o.max_state) + " × s_r, s_r = " +
+                     format_number(base.residual_scale()) + " m: a runaway branch? raise max_state, or 0 for no bound)";
+  }
   curve.rejected_steps = branch.rejected_steps;
   curve.kinks = branch.kinks;
   curve.corrector_iterations = branch.corrector_iterations;
@@ -236,7 +240,18 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.corrector_iterations = p.corrector_iterations;
     if (o.stability) {
       const auto t0 = std::chrono::steady_clock::now();
-      const FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+      FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+      // Refine where the error estimate could overturn the verdict (near a collision of two
+      // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
+      for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
+        const int steps = 4 * fl.steps;
+        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
+        const Eigen::MatrixXd ucf = base.trial().values(fine, 0) * spectral::as_coefficients(p.x, nc).transpose();
+        fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
+      }
+      if (!fl.settled()) ++curve.unsettled_points;
+      r.monodromy_steps = fl.steps;
+      r.max_multiplier_error = fl.multiplier_errors.size() > 0 ? fl.multiplier_errors.maxCoeff() : 0.0;
       r.max_multiplier = fl.max_modulus;
       r.stable = fl.stable();
       if (previous) r.crossing = classify_crossing(*previous, fl);
@@ -245,9 +260,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     }
     curve.points.push_back(std::move(r));
   }
+  // A fold of the truncated weighted-residual system and the Floquet crossing of its orbit need
+  // not fall on the same step: on the stiff stop at H = 32 the crossing comes 4 points after the
+  // fold. A crossing within kFoldWindow points on either side confirms it.
+  constexpr size_t kFoldWindow = 4;
   for (const auto& fold : curve.folds) {
     bool crossing = false;
-    for (size_t i = fold.after; o.stability && i < std::min(curve.points.size(), fold.after + 3); ++i) {
+    const size_t first = fold.after > kFoldWindow ? fold.after - kFoldWindow + 1 : 0;
+    for (size_t i = first; o.stability && i < std::min(curve.points.size(), fold.after + kFoldWindow + 1); ++i) {
       crossing = crossing || curve.points[i].crossing == Bifurcation::Fold;
     }
     curve.fold_confirmed.push_back(crossing);

@@ -1,6 +1,7 @@
 #include <wbm/solvers/time_basis.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <stdexcept>
 #include <string>
@@ -58,8 +59,16 @@ TimeBasis TimeBasis::from_name(const std::string& name, int dimension) {
   std::string digits;
   if (s.rfind("db", 0) == 0) digits = s.substr(2);
   if (s.rfind("daubechies", 0) == 0) digits = s.substr(10);
+  // from_chars, not stoi: "db13333…" out of int's range is bad input (std::invalid_argument from
+  // daubechies() naming the valid L), not std::out_of_range (found by fuzz_scene, issue #19).
+  int taps = 0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), taps);
   if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); })) {
-    return wavelet(wavelets::Family::daubechies(std::stoi(digits)), dimension);
+    if (ec != std::errc() || end != digits.data() + digits.size()) {
+      throw std::invalid_argument("basis '" + name.substr(0, 40) + (name.size() > 40 ? "…" : "") +
+                                  "': filter length out of range; Daubechies takes L even, 4 <= L <= 20 (db4 … db20)");
+    }
+    return wavelet(wavelets::Family::daubechies(taps), dimension);
   }
   std::string list;
   for (const auto& n : names()) list += (list.empty() ? "" : ", ") + n;

@@ -2,6 +2,7 @@
 // trips; every class of bad input is reported with file, line, key and what was expected; the
 // analyses a scene runs agree with closed forms.
 #include <cmath>
+#include <cstdio>
 #include <complex>
 #include <filesystem>
 #include <fstream>
@@ -330,9 +331,9 @@ TEST(Scene, SweepReportsARestartThatLeavesTheBranch) {
 }
 
 // Regressions for what fuzz_scene found (issue #19), each now a reported error with file, line
-// and key instead of undefined behaviour: (1) an nnm scene whose [contact] has no `law` key (the
-// default law is refused) dereferenced the missing node to place the message; (2) `level = 71`
-// was reported out of range but still used in 1 << level.
+// and key instead of undefined behaviour or an exception outside the contract: (1) an nnm scene
+// whose [contact] has no `law` key (the default law is refused) dereferenced the missing node to
+// place the message; (2) `level = 71` was reported out of range but still used in 1 << level.
 TEST(Scene, FuzzFindingsAreReportedErrors) {
   expect_throw_with<std::invalid_argument>(
       [] {
@@ -343,6 +344,10 @@ TEST(Scene, FuzzFindingsAreReportedErrors) {
   expect_throw_with<std::invalid_argument>(
       [] { (void)parse("[basis]\ntrial = \"db6\"\nlevel = 71\n[analysis]\ntype = \"basis-plot\"\n"); },
       {"inline.toml:3", "basis.level", "value 71 out of range", "[0, 20]"});
+  // (3) a Daubechies filter length beyond int made std::stoi throw std::out_of_range.
+  expect_throw_with<std::invalid_argument>(
+      [] { (void)parse("[basis]\ntrial = \"db13333333333333333333333\"\nlevel = 4\n[analysis]\ntype = \"basis-plot\"\n"); },
+      {"inline.toml:2", "basis.trial", "filter length out of range", "4 <= L <= 20"});
 }
 
 // A scene without a [basis] table gets harmonic balance with H = 32 (2H + 1 functions, every
@@ -397,6 +402,50 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
     ASSERT_EQ(hz2.size(), 2) << basis;
     EXPECT_NEAR(hz2(0), hz(0), 0.01) << basis;
     EXPECT_NEAR(hz2(1), hz(1), 0.01) << basis;
+  }
+}
+
+// Units must not matter (issue #19). A peer's nondimensional rod (E = ρ = S = L = 1, 20 elements,
+// C = βK with β = 0.04/π, tip force 0.01, linear stop k = 10 at gap 0.1, H = 16, 0.2–0.4 Hz) is
+// traced, then the same rod in other units of length, mass and time (factors 2⁻³, 2⁵, 2⁻⁴, so
+// every conversion is exact in binary). Continuation scales its state and parameter from the
+// problem, so the branch must be the same: the same points, frequencies and amplitudes converted
+// back to 1e-10, the same stability flags and folds. Any absolute tolerance, step or bound
+// would break this.
+TEST(Scene, ContinuationDoesNotDependOnTheUnits) {
+  auto scene = [](double sl, double sm, double st) {
+    auto num = [](double v) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%.17g", v);
+      return std::string(b);
+    };
+    const double beta = 0.04 / std::numbers::pi;
+    return parse("[structure]\nyoung_modulus = " + num(sm / (sl * st * st)) + "\ndensity = " + num(sm / (sl * sl * sl)) +
+                 "\narea = " + num(sl * sl) + "\nlength = " + num(sl) + "\nelements = 20\n[damping]\nbeta = " +
+                 num(beta * st) + "\n[forcing]\namplitude = " + num(0.01 * sm * sl / (st * st)) +
+                 "\nfrequency_hz = [" + num(0.2 / st) + ", " + num(0.4 / st) + "]\nnode = \"tip\"\n[contact]\n"
+                 "law = \"linear\"\nstiffness = " + num(10.0 * sm / (st * st)) + "\ngap = " + num(0.1 * sl) +
+                 "\nnode = \"tip\"\n[basis]\nharmonics = 16\n[analysis]\ntype = \"continuation\"\n");
+  };
+  const double sl = 0.125, sm = 32.0, st = 0.0625;
+  const auto a = wbm::scene::run_analysis(scene(1.0, 1.0, 1.0));
+  const auto b = wbm::scene::run_analysis(scene(sl, sm, st));
+  ASSERT_TRUE(a.converged) << a.summary;
+  ASSERT_TRUE(b.converged) << b.summary;
+  const auto& fa = column(a, "branch.csv", 0);
+  const auto& fb = column(b, "branch.csv", 0);
+  ASSERT_EQ(fa.size(), fb.size()) << a.summary << "\n" << b.summary;
+  EXPECT_GT(fa.size(), 20);
+  const Eigen::VectorXd f_back = fb * st;
+  EXPECT_LE((f_back - fa).cwiseAbs().maxCoeff(), 1e-10 * fa.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd amp_back = column(b, "branch.csv", 3) / sl;
+  const auto& amp = column(a, "branch.csv", 3);
+  EXPECT_LE((amp_back - amp).cwiseAbs().maxCoeff(), 1e-10 * amp.cwiseAbs().maxCoeff());
+  EXPECT_EQ(column(a, "branch.csv", 5), column(b, "branch.csv", 5));  // stable [-]
+  ASSERT_EQ(a.diagnostics["continuation"]["folds"].size(), b.diagnostics["continuation"]["folds"].size());
+  for (size_t k = 0; k < a.diagnostics["continuation"]["folds"].size(); ++k) {
+    EXPECT_NEAR(b.diagnostics["continuation"]["folds"][k]["frequency_hz"].get<double>() * st,
+                a.diagnostics["continuation"]["folds"][k]["frequency_hz"].get<double>(), 1e-10);
   }
 }
 

@@ -141,7 +141,7 @@ struct Analysis {
   double max_step = 2e-2;           // scaled arclength (solvers/continuation.hpp)
   double max_frequency_step_hz = 0; // > 0: |Δf| per step at most this [Hz]
   int max_points = 5000;
-  double max_state = 0.0;           // > 0: stop once ‖x‖∞ > max_state · (largest gap); 0: no bound
+  double max_state = 100.0;         // > 0: stop once ‖x‖∞ > max_state · s_r (s_r = max(largest gap, ‖x_lin‖∞)); 0: no bound
   bool stability = true;            // Floquet multipliers of every point
   // nnm (first nonlinear normal mode against the stops, solvers/nonlinear_modes.hpp):
   double energy_min = 0.5, energy_max = 0.0;  // normalized energy range (1 = contact onset)

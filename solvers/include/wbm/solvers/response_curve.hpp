@@ -62,6 +62,8 @@ struct ResponsePoint {
   int corrector_iterations = 0;
   // Stability (ResponseCurveOptions::stability): floquet.hpp.
   double max_multiplier = 0.0;         // spectral radius of the monodromy matrix
+  double max_multiplier_error = 0.0;   // largest FloquetResult::multiplier_errors entry
+  int monodromy_steps = 0;             // P used: `samples`, ×4 up to twice while not settled
   bool stable = true;                  // every |μ| < 1 + 1e-6
   Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
 };
@@ -69,8 +71,10 @@ struct ResponsePoint {
 struct ResponseCurve {
   std::vector<ResponsePoint> points;
   std::vector<Fold> folds;             // parameters of the turning points
-  /// Per fold: a Floquet multiplier crosses +1 within two points of it (with stability), i.e. it
-  /// is a fold of the dynamics and not only of the truncated weighted-residual system.
+  /// Per fold: a Floquet multiplier crosses +1 within four points of it on either side (with
+  /// stability), i.e. it is a fold of the dynamics and not only of the truncated weighted-residual
+  /// system (the crossing of the truncated orbit may lag the fold by a few points: 4 on the stiff
+  /// stop at H = 32).
   std::vector<bool> fold_confirmed;
   StopReason stop = StopReason::InitialPointFailed;
   std::string message;
@@ -79,6 +83,7 @@ struct ResponseCurve {
   long corrector_iterations = 0;
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
   double stability_time_s = 0.0;       // monodromy matrices of every point
+  int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
 };
 
 struct ResponseCurveOptions {
@@ -87,13 +92,15 @@ struct ResponseCurveOptions {
   int direction = +1;                               // sign of dλ at the start
   double initial_step = 5e-3, min_step = 1e-7, max_step = 2e-2;  // scaled arclength (see continuation.hpp)
   double max_parameter_step = 0.0;     // > 0: |Δλ| per step at most this (λ units)
-  double max_state = 0.0;              // > 0: stop (StateBound) once ‖x‖∞ > max_state · s_r (s_r: the largest
-                                       // gap, or ‖x_lin‖∞ at the start when every gap is 0); 0: no bound
+  double max_state = 100.0;            // > 0: stop (StateBound) once ‖x‖∞ > max_state · s_r
+                                       // (s_r = WeightedResidual::residual_scale); 0: no bound
   int max_points = 5000;
   int max_corrector_iterations = 8;
   double corrector_tolerance = 1e-9;
   int observed_dof = -1;               // DOF of max/min/amplitude; −1 = the forced DOF
-  int samples = 512;                   // P samples per period for max/min, and monodromy steps
+  /// P samples per period for max/min, and the monodromy steps; where a verdict is not settled
+  /// (some ||μ| − 1| ≤ 2 × its error estimate, floquet.hpp) P is quadrupled, at most twice.
+  int samples = 512;
   bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
 };
 
