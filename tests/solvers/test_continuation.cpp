@@ -43,20 +43,23 @@ class CubicSpring final : public contact::ContactLaw {
   double k3_;
 };
 
+// One DOF: mass m [kg], damping c [N·s/m], stiffness k [N/m].
+solvers::MechanicalSystem one_dof(double m, double c, double k) {
+  solvers::MechanicalSystem s;
+  s.mass.resize(1, 1);
+  s.mass.insert(0, 0) = m;
+  s.stiffness.resize(1, 1);
+  s.stiffness.insert(0, 0) = k;
+  s.damping.resize(1, 1);
+  s.damping.insert(0, 0) = c;
+  return s;
+}
+
 // Duffing m ü + c u̇ + k u + k3 u³ = F cos ωt: f_n = 10 Hz, ζ = 1 %, F = 1 N, k3 = 1e7 N/m³.
 struct Duffing {
   double m = 1.0, k = std::pow(2 * kPi * 10.0, 2), c = 2 * 0.01 * 2 * kPi * 10.0, k3 = 1e7, f = 1.0;
 
-  [[nodiscard]] solvers::MechanicalSystem system() const {
-    solvers::MechanicalSystem s;
-    s.mass.resize(1, 1);
-    s.mass.insert(0, 0) = m;
-    s.stiffness.resize(1, 1);
-    s.stiffness.insert(0, 0) = k;
-    s.damping.resize(1, 1);
-    s.damping.insert(0, 0) = c;
-    return s;
-  }
+  [[nodiscard]] solvers::MechanicalSystem system() const { return one_dof(m, c, k); }
   // Harmonic balance with {1, cos, sin, cos 2ωt}: for the odd cubic the constant and cos 2ωt
   // stay zero and u³ projects exactly on cos, sin, so this is the single-harmonic balance.
   [[nodiscard]] solvers::WeightedResidual problem(double hz, int dimension = 4) const {
@@ -382,13 +385,7 @@ TEST(Floquet, MonodromyConvergesAtSecondOrder) {
 // the exact 1.029 and 0.870: the error estimate sends such points to 4P.
 TEST(Floquet, StiffStopVerdictsAgreeWithTheExactPiecewiseLinearMonodromy) {
   const double m = 1.0, k = 4e4, c = 5.0, kc = 4e6, g0 = 2e-3;
-  solvers::MechanicalSystem system;
-  system.mass.resize(1, 1);
-  system.mass.insert(0, 0) = m;
-  system.stiffness.resize(1, 1);
-  system.stiffness.insert(0, 0) = k;
-  system.damping.resize(1, 1);
-  system.damping.insert(0, 0) = c;
+  const solvers::MechanicalSystem system = one_dof(m, c, k);
   const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kc, g0});
   const auto basis = TimeBasis::fourier_harmonics(32);
   const solvers::WeightedResidual base(system, {0, 5.0, 15.0}, {{0, law}}, basis, basis,
