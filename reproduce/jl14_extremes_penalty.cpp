@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <wbm/solvers/weighted_residual.hpp>
 
@@ -24,7 +25,7 @@
 
 namespace {
 struct Variation {
-  const char* what;
+  std::string what;
   double coefficient, exponent, gap, beta, frequency_hz;
   int dimension;  // 0: the default M of the table
 };
@@ -65,10 +66,7 @@ int main(int argc, char** argv) {
     at_resonance.frequency_hz = resonances(r);
     linear_amplitudes.push_back(
         std::abs(solvers::frequency_response(solvers::beta_damped(rod, kLightBeta), at_resonance)(rod.tip_dof())));
-    rows.push_back({r == 0 ? "linear resonance f1, light damping"
-                    : r == 1 ? "linear resonance f2, light damping"
-                             : "linear resonance f3, light damping",
-                    c.coefficient, c.exponent, c.gap, kLightBeta, resonances(r), 0});
+    rows.push_back({"linear resonance f" + std::to_string(r + 1) + ", light damping", c.coefficient, c.exponent, c.gap, kLightBeta, resonances(r), 0});
   }
   for (int big : run.quick() ? std::vector<int>{128} : std::vector<int>{512, 1024}) {
     rows.push_back({"Case 1, large M", c.coefficient, c.exponent, c.gap, beta, frequency_hz, big});
@@ -93,10 +91,10 @@ int main(int argc, char** argv) {
   std::vector<std::string> status(static_cast<size_t>(n));
   const double rod_stiffness = scene.structure->rod.young_modulus * scene.structure->rod.area / scene.structure->rod.length;
   int rigid_cells = 0, rigid_converged = 0;  // the near-rigid stop rows
-  // Diagnosis of each cell: a residual within kFloorFactor of its measured rounding floor cannot
-  // be reduced in double precision; a contact homotopy that turned back before σ = 1 shows that
-  // the branch of solutions connected to the linear response does not reach the target stiffness.
-  constexpr double kFloorFactor = 10.0;
+  // Diagnosis of each cell: a residual at its measured rounding floor
+  // (WeightedResidualSolution::at_rounding_floor) cannot be reduced in double precision; a contact
+  // homotopy that turned back before σ = 1 shows that the branch of solutions connected to the
+  // linear response does not reach the target stiffness.
   std::map<std::string, int> outcomes;  // diagnosis -> cells
   int unexplained = 0;
   std::ostringstream md;
@@ -132,9 +130,7 @@ int main(int argc, char** argv) {
       dims(k) = dim;
       // The diagnosis, from the solve's own measurements.
       std::string diagnosis;
-      const bool at_floor = sol.report.status == solvers::SolveStatus::ResidualNotVerified &&
-                            std::isfinite(sol.rounding_floor) &&
-                            sol.relative_residual <= kFloorFactor * sol.rounding_floor;
+      const bool at_floor = sol.at_rounding_floor();
       if (sol.converged()) {
         diagnosis = "converged (" + std::string(solvers::to_string(sol.path)) + ")";
       } else if (at_floor) {
@@ -183,7 +179,7 @@ int main(int argc, char** argv) {
                          {"iterations", sol.report.iterations}, {"relative_residual", json_value(residual(k))},
                          {"condition_number", json_value(cond(k))}, {"linear_solver", sol.linear_solver},
                          {"coefficients_finite", sol.coefficients.allFinite()}});
-      if (!sol.coefficients.allFinite()) run.fail(std::string(v.what) + ": non-finite coefficients");
+      if (!sol.coefficients.allFinite()) run.fail(v.what + ": non-finite coefficients");
     }
     md << "\n";
   }
@@ -197,7 +193,7 @@ int main(int argc, char** argv) {
      << " near-rigid cells did not converge: "
      << (rigid_cells > 0 && rigid_converged == 0 ? "agrees" : "disagrees")
      << ". Exact contact (LL11's KKT form) is the tool for a rigid stop.\n\n"
-     << "Diagnoses (a residual is at its rounding floor when it is within " << reproduce::format("%g", kFloorFactor)
+     << "Diagnoses (a residual is at its rounding floor when it is within " << reproduce::format("%g", solvers::WeightedResidualSolution::kRoundingFloorFactor)
      << "× the change of the full residual when the contact unknowns move by their own rounding; a homotopy path "
         "ended when the continuation in the contact stiffness σ from the linear response turned back before σ = 1, "
         "so that no solution connected to the soft-contact ones exists at the target stiffness in this "

@@ -148,6 +148,9 @@ Eigen::SparseMatrix<double> read_matrix_market(std::istream& in, const std::stri
   Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
   a.setFromTriplets(triplets.begin(), triplets.end());
   a.makeCompressed();
+  if (!a.coeffs().allFinite()) {
+    fail("repeated entries sum to a value beyond the double range; give each (i, j) once");
+  }
   return a;
 }
 

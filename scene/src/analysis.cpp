@@ -332,9 +332,8 @@ void continuation(const Scene& scene, AnalysisResult& out) {
     mu_error(i) = std::isfinite(p.max_multiplier_error) ? p.max_multiplier_error : NAN;
     steps(i) = p.monodromy_steps;
     verdict[static_cast<size_t>(i)] = !std::isfinite(p.max_multiplier_error) ? "no error estimate"
-                                      : std::abs(p.max_multiplier - 1.0) > 2.0 * p.max_multiplier_error
-                                          ? "settled"
-                                          : "within its error estimate";
+                                      : p.stability_settled                 ? "settled"
+                                                                            : "within its error estimate";
     f(i) = p.frequency_hz;
     umax(i) = p.max_displacement;
     umin(i) = p.min_displacement;

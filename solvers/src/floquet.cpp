@@ -22,9 +22,6 @@ int count_outside(const FloquetResult& r, double tolerance) {
   return k;
 }
 
-}  // namespace
-
-namespace {
 // Φ = Y(T) by the stepping of floquet.hpp on the P = contact_displacement.cols() samples.
 Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
                              const Eigen::MatrixXd& contact_displacement, double frequency_hz) {

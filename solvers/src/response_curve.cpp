@@ -249,7 +249,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         const Eigen::MatrixXd ucf = base.trial().values(fine, 0) * spectral::as_coefficients(p.x, nc).transpose();
         fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
       }
-      if (!fl.settled()) ++curve.unsettled_points;
+      r.stability_settled = fl.settled();
+      if (!r.stability_settled) ++curve.unsettled_points;
       r.monodromy_steps = fl.steps;
       r.max_multiplier_error = fl.multiplier_errors.size() > 0 ? fl.multiplier_errors.maxCoeff() : 0.0;
       r.max_multiplier = fl.max_modulus;
@@ -266,8 +267,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   constexpr size_t kFoldWindow = 4;
   for (const auto& fold : curve.folds) {
     bool crossing = false;
-    const size_t first = fold.after > kFoldWindow ? fold.after - kFoldWindow + 1 : 0;
-    for (size_t i = first; o.stability && i < std::min(curve.points.size(), fold.after + kFoldWindow + 1); ++i) {
+    // points[i].crossing is about the step (i − 1, i); the fold lies on the step (after, after + 1).
+    const size_t first = fold.after >= kFoldWindow ? fold.after - kFoldWindow + 1 : 1;
+    for (size_t i = first; o.stability && i < std::min(curve.points.size(), fold.after + kFoldWindow + 2); ++i) {
       crossing = crossing || curve.points[i].crossing == Bifurcation::Fold;
     }
     curve.fold_confirmed.push_back(crossing);

@@ -61,9 +61,9 @@ TimeBasis TimeBasis::from_name(const std::string& name, int dimension) {
   if (s.rfind("daubechies", 0) == 0) digits = s.substr(10);
   // from_chars, not stoi: "db13333…" out of int's range is bad input (std::invalid_argument from
   // daubechies() naming the valid L), not std::out_of_range (found by fuzz_scene, issue #19).
-  int taps = 0;
-  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), taps);
   if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); })) {
+    int taps = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), taps);
     if (ec != std::errc() || end != digits.data() + digits.size()) {
       throw std::invalid_argument("basis '" + name.substr(0, 40) + (name.size() > 40 ? "…" : "") +
                                   "': filter length out of range; Daubechies takes L even, 4 <= L <= 20 (db4 … db20)");

@@ -204,6 +204,11 @@ struct WeightedResidual::Impl {
                                   format_number(options.residual_tolerance) +
                                   ": must be > 0 (a relative bound on the full residual, e.g. 1e-8)");
     }
+    if (options.homotopy_max_points < 2) {
+      throw std::invalid_argument("WeightedResidualOptions.homotopy_max_points = " +
+                                  std::to_string(options.homotopy_max_points) +
+                                  ": must be >= 2 (continuation points of the contact homotopy; e.g. 2000)");
+    }
     if (options.time_samples < 0 || (options.time_samples > 0 && options.time_samples < m)) {
       throw std::invalid_argument("WeightedResidualOptions.time_samples Q = " + std::to_string(options.time_samples) +
                                   ": must be 0 (automatic, max(256, 2M)) or >= M = " + std::to_string(m));

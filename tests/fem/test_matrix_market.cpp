@@ -59,6 +59,7 @@ TEST(MatrixMarket, RefusesMalformedFilesNamingTheLine) {
   expect_refused(real + "2 2 1\n1 1 nan\n", {"m.mtx:3:", "finite real"});
   expect_refused(real + "2 2 1\n1 1 1e400\n", {"m.mtx:3:", "finite real"});
   expect_refused(real + "2 2 1\n1 1 1.0 7\n", {"m.mtx:3:", "i j value"});
+  expect_refused(real + "2 2 2\n1 1 1e308\n1 1 1e308\n", {"m.mtx:4:", "repeated entries sum"});
   expect_refused(real + "2 2 2\n1 1 1.0\n", {"m.mtx:3:", "states 2 entries, the file holds 1"});
   expect_refused(real + "2 2 1\n1 1 1.0\n2 2 1.0\n", {"m.mtx:4:", "more entries"});
   expect_refused("%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n1 2 1.0\n",

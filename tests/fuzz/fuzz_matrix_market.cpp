@@ -2,6 +2,7 @@
 // allows a matrix or std::invalid_argument; anything else (another exception, a sanitizer
 // report, a timeout, more memory than the input justifies) is a finding. A returned matrix has
 // the stated shape, only finite values, and is symmetric when the header says so.
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -21,8 +22,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (Eigen::Index k = 0; k < a.nonZeros(); ++k) {
       if (!std::isfinite(a.valuePtr()[k])) std::abort();
     }
-    if (text.find("symmetric") != std::string::npos && text.rfind("%%MatrixMarket", 0) == 0 &&
-        text.substr(0, text.find('\n')).find("symmetric") != std::string::npos) {
+    // The header (first line) was accepted, so its last word is general or symmetric (any case).
+    std::string header = text.substr(0, text.find('\n'));
+    for (char& ch : header) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (header.find("symmetric") != std::string::npos) {
       const Eigen::SparseMatrix<double> at = a.transpose();
       if ((a - at).norm() != 0.0) std::abort();
     }

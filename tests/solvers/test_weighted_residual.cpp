@@ -534,6 +534,7 @@ TEST(WeightedResidual, NearRigidStopIsDiagnosedAsRoundingFloorOrEndedPath) {
   ASSERT_EQ(hb.report.status, solvers::SolveStatus::ResidualNotVerified) << hb.report.message;
   EXPECT_GT(hb.rounding_floor, 1e3 * std::numeric_limits<double>::epsilon());
   EXPECT_LE(hb.relative_residual, 10.0 * hb.rounding_floor);
+  EXPECT_TRUE(hb.at_rounding_floor());
   const auto pg = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), contacts,
                                                    TimeBasis::from_name("db6", 64), TimeBasis::from_name("fourier", 64));
   ASSERT_EQ(pg.report.status, solvers::SolveStatus::PathEnded) << pg.report.message;
@@ -542,6 +543,7 @@ TEST(WeightedResidual, NearRigidStopIsDiagnosedAsRoundingFloorOrEndedPath) {
   EXPECT_LT(pg.homotopy.sigma_reached, 1.0);
   EXPECT_GE(pg.homotopy.folds, 1);
   EXPECT_TRUE(std::isnan(pg.rounding_floor));
+  EXPECT_FALSE(pg.at_rounding_floor());
   // A converged solve carries no floor.
   EXPECT_TRUE(std::isnan(solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(),
                                                           TimeBasis::from_name("fourier", 16),
@@ -612,4 +614,10 @@ TEST(WeightedResidual, CellAverageRefusesHaarTrialFunctions) {
                                         {.contact_quadrature = solvers::ContactQuadrature::CellAverage});
       },
       {"contact_quadrature = cell-average", "Haar", "ContactQuadrature::Midpoint"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::WeightedResidual(s.system(), s.harmonic_forcing(), s.contact_points(), TimeBasis::from_name("db6", 16),
+                                        TimeBasis::from_name("fourier", 16), {.homotopy_max_points = 1});
+      },
+      {"homotopy_max_points = 1", ">= 2"});
 }

@@ -16,14 +16,15 @@ namespace wbm::fem {
 /// symmetric files hold the lower triangle (i ≥ j) and are mirrored on return; repeated (i, j)
 /// entries are summed (as in FE assembly). Returns the rows × cols matrix (compressed,
 /// column-major), square or not: the caller checks the shape it needs.
-/// Throws std::invalid_argument with "source:line: what was expected" for: a missing or
-/// unsupported header (array, complex, pattern, hermitian and skew-symmetric are refused, naming
-/// the supported forms), a size line that is not three non-negative integers with rows, cols ≥ 1
-/// and ≤ 10⁸ (a memory guard: ~10× the largest FE models exchanged this way), an index out of range or above the diagonal in a symmetric file, a value that
-/// is not a finite number, more or fewer entries than the size line states, and trailing text on
-/// a line. Numbers are parsed with std::from_chars (no locale). Memory is reserved for at most
-/// 2²⁰ entries before they are read, so a size line cannot request more than the file holds.
-/// Verified by tests/fem/test_matrix_market.cpp and fuzzed by tests/fuzz/fuzz_matrix_market.cpp.
+/// Throws std::invalid_argument with "source:line: what was expected" for: a missing or unsupported
+/// header (array, complex, pattern, hermitian and skew-symmetric are refused, naming the supported
+/// forms), a size line that is not three non-negative integers with rows, cols ≥ 1 and ≤ 10⁸ (a
+/// memory guard: ~10× the largest FE models exchanged this way), an index out of range or above the
+/// diagonal in a symmetric file, a value that is not a finite number, repeated entries whose sum is
+/// not finite, more or fewer entries than the size line states, and trailing text on a line.
+/// Numbers are parsed with std::from_chars (no locale). Memory is reserved for at most 2²⁰ entries
+/// before they are read, so a size line cannot request more than the file holds. Verified by
+/// tests/fem/test_matrix_market.cpp and fuzzed by tests/fuzz/fuzz_matrix_market.cpp.
 [[nodiscard]] Eigen::SparseMatrix<double> read_matrix_market(std::istream& in, const std::string& source);
 
 /// The same from a file; throws std::runtime_error naming the path if it cannot be opened.

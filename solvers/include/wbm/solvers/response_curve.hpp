@@ -64,6 +64,7 @@ struct ResponsePoint {
   double max_multiplier = 0.0;         // spectral radius of the monodromy matrix
   double max_multiplier_error = 0.0;   // largest FloquetResult::multiplier_errors entry
   int monodromy_steps = 0;             // P used: `samples`, ×4 up to twice while not settled
+  bool stability_settled = true;       // FloquetResult::settled() at monodromy_steps
   bool stable = true;                  // every |μ| < 1 + 1e-6
   Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
 };

@@ -120,7 +120,8 @@ struct WeightedResidualOptions {
   /// (‖b‖₂ replaced by 1 N when b = 0); otherwise SolveStatus::ResidualNotVerified.
   /// Throws std::invalid_argument (at construction) unless > 0.
   double residual_tolerance = 1e-8;
-  /// Contact homotopy fallback (SolutionPath::ContactHomotopy): on/off and its point limit.
+  /// Contact homotopy fallback (SolutionPath::ContactHomotopy): on/off and its point limit
+  /// (>= 2; std::invalid_argument at construction otherwise).
   bool contact_homotopy = true;
   int homotopy_max_points = 2000;
 };
@@ -151,9 +152,14 @@ struct WeightedResidualSolution {
   /// Only for a solve whose full residual was not verified (SolveStatus::ResidualNotVerified):
   /// the rounding floor of the relative residual at this solution, measured as the largest
   /// change of ‖G a − b + n(a)‖/‖b‖ when the contact unknowns x move by their own rounding
-  /// (x ⊙ (1 ± ε), two signs patterns, ε = 2⁻⁵²); NaN otherwise. A residual within 10× of
+  /// (x ⊙ (1 ± ε), two sign patterns, ε = 2⁻⁵²); NaN otherwise. A residual within 10× of
   /// it cannot be reduced in double precision (a penalty too stiff for the arithmetic).
   double rounding_floor = std::numeric_limits<double>::quiet_NaN();
+  static constexpr double kRoundingFloorFactor = 10.0;
+  /// Not verified, but as small as double precision allows: relative_residual ≤ 10 × rounding_floor.
+  [[nodiscard]] bool at_rounding_floor() const {
+    return report.status == SolveStatus::ResidualNotVerified && relative_residual <= kRoundingFloorFactor * rounding_floor;
+  }
   double wall_time_s = 0.0;        // set-up and solve
   [[nodiscard]] bool converged() const { return report.converged(); }
 };
