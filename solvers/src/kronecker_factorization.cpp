@@ -11,6 +11,7 @@
 #include <Eigen/LU>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include <wbm/spectral/circulant.hpp>
 #include <wbm/spectral/layout.hpp>
 
 namespace wbm::solvers::detail {
@@ -64,6 +65,63 @@ std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops
   return out;
 }
 
+// The core S of a factored Fourier-weighting block (FourierWeighting below): block diagonal
+// (1 × 1 for the constant, 2 × 2 per (cos, sin) pair) in every row but the last, whose row is
+// full: S = B + e_L ℓᵀ with row L of B zero. O(M) storage and products; linear, so that the
+// compliance sums Σ_i w_i S_i in the same form.
+struct FourierCore {
+  Eigen::VectorXd diagonal;   // B(j, j), j < L
+  Eigen::VectorXd upper;      // B(j, j + 1) at the pair's first index j (cos), else 0
+  Eigen::VectorXd lower;      // B(j + 1, j) likewise
+  Eigen::RowVectorXd last_row;  // ℓᵀ = row L of S
+  explicit FourierCore(Eigen::Index m)
+      : diagonal(Eigen::VectorXd::Zero(m)), upper(Eigen::VectorXd::Zero(m)), lower(Eigen::VectorXd::Zero(m)),
+        last_row(Eigen::RowVectorXd::Zero(m)) {}
+  [[nodiscard]] Eigen::Index size() const { return diagonal.size(); }
+  [[nodiscard]] bool finite() const {
+    return diagonal.allFinite() && upper.allFinite() && lower.allFinite() && last_row.allFinite();
+  }
+  void add(double w, const FourierCore& o) {
+    diagonal += w * o.diagonal;
+    upper += w * o.upper;
+    lower += w * o.lower;
+    last_row += w * o.last_row;
+  }
+  // S r, or Sᵀ r, for each column of r (M rows).
+  [[nodiscard]] Eigen::MatrixXd apply(const Eigen::MatrixXd& r, bool transposed) const {
+    const Eigen::Index m = size(), last = m - 1;
+    Eigen::MatrixXd y = diagonal.asDiagonal() * r;
+    y.row(last).setZero();
+    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+      if (transposed) {
+        y.row(j) += lower(j) * r.row(j + 1);
+        y.row(j + 1) += upper(j) * r.row(j);
+      } else {
+        y.row(j) += upper(j) * r.row(j + 1);
+        y.row(j + 1) += lower(j) * r.row(j);
+      }
+    }
+    if (transposed) {
+      y += last_row.transpose() * r.row(last);
+    } else {
+      y.row(last) = last_row * r;
+    }
+    return y;
+  }
+  // L S (M × M) for a dense left factor L: column k of S has at most three nonzeros (its pair and
+  // row L), so O(M²) instead of the O(M³) dense product.
+  [[nodiscard]] Eigen::MatrixXd left_multiply(const Eigen::MatrixXd& left) const {
+    const Eigen::Index m = size(), last = m - 1;
+    Eigen::MatrixXd out = left.col(last) * last_row;  // the full row L
+    out.col(0) += diagonal(0) * left.col(0);
+    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+      out.col(j) += diagonal(j) * left.col(j) + lower(j) * left.col(j + 1);
+      out.col(j + 1) += upper(j) * left.col(j) + diagonal(j + 1) * left.col(j + 1);
+    }
+    return out;
+  }
+};
+
 // Distributional form with a Fourier weighting basis {1, cos 2πkτ, sin 2πkτ, …, cos πMτ}: the
 // weighting functions' derivatives stay in the basis, p̈_j = −ω_j² p_j for every j and
 // ṗ = D₁ p for every row but the last (cos πMτ, whose derivative sin πMτ is not in the basis), so
@@ -99,14 +157,17 @@ struct FourierWeighting {
     const double sm = ops.mass.cwiseAbs().maxCoeff(), sc = ops.damping.cwiseAbs().maxCoeff();
     if (!((ops.mass - d2ak).cwiseAbs().maxCoeff() <= 1e-10 * sm)) return std::nullopt;
     if (!((ops.damping + d1ak).topRows(m - 1).cwiseAbs().maxCoeff() <= 1e-10 * sc)) return std::nullopt;
-    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(ops.stiffness);
-    if (lu.rcond() > 1e-12) {
+    // A vanishing last row first: Eigen's rcond() is no guide on an exactly singular matrix
+    // (its estimate runs through the zero pivot; it returned 0.22 for Haar at M = 8).
+    const bool last_row_vanishes =
+        ops.stiffness.row(m - 1).cwiseAbs().maxCoeff() <= 1e-12 * ops.stiffness.cwiseAbs().maxCoeff();
+    if (!last_row_vanishes) {
+      const Eigen::PartialPivLU<Eigen::MatrixXd> lu(ops.stiffness);
+      if (!(lu.rcond() > 1e-12)) return std::nullopt;
       fw.ak_inv = lu.inverse();
+      if (!fw.ak_inv.allFinite()) return std::nullopt;
       fw.g = fw.ak_inv.transpose() * ops.damping.row(m - 1).transpose();
       return fw;
-    }
-    if (!(ops.stiffness.row(m - 1).cwiseAbs().maxCoeff() <= 1e-12 * ops.stiffness.cwiseAbs().maxCoeff())) {
-      return std::nullopt;
     }
     Eigen::MatrixXd n = ops.stiffness;
     n.row(m - 1) = ops.damping.row(m - 1);
@@ -117,38 +178,55 @@ struct FourierWeighting {
     return fw;
   }
 
-  // S_i (dense M × M) for the block f² A_M + f c A_C + λ A_K.
-  [[nodiscard]] Eigen::MatrixXd core(double f, double c, double lambda) const {
+  // S_i for the block f² A_M + f c A_C + λ A_K (FourierCore: O(M) storage).
+  [[nodiscard]] FourierCore core(double f, double c, double lambda) const {
     const Eigen::Index m = omega.size(), last = m - 1;
-    Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(m, m);  // P⁻¹
-    pinv(0, 0) = 1.0 / lambda;
+    FourierCore s(m);
+    s.diagonal(0) = 1.0 / lambda;
     for (Eigen::Index j = 1; j + 1 < m; j += 2) {
       // P on (cos, sin): [[a, b], [−b, a]] with a = λ − f² ω², b = f c ω (from −f c D₁).
       const double a = lambda - f * f * omega(j) * omega(j), b = f * c * omega(j);
       const double det = a * a + b * b;
-      pinv(j, j) = a / det;
-      pinv(j, j + 1) = -b / det;
-      pinv(j + 1, j) = b / det;
-      pinv(j + 1, j + 1) = a / det;
+      s.diagonal(j) = s.diagonal(j + 1) = a / det;
+      s.upper(j) = -b / det;  // S(j, j + 1)
+      s.lower(j) = b / det;   // S(j + 1, j)
     }
     const double gamma = f * c;
     if (replaced_last_row) {
-      pinv(last, last) = 1.0 / gamma;  // inf without damping: the block is singular (reported)
-      return pinv;
+      s.last_row(last) = 1.0 / gamma;  // inf without damping: the block is singular (reported)
+      return s;
     }
     const double p_last = lambda - f * f * omega(last) * omega(last);
-    pinv(last, last) = 1.0 / p_last;
-    const Eigen::RowVectorXd gp = g.transpose() * pinv;  // gᵀ P⁻¹
+    // gᵀ P⁻¹ with P⁻¹ block diagonal, P⁻¹(last, last) = 1/p_last.
+    Eigen::RowVectorXd gp(m);
+    gp(0) = g(0) * s.diagonal(0);
+    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+      gp(j) = g(j) * s.diagonal(j) + g(j + 1) * s.lower(j);
+      gp(j + 1) = g(j) * s.upper(j) + g(j + 1) * s.diagonal(j + 1);
+    }
+    gp(last) = g(last) / p_last;
     const double denominator = 1.0 + gamma * g(last) / p_last;
-    pinv.row(last) -= (gamma / (p_last * denominator)) * gp;  // − γ P⁻¹ e_L gᵀ P⁻¹ / (1 + γ gᵀ P⁻¹ e_L)
-    return pinv;
+    // Row `last` of P⁻¹ − γ P⁻¹ e_L gᵀ P⁻¹ / (1 + γ gᵀ P⁻¹ e_L) (P⁻¹ e_L = e_L / p_last).
+    s.last_row = -(gamma / (p_last * denominator)) * gp;
+    s.last_row(last) += 1.0 / p_last;
+    return s;
   }
 };
 
-// ‖G‖₁ from the Kronecker factors t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed.
-double kronecker_norm1(const std::array<Eigen::MatrixXd, 3>& t, const std::array<const Eigen::SparseMatrix<double>*, 3>& x) {
+// ‖G‖₁ from the Kronecker factors t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed:
+// the column (j, k) of G sums |Σ_s x_s(i, j) t_s(l, k)| over (i, l). Both factors sparse, so the
+// cost is O(nnz(X) · nnz(T)): O(n M) for Fourier:Fourier, O(n M²) for dense time operators.
+double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
+                       const std::array<const Eigen::SparseMatrix<double>*, 3>& x) {
   const auto n = x[0]->cols();
-  const auto m = t[0].rows();
+  const auto m = t[0].cols();
+  // Time operators more than a quarter full (wavelet Galerkin, Petrov–Galerkin): dense sums.
+  const bool dense = static_cast<double>(t[0].nonZeros() + t[1].nonZeros() + t[2].nonZeros()) >
+                     0.25 * static_cast<double>(m) * static_cast<double>(m);
+  std::array<Eigen::MatrixXd, 3> td;
+  if (dense) {
+    for (int s = 0; s < 3; ++s) td[s] = Eigen::MatrixXd(t[s]);
+  }
   double best = 0.0;
   for (Eigen::Index j = 0; j < n; ++j) {
     Eigen::VectorXd colsum = Eigen::VectorXd::Zero(m);  // over k
@@ -160,12 +238,15 @@ double kronecker_norm1(const std::array<Eigen::MatrixXd, 3>& t, const std::array
     std::sort(rows.begin(), rows.end());
     rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
     for (const Eigen::Index i : rows) {
-      Eigen::MatrixXd comb = Eigen::MatrixXd::Zero(m, m);
-      for (int s = 0; s < 3; ++s) {
-        const double v = x[s]->coeff(i, j);
-        if (v != 0.0) comb += v * t[s];
+      const double v0 = x[0]->coeff(i, j), v1 = x[1]->coeff(i, j), v2 = x[2]->coeff(i, j);
+      if (dense) {
+        colsum += (v0 * td[0] + v1 * td[1] + v2 * td[2]).cwiseAbs().colwise().sum().transpose();
+        continue;
       }
-      colsum += comb.cwiseAbs().colwise().sum().transpose();
+      const Eigen::SparseMatrix<double> comb = v0 * t[0] + v1 * t[1] + v2 * t[2];
+      for (Eigen::Index k = 0; k < m; ++k) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(comb, k); it; ++it) colsum(k) += std::abs(it.value());
+      }
     }
     best = std::max(best, colsum.maxCoeff());
   }
@@ -174,47 +255,59 @@ double kronecker_norm1(const std::array<Eigen::MatrixXd, 3>& t, const std::array
 
 }  // namespace
 
-// One modal block A + λ_i B (M × M). Its sparsity graph is split into connected components
-// first: Fourier:Fourier blocks fall apart into the 1 × 1 and 2 × 2 blocks of each harmonic,
-// which are inverted densely (O(M) per block). A block that stays connected is factorized by
-// sparse LU when it is sparse (banded circulant wavelet Galerkin operators) and by dense
-// partial-pivoting LU otherwise (discrete Petrov–Galerkin).
+// One modal block A + λ_i B (M × M) and its inverse, in the form the time operators allow:
+//  - Components: the sparsity graph splits into connected components (Fourier:Fourier: the
+//    1 × 1 and 2 × 2 blocks of each harmonic), each inverted densely: O(M) per mode.
+//  - Circulant: the three time operators are circulant (a wavelet basis with itself, exact or
+//    on Q = multiple-of-M midpoints): the block's inverse is circulant, from one FFT of its first
+//    column (spectral::Circulant): O(M log M) per mode.
+//  - Factored: Fourier weighting, distributional form: inverse A_K⁻¹ S_i with the shared dense
+//    left factor and the O(M) core S_i (FourierWeighting, FourierCore).
+//  - Sparse / dense LU otherwise (sparse when ≤ 25 % filled).
 class KroneckerFactorization::ModeBlock {
  public:
   using Components = std::vector<std::vector<Eigen::Index>>;
 
-  /// `components`: connected components of the sparsity graph shared by every mode's block
-  /// (block_components()); empty or a single one: no splitting.
-  ModeBlock(const Eigen::MatrixXd& block, const Components& components) : m_(block.rows()), component_(&components) {
-    if (components.size() > 1) {  // block diagonal after permutation
-      ok_ = true;
-      inverse_.reserve(components.size());
-      for (const auto& idx : components) {
-        const auto k = static_cast<Eigen::Index>(idx.size());
-        Eigen::MatrixXd sub(k, k);
-        for (Eigen::Index i = 0; i < k; ++i) {
-          for (Eigen::Index j = 0; j < k; ++j) sub(i, j) = block(idx[i], idx[j]);
-        }
-        if (k <= 2) {  // closed-form inverse; singular if the determinant vanishes against the entries
-          const double scale = sub.cwiseAbs().maxCoeff();
-          const double det = k == 1 ? sub(0, 0) : sub(0, 0) * sub(1, 1) - sub(0, 1) * sub(1, 0);
-          if (!(std::abs(det) > 1e-300 + 1e-15 * (k == 1 ? scale : scale * scale)) || !std::isfinite(det)) ok_ = false;
-          Eigen::MatrixXd inv(k, k);
-          if (k == 1) {
-            inv(0, 0) = 1.0 / det;
-          } else {
-            inv << sub(1, 1) / det, -sub(0, 1) / det, -sub(1, 0) / det, sub(0, 0) / det;
-          }
-          inverse_.push_back(std::move(inv));
-        } else {
-          const Eigen::PartialPivLU<Eigen::MatrixXd> lu(sub);
-          const double rc = lu.rcond();
-          if (!(rc > 1e-300 && std::isfinite(rc))) ok_ = false;
-          inverse_.push_back(lu.inverse());
-        }
+  /// Block a + λ bb, split along `components` (≥ 2 of them), each inverted densely.
+  ModeBlock(const Eigen::MatrixXd& a, const Eigen::MatrixXd& bb, double lambda, const Components& components)
+      : m_(a.rows()), component_(&components) {
+    ok_ = true;
+    inverse_.reserve(components.size());
+    for (const auto& idx : components) {
+      const auto k = static_cast<Eigen::Index>(idx.size());
+      Eigen::MatrixXd sub(k, k);
+      for (Eigen::Index i = 0; i < k; ++i) {
+        for (Eigen::Index j = 0; j < k; ++j) sub(i, j) = a(idx[i], idx[j]) + lambda * bb(idx[i], idx[j]);
       }
-      return;
+      if (k <= 2) {  // closed-form inverse; singular if the determinant vanishes against the entries
+        const double scale = sub.cwiseAbs().maxCoeff();
+        const double det = k == 1 ? sub(0, 0) : sub(0, 0) * sub(1, 1) - sub(0, 1) * sub(1, 0);
+        if (!(std::abs(det) > 1e-300 + 1e-15 * (k == 1 ? scale : scale * scale)) || !std::isfinite(det)) ok_ = false;
+        Eigen::MatrixXd inv(k, k);
+        if (k == 1) {
+          inv(0, 0) = 1.0 / det;
+        } else {
+          inv << sub(1, 1) / det, -sub(0, 1) / det, -sub(1, 0) / det, sub(0, 0) / det;
+        }
+        inverse_.push_back(std::move(inv));
+      } else {
+        const Eigen::PartialPivLU<Eigen::MatrixXd> lu(sub);
+        Eigen::MatrixXd inv = lu.inverse();
+        const double rc = lu.rcond();
+        if (!(rc > 1e-300 && std::isfinite(rc)) || !inv.allFinite()) ok_ = false;
+        inverse_.push_back(std::move(inv));
+      }
     }
+  }
+  /// Circulant block with first column `column`; singular (not ok) when min |eigenvalue| ≤
+  /// 1e-14 max |eigenvalue|, i.e. zero to double precision.
+  explicit ModeBlock(const Eigen::VectorXd& column) : m_(column.size()), component_(nullptr) {
+    const spectral::Circulant c(column);
+    ok_ = c.reciprocal_condition() > 1e-14;
+    if (ok_) circulant_inverse_.emplace(c.inverse());
+  }
+  /// Sparse or dense LU of the block.
+  explicit ModeBlock(const Eigen::MatrixXd& block) : m_(block.rows()), component_(nullptr) {
     const double density = static_cast<double>((block.array() != 0.0).count()) / static_cast<double>(block.size());
     sparse_ = block.rows() > 8 && density <= 0.25;
     if (sparse_) {
@@ -231,35 +324,46 @@ class KroneckerFactorization::ModeBlock {
   }
   /// Factored block (A_K⁻¹ S)⁻¹ given S = its core and the shared left factor A_K⁻¹ (see
   /// FourierWeighting): solve and inverse apply A_K⁻¹ S.
-  ModeBlock(Eigen::MatrixXd core, const Eigen::MatrixXd* left)
-      : m_(core.rows()), component_(nullptr), left_(left), core_(std::move(core)) {
-    ok_ = core_.allFinite();
+  ModeBlock(FourierCore core, const Eigen::MatrixXd* left)
+      : m_(core.size()), component_(nullptr), left_(left), core_(std::move(core)) {
+    ok_ = core_->finite();
   }
   [[nodiscard]] bool ok() const { return ok_; }
-  [[nodiscard]] bool factored() const { return left_ != nullptr; }
-  [[nodiscard]] const Eigen::MatrixXd& core() const { return core_; }
+  [[nodiscard]] const FourierCore* core() const { return core_ ? &*core_ : nullptr; }
+  [[nodiscard]] const spectral::Circulant* circulant_inverse() const {
+    return circulant_inverse_ ? &*circulant_inverse_ : nullptr;
+  }
+  [[nodiscard]] const Components* components() const { return inverse_.empty() ? nullptr : component_; }
+  [[nodiscard]] const Eigen::MatrixXd& component_inverse(size_t c) const { return inverse_[c]; }
+  /// The block's inverse applied to r (M × k), or its transpose.
   [[nodiscard]] Eigen::MatrixXd solve(const Eigen::MatrixXd& r, bool transposed) const {
-    if (left_ != nullptr) {
-      return transposed ? Eigen::MatrixXd(core_.transpose() * (left_->transpose() * r)) : Eigen::MatrixXd(*left_ * (core_ * r));
+    if (core_) {
+      return transposed ? core_->apply(left_->transpose() * r, true) : Eigen::MatrixXd(*left_ * core_->apply(r, false));
     }
+    if (circulant_inverse_) return circulant_inverse_->apply(r, transposed);
     if (!inverse_.empty()) {
-      Eigen::MatrixXd out(r.rows(), r.cols());
-      for (size_t c = 0; c < component_->size(); ++c) {
+      Eigen::MatrixXd out = Eigen::MatrixXd::Zero(r.rows(), r.cols());
+      for (size_t c = 0; c < component_->size(); ++c) {  // no temporaries: most components are 1 × 1 or 2 × 2
         const auto& idx = (*component_)[c];
+        const Eigen::MatrixXd& inv = inverse_[c];
         const auto k = static_cast<Eigen::Index>(idx.size());
-        Eigen::MatrixXd rhs(k, r.cols());
-        for (Eigen::Index i = 0; i < k; ++i) rhs.row(i) = r.row(idx[i]);
-        const Eigen::MatrixXd y = transposed ? Eigen::MatrixXd(inverse_[c].transpose() * rhs) : Eigen::MatrixXd(inverse_[c] * rhs);
-        for (Eigen::Index i = 0; i < k; ++i) out.row(idx[i]) = y.row(i);
+        for (Eigen::Index col = 0; col < r.cols(); ++col) {
+          for (Eigen::Index i = 0; i < k; ++i) {
+            double sum = 0.0;
+            for (Eigen::Index j = 0; j < k; ++j) sum += (transposed ? inv(j, i) : inv(i, j)) * r(idx[j], col);
+            out(idx[i], col) = sum;
+          }
+        }
       }
       return out;
     }
     if (sparse_) return transposed ? Eigen::MatrixXd(sparse_lu_->transpose().solve(r)) : Eigen::MatrixXd(sparse_lu_->solve(r));
     return transposed ? Eigen::MatrixXd(dense_lu_.transpose().solve(r)) : Eigen::MatrixXd(dense_lu_.solve(r));
   }
-  /// The inverse, M × M (dense storage; only the components' entries are nonzero).
+  /// The inverse, M × M (dense).
   [[nodiscard]] Eigen::MatrixXd inverse() const {
-    if (left_ != nullptr) return *left_ * core_;
+    if (core_) return core_->left_multiply(*left_);
+    if (circulant_inverse_) return circulant_inverse_->dense();
     if (inverse_.empty()) return solve(Eigen::MatrixXd::Identity(m_, m_), false);
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m_, m_);
     for (size_t c = 0; c < component_->size(); ++c) {
@@ -278,7 +382,8 @@ class KroneckerFactorization::ModeBlock {
   const Components* component_;
   std::vector<Eigen::MatrixXd> inverse_;  // per component, when split
   const Eigen::MatrixXd* left_ = nullptr;  // factored: A_K⁻¹ (shared) ...
-  Eigen::MatrixXd core_;                   // ... and S, the block's inverse being A_K⁻¹ S
+  std::optional<FourierCore> core_;        // ... and S, the block's inverse being A_K⁻¹ S
+  std::optional<spectral::Circulant> circulant_inverse_;
   std::unique_ptr<SparseLu> sparse_lu_;  // SparseLU::transpose() is not const; held by pointer
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu_;
 };
@@ -291,6 +396,7 @@ struct KroneckerFactorization::Setup {
   Eigen::MatrixXd phi;             // n × n, Φᵀ M Φ = I (modal path)
   Eigen::VectorXd lambda;
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
+  bool circulant = false;                             // all three time operators circulant
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
 };
 
@@ -322,6 +428,9 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     setup->lambda = eig.eigenvalues();
     setup->components = block_components(ops);
     if (fourier_weighting) setup->fourier_weighting = FourierWeighting::detect(ops);
+    setup->circulant = setup->components.empty() && !setup->fourier_weighting &&
+                       spectral::Circulant::is_circulant(ops.mass) && spectral::Circulant::is_circulant(ops.damping) &&
+                       spectral::Circulant::is_circulant(ops.stiffness);
   }
   setup_ = std::move(setup);
 }
@@ -346,8 +455,12 @@ bool KroneckerFactorization::factorize(const MechanicalSystem& system, const Tim
       if (su.fourier_weighting) {
         blocks_.push_back(std::make_shared<const ModeBlock>(
             su.fourier_weighting->core(fr, su.c_m + su.lambda(i) * su.c_k, su.lambda(i)), &su.fourier_weighting->ak_inv));
+      } else if (!su.components.empty()) {
+        blocks_.push_back(std::make_shared<const ModeBlock>(a, bb, su.lambda(i), su.components));
+      } else if (su.circulant) {
+        blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::VectorXd(a.col(0) + su.lambda(i) * bb.col(0))));
       } else {
-        blocks_.push_back(std::make_shared<const ModeBlock>(a + su.lambda(i) * bb, su.components));
+        blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::MatrixXd(a + su.lambda(i) * bb)));
       }
       if (!blocks_.back()->ok()) factorized_ = false;
     }
@@ -370,6 +483,20 @@ Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool tra
   const auto m = v.size() / n;
   const Eigen::MatrixXd modal_rhs = setup_->phi.transpose() * spectral::as_coefficients(v, n);  // n × M
   Eigen::MatrixXd y(n, m);
+  if (setup_->fourier_weighting) {
+    // One product with the shared left factor for every mode: A_K⁻¹ [S_1 r_1 … S_n r_n], or
+    // [S_1ᵀ z_1 …] with Z = A_K⁻ᵀ R.
+    const Eigen::MatrixXd& left = setup_->fourier_weighting->ak_inv;
+    if (transposed) {
+      const Eigen::MatrixXd z = left.transpose() * modal_rhs.transpose();  // M × n
+      for (Eigen::Index i = 0; i < n; ++i) y.row(i) = blocks_[i]->core()->apply(z.col(i), true).transpose();
+    } else {
+      Eigen::MatrixXd z(m, n);
+      for (Eigen::Index i = 0; i < n; ++i) z.col(i) = blocks_[i]->core()->apply(modal_rhs.row(i).transpose(), false);
+      y = (left * z).transpose();
+    }
+    return spectral::stacked(setup_->phi * y);
+  }
   for (Eigen::Index i = 0; i < n; ++i) y.row(i) = blocks_[i]->solve(modal_rhs.row(i).transpose(), transposed).transpose();
   return spectral::stacked(setup_->phi * y);
 }
@@ -378,31 +505,63 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
                                                    const std::vector<Eigen::Index>& contact_rows) const {
   const int nc = static_cast<int>(contact_dofs.size());
   const auto m = static_cast<Eigen::Index>(contact_rows.size()) / std::max(nc, 1);
-  Eigen::MatrixXd h(nc * m, nc * m);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
   const Setup& su = *setup_;
-  if (su.modal && su.fourier_weighting) {  // H_cd = A_K⁻¹ Σ_i φ_i(c) φ_i(d) S_i: one product per contact pair
+  // H_cd = Σ_i φ_i(c) φ_i(d) (A + λ_i B)⁻¹ (M × M) scattered into h(k·n_c + c, l·n_c + d).
+  const auto scatter = [&](int c, int d, const Eigen::MatrixXd& hcd) {
+    for (Eigen::Index l = 0; l < m; ++l) {
+      for (Eigen::Index k = 0; k < m; ++k) h(k * nc + c, l * nc + d) = hcd(k, l);
+    }
+  };
+  const auto weight = [&](size_t i, int c, int d) {
+    const auto mode = static_cast<Eigen::Index>(i);
+    return su.phi(contact_dofs[c], mode) * su.phi(contact_dofs[d], mode);
+  };
+  if (su.modal && su.fourier_weighting) {  // A_K⁻¹ (Σ_i w_i S_i): the sum in O(nM), the product in O(M²)
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
-        Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(m, m);
-        for (size_t i = 0; i < blocks_.size(); ++i) {
-          sum += (su.phi(contact_dofs[c], static_cast<Eigen::Index>(i)) * su.phi(contact_dofs[d], static_cast<Eigen::Index>(i))) *
-                 blocks_[i]->core();
-        }
-        const Eigen::MatrixXd hcd = su.fourier_weighting->ak_inv * sum;
-        for (Eigen::Index l = 0; l < m; ++l) {
-          for (Eigen::Index k = 0; k < m; ++k) h(k * nc + c, l * nc + d) = hcd(k, l);
+        FourierCore sum(m);
+        for (size_t i = 0; i < blocks_.size(); ++i) sum.add(weight(i, c, d), *blocks_[i]->core());
+        scatter(c, d, sum.left_multiply(su.fourier_weighting->ak_inv));
+      }
+    }
+    return h;
+  }
+  if (su.modal && su.circulant) {  // a sum of circulants is circulant: first columns only
+    for (int c = 0; c < nc; ++c) {
+      for (int d = 0; d < nc; ++d) {
+        Eigen::VectorXd column = Eigen::VectorXd::Zero(m);
+        for (size_t i = 0; i < blocks_.size(); ++i) column += weight(i, c, d) * blocks_[i]->circulant_inverse()->first_column();
+        scatter(c, d, spectral::Circulant(column).dense());
+      }
+    }
+    return h;
+  }
+  if (su.modal && !su.components.empty()) {  // only the components' entries are nonzero
+    for (size_t i = 0; i < blocks_.size(); ++i) {
+      for (size_t comp = 0; comp < su.components.size(); ++comp) {
+        const auto& idx = su.components[comp];
+        const Eigen::MatrixXd& inv = blocks_[i]->component_inverse(comp);
+        for (int c = 0; c < nc; ++c) {
+          for (int d = 0; d < nc; ++d) {
+            const double w = weight(i, c, d);
+            for (size_t b = 0; b < idx.size(); ++b) {
+              for (size_t a = 0; a < idx.size(); ++a) {
+                h(idx[a] * nc + c, idx[b] * nc + d) += w * inv(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+              }
+            }
+          }
         }
       }
     }
     return h;
   }
   if (su.modal) {
-    h.setZero();
     for (size_t i = 0; i < blocks_.size(); ++i) {
       const Eigen::MatrixXd s_i = blocks_[i]->inverse();
       for (int c = 0; c < nc; ++c) {
         for (int d = 0; d < nc; ++d) {
-          const double w = su.phi(contact_dofs[c], static_cast<Eigen::Index>(i)) * su.phi(contact_dofs[d], static_cast<Eigen::Index>(i));
+          const double w = weight(i, c, d);
           for (Eigen::Index l = 0; l < m; ++l) {
             for (Eigen::Index k = 0; k < m; ++k) h(k * nc + c, l * nc + d) += w * s_i(k, l);
           }
@@ -422,7 +581,9 @@ double KroneckerFactorization::norm1(const MechanicalSystem& system, const TimeO
   if (norm1_ >= 0.0) return norm1_;
   if (setup_->modal) {
     const double fr = frequency_hz_;
-    norm1_ = kronecker_norm1({fr * fr * ops.mass, fr * ops.damping, ops.stiffness},
+    norm1_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass).sparseView()),
+                              Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()),
+                              Eigen::SparseMatrix<double>(ops.stiffness.sparseView())},
                              {&system.mass, &system.damping, &system.stiffness});
     return norm1_;
   }

@@ -106,6 +106,56 @@ void cell_average(const contact::ContactLaw& law, double u, double delta, double
   dfdd = (0.5 * (fp + fm) - f) / delta;
 }
 
+using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+// One time basis at the Q midpoints τ_q = (q + ½)/Q, V(q, k) = v_k^{(d)}(τ_q), d = 0 or 1, used
+// without a dense Q × M matrix: by FFTW (spectral::Aft) for the Fourier basis, by a sparse
+// row-major matrix for wavelets (compact support: O(Q · support) entries, so that the memory
+// and the products grow like M, not M²).
+struct SampledBasis {
+  std::shared_ptr<const spectral::Aft> aft;  // Fourier
+  SparseRows values;                          // wavelets (Q × M)
+  Eigen::RowVectorXd top_derivative;          // Fourier, d = 1, M = 2^J: −πM sin πMτ_q (outside the span)
+  int q = 0, m = 0, derivative = 0;
+
+  SampledBasis(const TimeBasis& basis, const Eigen::VectorXd& tau, int d, std::shared_ptr<const spectral::Aft> fft)
+      : q(static_cast<int>(tau.size())), m(basis.dimension()), derivative(d) {
+    if (basis.is_fourier()) {
+      aft = std::move(fft);
+      if (d == 1 && m % 2 == 0) {
+        top_derivative.resize(q);
+        for (int r = 0; r < q; ++r) top_derivative(r) = -std::numbers::pi * m * std::sin(std::numbers::pi * m * tau(r));
+      }
+    } else {
+      values = basis.wavelet_basis()->sparse_values(tau, d);
+    }
+  }
+
+  // Σ_k X(i, k) v_k^{(d)}(τ_q): n × M coefficients → n × Q samples.
+  [[nodiscard]] Eigen::MatrixXd to_time(const Eigen::MatrixXd& x) const {
+    if (!aft) return (values * x.transpose()).transpose();
+    if (derivative == 0) return aft->to_time(x);
+    // d/dτ (c cos ωτ + s sin ωτ) = ω s cos ωτ − ω c sin ωτ: the derivative's coefficients, and
+    // the top function's derivative −πM sin πMτ (not in the basis) added on the samples.
+    Eigen::MatrixXd dx = Eigen::MatrixXd::Zero(x.rows(), m);
+    for (int j = 1; j + 1 < m; j += 2) {  // (cos, sin) pairs; the top function (M even) is last
+      const double omega = 2.0 * std::numbers::pi * ((j + 1) / 2);
+      dx.col(j) = omega * x.col(j + 1);
+      dx.col(j + 1) = -omega * x.col(j);
+    }
+    Eigen::MatrixXd out = aft->to_time(dx);
+    if (top_derivative.size() > 0) out += x.col(m - 1) * top_derivative;
+    return out;
+  }
+
+  // (1/Q) Σ_q S(i, q) v_j^{(d)}(τ_q): n × Q samples → n × M (the Q-point rule for ∫ v_j s dτ).
+  [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& s) const {
+    if (aft && derivative == 0) return aft->project(s);
+    if (aft) throw std::logic_error("SampledBasis::project: derivative samples of a Fourier basis are not projected");
+    return Eigen::MatrixXd(s * values) / static_cast<double>(q);
+  }
+};
+
 double elapsed(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
@@ -163,24 +213,27 @@ struct WeightedResidual::Impl {
   int n, m, q, nc;
   TimeOperators ops;
 
-  // Samples τ_q = (q + ½)/Q: theta(q, k) = q_k(τ_q) (trial), wq(q, j) = p_j(τ_q) / Q (weighting).
-  Eigen::MatrixXd theta, wq;
-  Eigen::MatrixXd theta_d;  // q̇_k(τ_q) (trial, d/dτ), only for ContactQuadrature::CellAverage
+  // The trial basis (values and, for ContactQuadrature::CellAverage, first derivatives) and the
+  // weighting basis at the Q midpoints τ_q = (q + ½)/Q (SampledBasis: FFTW for Fourier, sparse
+  // for wavelets); shared with at_frequency copies (const use only).
+  struct Sampling {
+    Eigen::VectorXd tau;
+    std::shared_ptr<const spectral::Aft> aft;  // when either basis is Fourier
+    std::optional<SampledBasis> trial, trial_slope, weighting;
+  };
+  std::shared_ptr<const Sampling> sampling;
   bool cell_average_rule = false;
-  std::vector<std::vector<int>> theta_nz, wq_nz;  // nonzero columns of each row
-  bool sparse_rows = false;                       // rows have compact support (N by loops)
-  // FFTW on the same midpoint samples, when the trial or the weighting basis is Fourier: u_c(τ_q)
-  // (Fourier trial), the projection of the sampled forces (Fourier weighting) and, for
-  // Fourier:Fourier, the contact Jacobian blocks (Aft::jacobian) in O(Q log Q) instead of O(QM)
-  // and O(QM²). Shared with at_frequency copies (const use only).
-  std::shared_ptr<const spectral::Aft> aft;
 
   // Linear solves with G (kronecker_factorization.hpp); set up once, factorized per frequency.
   std::optional<detail::KroneckerFactorization> g;
   bool factorized = false;
 
   Eigen::VectorXd b, a_lin, x_lin;
+  // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 10 % of it is nonzero (the 1 × 1
+  // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
   Eigen::MatrixXd h;
+  Eigen::SparseMatrix<double> h_sparse;
+  bool h_is_sparse = false;
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
@@ -223,21 +276,22 @@ struct WeightedResidual::Impl {
                                   "along the slope u̇ of the trial functions; the trial basis " + trial.name() +
                                   " has no pointwise derivative: use ContactQuadrature::Midpoint (the paper's rule)");
     }
-    Eigen::VectorXd tau(q);
-    for (int k = 0; k < q; ++k) tau(k) = (k + 0.5) / q;
-    theta = trial.values(tau, 0);
-    if (cell_average_rule) theta_d = trial.values(tau, 1);
-    wq = weighting.values(tau, 0) / static_cast<double>(q);
-    assemble_time_operators(tau);
-    sample_structure();
-    if (trial.is_fourier() || weighting.is_fourier()) aft = std::make_shared<const spectral::Aft>(m, q, 0.5);
+    auto smp = std::make_shared<Sampling>();
+    smp->tau.resize(q);
+    for (int k = 0; k < q; ++k) smp->tau(k) = (k + 0.5) / q;
+    if (trial.is_fourier() || weighting.is_fourier()) smp->aft = std::make_shared<const spectral::Aft>(m, q, 0.5);
+    smp->trial.emplace(trial, smp->tau, 0, smp->aft);
+    if (cell_average_rule) smp->trial_slope.emplace(trial, smp->tau, 1, smp->aft);
+    smp->weighting.emplace(weighting, smp->tau, 0, smp->aft);
+    sampling = smp;
+    assemble_time_operators();
     g.emplace(system, ops, options.linear_solver,
               weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional);
 
-    Eigen::VectorXd cosine(q);
-    for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * tau(k));
+    Eigen::RowVectorXd cosine(q);
+    for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * smp->tau(k));
     Eigen::MatrixXd bm = Eigen::MatrixXd::Zero(n, m);
-    bm.row(forcing.dof) = forcing.amplitude * (wq.transpose() * cosine).transpose();
+    bm.row(forcing.dof) = forcing.amplitude * smp->weighting->project(cosine);
     b = spectral::stacked(bm);
 
     contact_rows.resize(static_cast<size_t>(nc) * m);
@@ -252,7 +306,7 @@ struct WeightedResidual::Impl {
     a_lin = g->solve(b, false);
     x_lin = gather(a_lin);
     if (nc > 0) {
-      h = g->compliance(contact_dofs(), contact_rows);
+      set_compliance();
       double gmax = 0.0;
       for (const auto& ct : contacts) gmax = std::max(gmax, std::abs(ct.law->gap()));
       // The larger of the gap and the linear response: a 1 nm gap beside a millimetre motion
@@ -267,9 +321,8 @@ struct WeightedResidual::Impl {
   Impl(const Impl& base, double frequency_hz)
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
-        ops(base.ops), theta(base.theta), wq(base.wq), theta_d(base.theta_d),
-        cell_average_rule(base.cell_average_rule), theta_nz(base.theta_nz), wq_nz(base.wq_nz),
-        sparse_rows(base.sparse_rows), aft(base.aft), g(base.g->unfactorized()), b(base.b), scale(base.scale),
+        ops(base.ops), sampling(base.sampling), cell_average_rule(base.cell_average_rule),
+        g(base.g->unfactorized()), b(base.b), scale(base.scale),
         contact_rows(base.contact_rows) {
     forcing.frequency_hz = frequency_hz;
     forcing.validate(n);
@@ -277,7 +330,24 @@ struct WeightedResidual::Impl {
     if (!factorized) return;
     a_lin = g->solve(b, false);
     x_lin = gather(a_lin);
-    if (nc > 0) h = g->compliance(contact_dofs(), contact_rows);
+    if (nc > 0) set_compliance();
+  }
+
+  void set_compliance() {
+    h = g->compliance(contact_dofs(), contact_rows);
+    const auto nonzeros = (h.array() != 0.0).count();
+    h_is_sparse = static_cast<double>(nonzeros) <= 0.1 * static_cast<double>(h.size());
+    if (h_is_sparse) h_sparse = h.sparseView();
+  }
+
+  // H v for a vector or a matrix v (n_c·M rows).
+  [[nodiscard]] Eigen::MatrixXd compliance_times(const Eigen::MatrixXd& v) const {
+    if (h_is_sparse) return h_sparse * v;
+    return h * v;
+  }
+  [[nodiscard]] Eigen::VectorXd compliance_times(const Eigen::VectorXd& v) const {
+    if (h_is_sparse) return h_sparse * v;
+    return h * v;
   }
 
   [[nodiscard]] std::vector<int> contact_dofs() const {
@@ -291,15 +361,41 @@ struct WeightedResidual::Impl {
     return g->solve(v, transposed);
   }
 
-  void assemble_time_operators(const Eigen::VectorXd& tau) {
+  // [JL14 Eqs. (14)–(16)]: exactly (connection coefficients, analytic Fourier) or by the Q-point
+  // rule A = (sign/Q) Σ_q p^{(dw)}(τ_q) q^{(dt)}(τ_q)ᵀ. The discrete rule exploits the bases:
+  //  - Fourier weighting, wavelet trial: A^{(0)} = (1/Q) Σ_q p(τ_q) q^{(dt)}(τ_q)ᵀ by one FFTW
+  //    projection per trial function (O(M Q log Q)); the weighting's derivatives stay in the
+  //    basis, row(cos ωτ)' = −ω row(sin ωτ), row(sin ωτ)' = ω row(cos ωτ), row'' = −ω² row,
+  //    except the first derivative of the top function cos πMτ, summed directly;
+  //  - two wavelet bases: sparse products of their sample matrices;
+  //  - otherwise (Fourier trial with OperatorRule::Discrete): dense values, O(Q M²).
+  void assemble_time_operators() {
     const auto ts = terms(options.formulation);
     const bool exact = exact_rule(trial, weighting, options.operators);
+    const Eigen::VectorXd& tau = sampling->tau;
     std::array<Eigen::MatrixXd, 3> a;
-    std::array<Eigen::MatrixXd, 3> pw, qt;  // values by derivative order, computed once
+    std::array<Eigen::MatrixXd, 3> pw, qt;                // dense values by derivative order (fallback)
+    std::array<std::optional<SparseRows>, 3> ws, tsparse;  // sparse values by derivative order
+    std::array<Eigen::MatrixXd, 3> projected;              // Fourier weighting: A^{(0)} by trial derivative
+    const auto sparse_of = [&](std::array<std::optional<SparseRows>, 3>& cache, const TimeBasis& basis, int d) -> const SparseRows& {
+      if (!cache[d]) cache[d] = basis.wavelet_basis()->sparse_values(tau, d);
+      return *cache[d];
+    };
     for (int t = 0; t < 3; ++t) {
       const Term& term = ts[t];
       if (exact) {
         a[t] = term.sign * Eigen::MatrixXd(trial.exact_operator(term.weighting, term.trial));
+      } else if (weighting.is_fourier() && !trial.is_fourier()) {
+        Eigen::MatrixXd& base = projected[term.trial];
+        if (base.size() == 0) {
+          const SparseRows& v = sparse_of(tsparse, trial, term.trial);
+          base = sampling->aft->project(Eigen::MatrixXd(v.transpose())).transpose();  // (j, k)
+        }
+        a[t] = term.sign * fourier_weighting_derivative(base, term.weighting, sparse_of(tsparse, trial, term.trial));
+      } else if (!weighting.is_fourier() && !trial.is_fourier()) {
+        const SparseRows& w = sparse_of(ws, weighting, term.weighting);
+        const SparseRows& v = sparse_of(tsparse, trial, term.trial);
+        a[t] = (term.sign / q) * Eigen::MatrixXd(Eigen::SparseMatrix<double>(w.transpose()) * Eigen::SparseMatrix<double>(v));
       } else {
         if (pw[term.weighting].size() == 0) pw[term.weighting] = weighting.values(tau, term.weighting);
         if (qt[term.trial].size() == 0) qt[term.trial] = trial.values(tau, term.trial);
@@ -313,18 +409,36 @@ struct WeightedResidual::Impl {
                      : "discrete, Q = " + std::to_string(q) + " midpoints";
   }
 
-  void sample_structure() {
-    theta_nz.assign(q, {});
-    wq_nz.assign(q, {});
-    long nnz = 0;
-    for (int r = 0; r < q; ++r) {
-      for (int k = 0; k < m; ++k) {
-        if (theta(r, k) != 0.0) theta_nz[r].push_back(k);
-        if (wq(r, k) != 0.0) wq_nz[r].push_back(k);
+  // (1/Q) Σ_q p_j^{(dw)}(τ_q) v_k(τ_q) from base(j, k) = (1/Q) Σ_q p_j(τ_q) v_k(τ_q) for the
+  // Fourier weighting functions p_j (FourierBasis ordering) and the samples v (Q × M).
+  [[nodiscard]] Eigen::MatrixXd fourier_weighting_derivative(const Eigen::MatrixXd& base, int dw, const SparseRows& v) const {
+    if (dw == 0) return base;
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, base.cols());
+    const bool top = m % 2 == 0;
+    const int paired = top ? m / 2 - 1 : m / 2;
+    for (int h = 1; h <= paired; ++h) {
+      const double omega = 2.0 * std::numbers::pi * h;
+      const int c = 2 * h - 1, s_row = 2 * h;
+      if (dw == 1) {
+        out.row(c) = -omega * base.row(s_row);
+        out.row(s_row) = omega * base.row(c);
+      } else {
+        out.row(c) = -omega * omega * base.row(c);
+        out.row(s_row) = -omega * omega * base.row(s_row);
       }
-      nnz += static_cast<long>(theta_nz[r].size() * wq_nz[r].size());
     }
-    sparse_rows = nnz < static_cast<long>(q) * m * m / 8;
+    if (top) {
+      const double omega = std::numbers::pi * m;
+      if (dw == 1) {
+        Eigen::RowVectorXd dtop(q);
+        for (int r = 0; r < q; ++r) dtop(r) = -omega * std::sin(omega * sampling->tau(r));
+        out.row(m - 1) = (dtop * v) / static_cast<double>(q);
+      } else {
+        out.row(m - 1) = -omega * omega * base.row(m - 1);
+      }
+    }
+    if (dw > 2) throw std::logic_error("fourier_weighting_derivative: order > 2");
+    return out;
   }
 
   [[nodiscard]] Eigen::VectorXd gather(const Eigen::VectorXd& a) const {
@@ -335,16 +449,58 @@ struct WeightedResidual::Impl {
 
   // Contact displacement samples U (n_c × Q) for stacked contact unknowns x.
   [[nodiscard]] Eigen::MatrixXd contact_samples(const Eigen::VectorXd& x) const {
-    if (trial.is_fourier()) return aft->to_time(spectral::as_coefficients(x, nc));
-    return spectral::as_coefficients(x, nc) * theta.transpose();
+    return sampling->trial->to_time(spectral::as_coefficients(x, nc));
+  }
+
+  // block(j, k) = (1/Q) Σ_q p_j(τ_q) κ_q q_k(τ_q) over the samples with κ_q ≠ 0 (`active`): the
+  // contact Jacobian of one contact. Fourier:Fourier by Aft::jacobian (O(Q log Q + M²)); one
+  // Fourier basis by one FFTW projection per function of the other (O(M Q log Q)); two wavelet
+  // bases by their sparse rows (O(active · support²)).
+  [[nodiscard]] Eigen::MatrixXd contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const {
+    const Sampling& smp = *sampling;
+    if (trial.is_fourier() && weighting.is_fourier()) return smp.aft->jacobian(kc);
+    if (weighting.is_fourier() || trial.is_fourier()) {
+      const SparseRows& v = weighting.is_fourier() ? smp.trial->values : smp.weighting->values;
+      Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(m, q);  // S(k, q) = κ_q v_k(τ_q)
+      for (int r : active) {
+        for (SparseRows::InnerIterator it(v, r); it; ++it) samples(it.col(), r) = kc(r) * it.value();
+      }
+      const Eigen::MatrixXd p = smp.aft->project(samples);  // (1/Q) Σ_q S(k, q) f_l(τ_q), f the Fourier basis
+      return weighting.is_fourier() ? Eigen::MatrixXd(p.transpose()) : p;
+    }
+    Eigen::MatrixXd block = Eigen::MatrixXd::Zero(m, m);
+    const SparseRows& w = smp.weighting->values;
+    const SparseRows& v = smp.trial->values;
+    double loop_cost = 0.0;  // multiply-adds of the loops over the rows' nonzeros
+    for (int r : active) loop_cost += static_cast<double>(w.outerIndexPtr()[r + 1] - w.outerIndexPtr()[r]) *
+                                      static_cast<double>(v.outerIndexPtr()[r + 1] - v.outerIndexPtr()[r]);
+    if (loop_cost > static_cast<double>(active.size()) * m * m / 8.0) {
+      // Wide supports (the orthogonal B-spline's decays exponentially but spans the period at
+      // small M): a dense product of the active rows, blocked, is faster than scalar loops.
+      Eigen::MatrixXd wa(static_cast<Eigen::Index>(active.size()), m), va(wa.rows(), m);
+      for (size_t i = 0; i < active.size(); ++i) {
+        wa.row(static_cast<Eigen::Index>(i)) = w.row(active[i]) * (kc(active[i]) / q);
+        va.row(static_cast<Eigen::Index>(i)) = v.row(active[i]);
+      }
+      block.noalias() = wa.transpose() * va;
+      return block;
+    }
+    for (int r : active) {
+      for (SparseRows::InnerIterator wj(w, r); wj; ++wj) {
+        const double wk = wj.value() * kc(r) / q;
+        for (SparseRows::InnerIterator vk(v, r); vk; ++vk) block(wj.col(), vk.col()) += wk * vk.value();
+      }
+    }
+    return block;
   }
 
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
   // N(x) (n_c·M square).
   Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, Eigen::MatrixXd* jac) const {
+    const Sampling& smp = *sampling;
     const Eigen::MatrixXd u = contact_samples(x);
     Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
-    if (cell_average_rule) slope = spectral::as_coefficients(x, nc) * theta_d.transpose() / static_cast<double>(q);
+    if (cell_average_rule) slope = smp.trial_slope->to_time(spectral::as_coefficients(x, nc)) / static_cast<double>(q);
     Eigen::MatrixXd force(nc, q);
     if (jac != nullptr) jac->setZero(nc * m, nc * m);
     Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
@@ -361,45 +517,27 @@ struct WeightedResidual::Impl {
         if (kc(r) != 0.0) active.push_back(r);
         if (kd(r) != 0.0) sloped.push_back(r);
       }
-      Eigen::MatrixXd block = Eigen::MatrixXd::Zero(m, m);  // block(j, k) = Σ_q w_j f' q_k
-      if (active.empty()) {
-        // no sample in contact: N_c = 0
-      } else if (trial.is_fourier() && weighting.is_fourier()) {
-        block = aft->jacobian(kc);
-      } else if (sparse_rows) {
-        for (int r : active) {
-          for (int j : wq_nz[r]) {
-            const double wj = wq(r, j) * kc(r);
-            for (int k : theta_nz[r]) block(j, k) += wj * theta(r, k);
-          }
-        }
-      } else {
-        Eigen::MatrixXd wa(active.size(), m), ta(active.size(), m);
-        for (size_t i = 0; i < active.size(); ++i) {
-          wa.row(static_cast<Eigen::Index>(i)) = wq.row(active[i]) * kc(active[i]);
-          ta.row(static_cast<Eigen::Index>(i)) = theta.row(active[i]);
-        }
-        block.noalias() = wa.transpose() * ta;
-      }
+      Eigen::MatrixXd block = active.empty() ? Eigen::MatrixXd::Zero(m, m) : contact_block(kc, active);
       if (!sloped.empty()) {
-        // CellAverage: + Σ_q p_j(τ_q) ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the law's kink.
-        Eigen::MatrixXd wa(sloped.size(), m), td(sloped.size(), m);
+        // CellAverage: + Σ_q p_j(τ_q)/Q ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the
+        // law's kink (a few per crossing): their rows are evaluated here.
+        Eigen::VectorXd ts(static_cast<Eigen::Index>(sloped.size())), ks(ts.size());
         for (size_t i = 0; i < sloped.size(); ++i) {
-          wa.row(static_cast<Eigen::Index>(i)) = wq.row(sloped[i]) * (kd(sloped[i]) / q);
-          td.row(static_cast<Eigen::Index>(i)) = theta_d.row(sloped[i]);
+          ts(static_cast<Eigen::Index>(i)) = smp.tau(sloped[i]);
+          ks(static_cast<Eigen::Index>(i)) = kd(sloped[i]) / (static_cast<double>(q) * q);
         }
-        block.noalias() += wa.transpose() * td;
+        block.noalias() += (ks.asDiagonal() * weighting.values(ts, 0)).transpose() * trial.values(ts, 1);
       }
       for (int k = 0; k < m; ++k) {
         for (int j = 0; j < m; ++j) (*jac)(j * nc + c, k * nc + c) = block(j, k);
       }
     }
-    return spectral::stacked(weighting.is_fourier() ? aft->project(force) : Eigen::MatrixXd(force * wq));
+    return spectral::stacked(smp.weighting->project(force));
   }
 
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const {
     require_factorized();
-    return (x - load * x_lin + h * contact_forces(x, nullptr)) / scale;
+    return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
   }
 
   void require_factorized() const {
@@ -526,7 +664,7 @@ Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) con
   p.require_factorized();
   Eigen::MatrixXd nj;
   (void)p.contact_forces(x, &nj);
-  Eigen::MatrixXd jac = p.h * nj;
+  Eigen::MatrixXd jac = p.compliance_times(nj);
   jac.diagonal().array() += 1.0;
   return jac / p.scale;
 }
@@ -586,7 +724,7 @@ NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& 
 Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorXd& x, double lambda) const {
   const auto& p = *problem->impl_;
   p.require_factorized();
-  return (x - p.x_lin + std::pow(10.0, lambda) * (p.h * p.contact_forces(x, nullptr))) / p.scale;
+  return (x - p.x_lin + std::pow(10.0, lambda) * p.compliance_times(p.contact_forces(x, nullptr))) / p.scale;
 }
 
 Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd& x, double lambda) const {
@@ -594,10 +732,10 @@ Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd
   p.require_factorized();
   const double sigma = std::pow(10.0, lambda);
   Eigen::MatrixXd nj;
-  const Eigen::VectorXd hn = p.h * p.contact_forces(x, &nj);
+  const Eigen::VectorXd hn = p.compliance_times(p.contact_forces(x, &nj));
   Linearization l;
   l.residual = (x - p.x_lin + sigma * hn) / p.scale;
-  l.jacobian = (sigma / p.scale) * (p.h * nj);
+  l.jacobian = (sigma / p.scale) * p.compliance_times(nj);
   l.jacobian.diagonal().array() += 1.0 / p.scale;
   l.parameter_derivative = (std::log(10.0) * sigma / p.scale) * hn;  // dσ/dλ = σ ln 10
   return l;
@@ -609,7 +747,7 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
   Eigen::MatrixXd nj;
   (void)p.contact_forces(p.x_lin, &nj);
-  const double coupling = (p.h * nj).lpNorm<Eigen::Infinity>();
+  const double coupling = p.compliance_times(nj).lpNorm<Eigen::Infinity>();
   const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
   report.lambda_start = lambda0;
   PseudoArclengthOptions o;

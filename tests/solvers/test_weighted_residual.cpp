@@ -621,3 +621,104 @@ TEST(WeightedResidual, CellAverageRefusesHaarTrialFunctions) {
       },
       {"homotopy_max_points = 1", ">= 2"});
 }
+
+// Fast paths against the slow reference (issue #17). The condensed compliance H, the linear
+// response x_lin and the contact Jacobian N are recomputed here the slow way, from the public
+// time operators and dense basis values:
+//   H_cd = Σ_i φ_i(c) φ_i(d) (A + λ_i B)⁻¹ by dense LU of every modal block (K φ = λ M φ,
+//   φᵀ M φ = I; C = c_K K for the rod), x_lin,c = Σ_i φ_i(c) φ_i(f) (A + λ_i B)⁻¹ F β with
+//   β_j = (1/Q) Σ_q p_j(τ_q) cos 2πτ_q, N_c = (1/Q) Wᵀ diag(f_c′(u_c)) Θ with W, Θ the dense
+//   values of TimeBasis::values on the midpoints,
+// and compared with what the solver's structured paths give (harmonic components for
+// Fourier:Fourier, circulant blocks by FFT for the wavelet Galerkin pairs and Haar:B-spline, the
+// factored Fourier-weighting blocks for Haar:Fourier and DB6:Fourier, FFTW and sparse sample
+// matrices for N): 1e-12 relative, on the rod with two contacts (tip and tip − 5) so that the
+// cross terms H_cd, c ≠ d, are checked too. The discrete time operators of the Petrov–Galerkin
+// pairs are checked against dense sums the same way.
+TEST(WeightedResidual, StructuredPathsMatchTheDenseModalReference) {
+  const auto s = case1();
+  auto contacts = s.contact_points();
+  contacts.push_back({contacts.front().dof - 5, contacts.front().law});
+  const auto sys = s.system();
+  const auto forcing = s.harmonic_forcing();
+  const Eigen::MatrixXd kd(sys.stiffness), md(sys.mass), cd(sys.damping);
+  const double c_k = (cd.array() * kd.array()).sum() / (kd.array() * kd.array()).sum();
+  ASSERT_LT((cd - c_k * kd).norm(), 1e-12 * cd.norm()) << "the rod's damping is C = beta K";
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(kd, md);
+  const Eigen::MatrixXd& phi = eig.eigenvectors();
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double f = forcing.frequency_hz;
+  for (const Pair& pair : kTable2) {
+    for (int m : {32, 64}) {
+      const auto trial = TimeBasis::from_name(pair.trial, m), weighting = TimeBasis::from_name(pair.weighting, m);
+      const solvers::WeightedResidual wr(sys, forcing, contacts, trial, weighting);
+      const int nc = 2, q = wr.time_samples();
+      const auto& ops = wr.time_operators();
+      const Eigen::MatrixXd a = f * f * ops.mass, b = f * c_k * ops.damping + ops.stiffness;
+      Eigen::VectorXd tau(q), cosine(q);
+      for (int k = 0; k < q; ++k) {
+        tau(k) = (k + 0.5) / q;
+        cosine(k) = std::cos(2.0 * std::numbers::pi * tau(k));
+      }
+      const Eigen::MatrixXd w = weighting.values(tau, 0), theta = trial.values(tau, 0);
+      const Eigen::VectorXd beta = forcing.amplitude * w.transpose() * cosine / q;
+      Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
+      Eigen::VectorXd x_lin = Eigen::VectorXd::Zero(nc * m);
+      for (Eigen::Index i = 0; i < lambda.size(); ++i) {
+        const Eigen::MatrixXd block_inverse = Eigen::MatrixXd(a + lambda(i) * b).partialPivLu().inverse();
+        const Eigen::VectorXd modal_response = block_inverse * beta;
+        for (int c = 0; c < nc; ++c) {
+          for (int k = 0; k < m; ++k) x_lin(k * nc + c) += phi(contacts[c].dof, i) * phi(forcing.dof, i) * modal_response(k);
+          for (int d = 0; d < nc; ++d) {
+            const double wcd = phi(contacts[c].dof, i) * phi(contacts[d].dof, i);
+            for (int l = 0; l < m; ++l) {
+              for (int k = 0; k < m; ++k) h(k * nc + c, l * nc + d) += wcd * block_inverse(k, l);
+            }
+          }
+        }
+      }
+      const std::string what = std::string(pair.trial) + ":" + pair.weighting + " M = " + std::to_string(m);
+      if (!trial.same_family(weighting)) {
+        // Discrete operators (distributional: ∫ p̈ q, −∫ ṗ q, ∫ p q on the midpoints) by dense sums,
+        // against the FFTW projections with the Fourier weighting's derivative identities or the
+        // sparse products of wavelet samples.
+        const Eigen::MatrixXd expected[3] = {weighting.values(tau, 2).transpose() * theta / q,
+                                             -weighting.values(tau, 1).transpose() * theta / q,
+                                             w.transpose() * theta / q};
+        const Eigen::MatrixXd* got[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+        for (int t = 0; t < 3; ++t) {
+          EXPECT_LT((*got[t] - expected[t]).norm(), 1e-12 * expected[t].norm()) << what << " operator " << t;
+        }
+      }
+      const Eigen::VectorXd x_lin_fast = wr.contact_unknowns(wr.linear_response());
+      EXPECT_LT((x_lin_fast - x_lin).norm(), 1e-12 * x_lin.norm()) << what;
+
+      // A state in contact at both DOFs: N (slow) and H N, H n from the residual and Jacobian.
+      const Eigen::VectorXd x = 1.2 * x_lin;
+      Eigen::MatrixXd n_jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+      Eigen::VectorXd n_force = Eigen::VectorXd::Zero(nc * m);
+      for (int c = 0; c < nc; ++c) {
+        Eigen::VectorXd coefficients(m);
+        for (int k = 0; k < m; ++k) coefficients(k) = x(k * nc + c);
+        const Eigen::VectorXd u = theta * coefficients;
+        Eigen::VectorXd force(q), stiffness(q);
+        contacts[c].law->evaluate(u, force, stiffness);
+        ASSERT_GT(stiffness.maxCoeff(), 0.0) << what << ": contact " << c << " must be in contact";
+        const Eigen::MatrixXd block = w.transpose() * stiffness.asDiagonal() * theta / q;
+        const Eigen::VectorXd projected = w.transpose() * force / q;
+        for (int j = 0; j < m; ++j) {
+          n_force(j * nc + c) = projected(j);
+          for (int k = 0; k < m; ++k) n_jac(j * nc + c, k * nc + c) = block(j, k);
+        }
+      }
+      const double scale = wr.residual_scale();
+      const Eigen::VectorXd hn_fast = wr.contact_residual(x) * scale - x + x_lin_fast;
+      const Eigen::VectorXd hn = h * n_force;
+      EXPECT_LT((hn_fast - hn).norm(), 1e-12 * hn.norm()) << what;
+      Eigen::MatrixXd hnj_fast = wr.contact_jacobian(x) * scale;
+      hnj_fast.diagonal().array() -= 1.0;
+      const Eigen::MatrixXd hnj = h * n_jac;
+      EXPECT_LT((hnj_fast - hnj).norm(), 1e-12 * hnj.norm()) << what;
+    }
+  }
+}

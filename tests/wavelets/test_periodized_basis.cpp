@@ -138,6 +138,27 @@ TEST(PeriodizedBasis, TabulatedValuesMatchTheDirectPeriodizationSum) {
   }
 }
 
+// The sparse sample matrix keeps only the functions whose support covers each sample: at most
+// ⌊support length⌋ + 1 per row, so Q × M values cost O(Q · support) (issue #17); the rows keep
+// the partition of unity.
+TEST(PeriodizedBasis, SparseValuesStoreOnlyTheSupport) {
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(512, 0.0005, 0.9995);
+  for (const auto& family : {ww::Family::haar(), ww::Family::daubechies(6), ww::Family::orthogonal_cubic_bspline()}) {
+    const ww::PeriodizedBasis basis(family, 8);
+    const auto& phi = basis.scaling_function();
+    const auto width = static_cast<Eigen::Index>(std::floor(phi.support_end() - phi.support_begin())) + 1;
+    const auto sv = basis.sparse_values(tau, 0);
+    for (Eigen::Index p = 0; p < tau.size(); ++p) {
+      const Eigen::Index nonzeros = sv.outerIndexPtr()[p + 1] - sv.outerIndexPtr()[p];
+      EXPECT_LE(nonzeros, width) << family.name() << " sample " << p;
+      EXPECT_GE(nonzeros, 1) << family.name() << " sample " << p;
+    }
+    // Partition of unity, Σ_j φ(x − j) = 1: every row of the orthonormal basis sums to 2^{J/2}.
+    const Eigen::VectorXd row_sums = sv * Eigen::VectorXd::Ones(basis.dimension());
+    EXPECT_LT((row_sums.array() - 16.0).abs().maxCoeff(), 1e-8 * 16.0) << family.name();
+  }
+}
+
 TEST(PeriodizedBasis, RefusesBadLevelsAndMissingDerivatives) {
   wbm::testing::expect_throw_with<std::invalid_argument>([] { (void)ww::PeriodizedBasis(ww::Family::haar(), -1); },
                                                          {"level J = -1", "[0, 20]"});

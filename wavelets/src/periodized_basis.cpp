@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <wbm/wavelets/periodized_basis.hpp>
 
@@ -40,20 +41,31 @@ double PeriodizedBasis::value(int k, double tau, int derivative) const {
 }
 
 Eigen::MatrixXd PeriodizedBasis::values(const Eigen::VectorXd& tau, int derivative) const {
+  return Eigen::MatrixXd(sparse_values(tau, derivative));
+}
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> PeriodizedBasis::sparse_values(const Eigen::VectorXd& tau,
+                                                                             int derivative) const {
   // Only the functions whose (wrapped) support covers τ_p are non-zero: visit the integer shifts
   // j = k + ℓM with begin ≤ 2^J τ_p − j ≤ end, so the cost is O(Q · support), not O(Q · M).
-  Eigen::MatrixXd v = Eigen::MatrixXd::Zero(tau.size(), dimension_);
+  // Wrapped shifts that land on the same k (support longer than the period) are summed.
   const double factor = scale_ * std::sqrt(static_cast<double>(dimension_)) * std::ldexp(1.0, level_ * derivative);
+  std::vector<Eigen::Triplet<double>> entries;
+  const double width = function_->support_end() - function_->support_begin() + 1.0;
+  entries.reserve(static_cast<size_t>(tau.size()) * static_cast<size_t>(std::min<double>(width, dimension_)));
   for (Eigen::Index p = 0; p < tau.size(); ++p) {
     const double x = std::ldexp(tau(p), level_);
     const auto lo = static_cast<long>(std::ceil(x - function_->support_end()));
     const auto hi = static_cast<long>(std::floor(x - function_->support_begin()));
     for (long j = lo; j <= hi; ++j) {
       const long k = ((j % dimension_) + dimension_) % dimension_;
-      v(p, k) += function_->value(x - static_cast<double>(j), derivative);
+      const double v = function_->value(x - static_cast<double>(j), derivative);
+      if (v != 0.0) entries.emplace_back(static_cast<int>(p), static_cast<int>(k), factor * v);
     }
   }
-  return factor * v;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> out(tau.size(), dimension_);
+  out.setFromTriplets(entries.begin(), entries.end());  // duplicates (wrapped shifts) are summed
+  return out;
 }
 
 Eigen::MatrixXd PeriodizedBasis::sampled(int samples, int derivative) const {
