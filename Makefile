@@ -66,8 +66,9 @@ check-fuzz:
 	  echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_BUILD)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
 	done
 
+# The reproduce executables run JOBS at a time (one target each), then plot.py and report.py.
 reproduce: build
-	@cmake --build $(BUILD) --target reproduce
+	@cmake --build $(BUILD) --target reproduce -j $(JOBS)
 
 bench: build
 	@cmake --build $(BUILD) --target bench

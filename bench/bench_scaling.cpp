@@ -206,6 +206,7 @@ int main(int argc, char** argv) {
   md << " p (M) | set-up share at M = " << dims.back() << " |\n|---|";
   for (size_t i = 0; i < dims.size(); ++i) md << "---|";
   md << "---|---|\n";
+  std::ostringstream notes;  // solves that did not go by direct Newton, listed under the table
   for (size_t s = 0; s + 1 < series.size(); ++s) {
     const auto& rows = series[s];
     md << "| " << rows.front().label << " |";
@@ -214,11 +215,12 @@ int main(int argc, char** argv) {
        << " |\n";
     for (const auto& r : rows) {
       if (r.path != "direct Newton") {
-        md << "\n" << r.label << " at M = " << r.x << " went by the " << r.path << " (" << r.iterations
-           << " Newton iterations in all).\n";
+        notes << "\n" << r.label << " at M = " << r.x << " went by the " << r.path << " (" << r.iterations
+              << " Newton iterations in all).\n";
       }
     }
   }
+  md << notes.str();
   const auto& chain_rows = series.back();
   md << "\n### Time vs contact DOFs (" << chain_rows.front().label
      << ")\n\n| n_c | n_c·M | time, ms | Newton iterations | ms per iteration | route | status |\n|---|---|---|---|---|---|---|\n";

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
+#include <iterator>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -87,24 +89,25 @@ struct FourierCore {
     lower += w * o.lower;
     last_row += w * o.last_row;
   }
-  // S r, or Sᵀ r, for each column of r (M rows).
+  // S r, or Sᵀ r, for each column of r (M rows); column by column (column-major storage).
   [[nodiscard]] Eigen::MatrixXd apply(const Eigen::MatrixXd& r, bool transposed) const {
     const Eigen::Index m = size(), last = m - 1;
-    Eigen::MatrixXd y = diagonal.asDiagonal() * r;
-    y.row(last).setZero();
-    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
-      if (transposed) {
-        y.row(j) += lower(j) * r.row(j + 1);
-        y.row(j + 1) += upper(j) * r.row(j);
-      } else {
-        y.row(j) += upper(j) * r.row(j + 1);
-        y.row(j + 1) += lower(j) * r.row(j);
+    Eigen::MatrixXd y(m, r.cols());
+    for (Eigen::Index col = 0; col < r.cols(); ++col) {
+      const double* x = r.col(col).data();
+      double* o = y.col(col).data();
+      o[0] = diagonal(0) * x[0];
+      for (Eigen::Index j = 1; j + 1 < m; j += 2) {
+        const double off_up = transposed ? lower(j) : upper(j), off_low = transposed ? upper(j) : lower(j);
+        o[j] = diagonal(j) * x[j] + off_up * x[j + 1];
+        o[j + 1] = off_low * x[j] + diagonal(j + 1) * x[j + 1];
       }
-    }
-    if (transposed) {
-      y += last_row.transpose() * r.row(last);
-    } else {
-      y.row(last) = last_row * r;
+      if (transposed) {  // row L of B is zero: Sᵀ r = Bᵀ r + ℓ r_L
+        o[last] = 0.0;
+        for (Eigen::Index i = 0; i < m; ++i) o[i] += last_row(i) * x[last];
+      } else {
+        o[last] = last_row.dot(r.col(col));
+      }
     }
     return y;
   }
@@ -139,6 +142,57 @@ struct FourierWeighting {
   Eigen::VectorXd g;        // A_K⁻ᵀ c_L (Sherman–Morrison form only)
   Eigen::VectorXd omega;    // ω_j = 2πk_j of weighting function j (0 for the constant)
   bool replaced_last_row = false;
+  // Shift structure of the left factor L (A_K, or N): when trial function k is function 0 moved
+  // by k/M and the samples map onto themselves under that shift (Q a multiple of M),
+  //   L(0, k) = L(0, 0),   L(top, k) = (−1)^k L(top, 0),
+  //   L(cos_h, k) + i L(sin_h, k) = (C_h + i S_h) e^{2πihk/M},   C_h + i S_h from column 0,
+  // so (L x)_{cos_h} + i (L x)_{sin_h} = (C_h + i S_h) conj(X_h) with X the real DFT of x, and
+  // L⁻¹ y costs one inverse real DFT: O(M log M) instead of O(M²), the set-up O(M² log M)
+  // instead of the O(M³) LU and inverse.
+  bool shift = false;
+  Eigen::VectorXcd shift_coefficients;  // (C_h + i S_h), h = 0 … M/2 (h = 0: L(0, 0); h = M/2: L(top, 0))
+
+  // L⁻¹ y for each column of y (M rows), shift structure only.
+  [[nodiscard]] Eigen::MatrixXd shift_inverse(const Eigen::MatrixXd& y) const {
+    const Eigen::Index m = y.rows(), half = m / 2;
+    Eigen::MatrixXcd bins(half + 1, y.cols());
+    bins.row(0) = y.row(0).cast<std::complex<double>>() / shift_coefficients(0);
+    for (Eigen::Index h = 1; h < half; ++h) {
+      const Eigen::RowVectorXcd z = (y.row(2 * h - 1).cast<std::complex<double>>() +
+                                     std::complex<double>(0.0, 1.0) * y.row(2 * h).cast<std::complex<double>>()) /
+                                    shift_coefficients(h);
+      bins.row(h) = z.conjugate();
+    }
+    bins.row(half) = y.row(m - 1).cast<std::complex<double>>() / shift_coefficients(half);
+    return spectral::inverse_real_dft_columns(bins, static_cast<int>(m));
+  }
+
+  // Detects the shift structure of l (to 1e-12 of its largest entry) and, if present, sets
+  // shift_coefficients and ak_inv = l⁻¹ by shift_inverse. False if absent or singular.
+  bool detect_shift(const Eigen::MatrixXd& l) {
+    const Eigen::Index m = l.rows(), half = m / 2;
+    const double tol = 1e-12 * l.cwiseAbs().maxCoeff();
+    Eigen::VectorXcd coefficients(half + 1);
+    coefficients(0) = l(0, 0);
+    for (Eigen::Index h = 1; h < half; ++h) coefficients(h) = {l(2 * h - 1, 0), l(2 * h, 0)};
+    coefficients(half) = l(m - 1, 0);
+    std::vector<std::complex<double>> root(static_cast<size_t>(m));  // e^{2πij/M}
+    for (Eigen::Index j = 0; j < m; ++j) root[j] = std::polar(1.0, 2.0 * std::numbers::pi * static_cast<double>(j) / m);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      if (!(std::abs(l(0, k) - l(0, 0)) <= tol)) return false;
+      if (!(std::abs(l(m - 1, k) - (k % 2 == 0 ? 1.0 : -1.0) * l(m - 1, 0)) <= tol)) return false;
+      for (Eigen::Index h = 1; h < half; ++h) {
+        const std::complex<double> z = coefficients(h) * root[(h * k) % m];
+        if (!(std::abs(l(2 * h - 1, k) - z.real()) <= tol && std::abs(l(2 * h, k) - z.imag()) <= tol)) return false;
+      }
+    }
+    const Eigen::VectorXd mag = coefficients.cwiseAbs();
+    if (!(mag.minCoeff() > 1e-12 * mag.maxCoeff())) return false;  // singular to double precision
+    shift_coefficients = coefficients;
+    ak_inv = shift_inverse(Eigen::MatrixXd::Identity(m, m));
+    shift = ak_inv.allFinite();
+    return shift;
+  }
 
   // Returns nullopt unless the identities hold to 1e-10 relative and A_K is well conditioned.
   static std::optional<FourierWeighting> detect(const TimeOperators& ops) {
@@ -162,6 +216,10 @@ struct FourierWeighting {
     const bool last_row_vanishes =
         ops.stiffness.row(m - 1).cwiseAbs().maxCoeff() <= 1e-12 * ops.stiffness.cwiseAbs().maxCoeff();
     if (!last_row_vanishes) {
+      if (fw.detect_shift(ops.stiffness)) {
+        fw.g = fw.ak_inv.transpose() * ops.damping.row(m - 1).transpose();
+        return fw;
+      }
       const Eigen::PartialPivLU<Eigen::MatrixXd> lu(ops.stiffness);
       if (!(lu.rcond() > 1e-12)) return std::nullopt;
       fw.ak_inv = lu.inverse();
@@ -171,10 +229,11 @@ struct FourierWeighting {
     }
     Eigen::MatrixXd n = ops.stiffness;
     n.row(m - 1) = ops.damping.row(m - 1);
+    fw.replaced_last_row = true;
+    if (fw.detect_shift(n)) return fw;
     const Eigen::PartialPivLU<Eigen::MatrixXd> nlu(n);
     if (!(nlu.rcond() > 1e-12)) return std::nullopt;
     fw.ak_inv = nlu.inverse();
-    fw.replaced_last_row = true;
     return fw;
   }
 
@@ -215,7 +274,8 @@ struct FourierWeighting {
 
 // ‖G‖₁ from the Kronecker factors t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed:
 // the column (j, k) of G sums |Σ_s x_s(i, j) t_s(l, k)| over (i, l). Both factors sparse, so the
-// cost is O(nnz(X) · nnz(T)): O(n M) for Fourier:Fourier, O(n M²) for dense time operators.
+// cost is O(nnz(X) · nnz(T)): O(n M) for Fourier:Fourier; for dense time operators O(M²) per
+// distinct direction of (M_ij, C_ij, K_ij) (to 1e-14), a few for a FE model.
 double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
                        const std::array<const Eigen::SparseMatrix<double>*, 3>& x) {
   const auto n = x[0]->cols();
@@ -224,6 +284,7 @@ double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
   const bool dense = static_cast<double>(t[0].nonZeros() + t[1].nonZeros() + t[2].nonZeros()) >
                      0.25 * static_cast<double>(m) * static_cast<double>(m);
   std::array<Eigen::MatrixXd, 3> td;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> directions;  // (u, column sums of Σ u_s T_s)
   if (dense) {
     for (int s = 0; s < 3; ++s) td[s] = Eigen::MatrixXd(t[s]);
   }
@@ -240,7 +301,19 @@ double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
     for (const Eigen::Index i : rows) {
       const double v0 = x[0]->coeff(i, j), v1 = x[1]->coeff(i, j), v2 = x[2]->coeff(i, j);
       if (dense) {
-        colsum += (v0 * td[0] + v1 * td[1] + v2 * td[2]).cwiseAbs().colwise().sum().transpose();
+        // |s·Σ u_s T_s| = |s| |Σ u_s T_s|: one column sum per direction u = v/‖v‖ (a FE model has
+        // a few: the rod's interior diagonal, off-diagonal and end entries), reused to 1e-14.
+        const double norm = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+        if (norm == 0.0) continue;
+        const Eigen::Vector3d u(v0 / norm, v1 / norm, v2 / norm);
+        auto it = std::find_if(directions.begin(), directions.end(), [&](const auto& d) {
+          return (d.first - u).template lpNorm<Eigen::Infinity>() <= 1e-14;
+        });
+        if (it == directions.end()) {
+          directions.emplace_back(u, (u(0) * td[0] + u(1) * td[1] + u(2) * td[2]).cwiseAbs().colwise().sum().transpose());
+          it = std::prev(directions.end());
+        }
+        colsum += norm * it->second;
         continue;
       }
       const Eigen::SparseMatrix<double> comb = v0 * t[0] + v1 * t[1] + v2 * t[2];
@@ -268,34 +341,50 @@ class KroneckerFactorization::ModeBlock {
  public:
   using Components = std::vector<std::vector<Eigen::Index>>;
 
-  /// Block a + λ bb, split along `components` (≥ 2 of them), each inverted densely.
+  /// Block a + λ bb, split along `components` (≥ 2 of them), each inverted densely. The
+  /// inverses are stored flat (row-major, concatenated): a Fourier:Fourier block has M/2 of them,
+  /// and continuation builds one block per mode per frequency.
   ModeBlock(const Eigen::MatrixXd& a, const Eigen::MatrixXd& bb, double lambda, const Components& components)
       : m_(a.rows()), component_(&components) {
     ok_ = true;
-    inverse_.reserve(components.size());
+    offset_.reserve(components.size() + 1);
+    size_t total = 0;
     for (const auto& idx : components) {
+      offset_.push_back(total);
+      total += idx.size() * idx.size();
+    }
+    offset_.push_back(total);
+    flat_.resize(total);
+    for (size_t comp = 0; comp < components.size(); ++comp) {
+      const auto& idx = components[comp];
       const auto k = static_cast<Eigen::Index>(idx.size());
-      Eigen::MatrixXd sub(k, k);
-      for (Eigen::Index i = 0; i < k; ++i) {
-        for (Eigen::Index j = 0; j < k; ++j) sub(i, j) = a(idx[i], idx[j]) + lambda * bb(idx[i], idx[j]);
-      }
+      double* inv = flat_.data() + offset_[comp];
+      const auto entry = [&](Eigen::Index i, Eigen::Index j) { return a(idx[i], idx[j]) + lambda * bb(idx[i], idx[j]); };
       if (k <= 2) {  // closed-form inverse; singular if the determinant vanishes against the entries
-        const double scale = sub.cwiseAbs().maxCoeff();
-        const double det = k == 1 ? sub(0, 0) : sub(0, 0) * sub(1, 1) - sub(0, 1) * sub(1, 0);
-        if (!(std::abs(det) > 1e-300 + 1e-15 * (k == 1 ? scale : scale * scale)) || !std::isfinite(det)) ok_ = false;
-        Eigen::MatrixXd inv(k, k);
         if (k == 1) {
-          inv(0, 0) = 1.0 / det;
+          const double d = entry(0, 0);
+          if (!(std::abs(d) > 1e-300) || !std::isfinite(d)) ok_ = false;
+          inv[0] = 1.0 / d;
         } else {
-          inv << sub(1, 1) / det, -sub(0, 1) / det, -sub(1, 0) / det, sub(0, 0) / det;
+          const double e00 = entry(0, 0), e01 = entry(0, 1), e10 = entry(1, 0), e11 = entry(1, 1);
+          const double scale = std::max({std::abs(e00), std::abs(e01), std::abs(e10), std::abs(e11)});
+          const double det = e00 * e11 - e01 * e10;
+          if (!(std::abs(det) > 1e-300 + 1e-15 * scale * scale) || !std::isfinite(det)) ok_ = false;
+          inv[0] = e11 / det;
+          inv[1] = -e01 / det;
+          inv[2] = -e10 / det;
+          inv[3] = e00 / det;
         }
-        inverse_.push_back(std::move(inv));
       } else {
+        Eigen::MatrixXd sub(k, k);
+        for (Eigen::Index i = 0; i < k; ++i) {
+          for (Eigen::Index j = 0; j < k; ++j) sub(i, j) = entry(i, j);
+        }
         const Eigen::PartialPivLU<Eigen::MatrixXd> lu(sub);
-        Eigen::MatrixXd inv = lu.inverse();
+        const Eigen::MatrixXd sub_inverse = lu.inverse();
         const double rc = lu.rcond();
-        if (!(rc > 1e-300 && std::isfinite(rc)) || !inv.allFinite()) ok_ = false;
-        inverse_.push_back(std::move(inv));
+        if (!(rc > 1e-300 && std::isfinite(rc)) || !sub_inverse.allFinite()) ok_ = false;
+        RowMajorMap(inv, k, k) = sub_inverse;
       }
     }
   }
@@ -333,24 +422,29 @@ class KroneckerFactorization::ModeBlock {
   [[nodiscard]] const spectral::Circulant* circulant_inverse() const {
     return circulant_inverse_ ? &*circulant_inverse_ : nullptr;
   }
-  [[nodiscard]] const Components* components() const { return inverse_.empty() ? nullptr : component_; }
-  [[nodiscard]] const Eigen::MatrixXd& component_inverse(size_t c) const { return inverse_[c]; }
+  using RowMajorMap = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+  using ConstRowMajorMap = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+  /// Inverse of component c (|c| × |c|), when the block is split.
+  [[nodiscard]] ConstRowMajorMap component_inverse(size_t c) const {
+    const auto k = static_cast<Eigen::Index>((*component_)[c].size());
+    return {flat_.data() + offset_[c], k, k};
+  }
   /// The block's inverse applied to r (M × k), or its transpose.
   [[nodiscard]] Eigen::MatrixXd solve(const Eigen::MatrixXd& r, bool transposed) const {
     if (core_) {
       return transposed ? core_->apply(left_->transpose() * r, true) : Eigen::MatrixXd(*left_ * core_->apply(r, false));
     }
     if (circulant_inverse_) return circulant_inverse_->apply(r, transposed);
-    if (!inverse_.empty()) {
+    if (!flat_.empty()) {
       Eigen::MatrixXd out = Eigen::MatrixXd::Zero(r.rows(), r.cols());
       for (size_t c = 0; c < component_->size(); ++c) {  // no temporaries: most components are 1 × 1 or 2 × 2
         const auto& idx = (*component_)[c];
-        const Eigen::MatrixXd& inv = inverse_[c];
+        const double* inv = flat_.data() + offset_[c];
         const auto k = static_cast<Eigen::Index>(idx.size());
         for (Eigen::Index col = 0; col < r.cols(); ++col) {
           for (Eigen::Index i = 0; i < k; ++i) {
             double sum = 0.0;
-            for (Eigen::Index j = 0; j < k; ++j) sum += (transposed ? inv(j, i) : inv(i, j)) * r(idx[j], col);
+            for (Eigen::Index j = 0; j < k; ++j) sum += (transposed ? inv[j * k + i] : inv[i * k + j]) * r(idx[j], col);
             out(idx[i], col) = sum;
           }
         }
@@ -364,12 +458,12 @@ class KroneckerFactorization::ModeBlock {
   [[nodiscard]] Eigen::MatrixXd inverse() const {
     if (core_) return core_->left_multiply(*left_);
     if (circulant_inverse_) return circulant_inverse_->dense();
-    if (inverse_.empty()) return solve(Eigen::MatrixXd::Identity(m_, m_), false);
+    if (flat_.empty()) return solve(Eigen::MatrixXd::Identity(m_, m_), false);
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m_, m_);
     for (size_t c = 0; c < component_->size(); ++c) {
       const auto& idx = (*component_)[c];
       for (size_t i = 0; i < idx.size(); ++i) {
-        for (size_t j = 0; j < idx.size(); ++j) out(idx[i], idx[j]) = inverse_[c](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+        for (size_t j = 0; j < idx.size(); ++j) out(idx[i], idx[j]) = flat_[offset_[c] + i * idx.size() + j];
       }
     }
     return out;
@@ -380,7 +474,8 @@ class KroneckerFactorization::ModeBlock {
   Eigen::Index m_;
   bool sparse_ = false, ok_ = false;
   const Components* component_;
-  std::vector<Eigen::MatrixXd> inverse_;  // per component, when split
+  std::vector<double> flat_;     // component inverses, row-major, concatenated (split blocks only)
+  std::vector<size_t> offset_;   // start of component c in flat_
   const Eigen::MatrixXd* left_ = nullptr;  // factored: A_K⁻¹ (shared) ...
   std::optional<FourierCore> core_;        // ... and S, the block's inverse being A_K⁻¹ S
   std::optional<spectral::Circulant> circulant_inverse_;
@@ -541,7 +636,7 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
     for (size_t i = 0; i < blocks_.size(); ++i) {
       for (size_t comp = 0; comp < su.components.size(); ++comp) {
         const auto& idx = su.components[comp];
-        const Eigen::MatrixXd& inv = blocks_[i]->component_inverse(comp);
+        const auto inv = blocks_[i]->component_inverse(comp);
         for (int c = 0; c < nc; ++c) {
           for (int d = 0; d < nc; ++d) {
             const double w = weight(i, c, d);
@@ -575,6 +670,44 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
   const Eigen::MatrixXd z = lu_->solve(selection);
   for (Eigen::Index i = 0; i < nc * m; ++i) h.row(i) = z.row(contact_rows[static_cast<size_t>(i)]);
   return h;
+}
+
+bool KroneckerFactorization::fast_compliance_product() const {
+  return setup_->modal && setup_->fourier_weighting && setup_->fourier_weighting->shift;
+}
+
+Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd& v,
+                                                           const std::vector<int>& contact_dofs) const {
+  const Setup& su = *setup_;
+  const int nc = static_cast<int>(contact_dofs.size());
+  const Eigen::Index m = v.rows() / std::max(nc, 1);
+  Eigen::MatrixXd out(v.rows(), v.cols());
+  std::vector<Eigen::MatrixXd> vd(static_cast<size_t>(nc), Eigen::MatrixXd(m, v.cols()));
+  for (int d = 0; d < nc; ++d) {
+    for (Eigen::Index k = 0; k < m; ++k) vd[d].row(k) = v.row(k * nc + d);
+  }
+  if (nc == 1) {  // no reordering: x(k) is function k of the one contact
+    FourierCore core(m);
+    for (size_t i = 0; i < blocks_.size(); ++i) {
+      const double w = su.phi(contact_dofs[0], static_cast<Eigen::Index>(i));
+      core.add(w * w, *blocks_[i]->core());
+    }
+    return su.fourier_weighting->shift_inverse(core.apply(v, false));
+  }
+  for (int c = 0; c < nc; ++c) {
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(m, v.cols());  // Σ_d (Σ_i w_i S_i) v_d
+    for (int d = 0; d < nc; ++d) {
+      FourierCore core(m);
+      for (size_t i = 0; i < blocks_.size(); ++i) {
+        const auto mode = static_cast<Eigen::Index>(i);
+        core.add(su.phi(contact_dofs[c], mode) * su.phi(contact_dofs[d], mode), *blocks_[i]->core());
+      }
+      sum += core.apply(vd[d], false);
+    }
+    const Eigen::MatrixXd hc = su.fourier_weighting->shift_inverse(sum);
+    for (Eigen::Index k = 0; k < m; ++k) out.row(k * nc + c) = hc.row(k);
+  }
+  return out;
 }
 
 double KroneckerFactorization::norm1(const MechanicalSystem& system, const TimeOperators& ops) const {

@@ -42,6 +42,14 @@ class KroneckerFactorization {
   /// contact_dofs[c], whose unknown k sits at stacked row contact_rows[k·n_c + c].
   [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<int>& contact_dofs,
                                            const std::vector<Eigen::Index>& contact_rows) const;
+  /// True when compliance_product() beats a dense product with H: the modal path with the
+  /// factored Fourier-weighting blocks and a shift-structured A_K (wavelet trial functions on
+  /// Q = multiple-of-M samples).
+  [[nodiscard]] bool fast_compliance_product() const;
+  /// H v for v with n_c·M rows (contact ordering x(k·n_c + c)), H not used: for each contact c,
+  /// A_K⁻¹ Σ_d (Σ_i φ_i(c) φ_i(d) S_i) v_d, the sums in O(n M) per pair and A_K⁻¹ by one inverse
+  /// real DFT per column. Requires fast_compliance_product().
+  [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v, const std::vector<int>& contact_dofs) const;
   /// ‖G(f)‖₁: from the assembled G (sparse LU path) or from the Kronecker factors (modal path,
   /// computed on first use).
   [[nodiscard]] double norm1(const MechanicalSystem& system, const TimeOperators& ops) const;

@@ -15,6 +15,7 @@
 
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/circulant.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
 
@@ -231,9 +232,15 @@ struct WeightedResidual::Impl {
   Eigen::VectorXd b, a_lin, x_lin;
   // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 10 % of it is nonzero (the 1 × 1
   // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
+  // Otherwise, when every n_c × n_c block H_cd is circulant (wavelet Galerkin pairs and
+  // Haar:B-spline: sums of circulant modal inverses), the blocks by their FFTs: H N costs
+  // O(n_c² M² log M) instead of the O(n_c³ M³) dense product; with a Fourier weighting and a
+  // shift-structured A_K, H is applied without forming it (compliance_product: one inverse real
+  // DFT per column).
   Eigen::MatrixXd h;
   Eigen::SparseMatrix<double> h_sparse;
   bool h_is_sparse = false;
+  std::vector<spectral::Circulant> h_circulant;  // block (c, d) at c·n_c + d; empty if not circulant
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
@@ -337,17 +344,43 @@ struct WeightedResidual::Impl {
     h = g->compliance(contact_dofs(), contact_rows);
     const auto nonzeros = (h.array() != 0.0).count();
     h_is_sparse = static_cast<double>(nonzeros) <= 0.1 * static_cast<double>(h.size());
-    if (h_is_sparse) h_sparse = h.sparseView();
+    h_circulant.clear();
+    if (h_is_sparse) {
+      h_sparse = h.sparseView();
+      return;
+    }
+    std::vector<spectral::Circulant> blocks;
+    for (int c = 0; c < nc; ++c) {
+      for (int d = 0; d < nc; ++d) {
+        Eigen::MatrixXd block(m, m);
+        for (int l = 0; l < m; ++l) {
+          for (int k = 0; k < m; ++k) block(k, l) = h(k * nc + c, l * nc + d);
+        }
+        if (!spectral::Circulant::is_circulant(block)) return;
+        blocks.emplace_back(Eigen::VectorXd(block.col(0)));
+      }
+    }
+    h_circulant = std::move(blocks);
   }
 
-  // H v for a vector or a matrix v (n_c·M rows).
+  // H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
   [[nodiscard]] Eigen::MatrixXd compliance_times(const Eigen::MatrixXd& v) const {
     if (h_is_sparse) return h_sparse * v;
-    return h * v;
+    if (h_circulant.empty() && g->fast_compliance_product()) return g->compliance_product(v, contact_dofs());
+    if (h_circulant.empty()) return h * v;
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(v.rows(), v.cols());
+    Eigen::MatrixXd vd(m, v.cols());
+    for (int d = 0; d < nc; ++d) {
+      for (int k = 0; k < m; ++k) vd.row(k) = v.row(k * nc + d);
+      for (int c = 0; c < nc; ++c) {
+        const Eigen::MatrixXd y = h_circulant[static_cast<size_t>(c * nc + d)].apply(vd);
+        for (int k = 0; k < m; ++k) out.row(k * nc + c) += y.row(k);
+      }
+    }
+    return out;
   }
   [[nodiscard]] Eigen::VectorXd compliance_times(const Eigen::VectorXd& v) const {
-    if (h_is_sparse) return h_sparse * v;
-    return h * v;
+    return compliance_times(Eigen::MatrixXd(v)).col(0);
   }
 
   [[nodiscard]] std::vector<int> contact_dofs() const {

@@ -10,30 +10,36 @@
 #include "fftw_plans.hpp"
 
 namespace wbm::spectral {
-namespace {
 
-// r2c of a length-M vector: the ⌊M/2⌋ + 1 unnormalized bins.
-Eigen::VectorXcd forward_transform(const Eigen::VectorXd& v) {
-  const int m = static_cast<int>(v.size());
+Eigen::MatrixXcd real_dft_columns(const Eigen::MatrixXd& x) {
+  const auto m = static_cast<int>(x.rows());
+  if (m == 0) throw std::invalid_argument("real_dft_columns: x has no rows (M must be >= 1)");
+  Eigen::MatrixXcd out(m / 2 + 1, x.cols());
   detail::Buffers w(m);
-  for (int i = 0; i < m; ++i) w.real[i] = v(i);
-  fftw_execute_dft_r2c(detail::plans_for(m).forward, w.real, w.spectrum);
-  Eigen::VectorXcd out(m / 2 + 1);
-  for (int k = 0; k <= m / 2; ++k) out(k) = w.bin(k);
+  const auto& plans = detail::plans_for(m);
+  for (Eigen::Index j = 0; j < x.cols(); ++j) {
+    for (int i = 0; i < m; ++i) w.real[i] = x(i, j);
+    fftw_execute_dft_r2c(plans.forward, w.real, w.spectrum);
+    for (int k = 0; k <= m / 2; ++k) out(k, j) = w.bin(k);
+  }
   return out;
 }
 
-// Inverse of forward_transform (c2r, normalized by 1/M).
-Eigen::VectorXd backward_transform(const Eigen::VectorXcd& bins, int m) {
-  detail::Buffers w(m);
-  for (int k = 0; k <= m / 2; ++k) w.set_bin(k, bins(k));
-  fftw_execute_dft_c2r(detail::plans_for(m).backward, w.spectrum, w.real);
-  Eigen::VectorXd out(m);
-  for (int i = 0; i < m; ++i) out(i) = w.real[i] / m;
+Eigen::MatrixXd inverse_real_dft_columns(const Eigen::MatrixXcd& bins, int dimension) {
+  if (dimension < 1 || bins.rows() != dimension / 2 + 1) {
+    throw std::invalid_argument("inverse_real_dft_columns: " + std::to_string(bins.rows()) + " bins for M = " +
+                                std::to_string(dimension) + "; expected M/2 + 1 (M >= 1)");
+  }
+  Eigen::MatrixXd out(dimension, bins.cols());
+  detail::Buffers w(dimension);
+  const auto& plans = detail::plans_for(dimension);
+  for (Eigen::Index j = 0; j < bins.cols(); ++j) {
+    for (int k = 0; k <= dimension / 2; ++k) w.set_bin(k, bins(k, j));
+    fftw_execute_dft_c2r(plans.backward, w.spectrum, w.real);
+    for (int i = 0; i < dimension; ++i) out(i, j) = w.real[i] / dimension;
+  }
   return out;
 }
-
-}  // namespace
 
 Circulant::Circulant(Eigen::VectorXd column, Eigen::VectorXcd eigenvalues)
     : column_(std::move(column)), eigenvalues_(std::move(eigenvalues)) {}
@@ -41,7 +47,7 @@ Circulant::Circulant(Eigen::VectorXd column, Eigen::VectorXcd eigenvalues)
 Circulant::Circulant(const Eigen::VectorXd& first_column) : column_(first_column) {
   if (column_.size() == 0) throw std::invalid_argument("Circulant: the first column is empty (M must be >= 1)");
   if (!column_.allFinite()) throw std::invalid_argument("Circulant: the first column has a non-finite entry");
-  eigenvalues_ = forward_transform(column_);
+  eigenvalues_ = real_dft_columns(column_).col(0);
 }
 
 double Circulant::reciprocal_condition() const {
@@ -56,7 +62,7 @@ Circulant Circulant::inverse() const {
                             "): the matrix is singular");
   }
   const Eigen::VectorXcd inv = eigenvalues_.cwiseInverse();
-  return {backward_transform(inv, dimension()), inv};
+  return {inverse_real_dft_columns(inv, dimension()).col(0), inv};
 }
 
 Eigen::MatrixXd Circulant::apply(const Eigen::MatrixXd& v, bool transposed) const {

@@ -47,9 +47,13 @@ enum class OperatorRule { Automatic, Discrete };
 ///    and dense time operators, whose periodic wrap-around defeats the fill-reducing ordering).
 ///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (Eigen's generalized self-adjoint eigensolver),
 ///      G = (I ⊗ Φ⁻ᵀ) blockdiag_i(A + λ_i B) (I ⊗ Φ⁻¹),  A = f² A_M + f c_M A_C,  B = f c_K A_C + A_K,
-///    i.e. n independent M × M blocks, each factorized by sparse LU when it is sparse (Fourier
-///    2 × 2 blocks, banded circulant wavelet Galerkin operators) and by dense LU otherwise
-///    (discrete Petrov–Galerkin, O(M³)), and H = Σ_i φ_i(c) φ_i(c') (A + λ_i B)⁻¹.
+///    i.e. n independent M × M blocks, each inverted in the form its time operators allow:
+///    harmonic 1 × 1 and 2 × 2 components (Fourier:Fourier, O(M)), circulant by one FFT
+///    (spectral::Circulant; a wavelet basis with itself, exact or on Q = multiple-of-M samples,
+///    O(M log M)), the factored Fourier-weighting form A_K⁻¹ S_i with S_i in O(M) (wavelet trial,
+///    Fourier weighting, distributional form; A_K⁻¹ dense, once per set-up), sparse or dense LU
+///    otherwise; and H = Σ_i φ_i(c) φ_i(c') (A + λ_i B)⁻¹ in O(M²) per contact pair
+///    (docs/design.md, "Speed").
 ///    Throws std::invalid_argument if C is not Rayleigh.
 enum class LinearSolverPath { Automatic, SparseLU, Modal };
 

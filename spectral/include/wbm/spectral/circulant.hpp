@@ -10,6 +10,15 @@
 
 namespace wbm::spectral {
 
+/// Real DFT of every column of x (M rows): X(m, j) = Σ_k x(k, j) e^{−2πikm/M}, m = 0 … ⌊M/2⌋
+/// (FFTW r2c, unnormalized; the other bins are the conjugates). Throws std::invalid_argument if
+/// x has no rows.
+[[nodiscard]] Eigen::MatrixXcd real_dft_columns(const Eigen::MatrixXd& x);
+/// Inverse of real_dft_columns for M = `dimension` rows: x(k, j) = (1/M) Σ_{m=0}^{M−1} X(m, j)
+/// e^{2πikm/M} with X Hermitian (FFTW c2r; the imaginary parts of bins 0 and M/2 are ignored).
+/// Throws std::invalid_argument unless X has ⌊M/2⌋ + 1 rows.
+[[nodiscard]] Eigen::MatrixXd inverse_real_dft_columns(const Eigen::MatrixXcd& bins, int dimension);
+
 /// The M × M circulant C(i, k) = c((i − k) mod M) of its first column c (length M), stored by its
 /// eigenvalues ĉ_m = Σ_j c_j e^{−2πijm/M}, m = 0 … ⌊M/2⌋ (the others are their conjugates):
 ///   C v = c ⊛ v (circular convolution),   DFT(C v)_m = ĉ_m DFT(v)_m,
