@@ -7,16 +7,14 @@
 //    (k = 1e4 N/m, C = 1e-4 K, forcing 1 N at 0.8 of the first natural frequency on the free
 //    end), linear penalty stops (k_pen = 1e3 N/m) on the last n_c = 1, 4, 16, 64 masses, each at
 //    0.95 of its linear amplitude, so every stop is hit.
-// Each time is the median of 5 runs on one core (set-up included). Writes out/bench/scaling.csv
-// and out/bench/report.md (included in out/REPORT.md by reproduce/report.py). A solve that does
-// not converge is reported with its status; its time is still printed, marked.
-// Usage: bench_scaling [--out DIR] [--quick]  (--quick: M ≤ 64 and n_c ≤ 16, 3 runs; for CI).
+// Each time is the median of 5 runs on one core (set-up included). Writes, through
+// reproduce::Run, out/bench_scaling/scaling_dimension.csv, scaling_contacts.csv, meta.json and
+// report.md (included in out/REPORT.md by reproduce/report.py). A solve that does not converge
+// keeps its time, with its status in the status column and the report.
+// Usage: bench_scaling [--quick] [--out DIR]  (--quick: M ≤ 64 and n_c ≤ 16, 3 runs; for ctest).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -27,6 +25,8 @@
 #include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
+#include "combinations.hpp"
+#include "run.hpp"
 #include "scene.hpp"
 
 namespace {
@@ -112,132 +112,131 @@ wbm::solvers::MechanicalSystem chain(int n, double k) {
   return s;
 }
 
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
+// The rows of one series as a table: x, n_c·M, set-up and total time, Newton iterations; the
+// status column says "<SolveStatus> (<route>)".
+void write_series(wbm::reproduce::Run& run, const std::string& file, const std::string& x_name,
+                  const std::vector<std::vector<Row>>& series, bool with_index) {
+  std::vector<double> index, x, unknowns, setup, total, iterations;
+  std::vector<std::string> status;
+  for (size_t s = 0; s < series.size(); ++s) {
+    for (const auto& r : series[s]) {
+      index.push_back(static_cast<double>(s));
+      x.push_back(r.x);
+      unknowns.push_back(r.unknowns);
+      setup.push_back(r.setup_s);
+      total.push_back(r.total_s);
+      iterations.push_back(r.iterations);
+      status.push_back(r.status + " (" + r.path + ")");
+    }
+  }
+  const auto col = [](const std::vector<double>& v) { return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())).eval(); };
+  std::vector<std::string> header = {x_name, "contact_unknowns [-]", "setup_time [s]", "total_time [s]", "newton_iterations [-]"};
+  std::vector<Eigen::VectorXd> columns = {col(x), col(unknowns), col(setup), col(total), col(iterations)};
+  if (with_index) {
+    header.insert(header.begin(), "combination [-]");
+    columns.insert(columns.begin(), col(index));
+  }
+  run.table(file, header, columns, status);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::filesystem::path out = WBM_BENCH_OUT_DIR;
-  bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") {
-      quick = true;
-    } else if (a == "--out" && i + 1 < argc) {
-      out = argv[++i];
-    } else {
-      std::cerr << "bench_scaling: unknown argument '" << a << "'; usage: bench_scaling [--out DIR] [--quick]\n";
-      return 2;
-    }
-  }
-  const int repeats = quick ? 3 : 5;
-  std::vector<std::vector<Row>> series;
+  auto run = wbm::reproduce::Run::from_args(argc, argv, "bench_scaling");
+  return run.execute([](wbm::reproduce::Run& run) {
+    using wbm::reproduce::format;
+    const int repeats = run.quick() ? 3 : 5;
+    std::vector<std::vector<Row>> by_dimension;
 
-  // Time vs M, Case 1, every Table 2 pair.
-  const auto scene = wbm::reproduce::load_scene("jl14_case1");
-  const std::vector<std::pair<std::string, std::string>> pairs = {
-      {"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
-      {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
-  const std::vector<int> dims = quick ? std::vector<int>{16, 32, 64} : std::vector<int>{16, 32, 64, 128, 256, 512, 1024};
-  for (const auto& [trial, weighting] : pairs) {
-    std::vector<Row> rows;
-    for (int m : dims) {
-      Row r = time_solve(scene.system(), scene.harmonic_forcing(), scene.contact_points(), trial, weighting, m, repeats);
-      r.series = "M";
-      r.label = TimeBasis::from_name(trial, 2).name() + ":" + TimeBasis::from_name(weighting, 2).name();
-      r.x = m;
-      std::cerr << r.label << " M = " << m << ": " << r.total_s * 1e3 << " ms (" << r.status << ")\n";
-      rows.push_back(r);
+    // Time vs M, Case 1, every Table 2 pair.
+    const auto scene = wbm::reproduce::load_scene("jl14_case1");
+    const auto& pairs = wbm::reproduce::table2_combinations();
+    const std::vector<int> dims =
+        run.quick() ? std::vector<int>{16, 32, 64} : std::vector<int>{16, 32, 64, 128, 256, 512, 1024};
+    nlohmann::json combinations = nlohmann::json::array();
+    for (const auto& pair : pairs) {
+      combinations.push_back(pair.label());
+      std::vector<Row> rows;
+      for (int m : dims) {
+        Row r = time_solve(scene.system(), scene.harmonic_forcing(), scene.contact_points(), pair.trial, pair.weighting,
+                           m, repeats);
+        r.series = "M";
+        r.label = pair.label();
+        r.x = m;
+        std::cerr << r.label << " M = " << m << ": " << r.total_s * 1e3 << " ms (" << r.status << ")\n";
+        rows.push_back(r);
+      }
+      by_dimension.push_back(rows);
     }
-    series.push_back(rows);
-  }
 
-  // Time vs n_c on the chain.
-  {
-    const int n = 64, m = 16;
+    // Time vs n_c on the chain.
+    std::vector<Row> chain_rows;
+    const int n = 64, m_chain = 16;
     const double k = 1e4;
     const auto system = chain(n, k);
-    const double f1 = std::sqrt(k) * 2.0 * std::sin(std::numbers::pi / (2.0 * (2 * n + 1))) / (2.0 * std::numbers::pi);  // fixed-free chain
+    const double f1 = std::sqrt(k) * 2.0 * std::sin(std::numbers::pi / (2.0 * (2 * n + 1))) / (2.0 * std::numbers::pi);
     const wbm::solvers::HarmonicForcing forcing{n - 1, 1.0, 0.8 * f1};
     const Eigen::VectorXcd lin = wbm::solvers::frequency_response(system, forcing);
-    std::vector<Row> rows;
-    const std::vector<int> counts = quick ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 4, 16, 64};
+    const std::vector<int> counts = run.quick() ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 4, 16, 64};
     for (int nc : counts) {
       std::vector<wbm::solvers::ContactPoint> contacts;
       for (int c = n - nc; c < n; ++c) {
         contacts.push_back({c, std::make_shared<wbm::contact::LinearPenalty>(
                                    wbm::contact::LinearPenaltyParameters{1e3, 0.95 * std::abs(lin(c))})});
       }
-      Row r = time_solve(system, forcing, contacts, "fourier", "fourier", m, repeats);
+      Row r = time_solve(system, forcing, contacts, "fourier", "fourier", m_chain, repeats);
       r.series = "contacts";
       r.label = "Fourier:Fourier, chain of 64, M = 16";
       r.x = nc;
       std::cerr << "chain n_c = " << nc << ": " << r.total_s * 1e3 << " ms (" << r.status << ")\n";
-      rows.push_back(r);
+      chain_rows.push_back(r);
     }
-    series.push_back(rows);
-  }
 
-  std::filesystem::create_directories(out);
-  {
-    std::ofstream csv(out / "scaling.csv.tmp");
-    csv << "series,combination,x,contact_unknowns,setup_s,total_s,newton_iterations,path,converged,status\n";
-    for (const auto& rows : series) {
+    write_series(run, "scaling_dimension.csv", "M [-]", by_dimension, true);
+    write_series(run, "scaling_contacts.csv", "contacts [-]", {chain_rows}, false);
+    run.meta({{"combinations", combinations},
+              {"repeats", repeats},
+              {"time", "median wall time of construction + solve, one core"},
+              {"chain", {{"masses", n}, {"spring_N_per_m", k}, {"damping", "C = 1e-4 K"}, {"forcing_N", 1.0},
+                         {"frequency_hz", forcing.frequency_hz}, {"penalty_N_per_m", 1e3}, {"gap", "0.95 x linear amplitude"},
+                         {"dimension", m_chain}}}});
+
+    std::ostringstream md;
+    md << "## Cost scaling of the weighted-residual solve (bench/bench_scaling.cpp)\n\n"
+       << "Files: `out/bench_scaling/scaling_dimension.csv`, `scaling_contacts.csv`, `meta.json`. Median of "
+       << repeats << " full solves on one core (construction with set-up, Newton, recovery). The exponent p fits "
+          "t ≈ c·x^p on the last four points (least squares in log–log).\n\n"
+       << "### Time vs M (Case 1, distributional, Q = max(256, 2M)), ms\n\n| combination |";
+    for (int m : dims) md << " M = " << m << " |";
+    md << " p (M) | set-up share at M = " << dims.back() << " |\n|---|";
+    for (size_t i = 0; i < dims.size(); ++i) md << "---|";
+    md << "---|---|\n";
+    std::ostringstream notes;  // solves that did not go by direct Newton, listed under the table
+    for (const auto& rows : by_dimension) {
+      md << "| " << rows.front().label << " |";
+      for (const auto& r : rows) md << " " << format("%.3g", r.total_s * 1e3) << (r.converged ? "" : " (" + r.status + ")") << " |";
+      md << " " << format("%.2f", fitted_exponent(rows, 4)) << " | "
+         << format("%.0f %%", 100.0 * rows.back().setup_s / rows.back().total_s) << " |\n";
       for (const auto& r : rows) {
-        csv << r.series << "," << r.label << "," << r.x << "," << r.unknowns << "," << fmt("%.6e", r.setup_s) << ","
-            << fmt("%.6e", r.total_s) << "," << r.iterations << "," << r.path << "," << (r.converged ? 1 : 0) << ","
-            << r.status << "\n";
+        if (r.path != "direct Newton") {
+          notes << "\n" << r.label << " at M = " << r.x << " went by the " << r.path << " (" << r.iterations
+                << " Newton iterations in all).\n";
+        }
       }
     }
-  }
-  std::filesystem::rename(out / "scaling.csv.tmp", out / "scaling.csv");
-
-  std::ostringstream md;
-  md << "## Cost scaling of the weighted-residual solve (bench/bench_scaling.cpp)\n\n"
-     << "Files: `out/bench/scaling.csv`. Median of " << repeats
-     << " full solves on one core (set-up, Newton, recovery). The exponent p fits t ≈ c·x^p on the last four "
-        "points (least squares in log–log).\n\n"
-     << "### Time vs M (Case 1, distributional, Q = max(256, 2M)), ms\n\n| combination |";
-  for (int m : dims) md << " M = " << m << " |";
-  md << " p (M) | set-up share at M = " << dims.back() << " |\n|---|";
-  for (size_t i = 0; i < dims.size(); ++i) md << "---|";
-  md << "---|---|\n";
-  std::ostringstream notes;  // solves that did not go by direct Newton, listed under the table
-  for (size_t s = 0; s + 1 < series.size(); ++s) {
-    const auto& rows = series[s];
-    md << "| " << rows.front().label << " |";
-    for (const auto& r : rows) md << " " << fmt("%.3g", r.total_s * 1e3) << (r.converged ? "" : " (" + r.status + ")") << " |";
-    md << " " << fmt("%.2f", fitted_exponent(rows, 4)) << " | " << fmt("%.0f %%", 100.0 * rows.back().setup_s / rows.back().total_s)
-       << " |\n";
-    for (const auto& r : rows) {
-      if (r.path != "direct Newton") {
-        notes << "\n" << r.label << " at M = " << r.x << " went by the " << r.path << " (" << r.iterations
-              << " Newton iterations in all).\n";
-      }
+    md << notes.str();
+    md << "\n### Time vs contact DOFs (" << chain_rows.front().label
+       << ")\n\n| n_c | n_c·M | time, ms | Newton iterations | ms per iteration | route | status |\n|---|---|---|---|---|---|---|\n";
+    std::vector<Row> per_iteration = chain_rows;
+    for (auto& r : per_iteration) r.total_s /= std::max(r.iterations, 1);
+    for (size_t i = 0; i < chain_rows.size(); ++i) {
+      const auto& r = chain_rows[i];
+      md << "| " << r.x << " | " << r.unknowns << " | " << format("%.3g", r.total_s * 1e3) << " | " << r.iterations << " | "
+         << format("%.3g", per_iteration[i].total_s * 1e3) << " | " << r.path << " | " << r.status << " |\n";
     }
-  }
-  md << notes.str();
-  const auto& chain_rows = series.back();
-  md << "\n### Time vs contact DOFs (" << chain_rows.front().label
-     << ")\n\n| n_c | n_c·M | time, ms | Newton iterations | ms per iteration | route | status |\n|---|---|---|---|---|---|---|\n";
-  std::vector<Row> per_iteration = chain_rows;
-  for (auto& r : per_iteration) r.total_s /= std::max(r.iterations, 1);
-  for (size_t i = 0; i < chain_rows.size(); ++i) {
-    const auto& r = chain_rows[i];
-    md << "| " << r.x << " | " << r.unknowns << " | " << fmt("%.3g", r.total_s * 1e3) << " | " << r.iterations << " | "
-       << fmt("%.3g", per_iteration[i].total_s * 1e3) << " | " << r.path << " | " << r.status << " |\n";
-  }
-  md << "\nFitted exponent in n_c: " << fmt("%.2f", fitted_exponent(chain_rows, 4)) << " for the solve, "
-     << fmt("%.2f", fitted_exponent(per_iteration, 4)) << " per Newton iteration.\n";
-  {
-    std::ofstream f(out / "report.md.tmp");
-    f << md.str();
-  }
-  std::filesystem::rename(out / "report.md.tmp", out / "report.md");
-  std::cout << md.str();
-  return 0;
+    md << "\nFitted exponent in n_c: " << format("%.2f", fitted_exponent(chain_rows, 4)) << " for the solve, "
+       << format("%.2f", fitted_exponent(per_iteration, 4)) << " per Newton iteration.\n\n";
+    run.report(md.str());
+    std::cout << md.str();
+  });
 }
