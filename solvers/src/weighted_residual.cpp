@@ -230,7 +230,7 @@ struct WeightedResidual::Impl {
   bool factorized = false;
 
   Eigen::VectorXd b, a_lin, x_lin;
-  // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 10 % of it is nonzero (the 1 × 1
+  // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 25 % of it is nonzero (the 1 × 1
   // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
   // Otherwise, when every n_c × n_c block H_cd is circulant (wavelet Galerkin pairs and
   // Haar:B-spline: sums of circulant modal inverses), the blocks by their FFTs: H N costs
@@ -343,7 +343,7 @@ struct WeightedResidual::Impl {
   void set_compliance() {
     h = g->compliance(contact_dofs(), contact_rows);
     const auto nonzeros = (h.array() != 0.0).count();
-    h_is_sparse = static_cast<double>(nonzeros) <= 0.1 * static_cast<double>(h.size());
+    h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
     h_circulant.clear();
     if (h_is_sparse) {
       h_sparse = h.sparseView();
