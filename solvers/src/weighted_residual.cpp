@@ -446,6 +446,7 @@ struct WeightedResidual::Impl {
   // Fourier weighting functions p_j (FourierBasis ordering) and the samples v (Q × M).
   [[nodiscard]] Eigen::MatrixXd fourier_weighting_derivative(const Eigen::MatrixXd& base, int dw, const SparseRows& v) const {
     if (dw == 0) return base;
+    if (dw > 2) throw std::logic_error("fourier_weighting_derivative: order " + std::to_string(dw) + " > 2");
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, base.cols());
     const bool top = m % 2 == 0;
     const int paired = top ? m / 2 - 1 : m / 2;
@@ -470,7 +471,6 @@ struct WeightedResidual::Impl {
         out.row(m - 1) = -omega * omega * base.row(m - 1);
       }
     }
-    if (dw > 2) throw std::logic_error("fourier_weighting_derivative: order > 2");
     return out;
   }
 
