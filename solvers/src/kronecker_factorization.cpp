@@ -14,6 +14,7 @@
 #include <unsupported/Eigen/KroneckerProduct>
 
 #include <wbm/spectral/circulant.hpp>
+#include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 
 namespace wbm::solvers::detail {
@@ -203,11 +204,8 @@ struct FourierWeighting {
     for (Eigen::Index j = 1; j < m - 1; ++j) fw.omega(j) = 2.0 * std::numbers::pi * static_cast<double>((j + 1) / 2);
     fw.omega(m - 1) = std::numbers::pi * static_cast<double>(m);
     const Eigen::MatrixXd d2ak = -(fw.omega.array().square().matrix().asDiagonal() * ops.stiffness);
-    Eigen::MatrixXd d1ak = Eigen::MatrixXd::Zero(m, m);  // D₁ A_K: row 2k−1 (cos) ← −ω sin row, row 2k ← ω cos row
-    for (Eigen::Index j = 1; j + 1 < m; j += 2) {
-      d1ak.row(j) = -fw.omega(j) * ops.stiffness.row(j + 1);
-      d1ak.row(j + 1) = fw.omega(j) * ops.stiffness.row(j);
-    }
+    // D₁ A_K with D₁ the coefficient-space derivative (its top row is zero; checked rows only).
+    const Eigen::MatrixXd d1ak = spectral::FourierBasis(static_cast<int>(m)).derivative_matrix() * ops.stiffness;
     const double sm = ops.mass.cwiseAbs().maxCoeff(), sc = ops.damping.cwiseAbs().maxCoeff();
     if (!((ops.mass - d2ak).cwiseAbs().maxCoeff() <= 1e-10 * sm)) return std::nullopt;
     if (!((ops.damping + d1ak).topRows(m - 1).cwiseAbs().maxCoeff() <= 1e-10 * sc)) return std::nullopt;
@@ -495,6 +493,16 @@ struct KroneckerFactorization::Setup {
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
 };
 
+// The blocks H_cd (n_c × n_c, pair (c, d) at c·n_c + d) in a structured form, kept by
+// compliance() for compliance_product(): circulant, or the core sums Σ_i w_i S_i whose product
+// with the shift-structured A_K⁻¹ is H_cd.
+struct KroneckerFactorization::ComplianceStructure {
+  int contacts = 0;
+  std::vector<spectral::Circulant> circulant;
+  std::vector<FourierCore> cores;
+  const FourierWeighting* fourier_weighting = nullptr;  // owned by Setup
+};
+
 KroneckerFactorization::KroneckerFactorization(std::shared_ptr<const Setup> setup) : setup_(std::move(setup)) {}
 
 KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops,
@@ -538,6 +546,7 @@ bool KroneckerFactorization::factorize(const MechanicalSystem& system, const Tim
   const Setup& su = *setup_;
   frequency_hz_ = fr;
   norm1_ = -1.0;
+  compliance_structure_.reset();
   factorized_ = false;
   blocks_.clear();
   if (su.modal) {
@@ -597,7 +606,7 @@ Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool tra
 }
 
 Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& contact_dofs,
-                                                   const std::vector<Eigen::Index>& contact_rows) const {
+                                                   const std::vector<Eigen::Index>& contact_rows) {
   const int nc = static_cast<int>(contact_dofs.size());
   const auto m = static_cast<Eigen::Index>(contact_rows.size()) / std::max(nc, 1);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
@@ -612,13 +621,20 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
     const auto mode = static_cast<Eigen::Index>(i);
     return su.phi(contact_dofs[c], mode) * su.phi(contact_dofs[d], mode);
   };
+  auto structure = std::make_shared<ComplianceStructure>();
+  structure->contacts = nc;
   if (su.modal && su.fourier_weighting) {  // A_K⁻¹ (Σ_i w_i S_i): the sum in O(nM), the product in O(M²)
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
         FourierCore sum(m);
         for (size_t i = 0; i < blocks_.size(); ++i) sum.add(weight(i, c, d), *blocks_[i]->core());
         scatter(c, d, sum.left_multiply(su.fourier_weighting->ak_inv));
+        structure->cores.push_back(std::move(sum));
       }
+    }
+    if (su.fourier_weighting->shift) {
+      structure->fourier_weighting = &*su.fourier_weighting;
+      compliance_structure_ = std::move(structure);
     }
     return h;
   }
@@ -627,9 +643,11 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
       for (int d = 0; d < nc; ++d) {
         Eigen::VectorXd column = Eigen::VectorXd::Zero(m);
         for (size_t i = 0; i < blocks_.size(); ++i) column += weight(i, c, d) * blocks_[i]->circulant_inverse()->first_column();
-        scatter(c, d, spectral::Circulant(column).dense());
+        structure->circulant.emplace_back(column);
+        scatter(c, d, structure->circulant.back().dense());
       }
     }
+    compliance_structure_ = std::move(structure);
     return h;
   }
   if (su.modal && !su.components.empty()) {  // only the components' entries are nonzero
@@ -672,39 +690,28 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
   return h;
 }
 
-bool KroneckerFactorization::fast_compliance_product() const {
-  return setup_->modal && setup_->fourier_weighting && setup_->fourier_weighting->shift;
-}
-
-Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd& v,
-                                                           const std::vector<int>& contact_dofs) const {
-  const Setup& su = *setup_;
-  const int nc = static_cast<int>(contact_dofs.size());
+Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd& v) const {
+  const ComplianceStructure& cs = *compliance_structure_;
+  const int nc = cs.contacts;
   const Eigen::Index m = v.rows() / std::max(nc, 1);
+  // Rows of contact d (k·n_c + d), M × columns; with one contact, v itself.
+  const auto rows_of = [&](int d) {
+    if (nc == 1) return Eigen::MatrixXd(v);
+    Eigen::MatrixXd vd(m, v.cols());
+    for (Eigen::Index k = 0; k < m; ++k) vd.row(k) = v.row(k * nc + d);
+    return vd;
+  };
+  std::vector<Eigen::MatrixXd> vd;
+  for (int d = 0; d < nc; ++d) vd.push_back(rows_of(d));
   Eigen::MatrixXd out(v.rows(), v.cols());
-  std::vector<Eigen::MatrixXd> vd(static_cast<size_t>(nc), Eigen::MatrixXd(m, v.cols()));
-  for (int d = 0; d < nc; ++d) {
-    for (Eigen::Index k = 0; k < m; ++k) vd[d].row(k) = v.row(k * nc + d);
-  }
-  if (nc == 1) {  // no reordering: x(k) is function k of the one contact
-    FourierCore core(m);
-    for (size_t i = 0; i < blocks_.size(); ++i) {
-      const double w = su.phi(contact_dofs[0], static_cast<Eigen::Index>(i));
-      core.add(w * w, *blocks_[i]->core());
-    }
-    return su.fourier_weighting->shift_inverse(core.apply(v, false));
-  }
   for (int c = 0; c < nc; ++c) {
-    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(m, v.cols());  // Σ_d (Σ_i w_i S_i) v_d
+    Eigen::MatrixXd hc = Eigen::MatrixXd::Zero(m, v.cols());
     for (int d = 0; d < nc; ++d) {
-      FourierCore core(m);
-      for (size_t i = 0; i < blocks_.size(); ++i) {
-        const auto mode = static_cast<Eigen::Index>(i);
-        core.add(su.phi(contact_dofs[c], mode) * su.phi(contact_dofs[d], mode), *blocks_[i]->core());
-      }
-      sum += core.apply(vd[d], false);
+      const auto pair = static_cast<size_t>(c * nc + d);
+      hc += cs.circulant.empty() ? cs.cores[pair].apply(vd[d], false) : cs.circulant[pair].apply(vd[d]);
     }
-    const Eigen::MatrixXd hc = su.fourier_weighting->shift_inverse(sum);
+    if (cs.circulant.empty()) hc = cs.fourier_weighting->shift_inverse(hc);  // A_K⁻¹ Σ_d S_cd v_d
+    if (nc == 1) return hc;
     for (Eigen::Index k = 0; k < m; ++k) out.row(k * nc + c) = hc.row(k);
   }
   return out;

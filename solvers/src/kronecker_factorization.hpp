@@ -39,17 +39,19 @@ class KroneckerFactorization {
   /// G⁻¹ v, or G⁻ᵀ v, for a stacked v of length n·M. Requires factorized().
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
   /// H = P G⁻¹ Pᵀ, n_c·M square in the contact ordering x(k·n_c + c): contact c at DOF
-  /// contact_dofs[c], whose unknown k sits at stacked row contact_rows[k·n_c + c].
+  /// contact_dofs[c], whose unknown k sits at stacked row contact_rows[k·n_c + c]. Also keeps,
+  /// until the next factorize(), the per-pair blocks H_cd in the form compliance_product() uses:
+  /// circulant (wavelet Galerkin pairs, Haar:B-spline) or A_K⁻¹ Σ_i w_i S_i with a
+  /// shift-structured A_K (wavelet trial, Fourier weighting). Requires factorized().
   [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<int>& contact_dofs,
-                                           const std::vector<Eigen::Index>& contact_rows) const;
-  /// True when compliance_product() beats a dense product with H: the modal path with the
-  /// factored Fourier-weighting blocks and a shift-structured A_K (wavelet trial functions on
-  /// Q = multiple-of-M samples).
-  [[nodiscard]] bool fast_compliance_product() const;
-  /// H v for v with n_c·M rows (contact ordering x(k·n_c + c)), H not used: for each contact c,
-  /// A_K⁻¹ Σ_d (Σ_i φ_i(c) φ_i(d) S_i) v_d, the sums in O(n M) per pair and A_K⁻¹ by one inverse
-  /// real DFT per column. Requires fast_compliance_product().
-  [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v, const std::vector<int>& contact_dofs) const;
+                                           const std::vector<Eigen::Index>& contact_rows);
+  /// True when the last compliance() kept a structured form: compliance_product() then costs
+  /// O(n_c² · columns · M log M) instead of the O(n_c² M² · columns) dense product with H.
+  [[nodiscard]] bool fast_compliance_product() const { return compliance_structure_ != nullptr; }
+  /// H v for v with n_c·M rows (contact ordering), by the blocks kept by compliance(): each
+  /// circulant H_cd by FFT, or A_K⁻¹ (Σ_d S_cd v_d) by one inverse real DFT per column.
+  /// Requires fast_compliance_product().
+  [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v) const;
   /// ‖G(f)‖₁: from the assembled G (sparse LU path) or from the Kronecker factors (modal path,
   /// computed on first use).
   [[nodiscard]] double norm1(const MechanicalSystem& system, const TimeOperators& ops) const;
@@ -57,6 +59,7 @@ class KroneckerFactorization {
  private:
   struct Setup;
   class ModeBlock;
+  struct ComplianceStructure;
   explicit KroneckerFactorization(std::shared_ptr<const Setup> setup);
   std::shared_ptr<const Setup> setup_;
   double frequency_hz_ = 0.0;
@@ -66,6 +69,7 @@ class KroneckerFactorization {
   std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>> lu_;
   std::vector<std::shared_ptr<const ModeBlock>> blocks_;
   mutable double norm1_ = -1.0;  // < 0: not computed yet
+  std::shared_ptr<const ComplianceStructure> compliance_structure_;  // set by compliance(), reset by factorize()
 };
 
 }  // namespace wbm::solvers::detail

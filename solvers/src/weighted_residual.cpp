@@ -15,7 +15,6 @@
 
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
-#include <wbm/spectral/circulant.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
 
@@ -117,12 +116,14 @@ struct SampledBasis {
   std::shared_ptr<const spectral::Aft> aft;  // Fourier
   SparseRows values;                          // wavelets (Q × M)
   Eigen::RowVectorXd top_derivative;          // Fourier, d = 1, M = 2^J: −πM sin πMτ_q (outside the span)
+  Eigen::SparseMatrix<double> derivative_matrix;  // Fourier, d = 1: coefficients of the derivative
   int q = 0, m = 0, derivative = 0;
 
   SampledBasis(const TimeBasis& basis, const Eigen::VectorXd& tau, int d, std::shared_ptr<const spectral::Aft> fft)
       : q(static_cast<int>(tau.size())), m(basis.dimension()), derivative(d) {
     if (basis.is_fourier()) {
       aft = std::move(fft);
+      if (d == 1) derivative_matrix = spectral::FourierBasis(m).derivative_matrix();
       if (d == 1 && m % 2 == 0) {
         top_derivative.resize(q);
         for (int r = 0; r < q; ++r) top_derivative(r) = -std::numbers::pi * m * std::sin(std::numbers::pi * m * tau(r));
@@ -136,14 +137,9 @@ struct SampledBasis {
   [[nodiscard]] Eigen::MatrixXd to_time(const Eigen::MatrixXd& x) const {
     if (!aft) return (values * x.transpose()).transpose();
     if (derivative == 0) return aft->to_time(x);
-    // d/dτ (c cos ωτ + s sin ωτ) = ω s cos ωτ − ω c sin ωτ: the derivative's coefficients, and
-    // the top function's derivative −πM sin πMτ (not in the basis) added on the samples.
-    Eigen::MatrixXd dx = Eigen::MatrixXd::Zero(x.rows(), m);
-    for (int j = 1; j + 1 < m; j += 2) {  // (cos, sin) pairs; the top function (M even) is last
-      const double omega = 2.0 * std::numbers::pi * ((j + 1) / 2);
-      dx.col(j) = omega * x.col(j + 1);
-      dx.col(j + 1) = -omega * x.col(j);
-    }
+    // The derivative's coefficients x D (spectral::FourierBasis::derivative_matrix), and the top
+    // function's derivative −πM sin πMτ (not in the basis) added on the samples.
+    const Eigen::MatrixXd dx = x * derivative_matrix;
     Eigen::MatrixXd out = aft->to_time(dx);
     if (top_derivative.size() > 0) out += x.col(m - 1) * top_derivative;
     return out;
@@ -232,15 +228,12 @@ struct WeightedResidual::Impl {
   Eigen::VectorXd b, a_lin, x_lin;
   // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 25 % of it is nonzero (the 1 × 1
   // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
-  // Otherwise, when every n_c × n_c block H_cd is circulant (wavelet Galerkin pairs and
-  // Haar:B-spline: sums of circulant modal inverses), the blocks by their FFTs: H N costs
-  // O(n_c² M² log M) instead of the O(n_c³ M³) dense product; with a Fourier weighting and a
-  // shift-structured A_K, H is applied without forming it (compliance_product: one inverse real
-  // DFT per column).
+  // Otherwise the structured blocks the factorization kept (circulant, or A_K⁻¹ Σ S with a
+  // shift-structured A_K: KroneckerFactorization::compliance_product) when there are any, else
+  // the dense product.
   Eigen::MatrixXd h;
   Eigen::SparseMatrix<double> h_sparse;
   bool h_is_sparse = false;
-  std::vector<spectral::Circulant> h_circulant;  // block (c, d) at c·n_c + d; empty if not circulant
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
@@ -344,40 +337,14 @@ struct WeightedResidual::Impl {
     h = g->compliance(contact_dofs(), contact_rows);
     const auto nonzeros = (h.array() != 0.0).count();
     h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
-    h_circulant.clear();
-    if (h_is_sparse) {
-      h_sparse = h.sparseView();
-      return;
-    }
-    std::vector<spectral::Circulant> blocks;
-    for (int c = 0; c < nc; ++c) {
-      for (int d = 0; d < nc; ++d) {
-        Eigen::MatrixXd block(m, m);
-        for (int l = 0; l < m; ++l) {
-          for (int k = 0; k < m; ++k) block(k, l) = h(k * nc + c, l * nc + d);
-        }
-        if (!spectral::Circulant::is_circulant(block)) return;
-        blocks.emplace_back(Eigen::VectorXd(block.col(0)));
-      }
-    }
-    h_circulant = std::move(blocks);
+    if (h_is_sparse) h_sparse = h.sparseView();
   }
 
   // H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
   [[nodiscard]] Eigen::MatrixXd compliance_times(const Eigen::MatrixXd& v) const {
     if (h_is_sparse) return h_sparse * v;
-    if (h_circulant.empty() && g->fast_compliance_product()) return g->compliance_product(v, contact_dofs());
-    if (h_circulant.empty()) return h * v;
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(v.rows(), v.cols());
-    Eigen::MatrixXd vd(m, v.cols());
-    for (int d = 0; d < nc; ++d) {
-      for (int k = 0; k < m; ++k) vd.row(k) = v.row(k * nc + d);
-      for (int c = 0; c < nc; ++c) {
-        const Eigen::MatrixXd y = h_circulant[static_cast<size_t>(c * nc + d)].apply(vd);
-        for (int k = 0; k < m; ++k) out.row(k * nc + c) += y.row(k);
-      }
-    }
-    return out;
+    if (g->fast_compliance_product()) return g->compliance_product(v);
+    return h * v;
   }
   [[nodiscard]] Eigen::VectorXd compliance_times(const Eigen::VectorXd& v) const {
     return compliance_times(Eigen::MatrixXd(v)).col(0);
@@ -447,20 +414,11 @@ struct WeightedResidual::Impl {
   [[nodiscard]] Eigen::MatrixXd fourier_weighting_derivative(const Eigen::MatrixXd& base, int dw, const SparseRows& v) const {
     if (dw == 0) return base;
     if (dw > 2) throw std::logic_error("fourier_weighting_derivative: order " + std::to_string(dw) + " > 2");
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, base.cols());
+    // ṗ_j = Σ_l D(j, l) p_l (spectral::FourierBasis::derivative_matrix) for every row but the top.
+    const Eigen::SparseMatrix<double> d = spectral::FourierBasis(m).derivative_matrix();
+    Eigen::MatrixXd out = d * base;
+    if (dw == 2) out = d * out;
     const bool top = m % 2 == 0;
-    const int paired = top ? m / 2 - 1 : m / 2;
-    for (int h = 1; h <= paired; ++h) {
-      const double omega = 2.0 * std::numbers::pi * h;
-      const int c = 2 * h - 1, s_row = 2 * h;
-      if (dw == 1) {
-        out.row(c) = -omega * base.row(s_row);
-        out.row(s_row) = omega * base.row(c);
-      } else {
-        out.row(c) = -omega * omega * base.row(c);
-        out.row(s_row) = -omega * omega * base.row(s_row);
-      }
-    }
     if (top) {
       const double omega = std::numbers::pi * m;
       if (dw == 1) {

@@ -71,20 +71,9 @@ Eigen::MatrixXd Circulant::apply(const Eigen::MatrixXd& v, bool transposed) cons
     throw std::invalid_argument("Circulant::apply: v has " + std::to_string(v.rows()) + " rows, expected M = " +
                                 std::to_string(m));
   }
-  Eigen::MatrixXd out(m, v.cols());
-  detail::Buffers w(m);
-  const auto& plans = detail::plans_for(m);
-  for (Eigen::Index c = 0; c < v.cols(); ++c) {
-    for (int i = 0; i < m; ++i) w.real[i] = v(i, c);
-    fftw_execute_dft_r2c(plans.forward, w.real, w.spectrum);
-    for (int k = 0; k <= m / 2; ++k) {
-      const std::complex<double> e = transposed ? std::conj(eigenvalues_(k)) : eigenvalues_(k);
-      w.set_bin(k, w.bin(k) * e);
-    }
-    fftw_execute_dft_c2r(plans.backward, w.spectrum, w.real);
-    for (int i = 0; i < m; ++i) out(i, c) = w.real[i] / m;
-  }
-  return out;
+  Eigen::MatrixXcd bins = real_dft_columns(v);  // DFT(C v)_m = ĉ_m DFT(v)_m
+  for (int k = 0; k <= m / 2; ++k) bins.row(k) *= transposed ? std::conj(eigenvalues_(k)) : eigenvalues_(k);
+  return inverse_real_dft_columns(bins, m);
 }
 
 Eigen::MatrixXd Circulant::dense() const {

@@ -60,6 +60,19 @@ Eigen::MatrixXd FourierBasis::values(const Eigen::VectorXd& tau, int derivative)
   return v;
 }
 
+Eigen::SparseMatrix<double> FourierBasis::derivative_matrix() const {
+  std::vector<Eigen::Triplet<double>> t;
+  const int paired = has_top_function() ? dimension_ / 2 - 1 : dimension_ / 2;  // harmonics with a sine partner
+  for (int h = 1; h <= paired; ++h) {
+    const double w = 2.0 * std::numbers::pi * h;
+    t.emplace_back(2 * h - 1, 2 * h, -w);  // (cos ωτ)' = −ω sin ωτ
+    t.emplace_back(2 * h, 2 * h - 1, w);   // (sin ωτ)' = ω cos ωτ
+  }
+  Eigen::SparseMatrix<double> d(dimension_, dimension_);
+  d.setFromTriplets(t.begin(), t.end());
+  return d;
+}
+
 Eigen::SparseMatrix<double> FourierBasis::galerkin_operator(int derivative) const {
   if (derivative < 0 || derivative > 2) {
     throw std::invalid_argument("FourierBasis::galerkin_operator: derivative order " +

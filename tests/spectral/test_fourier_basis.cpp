@@ -92,6 +92,24 @@ TEST(FourierBasis, DerivativeOperatorsHaveIntegrationByPartsSymmetry) {
   EXPECT_GT(a1.cwiseAbs().maxCoeff(), 1.0);  // not trivially zero
 }
 
+// The coefficient-space derivative against the analytic derivatives of the functions:
+// V₁ = V₀ Dᵀ column by column, except the top function of M = 2^J, whose row of D is zero.
+TEST(FourierBasis, DerivativeMatrixMapsEveryFunctionButTheTopOne) {
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(37, 0.01, 0.97);
+  for (int m : {8, 9, 16}) {
+    const wbm::spectral::FourierBasis basis(m);
+    const Eigen::MatrixXd d(basis.derivative_matrix());
+    const Eigen::MatrixXd predicted = basis.values(tau, 0) * d.transpose();
+    const Eigen::MatrixXd exact = basis.values(tau, 1);
+    const int checked = basis.has_top_function() ? m - 1 : m;
+    EXPECT_LT((predicted.leftCols(checked) - exact.leftCols(checked)).cwiseAbs().maxCoeff(), 1e-12 * exact.cwiseAbs().maxCoeff()) << m;
+    if (basis.has_top_function()) {
+      EXPECT_EQ(d.row(m - 1).norm(), 0.0);
+      EXPECT_GT(exact.col(m - 1).cwiseAbs().maxCoeff(), 1.0);  // −πM sin πMτ: outside the span
+    }
+  }
+}
+
 TEST(FourierBasis, RejectsDimensionsThatAreNeitherPowersOfTwoNorOdd) {
   for (int m : {0, 1, 6, 12, -4}) {
     wbm::testing::expect_throw_with<std::invalid_argument>([m] { FourierBasis b(m); },

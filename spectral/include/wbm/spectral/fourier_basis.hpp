@@ -41,6 +41,12 @@ class FourierBasis {
   /// Matrix of values (rows = times, columns = basis functions): V(p, k) = q_k^{(d)}(τ_p).
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
 
+  /// The derivative in coefficient space, D (M × M, sparse): q_k' = Σ_l D(k, l) q_l, i.e.
+  /// D(cos_h, sin_h) = −2πh and D(sin_h, cos_h) = 2πh, so that (Σ_k a_k q_k)' has coefficients
+  /// a D. Exact for every function but the top one cos πMτ (M = 2^J), whose derivative
+  /// −πM sin πMτ is outside the span: its row is zero.
+  [[nodiscard]] Eigen::SparseMatrix<double> derivative_matrix() const;
+
   /// Exact Galerkin time operator (M × M, sparse):  A_d(j, k) = ∫₀¹ q_j(τ) q_k^{(d)}(τ) dτ,
   /// d = 0, 1, 2: row j = weighting function, column k = trial function. These are the time
   /// factors of the Kronecker products in [JL14 Eq. (14)] for Fourier:Fourier.
