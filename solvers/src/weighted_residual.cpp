@@ -485,15 +485,22 @@ struct WeightedResidual::Impl {
     return block;
   }
 
+  // The contact law's derivatives at the samples of one contact: ∂f/∂u (kc) and, for
+  // CellAverage, ∂f̄/∂δ (kd), with the samples where each is nonzero.
+  struct ContactTangent {
+    Eigen::VectorXd kc, kd;
+    std::vector<int> active, sloped;
+  };
+
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
-  // N(x) (n_c·M square).
-  Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, Eigen::MatrixXd* jac) const {
+  // the law's derivatives at the samples, one ContactTangent per contact.
+  Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
     const Sampling& smp = *sampling;
     const Eigen::MatrixXd u = contact_samples(x);
     Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
     if (cell_average_rule) slope = smp.trial_slope->to_time(spectral::as_coefficients(x, nc)) / static_cast<double>(q);
     Eigen::MatrixXd force(nc, q);
-    if (jac != nullptr) jac->setZero(nc * m, nc * m);
+    if (tangents != nullptr) tangents->assign(static_cast<size_t>(nc), {});
     Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
     for (int c = 0; c < nc; ++c) {
       if (cell_average_rule) {
@@ -502,28 +509,149 @@ struct WeightedResidual::Impl {
         contacts[c].law->evaluate(u.row(c).transpose(), fc, kc);
       }
       force.row(c) = fc.transpose();
-      if (jac == nullptr) continue;
-      std::vector<int> active, sloped;
+      if (tangents == nullptr) continue;
+      ContactTangent& t = (*tangents)[static_cast<size_t>(c)];
       for (int r = 0; r < q; ++r) {
-        if (kc(r) != 0.0) active.push_back(r);
-        if (kd(r) != 0.0) sloped.push_back(r);
+        if (kc(r) != 0.0) t.active.push_back(r);
+        if (kd(r) != 0.0) t.sloped.push_back(r);
       }
-      Eigen::MatrixXd block = active.empty() ? Eigen::MatrixXd::Zero(m, m) : contact_block(kc, active);
-      if (!sloped.empty()) {
+      t.kc = kc;
+      t.kd = kd;
+    }
+    return spectral::stacked(smp.weighting->project(force));
+  }
+
+  // N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
+  [[nodiscard]] Eigen::MatrixXd contact_force_jacobian(const std::vector<ContactTangent>& tangents) const {
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+    for (int c = 0; c < nc; ++c) {
+      const ContactTangent& t = tangents[static_cast<size_t>(c)];
+      Eigen::MatrixXd block = t.active.empty() ? Eigen::MatrixXd::Zero(m, m) : contact_block(t.kc, t.active);
+      if (!t.sloped.empty()) {
         // CellAverage: + Σ_q p_j(τ_q)/Q ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the
         // law's kink (a few per crossing): their rows are evaluated here.
-        Eigen::VectorXd ts(static_cast<Eigen::Index>(sloped.size())), ks(ts.size());
-        for (size_t i = 0; i < sloped.size(); ++i) {
-          ts(static_cast<Eigen::Index>(i)) = smp.tau(sloped[i]);
-          ks(static_cast<Eigen::Index>(i)) = kd(sloped[i]) / (static_cast<double>(q) * q);
-        }
+        const auto [ts, ks] = sloped_samples(t);
         block.noalias() += (ks.asDiagonal() * weighting.values(ts, 0)).transpose() * trial.values(ts, 1);
       }
       for (int k = 0; k < m; ++k) {
-        for (int j = 0; j < m; ++j) (*jac)(j * nc + c, k * nc + c) = block(j, k);
+        for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
       }
     }
-    return spectral::stacked(smp.weighting->project(force));
+    return jac;
+  }
+
+  // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
+  [[nodiscard]] std::pair<Eigen::VectorXd, Eigen::VectorXd> sloped_samples(const ContactTangent& t) const {
+    Eigen::VectorXd ts(static_cast<Eigen::Index>(t.sloped.size())), ks(ts.size());
+    for (size_t i = 0; i < t.sloped.size(); ++i) {
+      ts(static_cast<Eigen::Index>(i)) = sampling->tau(t.sloped[i]);
+      ks(static_cast<Eigen::Index>(i)) = t.kd(t.sloped[i]) / (static_cast<double>(q) * q);
+    }
+    return {ts, ks};
+  }
+
+  // The condensed Jacobian (I + H N)/s_r with N = W V of rank r = Σ_c (active + sloped samples):
+  // column i of W (n_c·M × r) is the weighting functions at the sample times κ_q/Q (or
+  // ∂f̄/∂δ/Q² for a kink term), row i of V (r × n_c·M) the trial functions (or their slopes) at
+  // the same time, both on the rows x(k·n_c + c) of their contact. With U = H W and
+  // C = I_r + V U, Newton's step is an r × r solve (WoodburyLu). V is applied by FFTW for a
+  // Fourier trial basis (all Q samples, the active ones kept) and by the sparse rows of the
+  // wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
+  // r × r LU then saves less than the two products with V cost (bench_weighted_residual).
+  [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x) const {
+    std::vector<ContactTangent> tangents;
+    (void)contact_forces(x, &tangents);
+    LowRankJacobian jac;
+    jac.scale = scale;
+    Eigen::Index rank = 0;
+    for (const auto& t : tangents) rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
+    const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+    if (4 * rank > 3 * size) {
+      jac.capacitance = compliance_times(contact_force_jacobian(tangents));
+      jac.capacitance.diagonal().array() += 1.0;
+      return jac;
+    }
+    // Per contact: the active rows of the trial samples (sparse, wavelets) and the kink rows.
+    struct Rows {
+      std::vector<int> active;
+      SparseRows values;           // wavelet trial: V's rows at the active samples (active × M)
+      Eigen::MatrixXd slope_rows;  // trial slopes at the kink samples (sloped × M)
+      Eigen::Index first = 0;      // V's first row for this contact
+    };
+    auto rows = std::make_shared<std::vector<Rows>>(static_cast<size_t>(nc));
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, rank);
+    Eigen::Index first = 0;
+    for (int c = 0; c < nc; ++c) {
+      const ContactTangent& t = tangents[static_cast<size_t>(c)];
+      Rows& rc = (*rows)[static_cast<size_t>(c)];
+      rc.first = first;
+      rc.active = t.active;
+      const auto na = static_cast<Eigen::Index>(t.active.size());
+      if (na > 0) {
+        Eigen::MatrixXd wa(na, m);  // row i: κ_q p_j(τ_q)/Q at active sample q = active[i]
+        if (weighting.is_fourier()) {
+          Eigen::MatrixXd impulses = Eigen::MatrixXd::Zero(na, q);
+          for (Eigen::Index i = 0; i < na; ++i) impulses(i, t.active[i]) = t.kc(t.active[i]);
+          wa = sampling->aft->project(impulses);
+        } else {
+          const SparseRows& sw = sampling->weighting->values;
+          wa.setZero();
+          for (Eigen::Index i = 0; i < na; ++i) {
+            const int r = t.active[static_cast<size_t>(i)];
+            for (SparseRows::InnerIterator it(sw, r); it; ++it) wa(i, it.col()) = t.kc(r) * it.value() / q;
+          }
+        }
+        for (int j = 0; j < m; ++j) w.block(static_cast<Eigen::Index>(j) * nc + c, first, 1, na) = wa.col(j).transpose();
+        if (!trial.is_fourier()) {
+          const SparseRows& sv = sampling->trial->values;
+          std::vector<Eigen::Triplet<double>> triplets;
+          for (Eigen::Index i = 0; i < na; ++i) {
+            for (SparseRows::InnerIterator it(sv, t.active[static_cast<size_t>(i)]); it; ++it) {
+              triplets.emplace_back(static_cast<int>(i), static_cast<int>(it.col()), it.value());
+            }
+          }
+          rc.values.resize(na, m);
+          rc.values.setFromTriplets(triplets.begin(), triplets.end());
+        }
+      }
+      if (!t.sloped.empty()) {
+        const auto [ts, ks] = sloped_samples(t);
+        const Eigen::MatrixXd ws = ks.asDiagonal() * weighting.values(ts, 0);
+        for (int j = 0; j < m; ++j) {
+          w.block(static_cast<Eigen::Index>(j) * nc + c, first + na, 1, ws.rows()) = ws.col(j).transpose();
+        }
+        rc.slope_rows = trial.values(ts, 1);
+      }
+      first += na + static_cast<Eigen::Index>(t.sloped.size());
+    }
+    const int contacts_n = nc, dimension = m;
+    const bool fourier_trial = trial.is_fourier();
+    const std::shared_ptr<const Sampling> smp = sampling;
+    jac.times_v = [rows, smp, contacts_n, dimension, fourier_trial, rank](const Eigen::MatrixXd& y) {
+      Eigen::MatrixXd out(rank, y.cols());
+      for (int c = 0; c < contacts_n; ++c) {
+        const Rows& rc = (*rows)[static_cast<size_t>(c)];
+        Eigen::MatrixXd yc;  // contact c's coefficients (M × k)
+        if (contacts_n > 1) {
+          yc.resize(dimension, y.cols());
+          for (int k = 0; k < dimension; ++k) yc.row(k) = y.row(static_cast<Eigen::Index>(k) * contacts_n + c);
+        }
+        const Eigen::MatrixXd& yv = contacts_n > 1 ? yc : y;
+        const auto na = static_cast<Eigen::Index>(rc.active.size());
+        if (na > 0 && fourier_trial) {
+          const Eigen::MatrixXd samples = smp->trial->to_time(yv.transpose()).transpose();  // Q × k
+          out.middleRows(rc.first, na) = samples(rc.active, Eigen::all);
+        } else if (na > 0) {
+          out.middleRows(rc.first, na) = rc.values * yv;
+        }
+        if (rc.slope_rows.rows() > 0) out.middleRows(rc.first + na, rc.slope_rows.rows()) = rc.slope_rows * yv;
+      }
+      return out;
+    };
+    jac.u = compliance_times(w);
+    jac.capacitance = jac.times_v(jac.u);
+    jac.capacitance.diagonal().array() += 1.0;
+    return jac;
   }
 
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const {
@@ -599,8 +727,9 @@ Eigen::MatrixXd WeightedResidual::jacobian(const Eigen::VectorXd& a) const {
                         Eigen::kroneckerProduct(fr * p.ops.damping, Eigen::MatrixXd(p.system.damping)) +
                         Eigen::kroneckerProduct(p.ops.stiffness, Eigen::MatrixXd(p.system.stiffness));
   if (p.nc > 0) {
-    Eigen::MatrixXd nj;
-    (void)p.contact_forces(p.gather(a), &nj);
+    std::vector<Impl::ContactTangent> tangents;
+    (void)p.contact_forces(p.gather(a), &tangents);
+    const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
     for (size_t i = 0; i < p.contact_rows.size(); ++i) {
       for (size_t j = 0; j < p.contact_rows.size(); ++j) {
         jac(p.contact_rows[i], p.contact_rows[j]) += nj(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
@@ -653,11 +782,16 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
 Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) const {
   const auto& p = *impl_;
   p.require_factorized();
-  Eigen::MatrixXd nj;
-  (void)p.contact_forces(x, &nj);
-  Eigen::MatrixXd jac = p.compliance_times(nj);
+  std::vector<Impl::ContactTangent> tangents;
+  (void)p.contact_forces(x, &tangents);
+  Eigen::MatrixXd jac = p.compliance_times(p.contact_force_jacobian(tangents));
   jac.diagonal().array() += 1.0;
   return jac / p.scale;
+}
+
+LowRankJacobian WeightedResidual::contact_jacobian_low_rank(const Eigen::VectorXd& x) const {
+  impl_->require_factorized();
+  return impl_->low_rank_contact_jacobian(x);
 }
 
 Eigen::VectorXd WeightedResidual::expand(const Eigen::VectorXd& x) const {
@@ -678,7 +812,7 @@ struct WeightedResidual::Condensed {
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
     return wr->impl_->contact_residual(x, load);
   }
-  [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return wr->contact_jacobian(x); }
+  [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& x) const { return wr->contact_jacobian_low_rank(x); }
 };
 
 NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& steps) const {
@@ -722,8 +856,9 @@ Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd
   const auto& p = *problem->impl_;
   p.require_factorized();
   const double sigma = std::pow(10.0, lambda);
-  Eigen::MatrixXd nj;
-  const Eigen::VectorXd hn = p.compliance_times(p.contact_forces(x, &nj));
+  std::vector<Impl::ContactTangent> tangents;
+  const Eigen::VectorXd hn = p.compliance_times(p.contact_forces(x, &tangents));
+  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
   Linearization l;
   l.residual = (x - p.x_lin + sigma * hn) / p.scale;
   l.jacobian = (sigma / p.scale) * p.compliance_times(nj);
@@ -736,8 +871,9 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   const auto& p = *impl_;
   report.tried = true;
   // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
-  Eigen::MatrixXd nj;
-  (void)p.contact_forces(p.x_lin, &nj);
+  std::vector<Impl::ContactTangent> tangents;
+  (void)p.contact_forces(p.x_lin, &tangents);
+  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
   const double coupling = p.compliance_times(nj).lpNorm<Eigen::Infinity>();
   const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
   report.lambda_start = lambda0;

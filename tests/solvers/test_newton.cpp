@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <string>
+#include <type_traits>
 
+#include <Eigen/SVD>
 #include <Eigen/SparseCore>
 
 #include <gtest/gtest.h>
@@ -151,4 +154,104 @@ TEST(Newton, MessagesPrintSmallNumbersInScientificNotation) {
   const auto r = newton(NoRoot{}, Eigen::VectorXd::Constant(1, 0.5), {.tolerance = 1e-12, .max_iterations = 3});
   EXPECT_NE(r.report.message.find("tolerance 1e-12"), std::string::npos) << r.report.message;
   EXPECT_EQ(r.report.message.find("0.000000"), std::string::npos) << r.report.message;
+}
+
+namespace {
+// J = (I + U V)/s with random U (n × r), V (r × n), V applied as a dense product.
+LowRankJacobian random_low_rank(Eigen::Index n, Eigen::Index r, double u_size, double scale, unsigned seed) {
+  std::srand(seed);
+  LowRankJacobian j;
+  j.scale = scale;
+  j.u = u_size * Eigen::MatrixXd::Random(n, r);
+  const Eigen::MatrixXd v = Eigen::MatrixXd::Random(r, n);
+  j.times_v = [v](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(v * y); };
+  j.capacitance = v * j.u;
+  j.capacitance.diagonal().array() += 1.0;
+  return j;
+}
+}  // namespace
+
+// Sherman–Morrison–Woodbury against a dense LU of (I + U V)/s formed here: rank 7 of 40, a
+// stiff update (‖U V‖ ~ 1e8, the penalty limit: J's solution is found by cancellation in
+// y − U C⁻¹ V y) whose backward error the refinement step brings to rounding, rank 0 (J = I/s)
+// and the dense form (C = s J).
+TEST(Newton, WoodburyLuSolvesIdentityPlusLowRank) {
+  const Eigen::Index n = 40;
+  const Eigen::VectorXd y = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  for (const double u_size : {1.0, 1e8}) {
+    const LowRankJacobian j = random_low_rank(n, 7, u_size, 0.25, 3);
+    Eigen::MatrixXd dense = j.u * j.times_v(Eigen::MatrixXd::Identity(n, n));
+    dense.diagonal().array() += 1.0;
+    dense /= j.scale;
+    EXPECT_LT((j.dense() - dense).norm(), 1e-15 * dense.norm());
+    WoodburyLu solver;
+    ASSERT_TRUE(solver.factorize(j));
+    const Eigen::VectorXd d = solver.solve(y);
+    const Eigen::VectorXd reference = dense.partialPivLu().solve(y);
+    const double backward = (dense * d - y).norm() / (dense.norm() * d.norm());
+    EXPECT_LT(backward, 1e-15) << "|U| ~ " << u_size;
+    // Forward error: both solutions are within ε κ(J) of the exact one.
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(dense);
+    const double kappa = svd.singularValues()(0) / svd.singularValues()(n - 1);
+    EXPECT_LT((d - reference).norm(), 10.0 * std::numeric_limits<double>::epsilon() * kappa * reference.norm())
+        << "|U| ~ " << u_size << ", kappa " << kappa;
+    EXPECT_GT(*solver.rcond(), 0.0);
+  }
+  LowRankJacobian none;
+  none.scale = 0.5;
+  none.u.resize(n, 0);
+  none.capacitance.resize(0, 0);
+  none.times_v = [](const Eigen::MatrixXd& x) { return Eigen::MatrixXd(0, x.cols()); };
+  WoodburyLu solver;
+  ASSERT_TRUE(solver.factorize(none));
+  EXPECT_LT((solver.solve(y) - 0.5 * y).norm(), 1e-16);
+  EXPECT_EQ(*solver.rcond(), 1.0);
+  LowRankJacobian dense_form;
+  dense_form.scale = 2.0;
+  dense_form.capacitance = Eigen::MatrixXd::Identity(n, n) + Eigen::MatrixXd::Random(n, n);
+  ASSERT_TRUE(solver.factorize(dense_form));
+  EXPECT_LT((dense_form.capacitance / 2.0 * solver.solve(y) - y).norm(), 1e-13 * y.norm());
+  LowRankJacobian broken = random_low_rank(n, 3, 1.0, 1.0, 5);
+  broken.u(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(solver.factorize(broken));
+}
+
+namespace {
+// R(x) = x + U V (x³) − y: the Jacobian (I + U V diag(3x²)) is identity plus rank r, as in the
+// condensed contact problem (x the contact unknowns, V the samples, U the compliance).
+struct LowRankCubic {
+  Eigen::MatrixXd u, v;
+  Eigen::VectorXd y;
+  Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return x + u * (v * x.array().cube().matrix()) - y; }
+  LowRankJacobian jacobian(const Eigen::VectorXd& x) const {
+    LowRankJacobian j;
+    j.u = u;
+    const Eigen::MatrixXd vd = v * (3.0 * x.array().square()).matrix().asDiagonal();
+    j.times_v = [vd](const Eigen::MatrixXd& z) { return Eigen::MatrixXd(vd * z); };
+    j.capacitance = vd * u;
+    j.capacitance.diagonal().array() += 1.0;
+    return j;
+  }
+};
+}  // namespace
+
+// newton() picks WoodburyLu for a LowRankJacobian and converges quadratically to the root that
+// the same Newton with the dense Jacobian (DenseLu) finds.
+TEST(Newton, WoodburyLuIsTheDefaultForLowRankJacobians) {
+  static_assert(std::is_same_v<DefaultLinearSolver<LowRankCubic>, WoodburyLu>);
+  std::srand(11);
+  const LowRankCubic system{0.1 * Eigen::MatrixXd::Random(30, 4).cwiseAbs(), Eigen::MatrixXd::Random(4, 30).cwiseAbs(),
+                            Eigen::VectorXd::LinSpaced(30, 0.5, 1.5)};
+  struct Dense {
+    const LowRankCubic* s;
+    Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x); }
+    Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return s->jacobian(x).dense(); }
+  };
+  const auto low = newton(system, Eigen::VectorXd::Zero(30), {.tolerance = 1e-13});
+  const auto dense = newton(Dense{&system}, Eigen::VectorXd::Zero(30), {.tolerance = 1e-13});
+  ASSERT_TRUE(low.report.converged()) << low.report.message;
+  ASSERT_TRUE(dense.report.converged()) << dense.report.message;
+  EXPECT_LT(system.residual(low.x).norm(), 1e-13);
+  EXPECT_LT((low.x - dense.x).norm(), 1e-12 * dense.x.norm());
+  EXPECT_EQ(low.report.iterations, dense.report.iterations);
 }

@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -580,6 +581,57 @@ TEST(WeightedResidual, CellAverageJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The low-rank form of the condensed Jacobian that Newton factorizes (WoodburyLu): (I + U V)/s_r
+// with V the trial functions at the contact samples in contact, against central differences,
+// for every pair with the midpoint rule and for the cell-average rule (its kink rows appended to
+// V) with a linear law kinked at the gap. Q = 3M/2 samples, so that the rank (samples in contact)
+// stays below ¾ M and the low-rank form (not the dense fallback) is the one checked.
+TEST(WeightedResidual, LowRankCondensedJacobianMatchesFiniteDifferences) {
+  const auto s = case1();
+  const double g0 = s.contacts.front().gap;
+  struct Case {
+    Pair pair;
+    int m;
+    solvers::ContactQuadrature rule;
+  };
+  using solvers::ContactQuadrature;
+  for (const auto& [pair, m, rule] :
+       {Case{{"fourier", "fourier"}, 32, ContactQuadrature::Midpoint}, Case{{"fourier", "fourier"}, 31, ContactQuadrature::Midpoint},
+        Case{{"bspline", "bspline"}, 32, ContactQuadrature::Midpoint}, Case{{"db6", "db6"}, 32, ContactQuadrature::Midpoint},
+        Case{{"haar", "fourier"}, 32, ContactQuadrature::Midpoint}, Case{{"db6", "fourier"}, 32, ContactQuadrature::Midpoint},
+        Case{{"haar", "bspline"}, 32, ContactQuadrature::Midpoint}, Case{{"fourier", "fourier"}, 32, ContactQuadrature::CellAverage},
+        Case{{"bspline", "bspline"}, 32, ContactQuadrature::CellAverage}, Case{{"db6", "fourier"}, 32, ContactQuadrature::CellAverage}}) {
+    const bool cell = rule == ContactQuadrature::CellAverage;
+    // The linear law's gap is raised from g0 by 10 % steps until fewer than ¾ M samples of the
+    // state below are in contact (the cell-average rank also counts the kink cells).
+    std::optional<solvers::WeightedResidual> wr;
+    std::optional<solvers::LowRankJacobian> low;
+    Eigen::VectorXd x;
+    for (double gap = g0; !low || low->dense_form(); gap *= 1.1) {
+      ASSERT_LT(gap, 20.0 * g0);
+      const std::vector<solvers::ContactPoint> contacts = {
+          {s.harmonic_forcing().dof, cell ? std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e9, gap})
+                                          : s.contact_points().front().law}};
+      wr.emplace(s.system(), s.harmonic_forcing(), contacts, TimeBasis::from_name(pair.trial, m),
+                 TimeBasis::from_name(pair.weighting, m), solvers::WeightedResidualOptions{.time_samples = m + m / 2, .contact_quadrature = rule});
+      x = wr->contact_unknowns(wr->linear_response()) * 1.02;
+      low.emplace(wr->contact_jacobian_low_rank(x));
+      if (!cell) break;
+    }
+    SCOPED_TRACE(std::string(pair.trial) + ":" + pair.weighting + ", M = " + std::to_string(m) + ", " +
+                 std::string(solvers::to_string(rule)));
+    ASSERT_FALSE(low->dense_form()) << "rank " << low->capacitance.rows();
+    EXPECT_GT(low->u.cols(), 0);
+    EXPECT_LE(4 * low->u.cols(), 3 * m);
+    struct Condensed {
+      const solvers::WeightedResidual* wr;
+      Eigen::VectorXd residual(const Eigen::VectorXd& y) const { return wr->contact_residual(y); }
+      Eigen::MatrixXd jacobian(const Eigen::VectorXd& y) const { return wr->contact_jacobian_low_rank(y).dense(); }
+    };
+    wbm::testing::expect_jacobian_matches_fd(Condensed{&*wr}, x, 1e-5, cell ? 1e-4 : 1e-7, 1e-6);
+  }
+}
+
 // Both contact quadratures are consistent rules for the same integral: on Case 1 (Fourier:Fourier,
 // H = 16) their solutions approach each other as Q grows, at about first order in 1/Q (the
 // integrand has kinks where the contact opens and closes: O(1/Q) for midpoint sums of a kinked
@@ -653,6 +705,7 @@ TEST(WeightedResidual, StructuredPathsMatchTheDenseModalReference) {
   struct Size {
     int m, samples;  // samples = 0: the default Q = max(256, 2M), a multiple of M
   };
+  int low_rank_forms = 0;
   for (const Pair& pair : kTable2) {
     for (const auto [m, samples] : {Size{32, 0}, Size{64, 0}, Size{64, 200}}) {
       const auto trial = TimeBasis::from_name(pair.trial, m), weighting = TimeBasis::from_name(pair.weighting, m);
@@ -699,32 +752,49 @@ TEST(WeightedResidual, StructuredPathsMatchTheDenseModalReference) {
       const Eigen::VectorXd x_lin_fast = wr.contact_unknowns(wr.linear_response());
       EXPECT_LT((x_lin_fast - x_lin).norm(), 1e-12 * x_lin.norm()) << what;
 
-      // A state in contact at both DOFs: N (slow) and H N, H n from the residual and Jacobian.
-      const Eigen::VectorXd x = 1.2 * x_lin;
-      Eigen::MatrixXd n_jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
-      Eigen::VectorXd n_force = Eigen::VectorXd::Zero(nc * m);
-      for (int c = 0; c < nc; ++c) {
-        Eigen::VectorXd coefficients(m);
-        for (int k = 0; k < m; ++k) coefficients(k) = x(k * nc + c);
-        const Eigen::VectorXd u = theta * coefficients;
-        Eigen::VectorXd force(q), stiffness(q);
-        contacts[c].law->evaluate(u, force, stiffness);
-        ASSERT_GT(stiffness.maxCoeff(), 0.0) << what << ": contact " << c << " must be in contact";
-        const Eigen::MatrixXd block = w.transpose() * stiffness.asDiagonal() * theta / q;
-        const Eigen::VectorXd projected = w.transpose() * force / q;
-        for (int j = 0; j < m; ++j) {
-          n_force(j * nc + c) = projected(j);
-          for (int k = 0; k < m; ++k) n_jac(j * nc + c, k * nc + c) = block(j, k);
+      // States in contact at both DOFs, over more (1.2 x_lin) or less (0.9 x_lin) of the period:
+      // N (slow) and H N, H n from the residual and the Jacobian in its dense and low-rank forms.
+      for (const double factor : {1.2, 0.9}) {
+        const Eigen::VectorXd x = factor * x_lin;
+        Eigen::MatrixXd n_jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+        Eigen::VectorXd n_force = Eigen::VectorXd::Zero(nc * m);
+        for (int c = 0; c < nc; ++c) {
+          Eigen::VectorXd coefficients(m);
+          for (int k = 0; k < m; ++k) coefficients(k) = x(k * nc + c);
+          const Eigen::VectorXd u = theta * coefficients;
+          Eigen::VectorXd force(q), stiffness(q);
+          contacts[c].law->evaluate(u, force, stiffness);
+          ASSERT_GT(stiffness.maxCoeff(), 0.0) << what << ": contact " << c << " must be in contact";
+          const Eigen::MatrixXd block = w.transpose() * stiffness.asDiagonal() * theta / q;
+          const Eigen::VectorXd projected = w.transpose() * force / q;
+          for (int j = 0; j < m; ++j) {
+            n_force(j * nc + c) = projected(j);
+            for (int k = 0; k < m; ++k) n_jac(j * nc + c, k * nc + c) = block(j, k);
+          }
         }
+        const double scale = wr.residual_scale();
+        const Eigen::VectorXd hn_fast = wr.contact_residual(x) * scale - x + x_lin_fast;
+        const Eigen::VectorXd hn = h * n_force;
+        EXPECT_LT((hn_fast - hn).norm(), 1e-12 * hn.norm()) << what;
+        Eigen::MatrixXd hnj_fast = wr.contact_jacobian(x) * scale;
+        hnj_fast.diagonal().array() -= 1.0;
+        const Eigen::MatrixXd hnj = h * n_jac;
+        EXPECT_LT((hnj_fast - hnj).norm(), 1e-12 * hnj.norm()) << what << " x = " << factor << " x_lin";
+        const solvers::LowRankJacobian low = wr.contact_jacobian_low_rank(x);
+        low_rank_forms += low.dense_form() ? 0 : 1;
+        Eigen::MatrixXd hnj_low = low.dense() * scale;
+        hnj_low.diagonal().array() -= 1.0;
+        EXPECT_LT((hnj_low - hnj).norm(), 1e-12 * hnj.norm()) << what << " x = " << factor << " x_lin";
+        Eigen::MatrixXd jac = hnj;
+        jac.diagonal().array() += 1.0;
+        jac /= scale;
+        solvers::WoodburyLu woodbury;
+        ASSERT_TRUE(woodbury.factorize(low));
+        const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(nc * m, -1.0, 1.0);
+        const Eigen::VectorXd step = jac.partialPivLu().solve(rhs);
+        EXPECT_LT((woodbury.solve(rhs) - step).norm(), 1e-10 * step.norm()) << what << " x = " << factor << " x_lin";
       }
-      const double scale = wr.residual_scale();
-      const Eigen::VectorXd hn_fast = wr.contact_residual(x) * scale - x + x_lin_fast;
-      const Eigen::VectorXd hn = h * n_force;
-      EXPECT_LT((hn_fast - hn).norm(), 1e-12 * hn.norm()) << what;
-      Eigen::MatrixXd hnj_fast = wr.contact_jacobian(x) * scale;
-      hnj_fast.diagonal().array() -= 1.0;
-      const Eigen::MatrixXd hnj = h * n_jac;
-      EXPECT_LT((hnj_fast - hnj).norm(), 1e-12 * hnj.norm()) << what;
     }
   }
+  EXPECT_GE(low_rank_forms, 12) << "the low-rank form must be exercised";
 }

@@ -1,13 +1,14 @@
 #pragma once
 /// The one Newton core of the project: damped Newton–Raphson for R(x) = 0 with a backtracking
 /// (Armijo) line search, an optional Levenberg–Marquardt fallback, and a linear-solver policy
-/// (dense LU, or sparse LU that keeps its symbolic analysis while the sparsity pattern is
-/// unchanged). The forced response (weighted residuals), the continuation corrector, the
+/// (dense LU; sparse LU that keeps its symbolic analysis while the sparsity pattern is
+/// unchanged; or Woodbury for identity plus low rank, the condensed contact systems). The forced response (weighted residuals), the continuation corrector, the
 /// nonlinear-mode stationarity solves and the fixed-energy KKT solves all run through newton().
 
 #include <algorithm>
 #include <cmath>
 #include <concepts>
+#include <functional>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -24,14 +25,46 @@
 
 namespace wbm::solvers {
 
+/// The Jacobian of a system condensed onto the unknowns of a nonlinearity (the contact
+/// unknowns of the weighted residual method): identity plus a rank-r update,
+///   J = (I_n + U V) / s,   U: n × r (dense),   V: r × n (given by its product Y ↦ V Y),
+/// with the capacitance matrix C = I_r + V U (r × r) formed by the system, which knows a fast
+/// product with V (an FFT, or the few nonzeros of compactly supported wavelets). Sherman–
+/// Morrison–Woodbury [Hager 1989, SIAM Review 31(2) 221–239]: J⁻¹ y = s (y − U C⁻¹ V y), so a
+/// step costs an r × r LU instead of an n × n one; det J = det C / sⁿ.
+/// An empty `times_v` is the dense case: V = I_n, r = n, and J = C / s (u unused).
+struct LowRankJacobian {
+  double scale = 1.0;            // s > 0
+  Eigen::MatrixXd u;             // U, n × r (empty in the dense case)
+  Eigen::MatrixXd capacitance;   // C = I_r + V U, r × r (dense case: C = s J, n × n)
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_v;  // Y (n × k) ↦ V Y (r × k)
+
+  [[nodiscard]] bool dense_form() const { return !times_v; }
+  [[nodiscard]] Eigen::Index size() const { return dense_form() ? capacitance.rows() : u.rows(); }
+  /// J y (length n).
+  [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const {
+    if (dense_form()) return capacitance * y / scale;
+    return (y + u * times_v(y)) / scale;
+  }
+  /// J as an n × n matrix: O(n² r) (the Levenberg–Marquardt fallback and tests).
+  [[nodiscard]] Eigen::MatrixXd dense() const {
+    if (dense_form()) return capacitance / scale;
+    Eigen::MatrixXd j = u * times_v(Eigen::MatrixXd::Identity(size(), size()));
+    j.diagonal().array() += 1.0;
+    return j / scale;
+  }
+};
+
 /// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n), either
-/// dense (Eigen::MatrixXd) or sparse (Eigen::SparseMatrix<double>); the Jacobian's type picks
-/// the default linear solver (DenseLu or SparseLu).
+/// dense (Eigen::MatrixXd), sparse (Eigen::SparseMatrix<double>) or identity plus low rank
+/// (LowRankJacobian); the Jacobian's type picks the default linear solver (DenseLu, SparseLu
+/// or WoodburyLu).
 template <class S>
 concept NonlinearSystem = requires(const S& s, const Eigen::VectorXd& x) {
   { s.residual(x) } -> std::convertible_to<Eigen::VectorXd>;
   requires std::convertible_to<decltype(s.jacobian(x)), Eigen::MatrixXd> ||
-               std::convertible_to<decltype(s.jacobian(x)), Eigen::SparseMatrix<double>>;
+               std::convertible_to<decltype(s.jacobian(x)), Eigen::SparseMatrix<double>> ||
+               std::same_as<std::decay_t<decltype(s.jacobian(x))>, LowRankJacobian>;
 };
 
 /// The norm in which the convergence test ‖R(x)‖ ≤ tolerance is made (and residual_norms are
@@ -134,6 +167,38 @@ class SparseLu {
   int analyses_ = 0;
 };
 
+/// Linear-solver policy for LowRankJacobian: partial-pivoting LU of the capacitance matrix C
+/// (r × r), then d = s (y − U C⁻¹ V y) and one step of iterative refinement on the residual
+/// y − J d (which makes the Woodbury formula as accurate as a backward-stable solve when C is
+/// well conditioned [Yip 1986, SIAM J. Sci. Stat. Comput. 7(2) 507–513]). rcond() is C's
+/// reciprocal condition estimate (C and s J have the same nonzero spectrum but for the
+/// eigenvalue 1 of multiplicity n − r); in the dense form it is that of s J itself.
+class WoodburyLu {
+ public:
+  bool factorize(const LowRankJacobian& jacobian) {
+    j_ = jacobian;
+    if (j_.capacitance.rows() > 0) lu_.compute(j_.capacitance);
+    return j_.capacitance.allFinite() && j_.u.allFinite();
+  }
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
+    Eigen::VectorXd d = woodbury(rhs);
+    if (!j_.dense_form()) d += woodbury(rhs - j_.apply(d));
+    return d;
+  }
+  [[nodiscard]] std::optional<double> rcond() const {
+    return j_.capacitance.rows() > 0 ? lu_.rcond() : 1.0;  // rank 0: J = I / s
+  }
+
+ private:
+  [[nodiscard]] Eigen::VectorXd woodbury(const Eigen::VectorXd& y) const {
+    if (j_.dense_form()) return j_.scale * lu_.solve(y);
+    if (j_.capacitance.rows() == 0) return j_.scale * y;
+    return j_.scale * (y - j_.u * lu_.solve(Eigen::VectorXd(j_.times_v(y))));
+  }
+  LowRankJacobian j_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+};
+
 namespace detail {
 template <class S>
 using SystemJacobian = std::decay_t<decltype(std::declval<const S&>().jacobian(std::declval<const Eigen::VectorXd&>()))>;
@@ -147,17 +212,20 @@ template <class J>
 Eigen::MatrixXd as_dense(const J& j) {
   return Eigen::MatrixXd(j);
 }
+inline Eigen::MatrixXd as_dense(const LowRankJacobian& j) { return j.dense(); }
 }  // namespace detail
 
 /// The linear solver newton() uses by default for a system: SparseLu for a sparse Jacobian,
-/// DenseLu otherwise.
+/// WoodburyLu for a LowRankJacobian, DenseLu otherwise.
 template <class S>
-using DefaultLinearSolver = std::conditional_t<detail::sparse_jacobian_v<S>, SparseLu, DenseLu>;
+using DefaultLinearSolver =
+    std::conditional_t<detail::sparse_jacobian_v<S>, SparseLu,
+                       std::conditional_t<std::is_same_v<detail::SystemJacobian<S>, LowRankJacobian>, WoodburyLu, DenseLu>>;
 
 /// Newton–Raphson from x: J(x_k) Δ = −R(x_k), x_{k+1} = x_k + t Δ with t = 1, ½, ¼, … the
 /// first step length that reduces ‖R‖₂ by the factor (1 − 10⁻⁴ t) (Armijo), or t = 1 without
 /// line search; with levenberg_marquardt, a failed line search switches to LM steps.
-/// `solver` is the linear-solver policy (DenseLu, SparseLu or any type with
+/// `solver` is the linear-solver policy (DenseLu, SparseLu, WoodburyLu or any type with
 /// factorize(J) → bool, solve(rhs) and rcond() → optional<double>); pass the same object to
 /// successive calls to keep what it caches (SparseLu's symbolic analysis).
 /// Stops with Converged (‖R‖ ≤ tolerance, verified on the returned x), MaxIterations,

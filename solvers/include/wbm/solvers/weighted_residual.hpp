@@ -226,7 +226,15 @@ class WeightedResidual {
   /// The condensed system on the contact unknowns (satisfies NonlinearSystem); x(k·n_c + c).
   /// `load` scales the forcing (s·F): r = (x − s·x_lin + H n_c(x)) / s_r, so ∂r/∂s = −x_lin/s_r.
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load = 1.0) const;
+  /// ∂r/∂x = (I + H N(x)) / s_r (n_c·M square, dense), N = ∂n_c/∂x.
   [[nodiscard]] Eigen::MatrixXd contact_jacobian(const Eigen::VectorXd& x) const;
+  /// The same Jacobian in the form Newton uses (newton.hpp, WoodburyLu): N = W V has the rank
+  /// r of the contact samples where the law's derivative is nonzero (plus the kink samples of
+  /// ContactQuadrature::CellAverage), so ∂r/∂x = (I + U V)/s_r with U = H W (n_c·M × r) and
+  /// the capacitance C = I_r + V U; V is applied by FFTW (Fourier trial basis) or by the
+  /// wavelets' sparse rows. Dense form (C = I + H N) when r > ¾ n_c·M. dense() equals
+  /// contact_jacobian(x) to rounding. Throws std::runtime_error if G is singular.
+  [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
   /// a = G⁻¹(b − Pᵀ n_c(x)): the full coefficients for given contact unknowns.
   [[nodiscard]] Eigen::VectorXd expand(const Eigen::VectorXd& x) const;
