@@ -17,6 +17,10 @@ wbm_require(FFTW3_FOUND libfftw3-dev "FFTW 3")
 find_package(GSL QUIET)
 wbm_require(GSL_FOUND libgsl-dev "GSL")
 
+list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
+find_package(KLU QUIET)  # cmake/FindKLU.cmake
+wbm_require(KLU_FOUND libsuitesparse-dev "SuiteSparse KLU")
+
 # Scenes and the `wbm` command.
 find_package(tomlplusplus QUIET)
 wbm_require(tomlplusplus_FOUND libtomlplusplus-dev "toml++")

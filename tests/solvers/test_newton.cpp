@@ -121,6 +121,29 @@ TEST(Newton, SparseLuReanalysesWhenThePatternChanges) {
   EXPECT_EQ(solver.symbolic_analyses(), 2);
 }
 
+// The sparse policy (KLU) refuses a singular Jacobian: SparseCubic at x = (2, 0, 2) has a zero
+// row (3·0² = 0), and Newton reports SingularJacobian instead of a step. A 3 × 3 system with a
+// known solution checks the solve itself: A = [[4, 1, 0], [1, 3, 1], [0, 1, 2]], A (1, 2, 3) =
+// (6, 10, 8).
+TEST(Newton, SparseLuRefusesASingularJacobianAndSolvesAKnownSystem) {
+  SparseLu solver;
+  EXPECT_FALSE(solver.factorize(SparseCubic{}.jacobian(Eigen::Vector3d(2.0, 0.0, 2.0))));
+  const auto r = newton(SparseCubic{}, Eigen::Vector3d(2.0, 0.0, 2.0), {}, solver);
+  EXPECT_EQ(r.report.status, SolveStatus::SingularJacobian) << r.report.message;
+  Eigen::SparseMatrix<double> a(3, 3);
+  const double entries[3][3] = {{4, 1, 0}, {1, 3, 1}, {0, 1, 2}};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (entries[i][j] != 0.0) a.insert(i, j) = entries[i][j];
+    }
+  }
+  ASSERT_TRUE(solver.factorize(a));
+  EXPECT_LT((solver.solve(Eigen::Vector3d(6.0, 10.0, 8.0)) - Eigen::Vector3d(1.0, 2.0, 3.0)).norm(), 1e-14);
+  Eigen::SparseMatrix<double> infinite = a;
+  infinite.coeffRef(1, 1) = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(solver.factorize(infinite));
+}
+
 // From x₀ = 10 the full Newton step on arctan overshoots to −138 and, with no backtracking
 // allowed, the line search fails: plain Newton stagnates, the Levenberg–Marquardt fallback
 // (damped steps) reaches the root 0.
