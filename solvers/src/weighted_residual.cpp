@@ -15,6 +15,7 @@
 
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
 
@@ -209,6 +210,14 @@ struct WeightedResidual::Impl {
   WeightedResidualOptions options;
   int n, m, q, nc;
   TimeOperators ops;
+  // Transposed time operators A_Mᵀ, A_Cᵀ, A_Kᵀ for the products U Aᵀ of the residual, sparse
+  // when at most 25 % full (Fourier:Fourier: diagonal and 2 × 2 blocks; banded wavelet
+  // Galerkin operators at large M), so that R(a) costs O(n · nnz) instead of O(n M²).
+  struct OperatorProducts {
+    std::array<Eigen::SparseMatrix<double>, 3> transposed;
+    bool sparse = false;
+  };
+  std::shared_ptr<const OperatorProducts> operator_products;
 
   // The trial basis (values and, for ContactQuadrature::CellAverage, first derivatives) and the
   // weighting basis at the Q midpoints τ_q = (q + ½)/Q (SampledBasis: FFTW for Fourier, sparse
@@ -232,8 +241,15 @@ struct WeightedResidual::Impl {
   // shift-structured A_K: KroneckerFactorization::compliance_product) when there are any, else
   // the dense product.
   Eigen::MatrixXd h;
-  Eigen::SparseMatrix<double> h_sparse;
+  std::shared_ptr<const Eigen::SparseMatrix<double>> h_sparse;  // shared with the Jacobians' products
   bool h_is_sparse = false;
+  // Fourier:Fourier: H's blocks commute with time shifts (ShiftKernel), detected per frequency.
+  struct ShiftKernel {
+    std::vector<Eigen::VectorXd> kappa;  // κ_cd(s), s = 0..Q−1, at index c·n_c + d
+    Eigen::MatrixXd top;                 // t_cd: H's entry on the top functions cos πMτ (0 for odd M)
+    Eigen::VectorXd g;                   // cos πMτ_q (the top function at the samples)
+  };
+  std::optional<ShiftKernel> kernel;
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
@@ -321,7 +337,8 @@ struct WeightedResidual::Impl {
   Impl(const Impl& base, double frequency_hz)
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
-        ops(base.ops), sampling(base.sampling), cell_average_rule(base.cell_average_rule),
+        ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
+        cell_average_rule(base.cell_average_rule),
         g(base.g->unfactorized()), b(base.b), scale(base.scale),
         contact_rows(base.contact_rows) {
     forcing.frequency_hz = frequency_hz;
@@ -337,17 +354,75 @@ struct WeightedResidual::Impl {
     h = g->compliance(contact_dofs(), contact_rows);
     const auto nonzeros = (h.array() != 0.0).count();
     h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
-    if (h_is_sparse) h_sparse = h.sparseView();
+    h_sparse.reset();
+    if (h_is_sparse) h_sparse = std::make_shared<const Eigen::SparseMatrix<double>>(h.sparseView());
+    kernel = shift_kernel();
   }
 
   // H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
   [[nodiscard]] Eigen::MatrixXd compliance_times(const Eigen::MatrixXd& v) const {
-    if (h_is_sparse) return h_sparse * v;
+    if (h_is_sparse) return *h_sparse * v;
     if (g->fast_compliance_product()) return g->compliance_product(v);
     return h * v;
   }
   [[nodiscard]] Eigen::VectorXd compliance_times(const Eigen::VectorXd& v) const {
     return compliance_times(Eigen::MatrixXd(v)).col(0);
+  }
+
+  // Fourier:Fourier, midpoint rule: when every harmonic h of H_cd couples only its own cos hτ
+  // and sin hτ, as the 2 × 2 block [[a_h, b_h], [−b_h, a_h]] (the structure of the exact
+  // Galerkin operators: G commutes with time shifts), the kernel of the contact Jacobian is
+  //   φ(τ_r)ᵀ H_cd φ(τ_r') = κ_cd(r − r' mod Q) + t_cd cos πMτ_r cos πMτ_r',
+  //   κ_cd(s) = H_cd(0, 0) + Σ_h [a_h cos(2πhs/Q) − b_h sin(2πhs/Q)],
+  // with t_cd the entry on the top function cos πMτ (M even; it has no sine partner, so it is
+  // not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
+  // other coupling (discrete operators, another basis) gives no kernel.
+  [[nodiscard]] std::optional<ShiftKernel> shift_kernel() const {
+    if (!trial.is_fourier() || !weighting.is_fourier() || cell_average_rule || !h_is_sparse) return std::nullopt;
+    const spectral::FourierBasis basis(m);
+    const bool top = basis.has_top_function();
+    const int harmonics = top ? m / 2 : (m - 1) / 2;
+    std::vector<int> cos_index(static_cast<size_t>(harmonics) + 1, -1), sin_index = cos_index;
+    for (int k = 0; k < m; ++k) (basis.is_sine(k) ? sin_index : cos_index)[static_cast<size_t>(basis.harmonic(k))] = k;
+    const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
+    for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
+        if (std::abs(it.value()) > tol && basis.harmonic(static_cast<int>(it.row() / nc)) != basis.harmonic(static_cast<int>(it.col() / nc))) {
+          return std::nullopt;
+        }
+      }
+    }
+    const int paired = top ? harmonics - 1 : harmonics;
+    ShiftKernel k;
+    k.kappa.resize(static_cast<size_t>(nc) * nc);
+    k.top = Eigen::MatrixXd::Zero(nc, nc);
+    k.g = Eigen::VectorXd::Zero(q);
+    Eigen::VectorXd cos_table(q), sin_table(q);
+    for (int i = 0; i < q; ++i) {
+      cos_table(i) = std::cos(2.0 * std::numbers::pi * i / q);
+      sin_table(i) = std::sin(2.0 * std::numbers::pi * i / q);
+    }
+    if (top) {
+      for (int r = 0; r < q; ++r) k.g(r) = basis.value(m - 1, sampling->tau(r));
+    }
+    auto at = [&](int kr, int c, int kc, int d) { return h(static_cast<Eigen::Index>(kr) * nc + c, static_cast<Eigen::Index>(kc) * nc + d); };
+    for (int c = 0; c < nc; ++c) {
+      for (int d = 0; d < nc; ++d) {
+        Eigen::VectorXd kappa = Eigen::VectorXd::Constant(q, at(0, c, 0, d));
+        for (int hh = 1; hh <= paired; ++hh) {
+          const int ci = cos_index[static_cast<size_t>(hh)], si = sin_index[static_cast<size_t>(hh)];
+          const double a = at(ci, c, ci, d), b = at(ci, c, si, d);
+          if (std::abs(a - at(si, c, si, d)) > tol || std::abs(b + at(si, c, ci, d)) > tol) return std::nullopt;
+          long index = 0;  // h·s mod Q
+          for (int sft = 0; sft < q; ++sft, index = (index + hh) % q) {
+            kappa(sft) += a * cos_table(index) - b * sin_table(index);
+          }
+        }
+        if (top) k.top(c, d) = at(m - 1, c, m - 1, d);
+        k.kappa[static_cast<size_t>(c) * nc + d] = std::move(kappa);
+      }
+    }
+    return k;
   }
 
   [[nodiscard]] std::vector<int> contact_dofs() const {
@@ -359,6 +434,26 @@ struct WeightedResidual::Impl {
   // G⁻¹ v (or G⁻ᵀ v) for a stacked v of length n·M.
   [[nodiscard]] Eigen::VectorXd solve_stacked(const Eigen::VectorXd& v, bool transposed) const {
     return g->solve(v, transposed);
+  }
+
+  void set_operator_products() {
+    auto products = std::make_shared<OperatorProducts>();
+    const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+    Eigen::Index nonzeros = 0;
+    for (const auto* op : a) nonzeros += (op->array() != 0.0).count();
+    products->sparse = static_cast<double>(nonzeros) <= 0.25 * 3.0 * static_cast<double>(m) * m;
+    if (products->sparse) {
+      for (int t = 0; t < 3; ++t) products->transposed[static_cast<size_t>(t)] = a[t]->transpose().sparseView();
+    }
+    operator_products = products;
+  }
+
+  // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
+  [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u, int t) const {
+    const Eigen::MatrixXd xu = x * u;
+    if (operator_products->sparse) return xu * operator_products->transposed[static_cast<size_t>(t)];
+    const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+    return xu * a[t]->transpose();
   }
 
   // [JL14 Eqs. (14)–(16)]: exactly (connection coefficients, analytic Fourier) or by the Q-point
@@ -384,7 +479,8 @@ struct WeightedResidual::Impl {
     for (int t = 0; t < 3; ++t) {
       const Term& term = ts[t];
       if (exact) {
-        a[t] = term.sign * Eigen::MatrixXd(trial.exact_operator(term.weighting, term.trial));
+        a[t] = Eigen::MatrixXd(trial.exact_operator(term.weighting, term.trial));
+        a[t] *= term.sign;
       } else if (weighting.is_fourier() && !trial.is_fourier()) {
         Eigen::MatrixXd& base = projected[term.trial];
         if (base.size() == 0) {
@@ -405,6 +501,7 @@ struct WeightedResidual::Impl {
     ops.mass = std::move(a[0]);
     ops.damping = std::move(a[1]);
     ops.stiffness = std::move(a[2]);
+    set_operator_products();
     ops.rule = exact ? (trial.is_fourier() ? "exact (analytic)" : "exact (connection coefficients)")
                      : "discrete, Q = " + std::to_string(q) + " midpoints";
   }
@@ -566,11 +663,13 @@ struct WeightedResidual::Impl {
     Eigen::Index rank = 0;
     for (const auto& t : tangents) rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
     const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+    jac.rows = size;
     if (4 * rank > 3 * size) {
       jac.capacitance = compliance_times(contact_force_jacobian(tangents));
       jac.capacitance.diagonal().array() += 1.0;
       return jac;
     }
+    if (kernel) return shift_kernel_jacobian(tangents, std::move(jac), rank);
     // Per contact: the active rows of the trial samples (sparse, wavelets) and the kink rows.
     struct Rows {
       std::vector<int> active;
@@ -654,6 +753,69 @@ struct WeightedResidual::Impl {
     return jac;
   }
 
+  // The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
+  // and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW
+  // projection of Z's rows placed at their samples, times the sparse H. V by FFTW, as above.
+  [[nodiscard]] LowRankJacobian shift_kernel_jacobian(const std::vector<ContactTangent>& tangents, LowRankJacobian jac,
+                                                      Eigen::Index rank) const {
+    struct Sample {
+      int contact, index;
+      double stiffness;
+    };
+    auto samples = std::make_shared<std::vector<Sample>>();
+    samples->reserve(static_cast<size_t>(rank));
+    for (int c = 0; c < nc; ++c) {
+      const ContactTangent& t = tangents[static_cast<size_t>(c)];
+      for (int r : t.active) samples->push_back({c, r, t.kc(r)});
+    }
+    const ShiftKernel& k = *kernel;
+    jac.capacitance.resize(rank, rank);
+    for (Eigen::Index j = 0; j < rank; ++j) {
+      const Sample& sj = (*samples)[static_cast<size_t>(j)];
+      const double weight = sj.stiffness / q;
+      for (Eigen::Index i = 0; i < rank; ++i) {
+        const Sample& si = (*samples)[static_cast<size_t>(i)];
+        const int shift = ((si.index - sj.index) % q + q) % q;
+        jac.capacitance(i, j) = (k.kappa[static_cast<size_t>(si.contact) * nc + sj.contact](shift) +
+                                 k.top(si.contact, sj.contact) * k.g(si.index) * k.g(sj.index)) * weight;
+      }
+      jac.capacitance(j, j) += 1.0;
+    }
+    const int contacts_n = nc, dimension = m, sample_count = q;
+    const std::shared_ptr<const Sampling> smp = sampling;
+    const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
+    jac.times_v = [samples, smp, contacts_n, dimension, rank](const Eigen::MatrixXd& y) {
+      Eigen::MatrixXd out(rank, y.cols());
+      Eigen::MatrixXd yc(y.cols(), dimension);  // contact c's coefficients, transposed (k × M)
+      Eigen::Index i = 0;
+      for (int c = 0; c < contacts_n && i < rank; ++c) {
+        if ((*samples)[static_cast<size_t>(i)].contact != c) continue;  // no sample of c in contact
+        for (int l = 0; l < dimension; ++l) yc.col(l) = y.row(static_cast<Eigen::Index>(l) * contacts_n + c).transpose();
+        const Eigen::MatrixXd u = smp->trial->to_time(yc);  // k × Q
+        for (; i < rank && (*samples)[static_cast<size_t>(i)].contact == c; ++i) {
+          out.row(i) = u.col((*samples)[static_cast<size_t>(i)].index).transpose();
+        }
+      }
+      return out;
+    };
+    jac.times_u = [samples, smp, hs, contacts_n, dimension, sample_count, rank](const Eigen::MatrixXd& z) {
+      Eigen::MatrixXd wz(static_cast<Eigen::Index>(contacts_n) * dimension, z.cols());
+      Eigen::MatrixXd impulses(z.cols(), sample_count);
+      Eigen::Index i = 0;
+      for (int c = 0; c < contacts_n; ++c) {
+        impulses.setZero();
+        for (; i < rank && (*samples)[static_cast<size_t>(i)].contact == c; ++i) {
+          const Sample& si = (*samples)[static_cast<size_t>(i)];
+          impulses.col(si.index) = si.stiffness * z.row(i).transpose();
+        }
+        const Eigen::MatrixXd projected = smp->weighting->project(impulses);  // k × M
+        for (int l = 0; l < dimension; ++l) wz.row(static_cast<Eigen::Index>(l) * contacts_n + c) = projected.col(l).transpose();
+      }
+      return Eigen::MatrixXd(*hs * wz);
+    };
+    return jac;
+  }
+
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const {
     require_factorized();
     return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
@@ -709,9 +871,9 @@ Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a) const {
   const auto u = spectral::as_coefficients(a, p.n);
   const double fr = p.forcing.frequency_hz;
   // (T ⊗ X) vec(U) = vec(X U Tᵀ), layout.hpp.
-  const Eigen::MatrixXd gu = fr * fr * (p.system.mass * u * p.ops.mass.transpose()) +
-                             fr * (p.system.damping * u * p.ops.damping.transpose()) +
-                             p.system.stiffness * u * p.ops.stiffness.transpose();
+  const Eigen::MatrixXd gu = fr * fr * p.operator_product(p.system.mass, u, 0) +
+                             fr * p.operator_product(p.system.damping, u, 1) +
+                             p.operator_product(p.system.stiffness, u, 2);
   Eigen::VectorXd r = spectral::stacked(gu) - p.b;
   if (p.nc > 0) {
     const Eigen::VectorXd nx = p.contact_forces(p.gather(a), nullptr);
@@ -774,8 +936,7 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
   const Eigen::MatrixXd a = spectral::as_coefficients(p.solve_stacked(rhs, false), p.n);  // n × M
   // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C: (T ⊗ S) a ↔ S A Tᵀ on the n × M coefficients.
   const double f = p.forcing.frequency_hz;
-  const Eigen::MatrixXd ga = 2.0 * f * (p.system.mass * a * p.ops.mass.transpose()) +
-                             p.system.damping * a * p.ops.damping.transpose();
+  const Eigen::MatrixXd ga = 2.0 * f * p.operator_product(p.system.mass, a, 0) + p.operator_product(p.system.damping, a, 1);
   return p.gather(p.solve_stacked(spectral::stacked(ga), false)) / p.scale;
 }
 

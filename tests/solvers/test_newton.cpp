@@ -185,6 +185,7 @@ LowRankJacobian random_low_rank(Eigen::Index n, Eigen::Index r, double u_size, d
   std::srand(seed);
   LowRankJacobian j;
   j.scale = scale;
+  j.rows = n;
   j.u = u_size * Eigen::MatrixXd::Random(n, r);
   const Eigen::MatrixXd v = Eigen::MatrixXd::Random(r, n);
   j.times_v = [v](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(v * y); };
@@ -222,6 +223,7 @@ TEST(Newton, WoodburyLuSolvesIdentityPlusLowRank) {
   }
   LowRankJacobian none;
   none.scale = 0.5;
+  none.rows = n;
   none.u.resize(n, 0);
   none.capacitance.resize(0, 0);
   none.times_v = [](const Eigen::MatrixXd& x) { return Eigen::MatrixXd(0, x.cols()); };
@@ -248,6 +250,7 @@ struct LowRankCubic {
   Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return x + u * (v * x.array().cube().matrix()) - y; }
   LowRankJacobian jacobian(const Eigen::VectorXd& x) const {
     LowRankJacobian j;
+    j.rows = u.rows();
     j.u = u;
     const Eigen::MatrixXd vd = v * (3.0 * x.array().square()).matrix().asDiagonal();
     j.times_v = [vd](const Eigen::MatrixXd& z) { return Eigen::MatrixXd(vd * z); };

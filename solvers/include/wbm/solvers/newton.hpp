@@ -27,30 +27,38 @@ namespace wbm::solvers {
 
 /// The Jacobian of a system condensed onto the unknowns of a nonlinearity (the contact
 /// unknowns of the weighted residual method): identity plus a rank-r update,
-///   J = (I_n + U V) / s,   U: n × r (dense),   V: r × n (given by its product Y ↦ V Y),
-/// with the capacitance matrix C = I_r + V U (r × r) formed by the system, which knows a fast
-/// product with V (an FFT, or the few nonzeros of compactly supported wavelets). Sherman–
-/// Morrison–Woodbury [Hager 1989, SIAM Review 31(2) 221–239]: J⁻¹ y = s (y − U C⁻¹ V y), so a
-/// step costs an r × r LU instead of an n × n one; det J = det C / sⁿ.
-/// An empty `times_v` is the dense case: V = I_n, r = n, and J = C / s (u unused).
+///   J = (I_n + U V) / s,   U: n × r,   V: r × n,
+/// with V given by its product Y ↦ V Y, U by the dense matrix `u` or by its product `times_u`
+/// (then `u` is empty), and the capacitance matrix C = I_r + V U (r × r) formed by the system,
+/// which knows fast products (an FFT, or the few nonzeros of compactly supported wavelets).
+/// Sherman–Morrison–Woodbury [Hager 1989, SIAM Review 31(2) 221–239]:
+/// J⁻¹ y = s (y − U C⁻¹ V y), so a step costs an r × r LU instead of an n × n one;
+/// det J = det C / sⁿ. An empty `times_v` is the dense case: V = I_n, r = n, and J = C / s
+/// (U unused).
 struct LowRankJacobian {
   double scale = 1.0;            // s > 0
-  Eigen::MatrixXd u;             // U, n × r (empty in the dense case)
+  Eigen::Index rows = 0;         // n
+  Eigen::MatrixXd u;             // U, n × r, or empty when times_u is given (and in the dense case)
   Eigen::MatrixXd capacitance;   // C = I_r + V U, r × r (dense case: C = s J, n × n)
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_v;  // Y (n × k) ↦ V Y (r × k)
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_u;  // Z (r × k) ↦ U Z (n × k), optional
 
   [[nodiscard]] bool dense_form() const { return !times_v; }
-  [[nodiscard]] Eigen::Index size() const { return dense_form() ? capacitance.rows() : u.rows(); }
+  [[nodiscard]] Eigen::Index size() const { return dense_form() ? capacitance.rows() : rows; }
+  [[nodiscard]] Eigen::Index rank() const { return capacitance.rows(); }
+  /// U Z (n × k) for Z (r × k).
+  [[nodiscard]] Eigen::MatrixXd u_times(const Eigen::MatrixXd& z) const { return times_u ? times_u(z) : Eigen::MatrixXd(u * z); }
   /// J y (length n).
   [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const {
     if (dense_form()) return capacitance * y / scale;
-    return (y + u * times_v(y)) / scale;
+    if (rank() == 0) return y / scale;
+    return (y + u_times(times_v(y)).col(0)) / scale;
   }
   /// J as an n × n matrix: O(n² r) (the Levenberg–Marquardt fallback and tests).
   [[nodiscard]] Eigen::MatrixXd dense() const {
     if (dense_form()) return capacitance / scale;
-    Eigen::MatrixXd j = u * times_v(Eigen::MatrixXd::Identity(size(), size()));
-    j.diagonal().array() += 1.0;
+    Eigen::MatrixXd j = Eigen::MatrixXd::Identity(size(), size());
+    if (rank() > 0) j += u_times(times_v(Eigen::MatrixXd::Identity(size(), size())));
     return j / scale;
   }
 };
@@ -167,7 +175,7 @@ class WoodburyLu {
   bool factorize(const LowRankJacobian& jacobian) {
     j_ = jacobian;
     if (j_.capacitance.rows() > 0) lu_.compute(j_.capacitance);
-    return j_.capacitance.allFinite() && j_.u.allFinite();
+    return j_.capacitance.allFinite() && j_.u.allFinite();  // times_u's products are checked by newton()
   }
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
     Eigen::VectorXd d = woodbury(rhs);
@@ -182,7 +190,7 @@ class WoodburyLu {
   [[nodiscard]] Eigen::VectorXd woodbury(const Eigen::VectorXd& y) const {
     if (j_.dense_form()) return j_.scale * lu_.solve(y);
     if (j_.capacitance.rows() == 0) return j_.scale * y;
-    return j_.scale * (y - j_.u * lu_.solve(Eigen::VectorXd(j_.times_v(y))));
+    return j_.scale * (y - j_.u_times(lu_.solve(j_.times_v(y))).col(0));
   }
   LowRankJacobian j_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
