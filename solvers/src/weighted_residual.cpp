@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -243,13 +244,19 @@ struct WeightedResidual::Impl {
   Eigen::MatrixXd h;
   std::shared_ptr<const Eigen::SparseMatrix<double>> h_sparse;  // shared with the Jacobians' products
   bool h_is_sparse = false;
-  // Fourier:Fourier: H's blocks commute with time shifts (ShiftKernel), detected per frequency.
+  // Fourier:Fourier: H's blocks commute with time shifts (ShiftKernel), detected per frequency
+  // on first use (a Jacobian of low rank), once even if several threads ask.
   struct ShiftKernel {
     std::vector<Eigen::VectorXd> kappa;  // κ_cd(s), s = 0..Q−1, at index c·n_c + d
     Eigen::MatrixXd top;                 // t_cd: H's entry on the top functions cos πMτ (0 for odd M)
     Eigen::VectorXd g;                   // cos πMτ_q (the top function at the samples)
   };
-  std::optional<ShiftKernel> kernel;
+  mutable std::optional<ShiftKernel> kernel;
+  mutable std::once_flag kernel_once;
+  [[nodiscard]] const std::optional<ShiftKernel>& shift_kernel_once() const {
+    std::call_once(kernel_once, [this] { kernel = shift_kernel(); });
+    return kernel;
+  }
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
@@ -356,7 +363,6 @@ struct WeightedResidual::Impl {
     h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
     h_sparse.reset();
     if (h_is_sparse) h_sparse = std::make_shared<const Eigen::SparseMatrix<double>>(h.sparseView());
-    kernel = shift_kernel();
   }
 
   // H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
@@ -413,9 +419,10 @@ struct WeightedResidual::Impl {
           const int ci = cos_index[static_cast<size_t>(hh)], si = sin_index[static_cast<size_t>(hh)];
           const double a = at(ci, c, ci, d), b = at(ci, c, si, d);
           if (std::abs(a - at(si, c, si, d)) > tol || std::abs(b + at(si, c, ci, d)) > tol) return std::nullopt;
-          long index = 0;  // h·s mod Q
-          for (int sft = 0; sft < q; ++sft, index = (index + hh) % q) {
+          for (int sft = 0, index = 0; sft < q; ++sft) {  // index = h·s mod Q
             kappa(sft) += a * cos_table(index) - b * sin_table(index);
+            index += hh;
+            if (index >= q) index -= q;
           }
         }
         if (top) k.top(c, d) = at(m - 1, c, m - 1, d);
@@ -669,7 +676,7 @@ struct WeightedResidual::Impl {
       jac.capacitance.diagonal().array() += 1.0;
       return jac;
     }
-    if (kernel) return shift_kernel_jacobian(tangents, std::move(jac), rank);
+    if (shift_kernel_once()) return shift_kernel_jacobian(tangents, std::move(jac), rank);
     // Per contact: the active rows of the trial samples (sparse, wavelets) and the kink rows.
     struct Rows {
       std::vector<int> active;
