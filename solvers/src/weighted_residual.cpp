@@ -393,9 +393,9 @@ struct WeightedResidual::Impl {
     const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
     for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
       for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
-        if (std::abs(it.value()) > tol && basis.harmonic(static_cast<int>(it.row() / nc)) != basis.harmonic(static_cast<int>(it.col() / nc))) {
-          return std::nullopt;
-        }
+        const int row_harmonic = basis.harmonic(static_cast<int>(it.row() / nc));
+        const int col_harmonic = basis.harmonic(static_cast<int>(it.col() / nc));
+        if (std::abs(it.value()) > tol && row_harmonic != col_harmonic) return std::nullopt;
       }
     }
     const int paired = top ? harmonics - 1 : harmonics;
@@ -411,7 +411,9 @@ struct WeightedResidual::Impl {
     if (top) {
       for (int r = 0; r < q; ++r) k.g(r) = basis.value(m - 1, sampling->tau(r));
     }
-    auto at = [&](int kr, int c, int kc, int d) { return h(static_cast<Eigen::Index>(kr) * nc + c, static_cast<Eigen::Index>(kc) * nc + d); };
+    auto at = [&](int kr, int c, int kc, int d) {  // H(k_r·n_c + c, k_c·n_c + d)
+      return h(static_cast<Eigen::Index>(kr) * nc + c, static_cast<Eigen::Index>(kc) * nc + d);
+    };
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
         Eigen::VectorXd kappa = Eigen::VectorXd::Constant(q, at(0, c, 0, d));
@@ -456,7 +458,8 @@ struct WeightedResidual::Impl {
   }
 
   // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
-  [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u, int t) const {
+  [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
+                                                 int t) const {
     const Eigen::MatrixXd xu = x * u;
     if (operator_products->sparse) return xu * operator_products->transposed[static_cast<size_t>(t)];
     const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};

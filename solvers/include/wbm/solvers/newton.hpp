@@ -2,8 +2,9 @@
 /// The one Newton core of the project: damped Newton–Raphson for R(x) = 0 with a backtracking
 /// (Armijo) line search, an optional Levenberg–Marquardt fallback, and a linear-solver policy
 /// (dense LU; sparse LU (KLU) that keeps its symbolic analysis while the sparsity pattern is
-/// unchanged; or Woodbury for identity plus low rank, the condensed contact systems). The forced response (weighted residuals), the continuation corrector, the
-/// nonlinear-mode stationarity solves and the fixed-energy KKT solves all run through newton().
+/// unchanged; or Woodbury for identity plus low rank, the condensed contact systems). The
+/// forced response (weighted residuals), the continuation corrector, the nonlinear-mode
+/// stationarity solves and the fixed-energy KKT solves all run through newton().
 
 #include <algorithm>
 #include <cmath>
@@ -168,8 +169,8 @@ class SparseLu {
 /// (r × r), then d = s (y − U C⁻¹ V y) and one step of iterative refinement on the residual
 /// y − J d (which makes the Woodbury formula as accurate as a backward-stable solve when C is
 /// well conditioned [Yip 1986, SIAM J. Sci. Stat. Comput. 7(2) 507–513]). rcond() is C's
-/// reciprocal condition estimate (C and s J have the same nonzero spectrum but for the
-/// eigenvalue 1 of multiplicity n − r); in the dense form it is that of s J itself.
+/// reciprocal condition estimate (s J has the eigenvalues of C and the eigenvalue 1 with
+/// multiplicity n − r); in the dense form it is that of s J itself.
 class WoodburyLu {
  public:
   bool factorize(const LowRankJacobian& jacobian) {

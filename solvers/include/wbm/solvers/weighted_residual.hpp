@@ -232,8 +232,11 @@ class WeightedResidual {
   /// r of the contact samples where the law's derivative is nonzero (plus the kink samples of
   /// ContactQuadrature::CellAverage), so ∂r/∂x = (I + U V)/s_r with U = H W (n_c·M × r) and
   /// the capacitance C = I_r + V U; V is applied by FFTW (Fourier trial basis) or by the
-  /// wavelets' sparse rows. Dense form (C = I + H N) when r > ¾ n_c·M. dense() equals
-  /// contact_jacobian(x) to rounding. Throws std::runtime_error if G is singular.
+  /// wavelets' sparse rows. Fourier:Fourier (midpoint rule, H commuting with time shifts):
+  /// C gathered from the shift kernel of H in O(r²) and U given by its product (times_u).
+  /// Dense form (C = I + H N) when r > ¾ n_c·M. dense() equals contact_jacobian(x) to
+  /// rounding. The products hold their own data (shared), not a reference to this object.
+  /// Throws std::runtime_error if G is singular.
   [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
   /// a = G⁻¹(b − Pᵀ n_c(x)): the full coefficients for given contact unknowns.
