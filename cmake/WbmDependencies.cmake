@@ -17,6 +17,8 @@ wbm_require(FFTW3_FOUND libfftw3-dev "FFTW 3")
 find_package(GSL QUIET)
 wbm_require(GSL_FOUND libgsl-dev "GSL")
 
+find_package(Threads REQUIRED)  # the toolchain's threads (response-curve stability)
+
 list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
 find_package(KLU QUIET)  # cmake/FindKLU.cmake
 wbm_require(KLU_FOUND libsuitesparse-dev "SuiteSparse KLU")

@@ -1,11 +1,15 @@
 #include <wbm/solvers/response_curve.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <mutex>
 #include <cmath>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include <Eigen/Eigenvalues>
 
@@ -166,6 +170,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     throw std::invalid_argument("trace_response: observed_dof = " + std::to_string(dof) + " outside [0, " +
                                 std::to_string(base.dofs()) + ")");
   }
+  if (o.threads < 0) {
+    throw std::invalid_argument("trace_response: threads = " + std::to_string(o.threads) +
+                                ": must be >= 0 (0: one per hardware thread, 1: serial)");
+  }
   const ForcedResponseFamily family(base, o.parameter);
   // The start, with load stepping if needed.
   const WeightedResidualSolution start = base.solve();
@@ -212,7 +220,6 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     if (contacts[c].dof == dof) observed_contact = c;
   }
   const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
-  std::optional<FloquetResult> previous;
   for (const auto& p : branch.points) {
     ResponsePoint r;
     r.parameter = p.parameter;
@@ -238,28 +245,68 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.min_displacement = u.minCoeff();
     r.amplitude = 0.5 * (r.max_displacement - r.min_displacement);
     r.corrector_iterations = p.corrector_iterations;
-    if (o.stability) {
-      const auto t0 = std::chrono::steady_clock::now();
-      FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
-      // Refine where the error estimate could overturn the verdict (near a collision of two
-      // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
-      for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
-        const int steps = 4 * fl.steps;
-        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
-        const Eigen::MatrixXd ucf = base.trial().values(fine, 0) * spectral::as_coefficients(p.x, nc).transpose();
-        fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
+    curve.points.push_back(std::move(r));
+  }
+  if (o.stability) {
+    // The monodromy matrix of each point, on `threads` workers taking points in turn (an atomic
+    // counter: the refined points cost up to 16 times more). Each point's computation does not
+    // depend on the others, so the results are the same for any thread count.
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<FloquetResult> results(curve.points.size());
+    std::atomic<size_t> next{0};
+    auto work = [&] {
+      for (size_t i = next++; i < results.size(); i = next++) {
+        const ResponsePoint& r = curve.points[i];
+        const Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+        FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+        // Refine where the error estimate could overturn the verdict (near a collision of two
+        // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
+        for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
+          const int steps = 4 * fl.steps;
+          const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
+          const Eigen::MatrixXd ucf = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+          fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
+        }
+        results[i] = std::move(fl);
       }
+    };
+    const unsigned hardware = std::max(1U, std::thread::hardware_concurrency());
+    const size_t workers = std::min<size_t>(o.threads > 0 ? static_cast<size_t>(o.threads) : hardware, results.size());
+    std::vector<std::thread> pool;
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    for (size_t t = 1; t < workers; ++t) {
+      pool.emplace_back([&] {
+        try {
+          work();
+        } catch (...) {
+          const std::lock_guard<std::mutex> lock(failure_mutex);
+          if (!failure) failure = std::current_exception();
+          next = results.size();  // the others stop at their next point
+        }
+      });
+    }
+    try {
+      work();
+    } catch (...) {
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      next = results.size();
+    }
+    for (auto& th : pool) th.join();
+    if (failure) std::rethrow_exception(failure);
+    for (size_t i = 0; i < results.size(); ++i) {
+      ResponsePoint& r = curve.points[i];
+      const FloquetResult& fl = results[i];
       r.stability_settled = fl.settled();
       if (!r.stability_settled) ++curve.unsettled_points;
       r.monodromy_steps = fl.steps;
       r.max_multiplier_error = fl.multiplier_errors.size() > 0 ? fl.multiplier_errors.maxCoeff() : 0.0;
       r.max_multiplier = fl.max_modulus;
       r.stable = fl.stable();
-      if (previous) r.crossing = classify_crossing(*previous, fl);
-      previous = fl;
-      curve.stability_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (i > 0) r.crossing = classify_crossing(results[i - 1], fl);
     }
-    curve.points.push_back(std::move(r));
+    curve.stability_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   // A fold of the truncated weighted-residual system and the Floquet crossing of its orbit need
   // not fall on the same step: on the stiff stop at H = 32 the crossing comes 4 points after the

@@ -227,6 +227,32 @@ TEST(Continuation, DuffingMiddleBranchIsUnstable) {
   EXPECT_TRUE(curve.fold_confirmed[0] && curve.fold_confirmed[1]);
 }
 
+// The stability of the points runs on threads: the multipliers, their error estimates, the
+// verdicts and the crossings are bit-identical to the serial run (each point's monodromy matrix
+// is computed alone), with 1, 2 and 3 threads.
+TEST(Continuation, StabilityOnThreadsIsBitIdenticalToTheSerialRun) {
+  const Duffing d;
+  auto o = duffing_options(+1);
+  o.threads = 1;
+  const auto serial = solvers::trace_response(d.problem(8.0, 16), o);
+  ASSERT_GT(serial.points.size(), 20u);
+  for (int threads : {2, 3}) {
+    o.threads = threads;
+    const auto parallel = solvers::trace_response(d.problem(8.0, 16), o);
+    ASSERT_EQ(parallel.points.size(), serial.points.size());
+    for (size_t i = 0; i < serial.points.size(); ++i) {
+      const auto &a = serial.points[i], &b = parallel.points[i];
+      EXPECT_EQ(a.max_multiplier, b.max_multiplier) << i;
+      EXPECT_EQ(a.max_multiplier_error, b.max_multiplier_error) << i;
+      EXPECT_EQ(a.monodromy_steps, b.monodromy_steps) << i;
+      EXPECT_EQ(a.stable, b.stable) << i;
+      EXPECT_EQ(a.crossing, b.crossing) << i;
+    }
+    EXPECT_EQ(parallel.fold_confirmed, serial.fold_confirmed);
+    EXPECT_EQ(parallel.unsettled_points, serial.unsettled_points);
+  }
+}
+
 // A corrector that fails (non-finite residual) the first times it is asked inside a window is
 // retried with halved steps; the branch then reaches the end with the same folds.
 TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
@@ -460,6 +486,10 @@ TEST(Continuation, RefusesInvalidOptions) {
   o.parameter_min = 9.0;
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)solvers::trace_response(d.problem(8.0), o); },
                                                     {"start 8", "outside [9"});
+  o = duffing_options(+1);
+  o.threads = -1;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)solvers::trace_response(d.problem(8.0), o); },
+                                                    {"threads = -1", ">= 0"});
   solvers::PseudoArclengthOptions p;
   p.parameter_min = 1.0;
   p.parameter_max = 2.0;

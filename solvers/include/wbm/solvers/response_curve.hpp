@@ -83,7 +83,7 @@ struct ResponseCurve {
   int kinks = 0;
   long corrector_iterations = 0;
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
-  double stability_time_s = 0.0;       // monodromy matrices of every point
+  double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
   int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
 };
 
@@ -103,6 +103,10 @@ struct ResponseCurveOptions {
   /// (some ||μ| − 1| ≤ 2 × its error estimate, floquet.hpp) P is quadrupled, at most twice.
   int samples = 512;
   bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
+  /// Threads for the stability of the points (each point's monodromy matrix is independent, so
+  /// the multipliers are bit-identical for any count); 0: std::thread::hardware_concurrency().
+  /// stability_time_s is then wall time. Throws std::invalid_argument (trace_response) if < 0.
+  int threads = 0;
 };
 
 /// Traces the response of `base` (its frequency and amplitude are the start) over the range of
