@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <mutex>
-#include <cmath>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include <Eigen/Eigenvalues>
@@ -264,7 +265,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
           const int steps = 4 * fl.steps;
           const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
-          const Eigen::MatrixXd ucf = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+          const Eigen::MatrixXd ucf =
+              base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
           fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
         }
         results[i] = std::move(fl);
@@ -272,27 +274,26 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     };
     const unsigned hardware = std::max(1U, std::thread::hardware_concurrency());
     const size_t workers = std::min<size_t>(o.threads > 0 ? static_cast<size_t>(o.threads) : hardware, results.size());
-    std::vector<std::thread> pool;
-    std::exception_ptr failure;
+    std::exception_ptr failure;  // the first exception of any worker, rethrown here
     std::mutex failure_mutex;
+    auto guarded = [&] {
+      try {
+        work();
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        next = results.size();  // the other workers stop at their next point
+      }
+    };
+    std::vector<std::thread> pool;
     for (size_t t = 1; t < workers; ++t) {
-      pool.emplace_back([&] {
-        try {
-          work();
-        } catch (...) {
-          const std::lock_guard<std::mutex> lock(failure_mutex);
-          if (!failure) failure = std::current_exception();
-          next = results.size();  // the others stop at their next point
-        }
-      });
+      try {
+        pool.emplace_back(guarded);
+      } catch (const std::system_error&) {
+        break;  // no more threads to be had: the ones started (and this one) do the work
+      }
     }
-    try {
-      work();
-    } catch (...) {
-      const std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-      next = results.size();
-    }
+    guarded();
     for (auto& th : pool) th.join();
     if (failure) std::rethrow_exception(failure);
     for (size_t i = 0; i < results.size(); ++i) {
