@@ -153,6 +153,23 @@ struct SampledBasis {
     if (aft) throw std::logic_error("SampledBasis::project: derivative samples of a Fourier basis are not projected");
     return Eigen::MatrixXd(s * values) / static_cast<double>(q);
   }
+
+  // project() of samples that are zero but at the times `at`: S(:, at[i]) = x(:, i) (k × |at|),
+  // without forming the k × Q samples for wavelets (their sparse rows at those times).
+  [[nodiscard]] Eigen::MatrixXd project_at(const std::vector<int>& at, const Eigen::MatrixXd& x) const {
+    if (aft) {
+      Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(x.rows(), q);
+      for (size_t i = 0; i < at.size(); ++i) samples.col(at[i]) = x.col(static_cast<Eigen::Index>(i));
+      return project(samples);
+    }
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), m);
+    for (size_t i = 0; i < at.size(); ++i) {
+      for (SparseRows::InnerIterator it(values, at[i]); it; ++it) {
+        out.col(it.col()) += (it.value() / q) * x.col(static_cast<Eigen::Index>(i));
+      }
+    }
+    return out;
+  }
 };
 
 double elapsed(std::chrono::steady_clock::time_point since) {
@@ -230,6 +247,45 @@ struct WeightedResidual::Impl {
   };
   std::shared_ptr<const Sampling> sampling;
   bool cell_average_rule = false;
+
+  // The rows of V (low_rank_contact_jacobian) of one contact: the trial functions at its samples
+  // in contact (by FFTW for a Fourier trial basis, else these sparse rows), then their slopes at
+  // its kink samples (CellAverage), from row `first` of V.
+  struct ContactRows {
+    std::vector<int> active;
+    SparseRows values;           // wavelet trial: the rows at the active samples (active × M)
+    Eigen::MatrixXd slope_rows;  // trial slopes at the kink samples (sloped × M)
+    Eigen::Index first = 0;
+  };
+  // Y (n_c·M × k, rows x(k·n_c + c)) ↦ V Y (rank × k): LowRankJacobian::times_v. Holds its data.
+  struct TrialRows {
+    std::shared_ptr<const std::vector<ContactRows>> rows;
+    std::shared_ptr<const Sampling> sampling;
+    int contacts, dimension;
+    Eigen::Index rank;
+    Eigen::MatrixXd operator()(const Eigen::MatrixXd& y) const {
+      Eigen::MatrixXd out(rank, y.cols());
+      Eigen::MatrixXd yc;  // contact c's coefficients (M × k)
+      for (int c = 0; c < contacts; ++c) {
+        const ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+        const auto na = static_cast<Eigen::Index>(rc.active.size());
+        if (na == 0 && rc.slope_rows.rows() == 0) continue;
+        if (contacts > 1) {
+          yc.resize(dimension, y.cols());
+          for (int k = 0; k < dimension; ++k) yc.row(k) = y.row(static_cast<Eigen::Index>(k) * contacts + c);
+        }
+        const Eigen::MatrixXd& yv = contacts > 1 ? yc : y;
+        if (na > 0 && sampling->trial->aft) {
+          const Eigen::MatrixXd samples = sampling->trial->to_time(yv.transpose()).transpose();  // Q × k
+          out.middleRows(rc.first, na) = samples(rc.active, Eigen::all);
+        } else if (na > 0) {
+          out.middleRows(rc.first, na) = rc.values * yv;
+        }
+        if (rc.slope_rows.rows() > 0) out.middleRows(rc.first + na, rc.slope_rows.rows()) = rc.slope_rows * yv;
+      }
+      return out;
+    }
+  };
 
   // Linear solves with G (kronecker_factorization.hpp); set up once, factorized per frequency.
   std::optional<detail::KroneckerFactorization> g;
@@ -647,6 +703,13 @@ struct WeightedResidual::Impl {
     return jac;
   }
 
+  // I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
+  [[nodiscard]] Eigen::MatrixXd identity_plus_hn(const std::vector<ContactTangent>& tangents) const {
+    Eigen::MatrixXd j = compliance_times(contact_force_jacobian(tangents));
+    j.diagonal().array() += 1.0;
+    return j;
+  }
+
   // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
   [[nodiscard]] std::pair<Eigen::VectorXd, Eigen::VectorXd> sloped_samples(const ContactTangent& t) const {
     Eigen::VectorXd ts(static_cast<Eigen::Index>(t.sloped.size())), ks(ts.size());
@@ -675,41 +738,24 @@ struct WeightedResidual::Impl {
     const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
     jac.rows = size;
     if (4 * rank > 3 * size) {
-      jac.capacitance = compliance_times(contact_force_jacobian(tangents));
-      jac.capacitance.diagonal().array() += 1.0;
+      jac.capacitance = identity_plus_hn(tangents);
       return jac;
     }
     if (shift_kernel_once()) return shift_kernel_jacobian(tangents, std::move(jac), rank);
-    // Per contact: the active rows of the trial samples (sparse, wavelets) and the kink rows.
-    struct Rows {
-      std::vector<int> active;
-      SparseRows values;           // wavelet trial: V's rows at the active samples (active × M)
-      Eigen::MatrixXd slope_rows;  // trial slopes at the kink samples (sloped × M)
-      Eigen::Index first = 0;      // V's first row for this contact
-    };
-    auto rows = std::make_shared<std::vector<Rows>>(static_cast<size_t>(nc));
+    auto rows = std::make_shared<std::vector<ContactRows>>(static_cast<size_t>(nc));
     Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, rank);
     Eigen::Index first = 0;
     for (int c = 0; c < nc; ++c) {
       const ContactTangent& t = tangents[static_cast<size_t>(c)];
-      Rows& rc = (*rows)[static_cast<size_t>(c)];
+      ContactRows& rc = (*rows)[static_cast<size_t>(c)];
       rc.first = first;
       rc.active = t.active;
       const auto na = static_cast<Eigen::Index>(t.active.size());
       if (na > 0) {
-        Eigen::MatrixXd wa(na, m);  // row i: κ_q p_j(τ_q)/Q at active sample q = active[i]
-        if (weighting.is_fourier()) {
-          Eigen::MatrixXd impulses = Eigen::MatrixXd::Zero(na, q);
-          for (Eigen::Index i = 0; i < na; ++i) impulses(i, t.active[i]) = t.kc(t.active[i]);
-          wa = sampling->aft->project(impulses);
-        } else {
-          const SparseRows& sw = sampling->weighting->values;
-          wa.setZero();
-          for (Eigen::Index i = 0; i < na; ++i) {
-            const int r = t.active[static_cast<size_t>(i)];
-            for (SparseRows::InnerIterator it(sw, r); it; ++it) wa(i, it.col()) = t.kc(r) * it.value() / q;
-          }
-        }
+        // Row i: κ_q p_j(τ_q)/Q at the active sample q = active[i].
+        Eigen::VectorXd kc(na);
+        for (Eigen::Index i = 0; i < na; ++i) kc(i) = t.kc(t.active[static_cast<size_t>(i)]);
+        const Eigen::MatrixXd wa = sampling->weighting->project_at(t.active, kc.asDiagonal().toDenseMatrix());
         for (int j = 0; j < m; ++j) w.block(static_cast<Eigen::Index>(j) * nc + c, first, 1, na) = wa.col(j).transpose();
         if (!trial.is_fourier()) {
           const SparseRows& sv = sampling->trial->values;
@@ -733,30 +779,7 @@ struct WeightedResidual::Impl {
       }
       first += na + static_cast<Eigen::Index>(t.sloped.size());
     }
-    const int contacts_n = nc, dimension = m;
-    const bool fourier_trial = trial.is_fourier();
-    const std::shared_ptr<const Sampling> smp = sampling;
-    jac.times_v = [rows, smp, contacts_n, dimension, fourier_trial, rank](const Eigen::MatrixXd& y) {
-      Eigen::MatrixXd out(rank, y.cols());
-      for (int c = 0; c < contacts_n; ++c) {
-        const Rows& rc = (*rows)[static_cast<size_t>(c)];
-        Eigen::MatrixXd yc;  // contact c's coefficients (M × k)
-        if (contacts_n > 1) {
-          yc.resize(dimension, y.cols());
-          for (int k = 0; k < dimension; ++k) yc.row(k) = y.row(static_cast<Eigen::Index>(k) * contacts_n + c);
-        }
-        const Eigen::MatrixXd& yv = contacts_n > 1 ? yc : y;
-        const auto na = static_cast<Eigen::Index>(rc.active.size());
-        if (na > 0 && fourier_trial) {
-          const Eigen::MatrixXd samples = smp->trial->to_time(yv.transpose()).transpose();  // Q × k
-          out.middleRows(rc.first, na) = samples(rc.active, Eigen::all);
-        } else if (na > 0) {
-          out.middleRows(rc.first, na) = rc.values * yv;
-        }
-        if (rc.slope_rows.rows() > 0) out.middleRows(rc.first + na, rc.slope_rows.rows()) = rc.slope_rows * yv;
-      }
-      return out;
-    };
+    jac.times_v = TrialRows{rows, sampling, nc, m, rank};
     jac.u = compliance_times(w);
     jac.capacitance = jac.times_v(jac.u);
     jac.capacitance.diagonal().array() += 1.0;
@@ -785,40 +808,35 @@ struct WeightedResidual::Impl {
       const double weight = sj.stiffness / q;
       for (Eigen::Index i = 0; i < rank; ++i) {
         const Sample& si = (*samples)[static_cast<size_t>(i)];
-        const int shift = ((si.index - sj.index) % q + q) % q;
+        const int shift = si.index >= sj.index ? si.index - sj.index : si.index - sj.index + q;
         jac.capacitance(i, j) = (k.kappa[static_cast<size_t>(si.contact) * nc + sj.contact](shift) +
                                  k.top(si.contact, sj.contact) * k.g(si.index) * k.g(sj.index)) * weight;
       }
       jac.capacitance(j, j) += 1.0;
     }
-    const int contacts_n = nc, dimension = m, sample_count = q;
+    auto rows = std::make_shared<std::vector<ContactRows>>(static_cast<size_t>(nc));
+    Eigen::Index first = 0;
+    for (int c = 0; c < nc; ++c) {
+      ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+      rc.first = first;
+      rc.active = tangents[static_cast<size_t>(c)].active;
+      first += static_cast<Eigen::Index>(rc.active.size());
+    }
+    jac.times_v = TrialRows{rows, sampling, nc, m, rank};
     const std::shared_ptr<const Sampling> smp = sampling;
     const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
-    jac.times_v = [samples, smp, contacts_n, dimension, rank](const Eigen::MatrixXd& y) {
-      Eigen::MatrixXd out(rank, y.cols());
-      Eigen::MatrixXd yc(y.cols(), dimension);  // contact c's coefficients, transposed (k × M)
-      Eigen::Index i = 0;
-      for (int c = 0; c < contacts_n && i < rank; ++c) {
-        if ((*samples)[static_cast<size_t>(i)].contact != c) continue;  // no sample of c in contact
-        for (int l = 0; l < dimension; ++l) yc.col(l) = y.row(static_cast<Eigen::Index>(l) * contacts_n + c).transpose();
-        const Eigen::MatrixXd u = smp->trial->to_time(yc);  // k × Q
-        for (; i < rank && (*samples)[static_cast<size_t>(i)].contact == c; ++i) {
-          out.row(i) = u.col((*samples)[static_cast<size_t>(i)].index).transpose();
-        }
-      }
-      return out;
-    };
-    jac.times_u = [samples, smp, hs, contacts_n, dimension, sample_count, rank](const Eigen::MatrixXd& z) {
+    const int contacts_n = nc, dimension = m;
+    jac.times_u = [samples, rows, smp, hs, contacts_n, dimension](const Eigen::MatrixXd& z) {
+      // W Z: per contact, the rows of Z times κ_q placed at their samples, projected.
       Eigen::MatrixXd wz(static_cast<Eigen::Index>(contacts_n) * dimension, z.cols());
-      Eigen::MatrixXd impulses(z.cols(), sample_count);
-      Eigen::Index i = 0;
       for (int c = 0; c < contacts_n; ++c) {
-        impulses.setZero();
-        for (; i < rank && (*samples)[static_cast<size_t>(i)].contact == c; ++i) {
-          const Sample& si = (*samples)[static_cast<size_t>(i)];
-          impulses.col(si.index) = si.stiffness * z.row(i).transpose();
+        const ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+        const auto na = static_cast<Eigen::Index>(rc.active.size());
+        Eigen::MatrixXd x(z.cols(), na);  // k × active
+        for (Eigen::Index i = 0; i < na; ++i) {
+          x.col(i) = (*samples)[static_cast<size_t>(rc.first + i)].stiffness * z.row(rc.first + i).transpose();
         }
-        const Eigen::MatrixXd projected = smp->weighting->project(impulses);  // k × M
+        const Eigen::MatrixXd projected = smp->weighting->project_at(rc.active, x);  // k × M
         for (int l = 0; l < dimension; ++l) wz.row(static_cast<Eigen::Index>(l) * contacts_n + c) = projected.col(l).transpose();
       }
       return Eigen::MatrixXd(*hs * wz);
@@ -955,9 +973,7 @@ Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) con
   p.require_factorized();
   std::vector<Impl::ContactTangent> tangents;
   (void)p.contact_forces(x, &tangents);
-  Eigen::MatrixXd jac = p.compliance_times(p.contact_force_jacobian(tangents));
-  jac.diagonal().array() += 1.0;
-  return jac / p.scale;
+  return p.identity_plus_hn(tangents) / p.scale;
 }
 
 LowRankJacobian WeightedResidual::contact_jacobian_low_rank(const Eigen::VectorXd& x) const {
