@@ -152,6 +152,14 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
                                   const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
   system.validate();
   ContactPoint::validate(contacts, system.dofs());
+  for (const auto& c : contacts) {
+    if (c.law->rigid()) {
+      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + "; the monodromy matrix of an impacting orbit needs a saltation "
+                                  "matrix at every impact, which is not implemented: stability is not computed for "
+                                  "rigid stops (use a LinearPenalty for a stiff-stop stability estimate)");
+    }
+  }
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   const Eigen::Index p_count = contact_displacement.cols();
   if (p_count < 8) {

@@ -63,6 +63,11 @@ PeriodicFields evaluate_fields(const TimeBasis& trial, const Eigen::MatrixXd& co
 Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& displacement) {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(displacement.cols());
   if (contacts.empty()) return f;
+  if (contacts.front().law->rigid()) {
+    throw std::invalid_argument("contact_force: the contact at DOF " + std::to_string(contacts.front().dof) +
+                                " is a rigid stop, whose force is not a function of the displacement: read "
+                                "WeightedResidualSolution::contact_force_samples instead");
+  }
   for (Eigen::Index p = 0; p < f.size(); ++p) f(p) = contacts.front().law->force(displacement(contacts.front().dof, p));
   return f;
 }

@@ -155,6 +155,11 @@ void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch)
 }  // namespace
 
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
+  if (base.rigid()) {
+    throw std::invalid_argument("trace_response: the contacts are rigid stops; continuation of the Signorini "
+                                "conditions is not implemented yet: solve point by point (a sweep) with the rigid "
+                                "law, or trace the branch with a stiff LinearPenalty");
+  }
   if (base.contact_unknowns(base.linear_response()).size() == 0) {
     throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
                                 "(use frequency_response)");

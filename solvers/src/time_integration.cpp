@@ -96,7 +96,142 @@ Ode make_ode(const MechanicalSystem& system, int forced_dof, double amplitude,
   return ode;
 }
 
+void refuse_rigid_stops(const std::vector<ContactPoint>& contacts, const char* where) {
+  for (const auto& c : contacts) {
+    if (c.law->rigid()) {
+      throw std::invalid_argument(std::string(where) + ": the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + ", which has no force law for an ODE integrator: use "
+                                  "integrate_moreau_jean_to_periodic (impulses, restitution law) or a LinearPenalty");
+    }
+  }
+}
+
 }  // namespace
+
+void MoreauJeanOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("MoreauJeanOptions." + what); };
+  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
+  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
+    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
+         std::to_string(samples_per_period));
+  }
+  if (!(theta >= 0.5 && theta <= 1.0)) fail("theta = " + std::to_string(theta) + ": must lie in [0.5, 1]");
+  if (!(restitution >= 0.0 && restitution <= 1.0)) fail("restitution = " + std::to_string(restitution) + ": must lie in [0, 1]");
+  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
+  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
+}
+
+PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
+                                                   const std::vector<ContactPoint>& contacts,
+                                                   const MoreauJeanOptions& options) {
+  system.validate();
+  forcing.validate(system.dofs());
+  ContactPoint::validate(contacts, system.dofs());
+  options.validate();
+  for (const auto& c : contacts) {
+    if (!c.law->rigid()) {
+      throw std::invalid_argument("integrate_moreau_jean_to_periodic: the contact at DOF " + std::to_string(c.dof) +
+                                  " is a " + c.law->describe() + "; this scheme takes rigid stops (contact::RigidStop) "
+                                  "only: use integrate_to_periodic for penalty laws");
+    }
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const int n = system.dofs();
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  const double period = 1.0 / forcing.frequency_hz;
+  const int steps = options.steps_per_period, p_count = options.samples_per_period;
+  const int stride = steps / p_count;
+  const double h = period / steps, th = options.theta, e = options.restitution;
+  const Eigen::MatrixXd m = Eigen::MatrixXd(system.mass), c = Eigen::MatrixXd(system.damping),
+                        k = Eigen::MatrixXd(system.stiffness);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(m + h * th * c + h * h * th * th * k);
+  Eigen::MatrixXd e_cols = Eigen::MatrixXd::Zero(n, nc);
+  for (Eigen::Index i = 0; i < nc; ++i) e_cols(contacts[static_cast<size_t>(i)].dof, i) = 1.0;
+  const Eigen::MatrixXd minv_e = lu.solve(e_cols);                  // M̂⁻¹ E
+  const Eigen::MatrixXd delassus = e_cols.transpose() * minv_e;     // W
+  // v_free = M̂⁻¹ [(M − h(1−θ)C − h²θ(1−θ)K) v − hK q + h f_θ]
+  const Eigen::MatrixXd a_v = lu.solve(m - h * (1.0 - th) * c - h * h * th * (1.0 - th) * k);
+  const Eigen::MatrixXd a_q = lu.solve(-h * k);
+  Eigen::VectorXd a_f = Eigen::VectorXd::Zero(n);
+  a_f(forcing.dof) = h * forcing.amplitude;
+  a_f = lu.solve(a_f);
+  const double omega = 2.0 * std::numbers::pi * forcing.frequency_hz;
+
+  PeriodicResponse out;
+  out.frequency_hz = forcing.frequency_hz;
+  out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd disp(n, p_count), vel(n, p_count);
+  Eigen::VectorXd previous_tip, impulse(nc), u_free(nc), u_old(nc);
+  auto& rep = out.report;
+  for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
+    for (int step = 0; step < steps; ++step) {
+      if (step % stride == 0) {
+        disp.col(step / stride) = q;
+        vel.col(step / stride) = v;
+      }
+      const double t0 = static_cast<double>(step) * h, t1 = t0 + h;  // the forcing has period T
+      const double f_theta = th * std::cos(omega * t1) + (1.0 - th) * std::cos(omega * t0);
+      Eigen::VectorXd v_new = a_v * v + a_q * q + f_theta * a_f;
+      impulse.setZero();
+      if (nc > 0) {
+        std::vector<Eigen::Index> active;
+        for (Eigen::Index i = 0; i < nc; ++i) {
+          const auto& ct = contacts[static_cast<size_t>(i)];
+          u_old(i) = v(ct.dof);
+          u_free(i) = v_new(ct.dof);
+          if (ct.law->gap() - q(ct.dof) - 0.5 * h * u_old(i) <= 0.0) active.push_back(i);
+        }
+        // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0.
+        for (int sweep = 0; sweep < 1000 && !active.empty(); ++sweep) {
+          double change = 0.0, size = 0.0;
+          for (Eigen::Index i : active) {
+            double r = -(u_free(i) + e * u_old(i));
+            for (Eigen::Index j : active) if (j != i) r += delassus(i, j) * impulse(j);
+            const double p_new = std::max(0.0, -r / delassus(i, i));
+            change = std::max(change, std::abs(p_new - impulse(i)));
+            size = std::max(size, std::abs(p_new));
+            impulse(i) = p_new;
+          }
+          if (active.size() == 1 || change <= 1e-14 * size) break;
+        }
+        v_new.noalias() -= minv_e * impulse;
+      }
+      q += h * (th * v_new + (1.0 - th) * v);
+      v = std::move(v_new);
+    }
+    if (!q.allFinite() || !v.allFinite()) {
+      rep.status = SolveStatus::NonFinite;
+      rep.message = "non-finite state in period " + std::to_string(period_index);
+      rep.periods = period_index;
+      break;
+    }
+    rep.periods = period_index;
+    rep.steps += steps;
+    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
+    if (previous_tip.size() == tip.size()) {
+      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
+      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
+      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
+      rep.periodicity.push_back(delta);
+      if (delta < options.periodicity_tolerance) {
+        rep.status = SolveStatus::Converged;
+        break;
+      }
+    }
+    previous_tip = tip;
+  }
+  out.displacement = std::move(disp);
+  out.velocity = std::move(vel);
+  if (rep.message.empty()) {
+    std::ostringstream os;
+    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of "
+       << steps << " Moreau–Jean steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
+    rep.message = os.str();
+  }
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
 
 PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
                                        const std::vector<ContactPoint>& contacts,
@@ -104,6 +239,7 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   system.validate();
   forcing.validate(system.dofs());
   ContactPoint::validate(contacts, system.dofs());
+  refuse_rigid_stops(contacts, "integrate_to_periodic");
   options.validate();
   const auto start = std::chrono::steady_clock::now();
 
@@ -175,6 +311,7 @@ Trajectory integrate_free(const MechanicalSystem& system, const std::vector<Cont
                           const TimeIntegrationOptions& options) {
   system.validate();
   ContactPoint::validate(contacts, system.dofs());
+  refuse_rigid_stops(contacts, "integrate_free");
   options.validate();
   const int n = system.dofs();
   if (u0.size() != n || v0.size() != n || !u0.allFinite() || !v0.allFinite()) {

@@ -14,6 +14,7 @@
 
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
@@ -316,6 +317,21 @@ struct WeightedResidual::Impl {
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
 
+  // Rigid stops (every contact a RigidStop): the trial functions at τ_{k+1} (M × M, row k: the
+  // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
+  // τ_k = (k + ½)/M over M (M × M, row j = function, column k), frequency independent and
+  // shared; per frequency the Delassus operator D = V H W, u_lin = V x_lin, and c = mean |D_ii|.
+  bool rigid = false;
+  struct Collocation {
+    Eigen::VectorXd tau;
+    Eigen::MatrixXd trial_values, weights;
+    Eigen::VectorXd gaps;  // g0 of contact c at row k·n_c + c
+  };
+  std::shared_ptr<const Collocation> collocation;
+  Eigen::MatrixXd delassus;
+  Eigen::VectorXd u_lin;
+  double force_compliance = 1.0;
+
   Impl(MechanicalSystem s, HarmonicForcing f, std::vector<ContactPoint> c, TimeBasis tr, TimeBasis we,
        WeightedResidualOptions o)
       : system(std::move(s)), forcing(f), contacts(std::move(c)), trial(std::move(tr)), weighting(std::move(we)),
@@ -349,6 +365,20 @@ struct WeightedResidual::Impl {
     const std::string why = inadmissibility(trial, weighting, options.formulation, options.operators);
     if (!why.empty()) throw std::invalid_argument(why);
 
+    int rigid_count = 0;
+    for (const auto& ct : contacts) rigid_count += ct.law->rigid() ? 1 : 0;
+    rigid = rigid_count > 0;
+    if (rigid && rigid_count < nc) {
+      throw std::invalid_argument("weighted residual: " + std::to_string(rigid_count) + " of the " + std::to_string(nc) +
+                                  " contacts are rigid stops and the others penalty laws; mixing them in one problem "
+                                  "is not supported: make every contact rigid, or give the rigid ones a stiff "
+                                  "LinearPenalty");
+    }
+    if (rigid && options.contact_quadrature == ContactQuadrature::CellAverage) {
+      throw std::invalid_argument("WeightedResidualOptions.contact_quadrature = cell-average integrates a penalty law over "
+                                  "each cell; rigid stops impose the Signorini conditions at the collocation instants "
+                                  "instead: use ContactQuadrature::Midpoint");
+    }
     cell_average_rule = options.contact_quadrature == ContactQuadrature::CellAverage;
     if (cell_average_rule && trial.max_derivative() < 1) {
       throw std::invalid_argument("WeightedResidualOptions.contact_quadrature = cell-average averages the contact law "
@@ -380,12 +410,28 @@ struct WeightedResidual::Impl {
       }
     }
 
+    if (rigid) {
+      auto col = std::make_shared<Collocation>();
+      col->tau.resize(m);
+      for (int k = 0; k < m; ++k) col->tau(k) = (k + 0.5) / m;
+      Eigen::VectorXd next(m);  // τ_{k+1}: the instant whose gap λ_k keeps open
+      for (int k = 0; k < m; ++k) next(k) = col->tau((k + 1) % m);
+      col->trial_values = trial.values(next, 0);
+      col->weights = weighting.values(col->tau, 0).transpose() / static_cast<double>(m);
+      col->gaps.resize(static_cast<Eigen::Index>(nc) * m);
+      for (int k = 0; k < m; ++k) {
+        for (int c = 0; c < nc; ++c) col->gaps(static_cast<Eigen::Index>(k) * nc + c) = contacts[c].law->gap();
+      }
+      collocation = col;
+    }
+
     factorized = g->factorize(system, ops, forcing.frequency_hz);
     if (!factorized) return;
     a_lin = g->solve(b, false);
     x_lin = gather(a_lin);
     if (nc > 0) {
       set_compliance();
+      if (rigid) set_delassus();
       double gmax = 0.0;
       for (const auto& ct : contacts) gmax = std::max(gmax, std::abs(ct.law->gap()));
       // The larger of the gap and the linear response: a 1 nm gap beside a millimetre motion
@@ -403,7 +449,7 @@ struct WeightedResidual::Impl {
         ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
         cell_average_rule(base.cell_average_rule),
         g(base.g->unfactorized()), b(base.b), scale(base.scale),
-        contact_rows(base.contact_rows) {
+        contact_rows(base.contact_rows), rigid(base.rigid), collocation(base.collocation) {
     forcing.frequency_hz = frequency_hz;
     forcing.validate(n);
     factorized = g->factorize(system, ops, forcing.frequency_hz);
@@ -411,6 +457,64 @@ struct WeightedResidual::Impl {
     a_lin = g->solve(b, false);
     x_lin = gather(a_lin);
     if (nc > 0) set_compliance();
+    if (nc > 0 && rigid) set_delassus();
+  }
+
+  // Y (M·n_c × k, rows j·n_c + c) ↦ (T ⊗ I_{n_c}) Y for an M × M time matrix T.
+  [[nodiscard]] Eigen::MatrixXd per_contact(const Eigen::MatrixXd& t, const Eigen::MatrixXd& y) const {
+    if (nc == 1) return t * y;
+    Eigen::MatrixXd out(y.rows(), y.cols());
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::MatrixXd yc = y(Eigen::seq(c, Eigen::last, nc), Eigen::all);
+      out(Eigen::seq(c, Eigen::last, nc), Eigen::all) = t * yc;
+    }
+    return out;
+  }
+
+  // D = V H W, u_lin = V x_lin and c = mean |D_ii| (rigid stops), at this frequency.
+  void set_delassus() {
+    const Collocation& col = *collocation;
+    const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, size);  // W ⊗ I_{n_c}
+    for (int c = 0; c < nc; ++c) w(Eigen::seq(c, Eigen::last, nc), Eigen::seq(c, Eigen::last, nc)) = col.weights;
+    delassus = per_contact(col.trial_values, compliance_times(w));
+    u_lin = per_contact(col.trial_values, x_lin);
+    force_compliance = delassus.diagonal().cwiseAbs().mean();
+    if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+  }
+
+  void require_rigid(const char* what) const {
+    if (!rigid) {
+      throw std::logic_error(std::string("WeightedResidual::") + what +
+                             ": the contacts are penalty laws, not rigid stops (use the contact_* functions)");
+    }
+  }
+  void refuse_rigid(const char* what) const {
+    if (rigid) {
+      throw std::logic_error(std::string("WeightedResidual::") + what + ": the contacts are rigid stops (" +
+                             contacts.front().law->describe() +
+                             "), which have no force law f_c(u): use signorini_residual, signorini_jacobian, "
+                             "expand_forces and residual(a, lambda)");
+    }
+  }
+
+  // φ(λ) = min(c λ, g0 − u(λ)) [m] at load s, with the gap samples u(λ) = s u_lin − D λ.
+  [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows) const {
+    require_factorized();
+    const Eigen::VectorXd gap = collocation->gaps - (load * u_lin - delassus * lambda);
+    Eigen::VectorXd phi(gap.size());
+    if (gap_rows != nullptr) gap_rows->clear();
+    for (Eigen::Index i = 0; i < gap.size(); ++i) {
+      const auto cp = contact::signorini_min(force_compliance * lambda(i), gap(i));
+      phi(i) = cp.value;
+      if (cp.gap_branch && gap_rows != nullptr) gap_rows->push_back(static_cast<int>(i));
+    }
+    return phi;
+  }
+
+  // n(λ) = (W ⊗ I_{n_c}) λ, stacked like x: the weighted residual of the collocation impulses.
+  [[nodiscard]] Eigen::VectorXd collocation_forces(const Eigen::VectorXd& lambda) const {
+    return per_contact(collocation->weights, lambda);
   }
 
   void set_compliance() {
@@ -658,6 +762,7 @@ struct WeightedResidual::Impl {
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
   // the law's derivatives at the samples, one ContactTangent per contact.
   Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
+    refuse_rigid("contact forces as a function of the displacement");
     const Sampling& smp = *sampling;
     const Eigen::MatrixXd u = contact_samples(x);
     Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
@@ -845,6 +950,7 @@ struct WeightedResidual::Impl {
   }
 
   [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const {
+    refuse_rigid("contact_residual");
     require_factorized();
     return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
   }
@@ -991,6 +1097,92 @@ Eigen::VectorXd WeightedResidual::expand(const Eigen::VectorXd& x) const {
   }
   return p.solve_stacked(rhs, false);
 }
+
+bool WeightedResidual::rigid() const { return impl_->rigid; }
+
+Eigen::VectorXd WeightedResidual::collocation_times() const {
+  impl_->require_rigid("collocation_times");
+  return impl_->collocation->tau;
+}
+
+const Eigen::MatrixXd& WeightedResidual::delassus() const {
+  impl_->require_rigid("delassus");
+  impl_->require_factorized();
+  return impl_->delassus;
+}
+
+double WeightedResidual::force_compliance() const {
+  impl_->require_rigid("force_compliance");
+  impl_->require_factorized();
+  return impl_->force_compliance;
+}
+
+Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lambda, double load) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_residual");
+  if (lambda.size() != static_cast<Eigen::Index>(p.nc) * p.m) {
+    throw std::invalid_argument("WeightedResidual::signorini_residual: lambda has length " + std::to_string(lambda.size()) +
+                                ", expected n_c*M = " + std::to_string(p.nc * p.m));
+  }
+  return p.signorini(lambda, load, nullptr) / p.scale;
+}
+
+LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_jacobian");
+  std::vector<int> active;
+  (void)p.signorini(lambda, 1.0, &active);
+  const Eigen::Index size = lambda.size();
+  const auto rank = static_cast<Eigen::Index>(active.size());
+  const double c = p.force_compliance;
+  LowRankJacobian jac;
+  jac.scale = p.scale / c;  // J = (c/s_r)(I + P_A (D/c − I)_A)
+  jac.rows = size;
+  if (4 * rank > 3 * size) {  // dense form: s J = I with the gap rows replaced by D/c
+    jac.capacitance = Eigen::MatrixXd::Identity(size, size);
+    for (int i : active) jac.capacitance.row(i) = p.delassus.row(i) / c;
+    return jac;
+  }
+  jac.u = Eigen::MatrixXd::Zero(size, rank);
+  for (Eigen::Index i = 0; i < rank; ++i) jac.u(active[static_cast<size_t>(i)], i) = 1.0;
+  auto rows = std::make_shared<Eigen::MatrixXd>(p.delassus(active, Eigen::all) / c);  // (D/c)_A, r × n
+  for (Eigen::Index i = 0; i < rank; ++i) (*rows)(i, active[static_cast<size_t>(i)]) -= 1.0;
+  jac.capacitance = p.delassus(active, active) / c;  // I + (D/c − I)_AA
+  jac.times_v = [rows](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(*rows * y); };
+  return jac;
+}
+
+Eigen::VectorXd WeightedResidual::expand_forces(const Eigen::VectorXd& lambda, double load) const {
+  const auto& p = *impl_;
+  p.require_rigid("expand_forces");
+  p.require_factorized();
+  Eigen::VectorXd rhs = load * p.b;
+  const Eigen::VectorXd nx = p.collocation_forces(lambda);
+  for (size_t j = 0; j < p.contact_rows.size(); ++j) rhs(p.contact_rows[j]) -= nx(static_cast<Eigen::Index>(j));
+  return p.solve_stacked(rhs, false);
+}
+
+Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a, const Eigen::VectorXd& lambda) const {
+  const auto& p = *impl_;
+  p.require_rigid("residual(a, lambda)");
+  const auto u = spectral::as_coefficients(a, p.n);
+  const double fr = p.forcing.frequency_hz;
+  const Eigen::MatrixXd gu = fr * fr * p.operator_product(p.system.mass, u, 0) +
+                             fr * p.operator_product(p.system.damping, u, 1) +
+                             p.operator_product(p.system.stiffness, u, 2);
+  Eigen::VectorXd r = spectral::stacked(gu) - p.b;
+  const Eigen::VectorXd nx = p.collocation_forces(lambda);
+  for (size_t j = 0; j < p.contact_rows.size(); ++j) r(p.contact_rows[j]) += nx(static_cast<Eigen::Index>(j));
+  return r;
+}
+
+// The Signorini conditions at load s as a NonlinearSystem on λ (rigid stops).
+struct WeightedResidual::Signorini {
+  const WeightedResidual* wr;
+  double load;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& lambda) const { return wr->signorini_residual(lambda, load); }
+  [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& lambda) const { return wr->signorini_jacobian(lambda); }
+};
 
 // The condensed system at load factor s (forcing s·F) as a NonlinearSystem.
 struct WeightedResidual::Condensed {
@@ -1152,6 +1344,7 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
     s.relative_residual = std::numeric_limits<double>::infinity();
     return s;
   }
+  if (p.rigid) return solve_rigid(x0, std::move(s), start);
   Eigen::VectorXd x;
   if (p.nc > 0) {
     Eigen::VectorXd start_x = x0 != nullptr ? *x0 : p.x_lin;
@@ -1223,6 +1416,54 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
                        " (ill-conditioned G? condition estimate " + format_number(s.condition_number) + ")";
     s.rounding_floor = rounding_floor(x);
     s.report.message += "; rounding floor of the residual at this solution " + format_number(s.rounding_floor);
+  }
+  s.wall_time_s = elapsed(start);
+  return s;
+}
+
+WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
+                                                       std::chrono::steady_clock::time_point start) const {
+  const auto& p = *impl_;
+  const Eigen::Index size = static_cast<Eigen::Index>(p.nc) * p.m;
+  const Eigen::VectorXd l0 = lambda0 != nullptr ? *lambda0 : Eigen::VectorXd::Zero(size);
+  if (l0.size() != size) {
+    throw std::invalid_argument("WeightedResidual::solve: initial contact forces have length " + std::to_string(l0.size()) +
+                                ", expected n_c*M = " + std::to_string(size) + " (rigid stops: the force samples λ)");
+  }
+  NewtonResult result = newton(Signorini{this, 1.0}, l0, p.options.newton);
+  s.path = SolutionPath::DirectNewton;
+  s.report = std::move(result.report);
+  s.report.message = "primal-dual active set (semismooth Newton on the Signorini conditions): " + s.report.message;
+  const Eigen::VectorXd& lambda = result.x;
+  const Eigen::VectorXd a = expand_forces(lambda);
+  s.coefficients = spectral::as_coefficients(a, p.n);
+  s.contact_force_samples = spectral::as_coefficients(lambda, p.nc);
+  const double bnorm = p.b.norm();
+  s.relative_residual = residual(a, lambda).norm() / (bnorm > 0.0 ? bnorm : 1.0);
+  s.residual_tolerance = p.options.residual_tolerance;
+  // The conditions recomputed from the coefficients, not from D λ.
+  const Eigen::VectorXd xa = p.gather(a);
+  const Eigen::VectorXd gap = p.collocation->gaps - p.per_contact(p.collocation->trial_values, xa);
+  Eigen::VectorXd phi(size);
+  for (Eigen::Index i = 0; i < size; ++i) phi(i) = contact::signorini_min(p.force_compliance * lambda(i), gap(i)).value;
+  s.collocation_penetration = (-gap).maxCoeff();
+  s.complementarity = phi.cwiseAbs().maxCoeff();
+  s.max_contact_force = lambda.maxCoeff();
+  const Eigen::MatrixXd u = p.contact_samples(xa);
+  s.max_penetration = -std::numeric_limits<double>::infinity();
+  for (int c = 0; c < p.nc; ++c) s.max_penetration = std::max(s.max_penetration, u.row(c).maxCoeff() - p.contacts[c].law->gap());
+  const double phi_norm = detail::residual_norm(phi / p.scale, p.options.newton.norm);
+  if (s.report.converged() && (!std::isfinite(s.relative_residual) || !s.coefficients.allFinite())) {
+    s.report.status = SolveStatus::NonFinite;
+    s.report.message = "non-finite full residual after convergence of the Signorini conditions";
+  } else if (s.report.converged() && !(s.relative_residual <= p.options.residual_tolerance &&
+                                       phi_norm <= p.options.newton.tolerance)) {
+    s.report.status = SolveStatus::ResidualNotVerified;
+    s.report.message = "the Signorini conditions converged (" + s.report.message + "), but recomputed from the "
+                       "coefficients the full residual is " + format_number(s.relative_residual) + " ‖b‖ (bound " +
+                       format_number(p.options.residual_tolerance) + ") and the complementarity residual " +
+                       format_number(phi_norm) + " s_r (bound " + format_number(p.options.newton.tolerance) +
+                       "; condition estimate of G " + format_number(s.condition_number) + ")";
   }
   s.wall_time_s = elapsed(start);
   return s;

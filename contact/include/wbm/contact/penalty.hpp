@@ -25,6 +25,10 @@ class ContactLaw {
   [[nodiscard]] virtual double gap() const = 0;                // g0 [m]
   /// One-line description with the parameters, for reports ("exponential a_c = ...").
   [[nodiscard]] virtual std::string describe() const = 0;
+  /// True for a rigid stop (RigidStop, signorini.hpp): its force is a Lagrange multiplier of
+  /// the Signorini conditions, not a function of u, so force() and stiffness() throw
+  /// std::logic_error; solvers that sample a law as a function of u refuse it by name.
+  [[nodiscard]] virtual bool rigid() const { return false; }
 
   /// Batched evaluation over samples: force(q) = f_c(u(q)), stiffness(q) = f_c'(u(q)).
   /// Writes into `force` and `stiffness`, which must have the size of `u`.

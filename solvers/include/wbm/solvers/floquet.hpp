@@ -61,8 +61,9 @@ struct FloquetResult {
 /// Monodromy matrix and Floquet multipliers about a periodic solution given by its contact
 /// displacements: contact_displacement is n_c × P, row c = u*_c(τ_p) [m] at τ_p = p/P of one
 /// period (P ≥ 8 steps; the row order of `contacts`). Without contacts pass a 0 × P matrix.
-/// Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples or
-/// f ≤ 0.
+/// Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples,
+/// f ≤ 0, or a rigid stop (contact::RigidStop: an impacting orbit would need saltation
+/// matrices, not implemented; stability is not computed for rigid stops).
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,
                                                 const Eigen::MatrixXd& contact_displacement, double frequency_hz);

@@ -41,7 +41,8 @@ struct PeriodicFields {
                                              const Eigen::VectorXd& tau, double frequency_hz);
 
 /// Contact force f_c(u_c(τ_p)) of the first contact [N] at each sample (Eq. 5); zero without
-/// contact. displacement is n × P.
+/// contact. displacement is n × P. Throws std::invalid_argument for a rigid stop (its force
+/// is the solution's contact_force_samples, not a function of u).
 [[nodiscard]] Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts,
                                             const Eigen::MatrixXd& displacement);
 

@@ -115,7 +115,8 @@ struct ResponseCurveOptions {
 /// a failed landing keeps the overshooting point and says so in the message). Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
-/// without contact (a linear curve needs no continuation: frequency_response()).
+/// without contact (a linear curve needs no continuation: frequency_response()) or with rigid
+/// stops (WeightedResidual::rigid(): continuation of the Signorini conditions is not implemented).
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
 }  // namespace wbm::solvers

@@ -52,12 +52,43 @@ struct PeriodicResponse {
 /// period i sampled at the P output times, the run stops at the first i with
 ///   δ_i = rms(u_i − u_{i−1}) / rms(u_i) < periodicity_tolerance
 /// ("rms of the relative error between the tip displacements for the i and i − 1 periods",
-/// [JL14 Sec. 4]) and returns period i. Throws std::invalid_argument for invalid inputs;
-/// a run that hits max_periods or a GSL failure is reported in `report`, never thrown.
+/// [JL14 Sec. 4]) and returns period i. Throws std::invalid_argument for invalid inputs (and
+/// for rigid stops, which have no force law: integrate_moreau_jean_to_periodic); a run that
+/// hits max_periods or a GSL failure is reported in `report`, never thrown.
 [[nodiscard]] PeriodicResponse integrate_to_periodic(const MechanicalSystem& system,
                                                      const HarmonicForcing& forcing,
                                                      const std::vector<ContactPoint>& contacts,
                                                      const TimeIntegrationOptions& options = {});
+
+/// Options of the Moreau–Jean time stepping (integrate_moreau_jean_to_periodic).
+struct MoreauJeanOptions {
+  int steps_per_period = 65536;         // N fixed steps per period, h = T/N; a multiple of P
+  int samples_per_period = 1024;        // P output samples per period, τ_p = p/P
+  double theta = 0.5;                   // θ ∈ [½, 1] (½: trapezoidal away from impacts)
+  double restitution = 0.0;             // Newton's coefficient e ∈ [0, 1] at the stops
+  double periodicity_tolerance = 1e-7;  // stop when δ_i < this (as TimeIntegrationOptions)
+  int max_periods = 5000;               // >= 2
+  void validate() const;                // throws std::invalid_argument naming the field
+};
+
+/// Periodic steady state with rigid stops by the Moreau–Jean time-stepping scheme
+/// [Jean 1999, CMAME 177 235–257; Acary & Brogliato 2008, Numerical Methods for Nonsmooth
+/// Dynamical Systems, Springer, Sec. 10.1], from rest, in physical time with fixed step h = T/N:
+///   M (v_{k+1} − v_k) + h (C v_{k+θ} + K q_{k+θ}) = h f_{k+θ} − Σ_c e_c P_c,
+///   q_{k+1} = q_k + h v_{k+θ},   x_{k+θ} = θ x_{k+1} + (1 − θ) x_k,
+/// with, for every contact c whose predicted gap g0 − q_c − (h/2) U_c ≤ 0 (U_c = e_cᵀ v_k, the
+/// velocity towards the stop), Newton's impact law at the velocity level,
+///   0 ≤ P_c ⊥ −(U_c,k+1 + e U_c,k) ≥ 0   (P_c ≥ 0 [N·s], the impulse of the step),
+/// a small LCP with the Delassus matrix W = Eᵀ (M + hθC + h²θ²K)⁻¹ E, solved exactly for one
+/// contact and by projected Gauss–Seidel (to 1e-14 relative) for several; P_c = 0 otherwise.
+/// First order in h through impacts (the velocity jumps), second order elsewhere for θ = ½.
+/// Periods, samples and the periodicity test δ_i are those of integrate_to_periodic. Every
+/// contact must be a rigid stop (contact::RigidStop): penalty laws go to integrate_to_periodic.
+/// Throws std::invalid_argument for invalid inputs; a run that hits max_periods is reported.
+[[nodiscard]] PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system,
+                                                                 const HarmonicForcing& forcing,
+                                                                 const std::vector<ContactPoint>& contacts,
+                                                                 const MoreauJeanOptions& options = {});
 
 /// Samples of a trajectory: displacement and velocity n × S at the times t (S).
 struct Trajectory {

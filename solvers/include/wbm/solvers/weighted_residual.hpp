@@ -3,6 +3,7 @@
 /// distributional form [JL14 Secs. 2, 4.1, Eqs. (14)–(17)], with the contact forces evaluated
 /// on time samples (alternating frequency/time for any basis). Units: SI; τ = f t normalized.
 
+#include <chrono>
 #include <limits>
 #include <memory>
 #include <string>
@@ -165,6 +166,17 @@ struct WeightedResidualSolution {
     return report.status == SolveStatus::ResidualNotVerified && relative_residual <= kRoundingFloorFactor * rounding_floor;
   }
   double wall_time_s = 0.0;        // set-up and solve
+  /// Rigid stops only (WeightedResidual::rigid()), else empty / NaN:
+  ///  - contact_force_samples: λ, n_c × M [N], row = contact, column k = impulse instant
+  ///    τ_k = (k + ½)/M; λ_k/M is the impulse (N·period), λ_k the mean force over one cell;
+  ///  - collocation_penetration: max over contacts and k of u_c(τ_{k+1}) − g0 [m], recomputed
+  ///    from `coefficients` (the plateau's flatness where the conditions are imposed;
+  ///    max_penetration is over the Q samples, between the instants as well);
+  ///  - complementarity: max over contacts and k of |min(c λ_k, g0 − u_c(τ_{k+1}))| [m],
+  ///    recomputed from `coefficients`, c the force compliance (WeightedResidual::force_compliance).
+  Eigen::MatrixXd contact_force_samples;
+  double collocation_penetration = std::numeric_limits<double>::quiet_NaN();
+  double complementarity = std::numeric_limits<double>::quiet_NaN();
   [[nodiscard]] bool converged() const { return report.converged(); }
 };
 
@@ -184,6 +196,31 @@ struct WeightedResidualSolution {
 /// scaled by s_r = max(max_c |g0_c|, ‖x_lin‖∞) (1 m if both vanish; metres, so that a 1 nm gap
 /// does not ask Newton for 1e-19 m). N sums over the samples in contact only, and over the
 /// basis functions nonzero there (compact support).
+///
+/// Rigid stops (contact::RigidStop, ContactLaw::rigid()): when every contact is rigid, the
+/// contact force of contact c is M impulses per period, λ_{c,k}/M at the instants
+/// τ_k = (k + ½)/M (λ_k: the mean force over one cell, N), and the Signorini conditions pair
+/// impulse k with the gap one instant later [JL14 Sec. 6, the exact contact the paper proposes]:
+///   n(λ) = Σ_c e_c ⊗ (1/M) Σ_k p(τ_k) λ_{c,k},
+///   g_{c,k} = g0_c − u_c(τ_{k+1}) ≥ 0,   λ_{c,k} ≥ 0,   g_{c,k} λ_{c,k} = 0   (k + 1 mod M).
+/// This is the periodic analogue of the Moreau–Jean scheme (the impulse of a step keeps the
+/// gap open at its end) and, like it with a position-level condition, a plastic impact law
+/// (e = 0): the solutions converge to the Moreau–Jean steady state with e = 0 as M grows
+/// (tests/solvers/test_rigid_contact.cpp). Pairing an impulse with the gap at its own instant
+/// is ill-posed: the displacement there does not depend on it (a kink, not a jump), and the
+/// active-set iteration cycles (docs/design.md).
+/// Condensed onto the n_c·M impulses λ (ordering λ(k·n_c + c), like x):
+///   u(λ) = u_lin − D λ,   D = V H W   (the Delassus operator),
+/// V = trial functions at τ_{k+1}, W = weighting functions at τ_k / M, u_lin = V x_lin; the
+/// equations φ(λ) = min(c λ, g0 − u(λ)) / s_r = 0 (contact::signorini_min, c = the mean |D_ii|
+/// [m/N]) are solved by the one Newton core with their generalized Jacobian, i.e. the primal–
+/// dual active-set method: on the r instants where the gap branch is active the step solves
+/// D_AA (an r × r LU, WoodburyLu), elsewhere λ = 0. Cost: D once per frequency
+/// (O((n_c M)² M)), then r × r per Newton step. With a Fourier trial basis of even M the top
+/// function cos πMτ vanishes at every instant: the conditions do not see it. A point mass at
+/// the stop (a 1-DOF oscillator) has no local compliance: its D is dominated by the periodic
+/// echo of the impulses and the iteration may stagnate (reported, not hidden). Mixing rigid and
+/// penalty contacts, and ContactQuadrature::CellAverage with rigid stops, are refused.
 ///
 /// Throws std::invalid_argument for invalid inputs, for M differing between trial and weighting,
 /// and for a pair/formulation that needs a derivative a basis lacks; the message names the
@@ -239,6 +276,30 @@ class WeightedResidual {
   /// Throws std::runtime_error if G is singular.
   [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
+
+  /// True when every contact is a rigid stop (the Signorini path above; the penalty-law
+  /// functions contact_residual, contact_jacobian, contact_jacobian_low_rank, expand and the
+  /// homotopy then throw std::logic_error naming the rigid ones).
+  [[nodiscard]] bool rigid() const;
+  /// Rigid stops: the impulse instants τ_k = (k + ½)/M (length M); impulse k is paired with the
+  /// gap at τ_{k+1}.
+  [[nodiscard]] Eigen::VectorXd collocation_times() const;
+  /// Rigid stops: D = V H W (n_c·M square [m/N], rows and columns k·n_c + c): the contact
+  /// displacements at τ_{k+1} are u(λ) = u_lin − D λ.
+  [[nodiscard]] const Eigen::MatrixXd& delassus() const;
+  /// Rigid stops: c = mean |D_ii| [m/N], the scale of c λ in the complementarity function.
+  [[nodiscard]] double force_compliance() const;
+  /// Rigid stops: φ(λ) = min(c λ, g0 − u(λ)) / s_r (length n_c·M) at load s (x_lin → s x_lin),
+  /// and its generalized Jacobian (gap rows: D_i/s_r; force rows: c e_i/s_r) as identity plus
+  /// the gap rows, (c/s_r)(I + P_A (D/c − I)_A), with capacitance D_AA/c (dense when
+  /// r > ¾ n_c·M). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
+  [[nodiscard]] Eigen::VectorXd signorini_residual(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda) const;
+  /// Rigid stops: a = G⁻¹(s b − Pᵀ n(λ)), the full coefficients (length n·M) for given forces.
+  [[nodiscard]] Eigen::VectorXd expand_forces(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  /// Rigid stops: R(a, λ) = G a − b + Pᵀ n(λ) [N] (length n·M), the full residual with the
+  /// collocation impulses.
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& a, const Eigen::VectorXd& lambda) const;
   /// a = G⁻¹(b − Pᵀ n_c(x)): the full coefficients for given contact unknowns.
   [[nodiscard]] Eigen::VectorXd expand(const Eigen::VectorXd& x) const;
 
@@ -268,6 +329,10 @@ class WeightedResidual {
   };
   [[nodiscard]] ContactHomotopy contact_homotopy() const { return {this}; }
 
+  /// Rigid stops (rigid()): the primal–dual active-set Newton on the Signorini conditions from
+  /// the impulses x0 (length n_c·M, default 0), no fallback; SolveStatus::Converged only if the
+  /// conditions recomputed from the coefficients meet newton.tolerance and the full residual
+  /// R(a, λ) meets residual_tolerance. Penalty laws:
   /// Newton on the contact unknowns from x0 (default x_lin); without x0 a failed Newton falls
   /// back on the contact homotopy, then on load stepping (SolutionPath; `path` says which gave
   /// the answer). Non-convergence is reported in the solution's report, never thrown: a
@@ -281,6 +346,9 @@ class WeightedResidual {
   explicit WeightedResidual(std::unique_ptr<Impl> impl);
   NewtonResult solve_with_load_stepping(Eigen::VectorXd x, int& steps) const;
   NewtonResult solve_with_contact_homotopy(HomotopyReport& report) const;
+  struct Signorini;
+  WeightedResidualSolution solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
+                                       std::chrono::steady_clock::time_point start) const;
   double rounding_floor(const Eigen::VectorXd& x) const;
   std::unique_ptr<Impl> impl_;
 };
