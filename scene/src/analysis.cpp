@@ -48,6 +48,8 @@ nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
           {"relative_residual", finite_or_null(s.relative_residual)},
           {"max_penetration_m", finite_or_null(s.max_penetration)},
           {"max_contact_force_N", finite_or_null(s.max_contact_force)},
+          {"collocation_penetration_m", finite_or_null(s.collocation_penetration)},
+          {"complementarity_m", finite_or_null(s.complementarity)},
           {"contact_unknowns", s.contact_unknowns},
           {"condition_number", finite_or_null(s.condition_number)},
           {"linear_solver", s.linear_solver},
@@ -88,7 +90,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
     }
     out.tables.push_back(std::move(v));
   }
-  if (!contacts.empty()) {
+  if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
     for (const auto& c : contacts) {
       Eigen::VectorXd force(tau.size());
@@ -137,6 +139,17 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
   }
   period_tables(scene, contacts, system, forcing.frequency_hz, tau, displacement, fields ? &fields->velocity : nullptr,
                 out);
+  if (scene.rigid()) {
+    // The multipliers at their instants τ_k = (k + ½)/M: the mean force over each cell.
+    const int m = trial.dimension();
+    const Eigen::VectorXd tk = (Eigen::VectorXd::LinSpaced(m, 0.0, m - 1.0).array() + 0.5) / m;
+    Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tk, tk / forcing.frequency_hz}};
+    for (size_t c = 0; c < contacts.size(); ++c) {
+      f.header.push_back("f_c_" + scene.structure->dof_name(contacts[c].dof) + " [N]");
+      f.columns.push_back(solution.contact_force_samples.row(static_cast<Eigen::Index>(c)).transpose());
+    }
+    out.tables.push_back(std::move(f));
+  }
   Table c{"coefficients.csv", {"k [-]"}, {Eigen::VectorXd::LinSpaced(a.cols(), 0.0, static_cast<double>(a.cols() - 1))}};
   for (int dof : scene.output_dofs()) {
     c.header.push_back("a_" + scene.structure->dof_name(dof) + " [m]");
@@ -184,7 +197,8 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
       previous_amplitude = NAN;
       continue;
     }
-    previous = wr.contact_unknowns(spectral::stacked(solution.coefficients));
+    previous = wr.rigid() ? spectral::stacked(solution.contact_force_samples)
+                          : wr.contact_unknowns(spectral::stacked(solution.coefficients));
     const Eigen::VectorXd u_forced = solvers::evaluate_trial(trial, solution.coefficients, forced, tau, f);
     const double amplitude = 0.5 * (u_forced.maxCoeff() - u_forced.minCoeff());
     if (restarted) {
@@ -253,10 +267,16 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
       progress(std::clamp(done, 0.0, 1.0), "period " + std::to_string(period) + ", δ = " + format("%.1e", delta));
     };
   }
-  const auto response = solvers::integrate_to_periodic(system, forcing, contacts, options);
+  const bool rigid = scene.rigid();
+  auto mj = scene.moreau_jean;
+  const auto response = rigid ? solvers::integrate_moreau_jean_to_periodic(system, forcing, contacts, mj)
+                              : solvers::integrate_to_periodic(system, forcing, contacts, options);
   const auto& rep = response.report;
   out.converged = rep.converged();
-  out.diagnostics["timestep"] = {{"method", "GSL msbdf (variable-order BDF)"},
+  const std::string method = rigid ? "Moreau–Jean (theta = 0.5, restitution " + format("%g", mj.restitution) + ", " +
+                                         std::to_string(mj.steps_per_period) + " steps per period)"
+                                   : "GSL msbdf (variable-order BDF)";
+  out.diagnostics["timestep"] = {{"method", method},
                                  {"status", std::string(solvers::to_string(rep.status))},
                                  {"converged", rep.converged()},
                                  {"periods", rep.periods},
@@ -265,7 +285,7 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
                                                                          : finite_or_null(rep.periodicity.back())},
                                  {"message", rep.message},
                                  {"wall_time_s", rep.wall_time_s}};
-  out.summary = "BDF at " + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
+  out.summary = (rigid ? "Moreau–Jean at " : "BDF at ") + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
                 std::to_string(rep.steps) + " steps, " + format("%.3f", rep.wall_time_s) + " s";
   if (!out.converged) return;
   period_tables(scene, contacts, system, forcing.frequency_hz, response.tau, response.displacement,

@@ -184,14 +184,17 @@ class Reader {
   }
 
   // Every key of `t` must be in `keys`.
-  void only(const toml::table& t, const std::string& section, const std::vector<std::string>& keys) {
+  // `hint`, if given, is appended to the message (why a key of another mode is not read here).
+  void only(const toml::table& t, const std::string& section, const std::vector<std::string>& keys,
+            const std::string& hint = "") {
     const std::set<std::string> allowed(keys.begin(), keys.end());
     for (const auto& [k, node] : t) {
       const std::string key(k.str());
       if (allowed.contains(key)) continue;
       std::string names;
       for (const auto& a : keys) names += (names.empty() ? "" : ", ") + a;
-      error(node.source(), section.empty() ? key : section + "." + key, "unknown key; allowed here: " + names);
+      error(node.source(), section.empty() ? key : section + "." + key,
+            "unknown key; allowed here: " + names + (hint.empty() ? std::string() : " (" + hint + ")"));
     }
   }
 

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include <Eigen/SparseCholesky>
+#include <wbm/contact/signorini.hpp>
 #include <wbm/fem/matrix_market.hpp>
 #include <toml++/toml.h>
 
@@ -180,6 +181,13 @@ class Parser {
     if (s_.analysis.kind != AnalysisKind::NonlinearModes) basis(root);
     if (plot) basis_plot(root);
     output(root);
+    if (s_.analysis.kind == AnalysisKind::Timestep && s_.rigid() &&
+        (s_.moreau_jean.steps_per_period < s_.output.samples || s_.moreau_jean.steps_per_period % s_.output.samples != 0)) {
+      r_.error(root.source(), "timestep.steps_per_period",
+               std::to_string(s_.moreau_jean.steps_per_period) + " is not a multiple of output.samples = " +
+                   std::to_string(s_.output.samples) + " (Moreau–Jean samples its fixed steps): use powers of two, "
+                   "e.g. 65536 steps and 1024 samples");
+    }
     return std::move(s_);
   }
 
@@ -567,10 +575,15 @@ class Parser {
       c.law = value_of(law_table(), r_.choice(*t, section, "law", names(law_table())));
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
-      if (c.law == ContactLawKind::Rigid && !modes) {
+      if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation) {
         r_.error(Reader::source_of(*t, "law"), section + ".law",
-                 "\"rigid\" (exact contact) is solved by analysis \"nnm\" only; the forced-response solvers need a "
-                 "penalty law: \"exponential\" or \"linear\"");
+                 "\"rigid\" (exact contact) is not continued yet (the Signorini conditions have no continuation): "
+                 "use type = \"solve\" with frequency_hz = [from, to] (a sweep), or a stiff \"linear\" penalty");
+      }
+      if (!modes && !s_.contacts.empty() &&
+          (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
+        r_.error(t->source(), section, "mixes rigid and penalty contacts; a forced response takes all \"rigid\" or "
+                                       "all penalty laws (give the rigid ones a stiff \"linear\" law)");
       }
       if (c.law == ContactLawKind::Exponential && modes) {
         r_.error(Reader::source_of(*t, "law"), section + ".law",
@@ -617,7 +630,8 @@ class Parser {
       // basis with its undamped top function by default (issue #19).
       s_.basis.harmonics = Basis::kDefaultHarmonics;
       s_.basis.dimension = 2 * s_.basis.harmonics + 1;
-      s_.basis.contact_quadrature = solvers::ContactQuadrature::CellAverage;
+      const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
+      s_.basis.contact_quadrature = rigid ? solvers::ContactQuadrature::Midpoint : solvers::ContactQuadrature::CellAverage;
       return;
     }
     r_.only(*t, "basis",
@@ -685,9 +699,15 @@ class Parser {
     } catch (const std::invalid_argument& e) {
       r_.error(Reader::source_of(*t, "trial"), "basis.trial", e.what());
     }
-    b.contact_quadrature = quadrature == "cell-average" || (quadrature == "automatic" && b.harmonics > 0)
+    const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
+    b.contact_quadrature = quadrature == "cell-average" || (quadrature == "automatic" && b.harmonics > 0 && !rigid)
                                ? solvers::ContactQuadrature::CellAverage
                                : solvers::ContactQuadrature::Midpoint;
+    if (rigid && quadrature == "cell-average") {
+      r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",
+               "\"cell-average\" integrates a penalty law over each cell; rigid stops impose the Signorini "
+               "conditions at the instants (k + 1/2)/M instead: use \"automatic\" or \"midpoint\"");
+    }
     if (tb && quadrature == "cell-average" && tb->max_derivative() < 1) {
       r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",
                "\"cell-average\" averages the contact law along the slope of the trial functions; " + tb->name() +
@@ -774,7 +794,22 @@ class Parser {
                                "\"; ignored");
       return;
     }
-    r_.only(*t, "timestep", {"relative_tolerance", "absolute_tolerance", "periodicity_tolerance", "max_periods"});
+    const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
+    if (rigid) {  // Moreau–Jean: fixed steps and an impact law instead of error control
+      r_.only(*t, "timestep", {"steps_per_period", "restitution", "periodicity_tolerance", "max_periods"},
+              "rigid stops are integrated by Moreau–Jean; relative_tolerance and absolute_tolerance are the BDF's "
+              "(penalty laws)");
+      auto& mj = s_.moreau_jean;
+      mj.steps_per_period = static_cast<int>(r_.integer(*t, "timestep", "steps_per_period", 4, 1 << 26, mj.steps_per_period));
+      mj.restitution = r_.number(*t, "timestep", "restitution", {"in [0, 1]", [](double v) { return v >= 0.0 && v <= 1.0; }},
+                                 mj.restitution);
+      mj.periodicity_tolerance =
+          r_.number(*t, "timestep", "periodicity_tolerance", detail::positive(""), mj.periodicity_tolerance);
+      mj.max_periods = static_cast<int>(r_.integer(*t, "timestep", "max_periods", 2, 10000000, mj.max_periods));
+      return;
+    }
+    r_.only(*t, "timestep", {"relative_tolerance", "absolute_tolerance", "periodicity_tolerance", "max_periods"},
+            "steps_per_period and restitution are the Moreau–Jean scheme's, for law = \"rigid\"");
     auto& o = s_.timestep;
     o.relative_tolerance = r_.number(*t, "timestep", "relative_tolerance",
                                      {"in (0, 1)", [](double v) { return v > 0.0 && v < 1.0; }}, o.relative_tolerance);
@@ -788,11 +823,13 @@ class Parser {
     const toml::table* t = r_.table(root, "output", false);
     if (t == nullptr) {
       s_.timestep.samples_per_period = s_.output.samples;
+      s_.moreau_jean.samples_per_period = s_.output.samples;
       return;
     }
     r_.only(*t, "output", {"samples", "nodes", "dofs"});
     s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
     s_.timestep.samples_per_period = s_.output.samples;
+    s_.moreau_jean.samples_per_period = s_.output.samples;
     for (const char* key : {"nodes", "dofs"}) {
       const toml::node* n = t->get(key);
       if (n == nullptr) continue;
@@ -935,10 +972,8 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
   for (const auto& c : contacts) {
     std::shared_ptr<const contact::ContactLaw> law;
     if (c.law == ContactLawKind::Rigid) {
-      throw std::logic_error("Scene::contact_points: a rigid stop has no penalty law (analysis \"nnm\" reads "
-                             "Scene::contacts directly)");
-    }
-    if (c.law == ContactLawKind::Exponential) {
+      law = std::make_shared<contact::RigidStop>(c.gap);
+    } else if (c.law == ContactLawKind::Exponential) {
       law = std::make_shared<contact::ExponentialPenalty>(
           contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
     } else {
@@ -1104,10 +1139,17 @@ nlohmann::json to_json(const Scene& s) {
                    {"linear_solver", linear_solver_name(s.solver.linear_solver)}};
   }
   if (s.analysis.kind == AnalysisKind::Timestep) {
-    j["timestep"] = {{"relative_tolerance", s.timestep.relative_tolerance},
-                     {"absolute_tolerance", s.timestep.absolute_tolerance},
-                     {"periodicity_tolerance", s.timestep.periodicity_tolerance},
-                     {"max_periods", s.timestep.max_periods}};
+    if (s.rigid()) {
+      j["timestep"] = {{"steps_per_period", s.moreau_jean.steps_per_period},
+                       {"restitution", s.moreau_jean.restitution},
+                       {"periodicity_tolerance", s.moreau_jean.periodicity_tolerance},
+                       {"max_periods", s.moreau_jean.max_periods}};
+    } else {
+      j["timestep"] = {{"relative_tolerance", s.timestep.relative_tolerance},
+                       {"absolute_tolerance", s.timestep.absolute_tolerance},
+                       {"periodicity_tolerance", s.timestep.periodicity_tolerance},
+                       {"max_periods", s.timestep.max_periods}};
+    }
   }
   nlohmann::json out = {{"samples", s.output.samples}};
   if (s.structure) {

@@ -16,6 +16,7 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/output.hpp>
 #include <wbm/scene/scene.hpp>
+#include <wbm/solvers/post_processing.hpp>
 
 #include "scene.hpp"  // reproduce/common: the shipped scene directory
 #include "testing.hpp"
@@ -211,8 +212,32 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(rod + "[contact]\nlaw = \"exponential\"\ncoefficient = 1.0\nexponent = 1.0\ngap = 1e-3\n" + nnm); },
       {"contact.law: analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)"});
-  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + force + "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n"); },
-                                           {"contact.law: \"rigid\" (exact contact) is solved by analysis \"nnm\" only"});
+  // Rigid stops in forced responses: not continued, not mixed with penalty laws, no cell average,
+  // and Moreau–Jean's keys (not the BDF's) in [timestep].
+  const std::string stop = "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n";
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
+                    "[analysis]\ntype = \"continuation\"\n");
+      },
+      {"contact.law: \"rigid\" (exact contact) is not continued yet", "frequency_hz = [from, to] (a sweep)"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse(rod + force + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\n[[contact]]\nlaw = \"linear\"\n"
+                                  "stiffness = 1e9\ngap = 1e-3\nnode = 5\n");
+      },
+      {"contact[1]: mixes rigid and penalty contacts"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + stop + "[basis]\ntrial = \"fourier\"\nharmonics = 8\ncontact_quadrature = \"cell-average\"\n"); },
+      {"basis.contact_quadrature: \"cell-average\" integrates a penalty law", "\"midpoint\""});
+  EXPECT_EQ(parse(rod + force + stop + "[basis]\ntrial = \"fourier\"\nharmonics = 8\n").basis.contact_quadrature,
+            wbm::solvers::ContactQuadrature::Midpoint);
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + stop + "[analysis]\ntype = \"timestep\"\n[timestep]\nrelative_tolerance = 1e-8\n"); },
+      {"timestep.relative_tolerance: unknown key", "rigid stops are integrated by Moreau–Jean"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + force + stop + "[analysis]\ntype = \"timestep\"\n[timestep]\nsteps_per_period = 1000\n"); },
+      {"timestep.steps_per_period: 1000 is not a multiple of output.samples = 1024"});
   expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + "[contact]\nlaw = \"rigid\"\ngap = 0.0\n" + nnm); },
                                            {"contact.gap: value 0 out of range: expected > 0 [m; nnm normalizes"});
   expect_throw_with<std::invalid_argument>(
@@ -460,6 +485,36 @@ TEST(Scene, TimestepMatchesClosedForm) {
   const double a = oscillator_amplitude(2.0, 60.0, 8e4, 10.0, 25.0);
   // Sampled maximum of a cosine on 8192 points: within 1 − cos(π/8192) ≈ 7e-8 of the amplitude.
   EXPECT_NEAR(column(r, "displacement.csv", 2).maxCoeff(), a, 1e-6 * a);
+}
+
+// A rigid stop from a scene: the weighted residual solve (Fourier:Fourier, M = 256) and the
+// Moreau–Jean time stepping (plastic impacts, e = 0) reach the same periodic tip motion, the
+// solve's contact plateau is at the gap, and its force file holds the multipliers at their
+// instants; the resolved scene re-runs to the same numbers.
+TEST(Scene, RigidStopSolveAgreesWithMoreauJean) {
+  const std::string rod = "[structure]\nyoung_modulus = 70e9\ndensity = 2700.0\narea = 25e-4\nlength = 1.0\n"
+                          "elements = 25\n[damping]\nbeta = 1e-4\n[forcing]\namplitude = 250e3\nfrequency_hz = 150.0\n"
+                          "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n";
+  const auto solve = wbm::scene::run_analysis(parse(rod + "[basis]\ntrial = \"fourier\"\ndimension = 256\n"));
+  ASSERT_TRUE(solve.converged) << solve.diagnostics.dump(2);
+  const auto step = wbm::scene::run_analysis(parse(rod + "[analysis]\ntype = \"timestep\"\n"));
+  ASSERT_TRUE(step.converged) << step.diagnostics.dump(2);
+  const Eigen::VectorXd& u_solve = column(solve, "displacement.csv", 2);
+  const Eigen::VectorXd& u_step = column(step, "displacement.csv", 2);
+  EXPECT_LT(wbm::solvers::rms_relative_error(u_solve, u_step), 5e-4);
+  EXPECT_LE(solve.diagnostics["solution"]["collocation_penetration_m"].get<double>(), 1e-15);
+  const Eigen::VectorXd& tau_k = column(solve, "contact_force.csv", 0);
+  ASSERT_EQ(tau_k.size(), 256);
+  EXPECT_DOUBLE_EQ(tau_k(0), 0.5 / 256);
+  EXPECT_GT(column(solve, "contact_force.csv", 2).maxCoeff(), 0.0);
+  for (const std::string& extra : {std::string("[basis]\ntrial = \"fourier\"\ndimension = 256\n"),
+                                  std::string("[analysis]\ntype = \"timestep\"\n[timestep]\nsteps_per_period = 4096\n"
+                                              "restitution = 0.5\n")}) {
+    const Scene s = parse(rod + extra);
+    const nlohmann::json j = wbm::scene::to_json(s);
+    EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("back.json"))), j) << j.dump(2);
+  }
+  EXPECT_EQ(parse(rod + "[analysis]\ntype = \"timestep\"\n[timestep]\nrestitution = 0.5\n").moreau_jean.restitution, 0.5);
 }
 
 // Basis plot: Haar φ_{J,k} is 2^{J/2} on [k/M, (k+1)/M) (orthonormal), M there with the paper's

@@ -170,7 +170,9 @@ struct Scene {
   std::vector<Contact> contacts;
   Basis basis;
   Solver solver;
-  solvers::TimeIntegrationOptions timestep{};
+  solvers::TimeIntegrationOptions timestep{};  // BDF, penalty laws
+  solvers::MoreauJeanOptions moreau_jean{};    // type = "timestep" with law = "rigid"
+  [[nodiscard]] bool rigid() const { return !contacts.empty() && contacts.front().law == ContactLawKind::Rigid; }
   Output output;
   std::vector<std::string> warnings;   // sections given but unused by the analysis ("file:line: ...")
 
