@@ -350,11 +350,80 @@ def free_vibration(folder):
     save(fig, folder, "free_vibration")
 
 
+def rigid_stop(folder):
+    """The rigid-stop study: Figs. 6-7 (tip displacement) and 9 (contact force per cell) for each
+    case, one panel per combination over the reference, and Figs. 10-11's tip error against M,
+    rigid (solid) beside the penalty law (dashed)."""
+    meta = json.loads((folder / "meta.json").read_text())
+    keys = [k for k in LABELS if k != "bdf"]
+    for case in ("case1", "case2"):
+        if case not in meta:
+            continue
+        title = meta[case]["scene"]["title"]
+        ref_label = "Moreau-Jean, e = 0" if meta[case].get("reference_periodic") else meta[case]["reference"]["method"]
+        for stem, scale, ylabel in (("tip_displacement", 1e3, "tip displacement [mm]"),
+                                    ("contact_force", 1e-3, "contact force, mean over a cell [kN]")):
+            path = folder / f"{stem}_{case}.csv"
+            if not path.exists():
+                continue
+            header, cols = read_csv(path)
+            series = {h.split(" ")[0][2:]: c for h, c in zip(header[1:], cols[1:])}
+            fig, axes = plt.subplots(2, 3, figsize=(12.0, 6.4), sharex=True, sharey=True)
+            for i, (ax, key) in enumerate(zip(axes.flat, keys)):
+                if "reference" in series:
+                    draw = ax.plot if stem == "tip_displacement" else (lambda x, y, **k: ax.step(x, y, where="mid", **k))
+                    draw(cols[0], [scale * v for v in series["reference"]], color="k", lw=2.5, alpha=0.35,
+                         label=ref_label)
+                if key in series:
+                    draw = ax.plot if stem == "tip_displacement" else (lambda x, y, **k: ax.step(x, y, where="mid", **k))
+                    draw(cols[0], [scale * v for v in series[key]], color="C0", lw=0.9,
+                         label=f"{LABELS[key]}, M = {meta['figure_dimension']}")
+                else:
+                    ax.text(0.5, 0.5, f"{LABELS[key]}: not converged", transform=ax.transAxes, ha="center",
+                            va="center", fontsize=8)
+                if stem == "tip_displacement":
+                    ax.axhline(1e3 * meta[case]["gap_m"], color="r", ls=":", lw=1.0, label="rigid stop $g_0$")
+                ax.set_title(f"({'abcdef'[i]}) {LABELS[key]}", fontsize=9)
+                ax.legend(loc="best", fontsize=6)
+                if i >= 3:
+                    ax.set_xlabel("normalized time τ [-]")
+                if i % 3 == 0:
+                    ax.set_ylabel(ylabel)
+            fig.suptitle(f"Rigid stop: {title}", fontsize=10)
+            save(fig, folder, f"{stem}_{case}")
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    for ax, case in zip(axes, ("case1", "case2")):
+        for file, ls, suffix in ((f"sweep_{case}.csv", "-", "rigid"), (f"penalty_{case}.csv", "--", "penalty")):
+            path = folder / file
+            if not path.exists():
+                continue
+            header, cols = read_csv(path)
+            values = cols[header.index("tip_error [-]")]
+            for i, name in enumerate(METHODS[:-1]):
+                pts = [(m, v) for c, m, v in zip(cols[0], cols[1], values) if int(c) == i and math.isfinite(v) and v > 0]
+                if pts:
+                    ax.plot(*zip(*pts), marker=MARKERS[i], ls=ls, lw=1.0, color=f"C{i}",
+                            alpha=1.0 if suffix == "rigid" else 0.45, label=f"{name} ({suffix})")
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("number of basis functions M [-]")
+        ax.set_ylabel("rms relative tip error [-]")
+        if case in meta:
+            periodic = meta[case].get("reference_periodic")
+            ax.set_title(meta[case]["scene"]["title"] + ("" if periodic else "\n(against Fourier:Fourier, largest M)"),
+                         fontsize=9)
+        ax.legend(fontsize=5, ncol=2)
+    fig.suptitle("Rigid stop (solid) and penalty law (dashed): tip error")
+    fig.tight_layout()
+    save(fig, folder, "tip_error")
+
+
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
            "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
            "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
            "jl14_speed_accuracy": speed_accuracy, "ll11_fig03": frequency_energy, "ll11_fig04": phase_space,
-           "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration}
+           "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration,
+           "jl14_rigid_stop": rigid_stop}
 
 
 def main():

@@ -43,14 +43,23 @@ struct Reference {
   std::vector<solvers::ContactPoint> contacts;
   solvers::PeriodicResponse response;
   Eigen::VectorXd tip_displacement, tip_velocity, contact_force, energy;  // on response.tau
+  std::string method;  // "GSL msbdf" or "Moreau–Jean (...)"
   [[nodiscard]] const Eigen::VectorXd& tau() const { return response.tau; }
 };
 /// Throws std::invalid_argument for a scene without [contact]; a BDF run that does not reach
 /// the periodic state is recorded with run.fail().
 [[nodiscard]] Reference solve_reference(Run& run, const std::string& scene, double relative_tolerance = 1e-10);
+/// The scene with its contact law replaced by a rigid stop at the same gap (contact::RigidStop)
+/// and its Moreau–Jean periodic reference (θ = ½, restitution e, `steps` per period, at most
+/// `max_periods`, 1024 samples; 256 with quick); contact_force is the mean force over each
+/// sample interval [N]. A run that does not become periodic is returned as it is (its report
+/// says so): the caller decides whether that fails the run.
+[[nodiscard]] Reference solve_rigid_reference(Run& run, const std::string& scene, int steps, double restitution = 0.0,
+                                              int max_periods = 5000);
 
 /// One combination at one M on a reference: the solve (median wall time over `repeats` full
-/// solves, set-up included) and its post-processing on the reference samples.
+/// solves, set-up included) and its post-processing on the reference samples (contact_force
+/// empty for rigid stops: their force is the solution's contact_force_samples).
 struct CombinationResult {
   Combination combination;
   int dimension = 0;

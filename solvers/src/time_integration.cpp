@@ -161,7 +161,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   out.frequency_hz = forcing.frequency_hz;
   out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
   Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd disp(n, p_count), vel(n, p_count);
+  Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
   Eigen::VectorXd previous_tip, impulse(nc), u_free(nc), u_old(nc);
   auto& rep = out.report;
   for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
@@ -169,6 +169,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
       if (step % stride == 0) {
         disp.col(step / stride) = q;
         vel.col(step / stride) = v;
+        force.col(step / stride).setZero();
       }
       const double t0 = static_cast<double>(step) * h, t1 = t0 + h;  // the forcing has period T
       const double f_theta = th * std::cos(omega * t1) + (1.0 - th) * std::cos(omega * t0);
@@ -196,6 +197,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
           if (active.size() == 1 || change <= 1e-14 * size) break;
         }
         v_new.noalias() -= minv_e * impulse;
+        force.col(step / stride) += impulse / (h * stride);
       }
       q += h * (th * v_new + (1.0 - th) * v);
       v = std::move(v_new);
@@ -223,6 +225,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   }
   out.displacement = std::move(disp);
   out.velocity = std::move(vel);
+  out.contact_force = std::move(force);
   if (rep.message.empty()) {
     std::ostringstream os;
     os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of "

@@ -1184,6 +1184,83 @@ struct WeightedResidual::Signorini {
   [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& lambda) const { return wr->signorini_jacobian(lambda); }
 };
 
+// The Signorini conditions regularized by a penalty of relative stiffness κ = 10^μ at the same
+// instants, as a ParametrizedSystem in μ (rigid stops):
+//   r(λ, μ) = (c λ − κ (u(λ) − g0)₊) / s_r,   ∂r/∂λ = (c I + κ P_A D) / s_r,
+//   ∂r/∂μ = −ln 10 · κ (u − g0)₊ / s_r,   A = the instants that penetrate.
+// Its solutions are those of the linear penalty k = κ/c at the instants; as κ → ∞ they tend to
+// the rigid one (penetration c λ/κ).
+struct WeightedResidual::SignoriniPenalty {
+  const WeightedResidual* wr;
+  [[nodiscard]] Eigen::VectorXd penetration(const Eigen::VectorXd& lambda) const {
+    const auto& p = *wr->impl_;
+    return ((p.u_lin - p.delassus * lambda) - p.collocation->gaps).cwiseMax(0.0);
+  }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& lambda, double mu) const {
+    const auto& p = *wr->impl_;
+    return (p.force_compliance * lambda - std::pow(10.0, mu) * penetration(lambda)) / p.scale;
+  }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& lambda, double mu) const {
+    const auto& p = *wr->impl_;
+    const double kappa = std::pow(10.0, mu);
+    const Eigen::VectorXd pen = penetration(lambda);
+    Linearization l;
+    l.residual = (p.force_compliance * lambda - kappa * pen) / p.scale;
+    l.jacobian = Eigen::MatrixXd::Zero(lambda.size(), lambda.size());
+    for (Eigen::Index i = 0; i < lambda.size(); ++i) {
+      if (pen(i) > 0.0) l.jacobian.row(i) = (kappa / p.scale) * p.delassus.row(i);
+      l.jacobian(i, i) += p.force_compliance / p.scale;
+    }
+    l.parameter_derivative = (-std::log(10.0) * kappa / p.scale) * pen;
+    return l;
+  }
+};
+
+NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport& report) const {
+  const auto& p = *impl_;
+  report.tried = true;
+  // From κ₀ = 10⁻², where λ ≈ κ₀ (u_lin − g0)₊ / c barely moves the structure, to κ = 10⁸
+  // (penetration about 10⁻⁸ c λ), then the active-set Newton on the exact conditions.
+  constexpr double kMuStart = -2.0, kMuEnd = 8.0;
+  report.lambda_start = kMuStart;
+  const SignoriniPenalty system{this};
+  const Eigen::VectorXd start = std::pow(10.0, kMuStart) * system.penetration(Eigen::VectorXd::Zero(p.u_lin.size())) /
+                                p.force_compliance;
+  PseudoArclengthOptions o;
+  o.parameter_min = kMuStart - 1.0;
+  o.parameter_max = kMuEnd;
+  o.parameter_scale = 1.0;  // decades of κ
+  o.state_scale = p.scale / p.force_compliance;  // newtons, as c λ is metres
+  o.initial_step = 0.05;
+  o.max_step = 0.5;
+  o.min_step = 1e-9;
+  o.kink_step = 1e-6;
+  o.corner_restart = true;  // the penalty's (·)₊ has a corner at every instant that starts touching
+  o.max_points = p.options.homotopy_max_points;
+  o.corrector_tolerance = p.options.newton.tolerance;
+  o.initial_newton = p.options.newton;
+  const Branch branch = pseudo_arclength(system, start, kMuStart, o);
+  report.points = static_cast<int>(branch.points.size());
+  report.folds = static_cast<int>(branch.folds.size());
+  report.corrector_iterations = branch.corrector_iterations;
+  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
+  double mu_max = -std::numeric_limits<double>::infinity();
+  for (const auto& bp : branch.points) mu_max = std::max(mu_max, bp.parameter);
+  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(mu_max, kMuEnd));
+  // Newton on the exact conditions from the stiffest penalty point reached: near the end of the
+  // path its active set is the rigid one.
+  Eigen::VectorXd guess = branch.points.empty() ? start : branch.points.back().x;
+  NewtonResult out = newton(Signorini{this, 1.0}, std::move(guess), p.options.newton);
+  out.report.iterations += static_cast<int>(branch.corrector_iterations);
+  report.reached = out.report.converged();
+  out.report.message = "penalty homotopy of the Signorini conditions, kappa from 1e" + format_number(kMuStart) +
+                       " to " + format_number(report.sigma_reached) + " (" + std::to_string(report.points) + " points, " +
+                       std::to_string(report.folds) + " folds; " + report.stop + "), then the active-set Newton: " +
+                       out.report.message;
+  if (!out.report.converged() && branch.stop != StopReason::RangeReached) out.report.status = SolveStatus::PathEnded;
+  return out;
+}
+
 // The condensed system at load factor s (forcing s·F) as a NonlinearSystem.
 struct WeightedResidual::Condensed {
   const WeightedResidual* wr;
@@ -1432,8 +1509,16 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   }
   NewtonResult result = newton(Signorini{this, 1.0}, l0, p.options.newton);
   s.path = SolutionPath::DirectNewton;
+  std::string history = "primal-dual active set (semismooth Newton on the Signorini conditions): " + result.report.message;
+  if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy) {
+    NewtonResult h = solve_rigid_with_penalty_homotopy(s.homotopy);
+    h.report.iterations += result.report.iterations;
+    history += "; " + h.report.message;
+    if (h.report.converged()) s.path = SolutionPath::ContactHomotopy;
+    result = std::move(h);
+  }
   s.report = std::move(result.report);
-  s.report.message = "primal-dual active set (semismooth Newton on the Signorini conditions): " + s.report.message;
+  s.report.message = history;
   const Eigen::VectorXd& lambda = result.x;
   const Eigen::VectorXd a = expand_forces(lambda);
   s.coefficients = spectral::as_coefficients(a, p.n);

@@ -307,3 +307,53 @@ TEST(RigidContact, RefusesWhatItCannotDo) {
   EXPECT_FALSE(penalised.rigid());
   wbm::testing::expect_throw_with<std::logic_error>([&] { (void)penalised.delassus(); }, {"penalty laws"});
 }
+
+// Over a period M ü + C u̇ averages to zero, so the mean contact force balances the static load
+// of the mean displacement: f̄ e_tip = −K ū (the forcing has zero mean). Checked on the
+// Moreau–Jean steady state (its impulses) and on the weighted residual solution (its
+// multipliers, Fourier:Fourier), which also agree with each other.
+TEST(RigidContact, MeanContactForceBalancesTheMeanStaticLoad) {
+  const RigidCase1 c;
+  solvers::MoreauJeanOptions o;
+  o.steps_per_period = 1 << 16;
+  const auto mj = solvers::integrate_moreau_jean_to_periodic(c.system, c.forcing, c.stop, o);
+  ASSERT_TRUE(mj.report.converged());
+  const Eigen::VectorXd mean_u = mj.displacement.rowwise().mean();
+  const Eigen::VectorXd static_load = -(c.system.stiffness * mean_u);
+  const double f_mj = mj.contact_force.row(0).mean();
+  EXPECT_GT(f_mj, 0.0);
+  // To the rectangle rule of the 1024 output samples on the kinked trajectory (the identity is
+  // exact over the 65536 steps).
+  EXPECT_NEAR(static_load(c.tip), f_mj, 1e-4 * f_mj);
+  EXPECT_LE(static_load.head(c.tip).cwiseAbs().maxCoeff(), 1e-4 * f_mj);  // no load elsewhere
+
+  const auto trial = TimeBasis::fourier(256);
+  const auto s = solvers::WeightedResidual(c.system, c.forcing, c.stop, trial, trial).solve();
+  ASSERT_TRUE(s.converged());
+  const double f_wr = s.contact_force_samples.row(0).mean();
+  const Eigen::VectorXd mean_a = s.coefficients.col(0);  // the constant function's coefficient
+  EXPECT_NEAR(-(c.system.stiffness * mean_a)(c.tip), f_wr, 1e-9 * f_wr);
+  EXPECT_NEAR(f_wr, f_mj, 2e-3 * f_mj);
+}
+
+// Near resonance (Case 2, 1275 Hz) the active-set iteration from λ = 0 cycles for DB6:DB6; the
+// penalty homotopy then reaches the rigid solution, whose Signorini conditions hold when
+// recomputed from the coefficients.
+TEST(RigidContact, PenaltyHomotopyRescuesACyclingActiveSet) {
+  const auto sc = reproduce::load_scene("jl14_case2");
+  const auto cp = sc.contact_points();
+  const double g0 = cp.front().law->gap();
+  const std::vector<solvers::ContactPoint> stop{{cp.front().dof, std::make_shared<contact::RigidStop>(g0)}};
+  const auto db6 = TimeBasis::from_name("db6", 8);
+  solvers::WeightedResidualOptions direct_only;
+  direct_only.contact_homotopy = false;
+  const auto direct = solvers::WeightedResidual(sc.system(), sc.harmonic_forcing(), stop, db6, db6, direct_only).solve();
+  EXPECT_FALSE(direct.converged());  // the reason for the fallback
+  const auto s = solvers::WeightedResidual(sc.system(), sc.harmonic_forcing(), stop, db6, db6).solve();
+  ASSERT_TRUE(s.converged()) << s.report.message;
+  EXPECT_EQ(s.path, solvers::SolutionPath::ContactHomotopy);
+  EXPECT_TRUE(s.homotopy.reached);
+  EXPECT_LE(s.complementarity, 1e-12 * g0);
+  EXPECT_LE(s.collocation_penetration, 1e-12 * g0);
+  EXPECT_GE(s.contact_force_samples.minCoeff(), -1e-9 * s.max_contact_force);
+}

@@ -39,6 +39,9 @@ struct PeriodicResponse {
   Eigen::VectorXd tau;
   Eigen::MatrixXd displacement;  // [m]
   Eigen::MatrixXd velocity;      // [m/s]
+  /// Moreau–Jean only (else empty): n_c × P, the impulses of the steps in [τ_p, τ_{p+1}) over
+  /// the interval's duration: the mean contact force there [N], row = contact.
+  Eigen::MatrixXd contact_force;
   double frequency_hz = 0.0;
   TimeIntegrationReport report;
 };

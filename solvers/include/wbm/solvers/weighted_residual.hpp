@@ -330,9 +330,13 @@ class WeightedResidual {
   [[nodiscard]] ContactHomotopy contact_homotopy() const { return {this}; }
 
   /// Rigid stops (rigid()): the primal–dual active-set Newton on the Signorini conditions from
-  /// the impulses x0 (length n_c·M, default 0), no fallback; SolveStatus::Converged only if the
-  /// conditions recomputed from the coefficients meet newton.tolerance and the full residual
-  /// R(a, λ) meets residual_tolerance. Penalty laws:
+  /// the impulses x0 (length n_c·M, default 0); without x0, if it fails (the active set cycles:
+  /// D is not a P-matrix), SolutionPath::ContactHomotopy: pseudo-arclength continuation of the
+  /// conditions regularized by a penalty at the same instants, c λ = κ (u − g0)₊, in log₁₀ κ
+  /// from 10⁻² to 10⁸, then the active-set Newton from there (`homotopy` reports κ reached as
+  /// sigma_reached). SolveStatus::Converged only if the conditions recomputed from the
+  /// coefficients meet newton.tolerance and the full residual R(a, λ) meets residual_tolerance.
+  /// Penalty laws:
   /// Newton on the contact unknowns from x0 (default x_lin); without x0 a failed Newton falls
   /// back on the contact homotopy, then on load stepping (SolutionPath; `path` says which gave
   /// the answer). Non-convergence is reported in the solution's report, never thrown: a
@@ -347,6 +351,8 @@ class WeightedResidual {
   NewtonResult solve_with_load_stepping(Eigen::VectorXd x, int& steps) const;
   NewtonResult solve_with_contact_homotopy(HomotopyReport& report) const;
   struct Signorini;
+  struct SignoriniPenalty;
+  NewtonResult solve_rigid_with_penalty_homotopy(HomotopyReport& report) const;
   WeightedResidualSolution solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
                                        std::chrono::steady_clock::time_point start) const;
   double rounding_floor(const Eigen::VectorXd& x) const;
