@@ -2,12 +2,15 @@
 // (reproduce/scenes/jl14_case1.toml), distributional form, M = 16 … 256: assembly (time
 // operators, modal factorization of G, condensation H = P G⁻¹ Pᵀ), one condensed residual +
 // Jacobian, and a full solve (assembly + Newton + recovery). Goal (issue #4): every
-// combination's Case 1 solve at M = 64 in < 20 ms on one core.
+// combination's Case 1 solve at M = 64 in < 20 ms on one core. The full solve with a rigid stop
+// against the penalty law at M = 64 and 256 (issue #16).
 #include <benchmark/benchmark.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
+#include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 #include "scene.hpp"
@@ -76,6 +79,43 @@ void BM_WeightedResidual_FullSolve(benchmark::State& state) {
   label(state);
 }
 
+// The same full solve with the penalty replaced by a rigid stop at the same gap (Signorini
+// conditions, issue #16): range(2) = 0 the exponential penalty of Case 1, 1 the rigid stop.
+// Counters: Newton iterations and the solve's path (0 direct, 1 homotopy).
+void BM_WeightedResidual_FullSolveRigidVsPenalty(benchmark::State& state) {
+  const int m = static_cast<int>(state.range(0));
+  const auto& s = case1();
+  const auto& p = kPairs[static_cast<size_t>(state.range(1))];
+  std::vector<wbm::solvers::ContactPoint> contacts = s.contact_points();
+  const bool rigid = state.range(2) == 1;
+  if (rigid) contacts.front().law = std::make_shared<wbm::contact::RigidStop>(contacts.front().law->gap());
+  int iterations = 0;
+  bool converged = true;
+  double path = 0.0;
+  for (auto _ : state) {
+    const wbm::solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), contacts,
+                                            wbm::solvers::TimeBasis::from_name(p.first, m),
+                                            wbm::solvers::TimeBasis::from_name(p.second, m));
+    const auto sol = wr.solve();
+    iterations = sol.report.iterations;
+    converged = sol.converged();
+    path = sol.path == wbm::solvers::SolutionPath::DirectNewton ? 0.0 : 1.0;
+  }
+  state.counters["newton_iterations"] = iterations;
+  state.counters["converged"] = converged ? 1 : 0;
+  state.counters["fallback_path"] = path;
+  state.SetLabel(p.first + ":" + p.second + (rigid ? ", rigid stop" : ", exponential penalty"));
+}
+
+void rigid_arguments(benchmark::internal::Benchmark* b) {
+  for (int pair = 0; pair < 6; ++pair) {
+    for (int m : {64, 256}) {
+      for (int rigid : {0, 1}) b->Args({m, pair, rigid});
+    }
+  }
+  b->Unit(benchmark::kMillisecond);
+}
+
 void arguments(benchmark::internal::Benchmark* b) {
   for (int pair = 0; pair < 6; ++pair) {
     for (int m : {16, 32, 64, 128, 256}) b->Args({m, pair});
@@ -90,4 +130,5 @@ BENCHMARK(BM_WeightedResidual_Assembly)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_Residual)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);
+BENCHMARK(BM_WeightedResidual_FullSolveRigidVsPenalty)->Apply(rigid_arguments);
 BENCHMARK_MAIN();
