@@ -416,6 +416,29 @@ def rigid_stop(folder):
     fig.suptitle("Rigid stop (solid) and penalty law (dashed): tip error")
     fig.tight_layout()
     save(fig, folder, "tip_error")
+    path = folder / "frequency_response.csv"
+    if path.exists():
+        header, cols = read_csv(path)
+        penalty = folder.parent / "jl14_fig12" / "branches.csv"
+        pen = read_csv(penalty)[1] if penalty.exists() else None
+        present = sorted({int(c) for c in cols[0]})
+        for stem, wanted in (("frequency_response", [0, 3]), ("frequency_response_all", present)):
+            fig, ax = plt.subplots(figsize=(7.0, 4.4))
+            for i in wanted:
+                pts = [(f, 1e3 * a) for c, f, a in zip(cols[0], cols[1], cols[2]) if int(c) == i]
+                if pts:
+                    line, = ax.plot(*zip(*pts), lw=1.2, label=f"{METHODS[i]}, rigid stop")
+                    if pen is not None:
+                        pp = [(f, 1e3 * a) for c, f, a in zip(pen[0], pen[1], pen[4]) if int(c) == i]
+                        if pp:
+                            ax.plot(*zip(*pp), lw=0.8, ls=":", color=line.get_color(),
+                                    label=f"{METHODS[i]}, penalty (Fig. 12)")
+            ax.axhline(1e3 * meta["frequency_response_gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
+            ax.set_xlabel("forcing frequency [Hz]")
+            ax.set_ylabel("tip amplitude (max - min)/2 [mm]")
+            ax.set_title("Fig. 12 with a rigid stop (continuation; stability not computed)", fontsize=9)
+            ax.legend(fontsize=7)
+            save(fig, folder, stem)
 
 
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,

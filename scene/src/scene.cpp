@@ -218,7 +218,18 @@ class Parser {
                                           a.max_frequency_step_hz);
       a.max_points = static_cast<int>(r_.integer(*t, "analysis", "max_points", 2, 1000000, a.max_points));
       a.max_state = r_.number(*t, "analysis", "max_state", detail::non_negative("times s_r = max(gap, linear response); 0 = no bound"), a.max_state);
-      a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
+      // Rigid stops have no stability (no saltation matrices): false unless asked for (then refused).
+      bool rigid = false;
+      auto rigid_law = [](const toml::table* c) {
+        return c != nullptr && c->get_as<std::string>("law") != nullptr && c->get_as<std::string>("law")->get() == "rigid";
+      };
+      if (const toml::node* c = root.get("contact")) {
+        if (c->is_table()) rigid = rigid_law(c->as_table());
+        if (c->is_array_of_tables()) {
+          for (const auto& e : *c->as_array()) rigid = rigid || rigid_law(e.as_table());
+        }
+      }
+      a.stability = r_.boolean(*t, "analysis", "stability", rigid ? false : a.stability);
     }
   }
 
@@ -575,10 +586,10 @@ class Parser {
       c.law = value_of(law_table(), r_.choice(*t, section, "law", names(law_table())));
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
-      if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation) {
+      if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
         r_.error(Reader::source_of(*t, "law"), section + ".law",
-                 "\"rigid\" (exact contact) is not continued yet (the Signorini conditions have no continuation): "
-                 "use type = \"solve\" with frequency_hz = [from, to] (a sweep), or a stiff \"linear\" penalty");
+                 "\"rigid\" (exact contact) with analysis.stability = true: the stability of impacting orbits "
+                 "(saltation matrices) is not computed; set stability = false, or use a stiff \"linear\" penalty");
       }
       if (!modes && !s_.contacts.empty() &&
           (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {

@@ -48,6 +48,7 @@ bool ForcedResponseFamily::outside(double lambda) const {
 
 Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double lambda) const {
   if (outside(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
+  if (base_->rigid()) return at(lambda).signorini_residual(x, load(lambda));
   return at(lambda).contact_residual(x, load(lambda));
 }
 
@@ -58,6 +59,14 @@ Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double l
   }
   const WeightedResidual& wr = at(lambda);
   Linearization l;
+  if (wr.rigid()) {  // the Signorini conditions on the impulses
+    l.residual = wr.signorini_residual(x, load(lambda));
+    l.jacobian = wr.signorini_jacobian(x).dense();
+    l.parameter_derivative = parameter_ == ContinuationParameter::Frequency
+                                 ? wr.signorini_frequency_derivative(x, load(lambda))
+                                 : Eigen::VectorXd(wr.signorini_load_derivative(x, load(lambda)) / base_amplitude_);
+    return l;
+  }
   l.residual = wr.contact_residual(x, load(lambda));
   l.jacobian = wr.contact_jacobian(x);
   if (parameter_ == ContinuationParameter::Frequency) {
@@ -155,10 +164,11 @@ void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch)
 }  // namespace
 
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
-  if (base.rigid()) {
-    throw std::invalid_argument("trace_response: the contacts are rigid stops; continuation of the Signorini "
-                                "conditions is not implemented yet: solve point by point (a sweep) with the rigid "
-                                "law, or trace the branch with a stiff LinearPenalty");
+  const bool rigid = base.rigid();
+  if (rigid && o.stability) {
+    throw std::invalid_argument("trace_response: stability = true with rigid stops: the monodromy matrix of an "
+                                "impacting orbit needs saltation matrices, which are not implemented; set "
+                                "ResponseCurveOptions::stability = false (or use a stiff LinearPenalty)");
   }
   if (base.contact_unknowns(base.linear_response()).size() == 0) {
     throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
@@ -188,12 +198,16 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     curve.message = "start: " + start.report.message;
     return curve;
   }
-  const Eigen::VectorXd x0 = base.contact_unknowns(spectral::stacked(start.coefficients));
+  // The unknowns: the contact coefficients x (penalty laws) or the impulses λ (rigid stops).
+  const Eigen::VectorXd x0 = rigid ? spectral::stacked(start.contact_force_samples)
+                                   : base.contact_unknowns(spectral::stacked(start.coefficients));
   PseudoArclengthOptions pa;
   pa.parameter_min = o.parameter_min;
   pa.parameter_max = o.parameter_max;
   pa.parameter_scale = std::abs(lambda0) > 0.0 ? std::abs(lambda0) : 1.0;
-  pa.state_scale = base.residual_scale();
+  // λ in newtons: scaled so that c λ is compared with s_r, as the residual is.
+  pa.state_scale = rigid ? base.residual_scale() / base.force_compliance() : base.residual_scale();
+  pa.corner_restart = rigid;  // the branch has a corner at every change of the active instants
   pa.direction = o.direction;
   pa.initial_step = o.initial_step;
   pa.min_step = o.min_step;
@@ -205,7 +219,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.corrector_tolerance = o.corrector_tolerance;
   pa.initial_newton.tolerance = o.corrector_tolerance;
   Branch branch = pseudo_arclength(family, x0, lambda0, pa);
-  cut_at_undamped_top_resonance(base, branch);
+  // Rigid stops never drive the top function: it vanishes at every impulse instant.
+  if (!rigid) cut_at_undamped_top_resonance(base, branch);
   land_on_range_end(family, branch, o);
   curve.folds = branch.folds;
   curve.stop = branch.stop;
@@ -232,13 +247,25 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.frequency_hz = frequency ? p.parameter : base.frequency_hz();
     r.amplitude_n = family.load(p.parameter) * base.forcing().amplitude;
     r.contact_unknowns = p.x;
+    Eigen::VectorXd u;
+    if (rigid) {  // the impulses: expand at this point
+      const WeightedResidual& wr = family.at(p.parameter);
+      const Eigen::VectorXd a = wr.expand_forces(p.x, family.load(p.parameter));
+      r.max_contact_force = p.x.maxCoeff();
+      u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
+      r.max_displacement = u.maxCoeff();
+      r.min_displacement = u.minCoeff();
+      r.amplitude = 0.5 * (r.max_displacement - r.min_displacement);
+      r.corrector_iterations = p.corrector_iterations;
+      curve.points.push_back(std::move(r));
+      continue;
+    }
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(p.x, nc).transpose();  // P × n_c
     for (int c = 0; c < nc; ++c) {
       for (Eigen::Index k = 0; k < uc.rows(); ++k) {
         r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
       }
     }
-    Eigen::VectorXd u;
     if (observed_contact >= 0) {
       u = uc.col(observed_contact);
     } else {  // a DOF away from the contacts: expand (one more factorization of G at this point)

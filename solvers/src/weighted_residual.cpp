@@ -431,7 +431,7 @@ struct WeightedResidual::Impl {
     x_lin = gather(a_lin);
     if (nc > 0) {
       set_compliance();
-      if (rigid) set_delassus();
+      if (rigid) set_delassus(true);
       double gmax = 0.0;
       for (const auto& ct : contacts) gmax = std::max(gmax, std::abs(ct.law->gap()));
       // The larger of the gap and the linear response: a 1 nm gap beside a millimetre motion
@@ -457,7 +457,8 @@ struct WeightedResidual::Impl {
     a_lin = g->solve(b, false);
     x_lin = gather(a_lin);
     if (nc > 0) set_compliance();
-    if (nc > 0 && rigid) set_delassus();
+    force_compliance = base.force_compliance;  // like s_r: residuals at different f comparable
+    if (nc > 0 && rigid) set_delassus(false);
   }
 
   // Y (M·n_c × k, rows j·n_c + c) ↦ (T ⊗ I_{n_c}) Y for an M × M time matrix T.
@@ -471,14 +472,16 @@ struct WeightedResidual::Impl {
     return out;
   }
 
-  // D = V H W, u_lin = V x_lin and c = mean |D_ii| (rigid stops), at this frequency.
-  void set_delassus() {
+  // D = V H W and u_lin = V x_lin (rigid stops) at this frequency, and c = mean |D_ii| if asked
+  // (at the base frequency only; at_frequency copies keep it, as they keep s_r).
+  void set_delassus(bool set_force_compliance) {
     const Collocation& col = *collocation;
     const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
     Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, size);  // W ⊗ I_{n_c}
     for (int c = 0; c < nc; ++c) w(Eigen::seq(c, Eigen::last, nc), Eigen::seq(c, Eigen::last, nc)) = col.weights;
     delassus = per_contact(col.trial_values, compliance_times(w));
     u_lin = per_contact(col.trial_values, x_lin);
+    if (!set_force_compliance) return;
     force_compliance = delassus.diagonal().cwiseAbs().mean();
     if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
   }
@@ -1150,6 +1153,31 @@ LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lamb
   jac.capacitance = p.delassus(active, active) / c;  // I + (D/c − I)_AA
   jac.times_v = [rows](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(*rows * y); };
   return jac;
+}
+
+Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_frequency_derivative");
+  std::vector<int> gap_rows;
+  (void)p.signorini(lambda, load, &gap_rows);
+  const Eigen::MatrixXd a = spectral::as_coefficients(expand_forces(lambda, load), p.n);  // n × M
+  // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C, then P G⁻¹, then the trial values at τ_{k+1}.
+  const double f = p.forcing.frequency_hz;
+  const Eigen::MatrixXd ga = 2.0 * f * p.operator_product(p.system.mass, a, 0) + p.operator_product(p.system.damping, a, 1);
+  const Eigen::VectorXd du = p.per_contact(p.collocation->trial_values, p.gather(p.solve_stacked(spectral::stacked(ga), false)));
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
+  for (int i : gap_rows) out(i) = du(i) / p.scale;  // g = g0 − u and ∂u/∂f = −V P G⁻¹ G′ a
+  return out;
+}
+
+Eigen::VectorXd WeightedResidual::signorini_load_derivative(const Eigen::VectorXd& lambda, double load) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_load_derivative");
+  std::vector<int> gap_rows;
+  (void)p.signorini(lambda, load, &gap_rows);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
+  for (int i : gap_rows) out(i) = -p.u_lin(i) / p.scale;
+  return out;
 }
 
 Eigen::VectorXd WeightedResidual::expand_forces(const Eigen::VectorXd& lambda, double load) const {

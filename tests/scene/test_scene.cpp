@@ -218,9 +218,11 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>(
       [&] {
         (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
-                    "[analysis]\ntype = \"continuation\"\n");
+                    "[analysis]\ntype = \"continuation\"\nstability = true\n");
       },
-      {"contact.law: \"rigid\" (exact contact) is not continued yet", "frequency_hz = [from, to] (a sweep)"});
+      {"contact.law: \"rigid\" (exact contact) with analysis.stability = true", "set stability = false"});
+  EXPECT_FALSE(parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
+                     "[analysis]\ntype = \"continuation\"\n").analysis.stability);
   expect_throw_with<std::invalid_argument>(
       [&] {
         (void)parse(rod + force + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\n[[contact]]\nlaw = \"linear\"\n"

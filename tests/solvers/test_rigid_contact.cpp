@@ -286,7 +286,7 @@ TEST(RigidContact, RefusesWhatItCannotDo) {
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)wr.signorini_residual(Eigen::VectorXd::Zero(3)); },
                                                     {"length 3", "n_c*M = 16"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::trace_response(wr, {}); }, {"rigid stops", "not implemented"});
+      [&] { (void)solvers::trace_response(wr, {}); }, {"rigid stops", "saltation", "stability = false"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::integrate_to_periodic(c.system, c.forcing, c.stop); }, {"integrate_moreau_jean_to_periodic"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
@@ -356,4 +356,61 @@ TEST(RigidContact, PenaltyHomotopyRescuesACyclingActiveSet) {
   EXPECT_LE(s.complementarity, 1e-12 * g0);
   EXPECT_LE(s.collocation_penetration, 1e-12 * g0);
   EXPECT_GE(s.contact_force_samples.minCoeff(), -1e-9 * s.max_contact_force);
+}
+
+// ∂φ/∂f and ∂φ/∂s of the Signorini conditions against central differences through
+// at_frequency (a new factorization of G) and the load argument.
+TEST(RigidContact, ParameterDerivativesMatchFiniteDifferences) {
+  const RigidCase1 c;
+  const auto trial = TimeBasis::from_name("haar", 32);
+  const auto weighting = TimeBasis::fourier(32);
+  const solvers::WeightedResidual wr(c.system, c.forcing, c.stop, trial, weighting);
+  const auto s = wr.solve();
+  ASSERT_TRUE(s.converged());
+  Eigen::VectorXd lambda = spectral::stacked(s.contact_force_samples);
+  for (Eigen::Index i = 0; i < lambda.size(); ++i) lambda(i) += (i % 2 == 0 ? 0.1 : -0.05) * s.max_contact_force;
+  const double f = c.forcing.frequency_hz, hf = 1e-4 * f;
+  const Eigen::VectorXd fd_f =
+      (wr.at_frequency(f + hf).signorini_residual(lambda) - wr.at_frequency(f - hf).signorini_residual(lambda)) / (2 * hf);
+  const Eigen::VectorXd df = wr.signorini_frequency_derivative(lambda);
+  EXPECT_GT(df.norm(), 0.0);
+  EXPECT_LE((df - fd_f).norm(), 1e-6 * fd_f.norm());
+  const double hs = 1e-6;
+  const Eigen::VectorXd fd_s = (wr.signorini_residual(lambda, 1 + hs) - wr.signorini_residual(lambda, 1 - hs)) / (2 * hs);
+  EXPECT_LE((wr.signorini_load_derivative(lambda) - fd_s).norm(), 1e-6 * fd_s.norm());
+}
+
+// The frequency response with the rigid stop by pseudo-arclength continuation (through the
+// corners of the nonsmooth branch) passes through the points that solve() finds on its own at
+// fixed frequencies, where the branch has one point per frequency.
+TEST(RigidContact, ContinuationPassesThroughTheFixedFrequencySolves) {
+  const RigidCase1 c;
+  const auto trial = TimeBasis::fourier(32);
+  const solvers::WeightedResidual base(c.system, c.forcing, c.stop, trial, trial);
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = c.forcing.frequency_hz;
+  o.parameter_max = 400.0;
+  o.stability = false;
+  o.max_parameter_step = 10.0;
+  const auto curve = solvers::trace_response(base, o);
+  ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
+  ASSERT_GE(curve.points.size(), 20U);
+  EXPECT_DOUBLE_EQ(curve.points.back().frequency_hz, 400.0);
+  for (double f : {200.0, 300.0, 400.0}) {
+    const auto wr = base.at_frequency(f);
+    const auto s = wr.solve();
+    ASSERT_TRUE(s.converged());
+    const Eigen::VectorXd u = solvers::evaluate_trial(trial, s.coefficients, c.tip, grid(1024), f);
+    const double amplitude = 0.5 * (u.maxCoeff() - u.minCoeff());
+    // The branch between its two points around f, linearly.
+    for (size_t i = 0; i + 1 < curve.points.size(); ++i) {
+      const auto& a = curve.points[i];
+      const auto& b = curve.points[i + 1];
+      if (a.frequency_hz <= f && f <= b.frequency_hz) {
+        const double t = b.frequency_hz > a.frequency_hz ? (f - a.frequency_hz) / (b.frequency_hz - a.frequency_hz) : 0.0;
+        EXPECT_NEAR(a.amplitude + t * (b.amplitude - a.amplitude), amplitude, 2e-3 * amplitude) << f << " Hz";
+        break;
+      }
+    }
+  }
 }

@@ -54,7 +54,8 @@ struct ResponsePoint {
   double parameter = 0.0;              // f [Hz] or F [N]
   double frequency_hz = 0.0;
   double amplitude_n = 0.0;            // F [N]
-  Eigen::VectorXd contact_unknowns;    // x (n_c·M, x(k·n_c + c)) [m]; the rest: family.at(λ).expand(x)
+  Eigen::VectorXd contact_unknowns;    // x (n_c·M, x(k·n_c + c)) [m]; the rest: family.at(λ).expand(x);
+                                       // rigid stops: the impulses λ [N] (expand_forces)
   double max_displacement = 0.0;       // max over P samples of u at `observed_dof` [m]
   double min_displacement = 0.0;       // min [m]
   double amplitude = 0.0;              // (max − min)/2 [m], the curve's amplitude measure
@@ -115,8 +116,12 @@ struct ResponseCurveOptions {
 /// a failed landing keeps the overshooting point and says so in the message). Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
-/// without contact (a linear curve needs no continuation: frequency_response()) or with rigid
-/// stops (WeightedResidual::rigid(): continuation of the Signorini conditions is not implemented).
+/// without contact (a linear curve needs no continuation: frequency_response()), and for
+/// stability = true with rigid stops (no saltation matrices). Rigid stops (WeightedResidual::
+/// rigid()): the unknowns are the impulses λ (contact_unknowns of the points), the residual the
+/// Signorini conditions with their generalized Jacobian, and the continuation restarts at the
+/// corners of the branch (PseudoArclengthOptions::corner_restart), one at every change of the
+/// active instants.
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
 }  // namespace wbm::solvers

@@ -287,7 +287,8 @@ class WeightedResidual {
   /// Rigid stops: D = V H W (n_c·M square [m/N], rows and columns k·n_c + c): the contact
   /// displacements at τ_{k+1} are u(λ) = u_lin − D λ.
   [[nodiscard]] const Eigen::MatrixXd& delassus() const;
-  /// Rigid stops: c = mean |D_ii| [m/N], the scale of c λ in the complementarity function.
+  /// Rigid stops: c = mean |D_ii| [m/N], the scale of c λ in the complementarity function (of
+  /// the frequency the object was built at: at_frequency keeps it, as it keeps s_r).
   [[nodiscard]] double force_compliance() const;
   /// Rigid stops: φ(λ) = min(c λ, g0 − u(λ)) / s_r (length n_c·M) at load s (x_lin → s x_lin),
   /// and its generalized Jacobian (gap rows: D_i/s_r; force rows: c e_i/s_r) as identity plus
@@ -295,6 +296,11 @@ class WeightedResidual {
   /// r > ¾ n_c·M). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
   [[nodiscard]] Eigen::VectorXd signorini_residual(const Eigen::VectorXd& lambda, double load = 1.0) const;
   [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda) const;
+  /// Rigid stops: ∂φ/∂f of signorini_residual at λ and load s [1/Hz]: on the gap rows
+  /// (V P G⁻¹ G′(f) a(λ)) / s_r with a(λ) = G⁻¹(s b − Pᵀ n(λ)), G′ = 2f A_M ⊗ M + A_C ⊗ C; 0 on
+  /// the force rows. And ∂φ/∂s (the load): −u_lin/s_r on the gap rows, 0 elsewhere.
+  [[nodiscard]] Eigen::VectorXd signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  [[nodiscard]] Eigen::VectorXd signorini_load_derivative(const Eigen::VectorXd& lambda, double load = 1.0) const;
   /// Rigid stops: a = G⁻¹(s b − Pᵀ n(λ)), the full coefficients (length n·M) for given forces.
   [[nodiscard]] Eigen::VectorXd expand_forces(const Eigen::VectorXd& lambda, double load = 1.0) const;
   /// Rigid stops: R(a, λ) = G a − b + Pᵀ n(λ) [N] (length n·M), the full residual with the
@@ -304,8 +310,9 @@ class WeightedResidual {
   [[nodiscard]] Eigen::VectorXd expand(const Eigen::VectorXd& x) const;
 
   /// The same problem at another forcing frequency f [Hz]: time operators, samples, forcing
-  /// vector, modal basis and the residual scale s_r are reused, only G(f) is factorized again
-  /// (so contact residuals at different f are comparable, as continuation needs).
+  /// vector, modal basis and the residual scale s_r (and for rigid stops the force compliance c)
+  /// are reused, only G(f) is factorized again (so contact residuals at different f are
+  /// comparable, as continuation needs).
   /// Throws std::invalid_argument unless f > 0 and finite.
   [[nodiscard]] WeightedResidual at_frequency(double frequency_hz) const;
   [[nodiscard]] double frequency_hz() const;
