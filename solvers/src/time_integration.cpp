@@ -164,7 +164,9 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
   Eigen::VectorXd previous_tip, impulse(nc), u_free(nc), u_old(nc);
   auto& rep = out.report;
+  const Eigen::SparseMatrix<double>& damping = system.damping;
   for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
+    double input = 0.0, dissipated = 0.0, absorbed = 0.0;  // work over this period [J]
     for (int step = 0; step < steps; ++step) {
       if (step % stride == 0) {
         disp.col(step / stride) = q;
@@ -199,9 +201,16 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
         v_new.noalias() -= minv_e * impulse;
         force.col(step / stride) += impulse / (h * stride);
       }
-      q += h * (th * v_new + (1.0 - th) * v);
+      const Eigen::VectorXd v_theta = th * v_new + (1.0 - th) * v;
+      input += h * forcing.amplitude * f_theta * v_theta(forcing.dof);
+      dissipated += h * v_theta.dot(damping * v_theta);
+      for (Eigen::Index i = 0; i < nc; ++i) absorbed += impulse(i) * v_theta(contacts[static_cast<size_t>(i)].dof);
+      q += h * v_theta;
       v = std::move(v_new);
     }
+    out.input_power = input / period;
+    out.damping_power = dissipated / period;
+    out.stop_power = absorbed / period;
     if (!q.allFinite() || !v.allFinite()) {
       rep.status = SolveStatus::NonFinite;
       rep.message = "non-finite state in period " + std::to_string(period_index);

@@ -110,6 +110,25 @@ TEST(MoreauJean, RigidStopConvergesAtFirstOrderInTheStep) {
   EXPECT_GT(tips.back().maxCoeff(), c.gap - 1e-4 * c.gap);  // it does reach the stop
 }
 
+// The θ = ½ scheme's energy identity over a periodic period: input − damping − stop = 0, and an
+// elastic stop (e = 1) absorbs nothing while a plastic one (e = 0) absorbs a positive share.
+TEST(MoreauJean, EnergyBalanceClosesOverAPeriod) {
+  const RigidCase1 c;
+  for (double e : {0.0, 1.0}) {
+    solvers::MoreauJeanOptions o;
+    o.steps_per_period = 1 << 12;
+    o.restitution = e;
+    const auto r = solvers::integrate_moreau_jean_to_periodic(c.system, c.forcing, c.stop, o);
+    ASSERT_TRUE(r.report.converged()) << r.report.message;
+    EXPECT_NEAR(r.input_power - r.damping_power - r.stop_power, 0.0, 1e-9 * r.input_power) << "e = " << e;
+    if (e == 1.0) {
+      EXPECT_NEAR(r.stop_power, 0.0, 1e-9 * r.input_power);
+    } else {
+      EXPECT_GT(r.stop_power, 1e-5 * r.input_power);
+    }
+  }
+}
+
 // The weighted residual solution with the rigid stop converges, for the six pairs of Table 2,
 // to the Moreau–Jean steady state with a plastic impact law (e = 0): the Signorini conditions at
 // the instants τ_{k+1} with the impulse of τ_k are the periodic analogue of its position-to-

@@ -2,6 +2,7 @@
 /// Periodic steady state by time stepping from rest: the reference solution of [JL14 Sec. 4].
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,13 @@ struct PeriodicResponse {
   /// Moreau–Jean only (else empty): n_c × P, the impulses of the steps in [τ_p, τ_{p+1}) over
   /// the interval's duration: the mean contact force there [N], row = contact.
   Eigen::MatrixXd contact_force;
+  /// Moreau–Jean only (else NaN): the mean powers over the last period [W], summed per step with
+  /// v_{k+θ}: input h f_{k+θ}·v, damping h vᵀ C v, and the stops' absorption Σ_c P_c v_c (the
+  /// impulse times the velocity towards the stop). For θ = ½ the scheme's energy identity makes
+  /// input − damping − stop the change of energy over the period (≈ 0 once periodic).
+  double input_power = std::numeric_limits<double>::quiet_NaN();
+  double damping_power = std::numeric_limits<double>::quiet_NaN();
+  double stop_power = std::numeric_limits<double>::quiet_NaN();
   double frequency_hz = 0.0;
   TimeIntegrationReport report;
 };
