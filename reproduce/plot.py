@@ -391,31 +391,35 @@ def rigid_stop(folder):
                     ax.set_ylabel(ylabel)
             fig.suptitle(f"Rigid stop: {title}", fontsize=10)
             save(fig, folder, f"{stem}_{case}")
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
-    for ax, case in zip(axes, ("case1", "case2")):
-        for file, ls, suffix in ((f"sweep_{case}.csv", "-", "rigid"), (f"penalty_{case}.csv", "--", "penalty")):
-            path = folder / file
-            if not path.exists():
-                continue
-            header, cols = read_csv(path)
-            values = cols[header.index("tip_error [-]")]
-            for i, name in enumerate(METHODS[:-1]):
-                pts = [(m, v) for c, m, v in zip(cols[0], cols[1], values) if int(c) == i and math.isfinite(v) and v > 0]
-                if pts:
-                    ax.plot(*zip(*pts), marker=MARKERS[i], ls=ls, lw=1.0, color=f"C{i}",
-                            alpha=1.0 if suffix == "rigid" else 0.45, label=f"{name} ({suffix})")
-        ax.set_xscale("log", base=2)
-        ax.set_yscale("log")
-        ax.set_xlabel("number of basis functions M [-]")
-        ax.set_ylabel("rms relative tip error [-]")
-        if case in meta:
-            periodic = meta[case].get("reference_periodic")
-            ax.set_title(meta[case]["scene"]["title"] + ("" if periodic else "\n(against Fourier:Fourier, largest M)"),
-                         fontsize=9)
-        ax.legend(fontsize=5, ncol=2)
-    fig.suptitle("Rigid stop (solid) and penalty law (dashed): tip error")
-    fig.tight_layout()
-    save(fig, folder, "tip_error")
+    for metric, ylabel in (("tip_error", "rms relative tip error [-]"), ("energy_norm", "energy norm / reference [-]")):
+        fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+        for ax, case in zip(axes, ("case1", "case2")):
+            for file, ls, suffix in ((f"sweep_{case}.csv", "-", "rigid"), (f"penalty_{case}.csv", "--", "penalty")):
+                path = folder / file
+                if not path.exists():
+                    continue
+                header, cols = read_csv(path)
+                values = cols[header.index(f"{metric} [-]")]
+                for i, name in enumerate(METHODS[:-1]):
+                    pts = [(m, v) for c, m, v in zip(cols[0], cols[1], values) if int(c) == i and math.isfinite(v) and v > 0]
+                    if pts:
+                        ax.plot(*zip(*pts), marker=MARKERS[i], ls=ls, lw=1.0, color=f"C{i}",
+                                alpha=1.0 if suffix == "rigid" else 0.45, label=f"{name} ({suffix})")
+            ax.set_xscale("log", base=2)
+            if metric == "tip_error":
+                ax.set_yscale("log")
+            else:
+                ax.axhline(1.0, color="k", lw=0.8, ls=":")
+            ax.set_xlabel("number of basis functions M [-]")
+            ax.set_ylabel(ylabel)
+            if case in meta:
+                periodic = meta[case].get("reference_periodic")
+                ax.set_title(meta[case]["scene"]["title"] + ("" if periodic else "\n(against Fourier:Fourier, largest M)"),
+                             fontsize=9)
+            ax.legend(fontsize=5, ncol=2)
+        fig.suptitle(f"Rigid stop (solid) and penalty law (dashed): {metric.replace('_', ' ')} (Figs. 10-11)")
+        fig.tight_layout()
+        save(fig, folder, metric)
     path = folder / "frequency_response.csv"
     if path.exists():
         header, cols = read_csv(path)
