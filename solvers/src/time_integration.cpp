@@ -147,7 +147,9 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(m + h * th * c + h * h * th * th * k);
   Eigen::MatrixXd e_cols = Eigen::MatrixXd::Zero(n, nc);
   for (Eigen::Index i = 0; i < nc; ++i) e_cols(contacts[static_cast<size_t>(i)].dof, i) = 1.0;
-  const Eigen::MatrixXd minv_e = lu.solve(e_cols);                  // M̂⁻¹ E
+  // Eigen's triangular solve takes the address of the first entry, so an n × 0 right-hand side
+  // (no contacts) is undefined behaviour there: skip it.
+  const Eigen::MatrixXd minv_e = nc > 0 ? Eigen::MatrixXd(lu.solve(e_cols)) : Eigen::MatrixXd(n, 0);  // M̂⁻¹ E
   const Eigen::MatrixXd delassus = e_cols.transpose() * minv_e;     // W
   // v_free = M̂⁻¹ [(M − h(1−θ)C − h²θ(1−θ)K) v − hK q + h f_θ]
   const Eigen::MatrixXd a_v = lu.solve(m - h * (1.0 - th) * c - h * h * th * (1.0 - th) * k);
