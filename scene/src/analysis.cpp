@@ -63,6 +63,11 @@ std::string format(const char* spec, double v) {
   return b;
 }
 
+// A contact's column name: its DOF, or "dof-other" for a contact between two DOFs.
+std::string contact_label(const Structure& st, const solvers::ContactPoint& c) {
+  return c.other < 0 ? st.dof_name(c.dof) : st.dof_name(c.dof) + "-" + st.dof_name(c.other);
+}
+
 // Per-period files from displacement/velocity of every DOF (n × P), shared by solve and timestep.
 void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
                    const solvers::MechanicalSystem& system, double frequency_hz, const Eigen::VectorXd& tau,
@@ -94,8 +99,8 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
     for (const auto& c : contacts) {
       Eigen::VectorXd force(tau.size());
-      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(displacement(c.dof, p));
-      f.header.push_back("f_c_" + st.dof_name(c.dof) + " [N]");
+      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(displacement.col(p)));
+      f.header.push_back("f_c_" + contact_label(st, c) + " [N]");
       f.columns.push_back(force);
     }
     out.tables.push_back(std::move(f));
@@ -145,7 +150,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
     const Eigen::VectorXd tk = (Eigen::VectorXd::LinSpaced(m, 0.0, m - 1.0).array() + 0.5) / m;
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tk, tk / forcing.frequency_hz}};
     for (size_t c = 0; c < contacts.size(); ++c) {
-      f.header.push_back("f_c_" + scene.structure->dof_name(contacts[c].dof) + " [N]");
+      f.header.push_back("f_c_" + contact_label(*scene.structure, contacts[c]) + " [N]");
       f.columns.push_back(solution.contact_force_samples.row(static_cast<Eigen::Index>(c)).transpose());
     }
     out.tables.push_back(std::move(f));

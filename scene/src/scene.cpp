@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/SparseCholesky>
 #include <wbm/contact/signorini.hpp>
@@ -579,7 +580,7 @@ class Parser {
       r_.error(n->source(), "contact", "expected a table [contact] or tables [[contact]]");
       return;
     }
-    std::set<int> dofs;
+    std::set<std::pair<int, int>> dofs;  // (dof, against)
     const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
     for (const auto& [t, section] : tables) {
       Contact c;
@@ -604,13 +605,13 @@ class Parser {
         r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
       }
       if (c.law == ContactLawKind::Rigid) {
-        r_.only(*t, section, {"law", "gap", "node", "dof"});
+        r_.only(*t, section, {"law", "gap", "node", "dof", "against"});
       } else if (c.law == ContactLawKind::Exponential) {
-        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof"});
+        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against"});
         c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
         c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
       } else if (c.law == ContactLawKind::Linear) {
-        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof"});
+        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against"});
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
         if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
             c.stiffness != s_.contacts.front().stiffness) {
@@ -620,8 +621,24 @@ class Parser {
         }
       }
       c.dof = location(*t, section, default_location());
-      if (s_.structure && !dofs.insert(c.dof).second) {
+      if (const toml::node* a = t->get("against"); a != nullptr && s_.structure) {
+        if (modes) {
+          r_.error(a->source(), section + ".against",
+                   "analysis \"nnm\" takes stops against a fixed obstacle; remove against (contacts between two "
+                   "DOFs are for forced responses)");
+        } else if (const auto other = location_value(*a, section + ".against")) {
+          if (*other == c.dof) {
+            r_.error(a->source(), section + ".against",
+                     "is the contact's own DOF " + s_.structure->dof_name(c.dof) +
+                         "; give the other body's DOF, or remove against for a fixed obstacle");
+          } else {
+            c.against = *other;
+          }
+        }
+      }
+      if (s_.structure && !dofs.insert({c.dof, c.against}).second) {
         r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
+                                           (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
                                            "; one law per DOF (combine them into one)");
       }
       s_.contacts.push_back(c);
@@ -990,7 +1007,7 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
-    points.push_back({c.dof, law});
+    points.push_back({c.dof, law, c.against});
   }
   return points;
 }
@@ -1123,6 +1140,11 @@ nlohmann::json to_json(const Scene& s) {
         o["stiffness"] = c.stiffness;
       }
       where(o, c.dof);
+      if (c.against >= 0) {
+        nlohmann::json a;
+        where(a, c.against);
+        o["against"] = rod ? a["node"] : a["dof"];
+      }
       list.push_back(o);
     }
     j["contact"] = list;

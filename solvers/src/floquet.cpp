@@ -37,12 +37,10 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
   const double h = 1.0 / (frequency_hz * static_cast<double>(p_count));
   const Eigen::MatrixXd step = (a0 * h).exp();  // e^{A₀h}
 
-  // b_c = (0, −M⁻¹ e_c): U (2n × n_c); e_cᵀ y = y(dof_c).
+  // b_c = (0, −M⁻¹ e_c): U (2n × n_c); e_cᵀ y = y(dof_c) − y(other_c).
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(2 * n, nc);
   for (Eigen::Index c = 0; c < nc; ++c) {
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
-    e(contacts[static_cast<size_t>(c)].dof) = 1.0;
-    u.col(c).tail(n) = -mlu.solve(e);
+    u.col(c).tail(n) = -mlu.solve(contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)));
   }
   auto stiffness = [&](Eigen::Index p) {  // k_c(t_p), periodic in p
     Eigen::VectorXd k(nc);
@@ -53,7 +51,11 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
   // Rows e_cᵀ Y (n_c × 2n).
   auto rows = [&](const Eigen::MatrixXd& y) {
     Eigen::MatrixXd r(nc, y.cols());
-    for (Eigen::Index c = 0; c < nc; ++c) r.row(c) = y.row(contacts[static_cast<size_t>(c)].dof);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const auto& ct = contacts[static_cast<size_t>(c)];
+      r.row(c) = y.row(ct.dof);
+      if (ct.other >= 0) r.row(c) -= y.row(ct.other);
+    }
     return r;
   };
   // e_cᵀ b_d (n_c × n_c) for the Woodbury solve.

@@ -610,7 +610,9 @@ Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool tra
 }
 
 Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& contact_dofs,
-                                                   const std::vector<Eigen::Index>& contact_rows) {
+                                                   const std::vector<Eigen::Index>& contact_rows,
+                                                   const std::vector<int>& other_dofs,
+                                                   const std::vector<Eigen::Index>& other_rows) {
   const int nc = static_cast<int>(contact_dofs.size());
   const auto m = static_cast<Eigen::Index>(contact_rows.size()) / std::max(nc, 1);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
@@ -621,9 +623,14 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
       for (Eigen::Index k = 0; k < m; ++k) h(k * nc + c, l * nc + d) = hcd(k, l);
     }
   };
+  // ψ_c(i) = φ_i(dof_c) − φ_i(other_c): mode i along contact c's direction e_dof − e_other.
+  const auto shape = [&](int c, Eigen::Index mode) {
+    const int other = other_dofs.empty() ? -1 : other_dofs[static_cast<size_t>(c)];
+    return su.phi(contact_dofs[c], mode) - (other >= 0 ? su.phi(other, mode) : 0.0);
+  };
   const auto weight = [&](size_t i, int c, int d) {
     const auto mode = static_cast<Eigen::Index>(i);
-    return su.phi(contact_dofs[c], mode) * su.phi(contact_dofs[d], mode);
+    return shape(c, mode) * shape(d, mode);
   };
   auto structure = std::make_shared<ComplianceStructure>();
   structure->contacts = nc;
@@ -687,10 +694,19 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
     }
     return h;
   }
-  Eigen::MatrixXd selection = Eigen::MatrixXd::Zero(g_.rows(), nc * m);
-  for (Eigen::Index j = 0; j < nc * m; ++j) selection(contact_rows[static_cast<size_t>(j)], j) = 1.0;
+  const auto other_row = [&](Eigen::Index j) {
+    return other_rows.empty() ? Eigen::Index{-1} : other_rows[static_cast<size_t>(j)];
+  };
+  Eigen::MatrixXd selection = Eigen::MatrixXd::Zero(g_.rows(), nc * m);  // Pᵀ
+  for (Eigen::Index j = 0; j < nc * m; ++j) {
+    selection(contact_rows[static_cast<size_t>(j)], j) = 1.0;
+    if (other_row(j) >= 0) selection(other_row(j), j) = -1.0;
+  }
   const Eigen::MatrixXd z = lu_->solve(selection);
-  for (Eigen::Index i = 0; i < nc * m; ++i) h.row(i) = z.row(contact_rows[static_cast<size_t>(i)]);
+  for (Eigen::Index i = 0; i < nc * m; ++i) {
+    h.row(i) = z.row(contact_rows[static_cast<size_t>(i)]);
+    if (other_row(i) >= 0) h.row(i) -= z.row(other_row(i));
+  }
   return h;
 }
 

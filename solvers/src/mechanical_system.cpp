@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/SparseLU>
 
@@ -94,15 +95,20 @@ void HarmonicForcing::validate(int dofs) const {
 }
 
 void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs) {
-  std::set<int> seen;
+  std::set<std::pair<int, int>> seen;
   for (const auto& c : contacts) {
     if (c.dof < 0 || c.dof >= dofs) {
       throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
                                   ": must lie in [0, " + std::to_string(dofs) + ")");
     }
+    if (c.other < -1 || c.other >= dofs || c.other == c.dof) {
+      throw std::invalid_argument("ContactPoint.other = " + std::to_string(c.other) + " (dof " + std::to_string(c.dof) +
+                                  "): must be -1 (a fixed obstacle) or another DOF in [0, " + std::to_string(dofs) + ")");
+    }
     if (!c.law) throw std::invalid_argument("ContactPoint.law is null for DOF " + std::to_string(c.dof));
-    if (!seen.insert(c.dof).second) {
+    if (!seen.insert({c.dof, c.other}).second) {
       throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
+                                  (c.other >= 0 ? " against DOF " + std::to_string(c.other) : std::string()) +
                                   " appears twice: combine the laws into one per DOF");
     }
   }

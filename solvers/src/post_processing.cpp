@@ -68,7 +68,7 @@ Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts, const E
                                 " is a rigid stop, whose force is not a function of the displacement: read "
                                 "WeightedResidualSolution::contact_force_samples instead");
   }
-  for (Eigen::Index p = 0; p < f.size(); ++p) f(p) = contacts.front().law->force(displacement(contacts.front().dof, p));
+  for (Eigen::Index p = 0; p < f.size(); ++p) f(p) = contacts.front().law->force(contacts.front().displacement(displacement.col(p)));
   return f;
 }
 
@@ -86,7 +86,7 @@ Eigen::VectorXd system_energy(const MechanicalSystem& system, const std::vector<
   Eigen::VectorXd e(displacement.cols());
   for (Eigen::Index p = 0; p < e.size(); ++p) {
     e(p) = 0.5 * velocity.col(p).dot(mv.col(p)) + 0.5 * displacement.col(p).dot(ku.col(p));
-    for (const auto& c : contacts) e(p) += c.law->potential(displacement(c.dof, p));
+    for (const auto& c : contacts) e(p) += c.law->potential(c.displacement(displacement.col(p)));
   }
   return e;
 }

@@ -44,7 +44,7 @@ int rhs(double tau, const double y[], double dydt[], void* params) {
   dw.noalias() = -o.minv_k * u - o.minv_c * w;
   dw += o.amplitude * std::cos(2.0 * std::numbers::pi * tau) * o.minv_cols.col(0);
   for (size_t c = 0; c < o.contacts.size(); ++c) {
-    dw -= o.contacts[c].law->force(u(o.contacts[c].dof)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+    dw -= o.contacts[c].law->force(o.contacts[c].displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
   }
   return dw.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
 }
@@ -57,10 +57,12 @@ int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* pa
   j.topRightCorner(n, n).setIdentity();
   j.bottomLeftCorner(n, n) = -o.minv_k;
   j.bottomRightCorner(n, n) = -o.minv_c;
+  const Eigen::Map<const Eigen::VectorXd> u(y, n);
   for (size_t c = 0; c < o.contacts.size(); ++c) {
-    const int dof = o.contacts[c].dof;
-    j.bottomRows(n).col(dof) -= o.contacts[c].law->stiffness(y[dof]) *
-                                o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+    const auto& ct = o.contacts[c];
+    const Eigen::VectorXd kcol = ct.law->stiffness(ct.displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+    j.bottomRows(n).col(ct.dof) -= kcol;
+    if (ct.other >= 0) j.bottomRows(n).col(ct.other) += kcol;
   }
   Eigen::Map<Eigen::VectorXd> dt(dfdt, 2 * n);
   dt.setZero();
@@ -87,9 +89,7 @@ Ode make_ode(const MechanicalSystem& system, int forced_dof, double amplitude,
   e(forced_dof) = 1.0;
   ode.minv_cols.col(0) = t_unit * t_unit * mlu.solve(e);
   for (size_t c = 0; c < contacts.size(); ++c) {
-    e.setZero();
-    e(contacts[c].dof) = 1.0;
-    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t_unit * t_unit * mlu.solve(e);
+    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t_unit * t_unit * mlu.solve(contacts[c].direction(ode.n));
   }
   ode.amplitude = amplitude;
   ode.contacts = contacts;
@@ -146,7 +146,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
                         k = Eigen::MatrixXd(system.stiffness);
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(m + h * th * c + h * h * th * th * k);
   Eigen::MatrixXd e_cols = Eigen::MatrixXd::Zero(n, nc);
-  for (Eigen::Index i = 0; i < nc; ++i) e_cols(contacts[static_cast<size_t>(i)].dof, i) = 1.0;
+  for (Eigen::Index i = 0; i < nc; ++i) e_cols.col(i) = contacts[static_cast<size_t>(i)].direction(n);
   // Eigen's triangular solve takes the address of the first entry, so an n × 0 right-hand side
   // (no contacts) is undefined behaviour there: skip it.
   const Eigen::MatrixXd minv_e = nc > 0 ? Eigen::MatrixXd(lu.solve(e_cols)) : Eigen::MatrixXd(n, 0);  // M̂⁻¹ E
@@ -183,9 +183,9 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
         std::vector<Eigen::Index> active;
         for (Eigen::Index i = 0; i < nc; ++i) {
           const auto& ct = contacts[static_cast<size_t>(i)];
-          u_old(i) = v(ct.dof);
-          u_free(i) = v_new(ct.dof);
-          if (ct.law->gap() - q(ct.dof) - 0.5 * h * u_old(i) <= 0.0) active.push_back(i);
+          u_old(i) = ct.displacement(v);
+          u_free(i) = ct.displacement(v_new);
+          if (ct.law->gap() - ct.displacement(q) - 0.5 * h * u_old(i) <= 0.0) active.push_back(i);
         }
         // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0.
         for (int sweep = 0; sweep < 1000 && !active.empty(); ++sweep) {
@@ -206,7 +206,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
       const Eigen::VectorXd v_theta = th * v_new + (1.0 - th) * v;
       input += h * forcing.amplitude * f_theta * v_theta(forcing.dof);
       dissipated += h * v_theta.dot(damping * v_theta);
-      for (Eigen::Index i = 0; i < nc; ++i) absorbed += impulse(i) * v_theta(contacts[static_cast<size_t>(i)].dof);
+      for (Eigen::Index i = 0; i < nc; ++i) absorbed += impulse(i) * contacts[static_cast<size_t>(i)].displacement(v_theta);
       q += h * v_theta;
       v = std::move(v_new);
     }

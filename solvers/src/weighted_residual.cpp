@@ -316,6 +316,7 @@ struct WeightedResidual::Impl {
   }
   double scale = 1.0;
   std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
+  std::vector<Eigen::Index> other_rows;    // the row of the other DOF of a relative contact, or −1
 
   // Rigid stops (every contact a RigidStop): the trial functions at τ_{k+1} (M × M, row k: the
   // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
@@ -404,9 +405,11 @@ struct WeightedResidual::Impl {
     b = spectral::stacked(bm);
 
     contact_rows.resize(static_cast<size_t>(nc) * m);
+    other_rows.assign(static_cast<size_t>(nc) * m, -1);
     for (int k = 0; k < m; ++k) {
       for (int c = 0; c < nc; ++c) {
         contact_rows[static_cast<size_t>(k) * nc + c] = spectral::stacked_index(k, contacts[c].dof, n);
+        if (contacts[c].other >= 0) other_rows[static_cast<size_t>(k) * nc + c] = spectral::stacked_index(k, contacts[c].other, n);
       }
     }
 
@@ -449,7 +452,7 @@ struct WeightedResidual::Impl {
         ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
         cell_average_rule(base.cell_average_rule),
         g(base.g->unfactorized()), b(base.b), scale(base.scale),
-        contact_rows(base.contact_rows), rigid(base.rigid), collocation(base.collocation) {
+        contact_rows(base.contact_rows), other_rows(base.other_rows), rigid(base.rigid), collocation(base.collocation) {
     forcing.frequency_hz = frequency_hz;
     forcing.validate(n);
     factorized = g->factorize(system, ops, forcing.frequency_hz);
@@ -521,7 +524,7 @@ struct WeightedResidual::Impl {
   }
 
   void set_compliance() {
-    h = g->compliance(contact_dofs(), contact_rows);
+    h = g->compliance(contact_dofs(), contact_rows, other_dofs(), other_rows);
     const auto nonzeros = (h.array() != 0.0).count();
     h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
     h_sparse.reset();
@@ -601,6 +604,19 @@ struct WeightedResidual::Impl {
     std::vector<int> d;
     for (const auto& c : contacts) d.push_back(c.dof);
     return d;
+  }
+  [[nodiscard]] std::vector<int> other_dofs() const {
+    std::vector<int> d;
+    for (const auto& c : contacts) d.push_back(c.other);
+    return d;
+  }
+
+  // v(contact row) += s·x, v(other row) −= s·x: Pᵀ x for P the contact directions e_dof − e_other.
+  void scatter(Eigen::VectorXd& v, const Eigen::VectorXd& x, double s) const {
+    for (size_t j = 0; j < contact_rows.size(); ++j) {
+      v(contact_rows[j]) += s * x(static_cast<Eigen::Index>(j));
+      if (other_rows[j] >= 0) v(other_rows[j]) -= s * x(static_cast<Eigen::Index>(j));
+    }
   }
 
   // G⁻¹ v (or G⁻ᵀ v) for a stacked v of length n·M.
@@ -704,7 +720,9 @@ struct WeightedResidual::Impl {
 
   [[nodiscard]] Eigen::VectorXd gather(const Eigen::VectorXd& a) const {
     Eigen::VectorXd x(contact_rows.size());
-    for (size_t j = 0; j < contact_rows.size(); ++j) x(static_cast<Eigen::Index>(j)) = a(contact_rows[j]);
+    for (size_t j = 0; j < contact_rows.size(); ++j) {
+      x(static_cast<Eigen::Index>(j)) = a(contact_rows[j]) - (other_rows[j] >= 0 ? a(other_rows[j]) : 0.0);
+    }
     return x;
   }
 
@@ -1014,7 +1032,7 @@ Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a) const {
   Eigen::VectorXd r = spectral::stacked(gu) - p.b;
   if (p.nc > 0) {
     const Eigen::VectorXd nx = p.contact_forces(p.gather(a), nullptr);
-    for (size_t j = 0; j < p.contact_rows.size(); ++j) r(p.contact_rows[j]) += nx(static_cast<Eigen::Index>(j));
+    p.scatter(r, nx, 1.0);
   }
   return r;
 }
@@ -1029,9 +1047,14 @@ Eigen::MatrixXd WeightedResidual::jacobian(const Eigen::VectorXd& a) const {
     std::vector<Impl::ContactTangent> tangents;
     (void)p.contact_forces(p.gather(a), &tangents);
     const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
+    // Pᵀ N P with P the rows e_dof − e_other.
     for (size_t i = 0; i < p.contact_rows.size(); ++i) {
       for (size_t j = 0; j < p.contact_rows.size(); ++j) {
-        jac(p.contact_rows[i], p.contact_rows[j]) += nj(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+        const double v = nj(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+        jac(p.contact_rows[i], p.contact_rows[j]) += v;
+        if (p.other_rows[j] >= 0) jac(p.contact_rows[i], p.other_rows[j]) -= v;
+        if (p.other_rows[i] >= 0) jac(p.other_rows[i], p.contact_rows[j]) -= v;
+        if (p.other_rows[i] >= 0 && p.other_rows[j] >= 0) jac(p.other_rows[i], p.other_rows[j]) += v;
       }
     }
   }
@@ -1068,7 +1091,7 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
   Eigen::VectorXd rhs = load * p.b;
   if (p.nc > 0) {
     const Eigen::VectorXd nx = p.contact_forces(x, nullptr);
-    for (size_t j = 0; j < p.contact_rows.size(); ++j) rhs(p.contact_rows[j]) -= nx(static_cast<Eigen::Index>(j));
+    p.scatter(rhs, nx, -1.0);
   }
   const Eigen::MatrixXd a = spectral::as_coefficients(p.solve_stacked(rhs, false), p.n);  // n × M
   // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C: (T ⊗ S) a ↔ S A Tᵀ on the n × M coefficients.
@@ -1096,7 +1119,7 @@ Eigen::VectorXd WeightedResidual::expand(const Eigen::VectorXd& x) const {
   Eigen::VectorXd rhs = p.b;
   if (p.nc > 0) {
     const Eigen::VectorXd nx = p.contact_forces(x, nullptr);
-    for (size_t j = 0; j < p.contact_rows.size(); ++j) rhs(p.contact_rows[j]) -= nx(static_cast<Eigen::Index>(j));
+    p.scatter(rhs, nx, -1.0);
   }
   return p.solve_stacked(rhs, false);
 }
@@ -1186,7 +1209,7 @@ Eigen::VectorXd WeightedResidual::expand_forces(const Eigen::VectorXd& lambda, d
   p.require_factorized();
   Eigen::VectorXd rhs = load * p.b;
   const Eigen::VectorXd nx = p.collocation_forces(lambda);
-  for (size_t j = 0; j < p.contact_rows.size(); ++j) rhs(p.contact_rows[j]) -= nx(static_cast<Eigen::Index>(j));
+  p.scatter(rhs, nx, -1.0);
   return p.solve_stacked(rhs, false);
 }
 
@@ -1200,7 +1223,7 @@ Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a, const Eigen
                              p.operator_product(p.system.stiffness, u, 2);
   Eigen::VectorXd r = spectral::stacked(gu) - p.b;
   const Eigen::VectorXd nx = p.collocation_forces(lambda);
-  for (size_t j = 0; j < p.contact_rows.size(); ++j) r(p.contact_rows[j]) += nx(static_cast<Eigen::Index>(j));
+  p.scatter(r, nx, 1.0);
   return r;
 }
 

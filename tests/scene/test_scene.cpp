@@ -626,3 +626,43 @@ TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
   }
   EXPECT_EQ(column(r, "branch.csv", 5).minCoeff(), 1.0);  // every point stable
 }
+
+// A contact between two DOFs (`against`): a mass x1 on a spring and a forced mass x2 that closes
+// the gap by moving towards it. With u = T y, T = [[1, 1], [0, 1]], y1 = x1 − x2 and the same
+// problem is a contact of y1 against a fixed wall in (TᵀMT, TᵀKT), C = αM in both: the two scenes
+// must give x1 = y1 + y2 and x2 = y2. The contact force file is headed by the pair.
+TEST(Scene, ContactBetweenTwoDofsEqualsTheTransformedWallContact) {
+  const std::string common = "damping = { alpha = 3.0 }\nforcing = { amplitude = 10.0, frequency_hz = 25.0, dof = 1 }\n";
+  const Scene between = parse("structure = { mass = [1.0, 2.0], stiffness = [4e4, 1e5], dofs = [\"x1\", \"x2\"] }\n" +
+                              common +
+                              "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4, dof = \"x1\", against = \"x2\" }\n");
+  const Scene wall = parse("structure = { mass = [[1.0, 1.0], [1.0, 3.0]], stiffness = [[4e4, 4e4], [4e4, 1.4e5]], "
+                           "dofs = [\"y1\", \"y2\"] }\n" + common +
+                           "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4, dof = \"y1\" }\n");
+  const nlohmann::json j = wbm::scene::to_json(between);
+  EXPECT_EQ(j["contact"][0]["against"], "x2");
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("between.json"))), j);
+  const auto r = wbm::scene::run_analysis(between);
+  const auto w = wbm::scene::run_analysis(wall);
+  ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
+  ASSERT_TRUE(w.converged) << w.diagnostics.dump(2);
+  const Eigen::VectorXd x1 = column(r, "displacement.csv", 2), x2 = column(r, "displacement.csv", 3);
+  const Eigen::VectorXd y1 = column(w, "displacement.csv", 2), y2 = column(w, "displacement.csv", 3);
+  EXPECT_LT((x1 - (y1 + y2)).norm(), 1e-8 * x1.norm());
+  EXPECT_LT((x2 - y2).norm(), 1e-8 * x2.norm());
+  EXPECT_GT((x1 - x2).maxCoeff(), 1e-4);  // the gap does close
+  for (const auto& t : r.tables) {
+    if (t.file == "contact_force.csv") {
+      EXPECT_EQ(t.header.at(2), "f_c_x1-x2 [N]");
+    }
+  }
+  EXPECT_LT((column(r, "contact_force.csv", 2) - column(w, "contact_force.csv", 2)).norm(),
+            1e-8 * column(w, "contact_force.csv", 2).norm());
+  const std::string two = "structure = { mass = [1.0, 2.0], stiffness = [4e4, 1e5] }\n" + common;
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(two + "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4, dof = 0, against = 0 }\n"); },
+      {"contact.against: is the contact's own DOF dof0", "remove against for a fixed obstacle"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(two + "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4, dof = 0, against = 7 }\n"); },
+      {"contact.against:", "[0, 1]"});
+}

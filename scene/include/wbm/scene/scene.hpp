@@ -105,6 +105,9 @@ struct Contact {
   double stiffness = 0.0;    // k [N/m] (linear)
   double gap = 0.0;          // g0 [m]
   int dof = 0;               // 0-based
+  /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
+  /// g0 − (u[dof] − u[against]) and the force pushes the two apart. −1: a fixed obstacle.
+  int against = -1;
 };
 
 struct Basis {

@@ -37,11 +37,27 @@ struct HarmonicForcing {
   void validate(int dofs) const;
 };
 
-/// A contact law acting on one DOF (law shared, immutable).
+/// A contact law acting on one DOF against a fixed obstacle, or between two DOFs (law shared,
+/// immutable). The law is evaluated on the contact displacement u_c = u[dof] − u[other] (u[dof]
+/// alone when other < 0), towards closing the gap, and its force f_c pushes the two apart:
+/// −f_c on `dof`, +f_c on `other` (the equation of motion has −e_c f_c with e_c = e_dof − e_other).
 struct ContactPoint {
   int dof;
   std::shared_ptr<const contact::ContactLaw> law;
-  /// Throws std::invalid_argument for a DOF out of range, a null law or repeated DOFs.
+  int other = -1;  // the second DOF of a relative contact (two bodies), or −1 (a fixed obstacle)
+  /// u_c for a vector indexed by DOF (length n).
+  [[nodiscard]] double displacement(const Eigen::Ref<const Eigen::VectorXd>& u) const {
+    return other < 0 ? u(dof) : u(dof) - u(other);
+  }
+  /// e_c (length n): 1 at dof, −1 at other.
+  [[nodiscard]] Eigen::VectorXd direction(int n) const {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
+    e(dof) = 1.0;
+    if (other >= 0) e(other) = -1.0;
+    return e;
+  }
+  /// Throws std::invalid_argument for a DOF (or other DOF) out of range, other == dof, a null law
+  /// or a repeated (dof, other) pair.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
 

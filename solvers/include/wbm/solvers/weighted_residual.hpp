@@ -185,7 +185,8 @@ struct WeightedResidualSolution {
 ///   R(a) = G a − b + n(a) = 0,   G = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K,
 ///   b = F e_f ⊗ (1/Q) Σ_q p(τ_q) cos 2πτ_q,
 ///   n(a) = Σ_c e_c ⊗ (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)),   u_c(τ_q) = Σ_k a_{c,k} q_k(τ_q),
-/// a stacked as in layout.hpp (length n·M). The Q-point midpoint rule never samples a Haar
+/// a stacked as in layout.hpp (length n·M), e_c = e_dof − e_other for a contact between two
+/// DOFs (ContactPoint::other; e_dof against a fixed obstacle). The Q-point midpoint rule never samples a Haar
 /// breakpoint k/M and is second order on piecewise-smooth integrands with breakpoints on the
 /// grid, spectral on smooth periodic ones.
 ///
