@@ -605,13 +605,13 @@ class Parser {
         r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
       }
       if (c.law == ContactLawKind::Rigid) {
-        r_.only(*t, section, {"law", "gap", "node", "dof", "against"});
+        r_.only(*t, section, {"law", "gap", "node", "dof", "against", "direction"});
       } else if (c.law == ContactLawKind::Exponential) {
-        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against"});
+        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against", "direction"});
         c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
         c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
       } else if (c.law == ContactLawKind::Linear) {
-        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against"});
+        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against", "direction"});
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
         if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
             c.stiffness != s_.contacts.front().stiffness) {
@@ -636,13 +636,76 @@ class Parser {
           }
         }
       }
-      if (s_.structure && !dofs.insert({c.dof, c.against}).second) {
+      if (const toml::node* d = t->get("direction"); d != nullptr && s_.structure) c.along = direction(*d, section, c, modes);
+      if (s_.structure && !dofs.insert({c.dof, c.against}).second && c.along.empty()) {
         r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
                                            (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
                                            "; one law per DOF (combine them into one)");
       }
       s_.contacts.push_back(c);
     }
+  }
+
+  // [contact] direction: ±1 (the side of the stop along the DOF) or a table {DOF name = weight}
+  // (matrices); returns the (DOF, weight) pairs, empty for +1.
+  std::vector<std::pair<int, double>> direction(const toml::node& d, const std::string& section, const Contact& c,
+                                                bool modes) {
+    const std::string full = section + ".direction";
+    const Structure& st = *s_.structure;
+    if (modes) {
+      r_.error(d.source(), full, "analysis \"nnm\" takes stops along +u of a DOF; remove direction");
+      return {};
+    }
+    if (c.against >= 0) {
+      r_.error(d.source(), full, "beside against: a contact between two DOFs acts along u[dof] − u[against]; "
+                                 "remove one of them");
+      return {};
+    }
+    if (d.is_floating_point() || d.is_integer()) {
+      const double v = d.value<double>().value_or(0.0);
+      if (v == 1.0) return {};
+      if (v == -1.0) return {{c.dof, -1.0}};
+      r_.error(d.source(), full, "expected +1 or -1 (the side of the stop along the DOF), or a table of DOF weights "
+                                 "{ name = weight, … } for a normal over several DOFs; got " + detail::number_text(v));
+      return {};
+    }
+    const toml::table* t = d.as_table();
+    if (t == nullptr || st.kind == StructureKind::Rod) {
+      r_.error(d.source(), full, st.kind == StructureKind::Rod
+                                     ? "the rod has one DOF per node: direction is +1 or -1"
+                                     : "expected +1, -1 or a table { name = weight, … } over DOF names");
+      return {};
+    }
+    std::vector<std::pair<int, double>> along;
+    double norm = 0.0;
+    bool has_dof = false;
+    for (const auto& [key, value] : *t) {
+      const std::string name(key.str());
+      const auto it = std::find(st.dof_names.begin(), st.dof_names.end(), name);
+      if (it == st.dof_names.end()) {
+        r_.error(value.source(), full + "." + name, "is not a DOF name of [structure] dofs");
+        continue;
+      }
+      const double w = r_.number_value(value, full + "." + name, detail::finite(""));
+      const int j = static_cast<int>(it - st.dof_names.begin());
+      has_dof = has_dof || j == c.dof;
+      norm += w * w;
+      along.emplace_back(j, w);
+    }
+    if (!(norm > 0.0)) {
+      r_.error(d.source(), full, "every weight is zero; give a direction, e.g. a unit normal");
+      return {};
+    }
+    if (!has_dof) {
+      r_.error(d.source(), full, "does not include the contact's DOF " + st.dof_name(c.dof) +
+                                     "; dof names the contact and must be one of the direction's DOFs");
+      return {};
+    }
+    if (std::abs(norm - 1.0) > 1e-6) {
+      r_.warn(d.source(), full + ": |n| = " + detail::number_text(std::sqrt(norm)) +
+                              ", not 1: the gap and the contact force are measured along n as given");
+    }
+    return along;
   }
 
   void basis(const toml::table& root) {
@@ -1007,7 +1070,7 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
-    points.push_back({c.dof, law, c.against});
+    points.push_back({c.dof, law, c.against, c.along});
   }
   return points;
 }
@@ -1144,6 +1207,13 @@ nlohmann::json to_json(const Scene& s) {
         nlohmann::json a;
         where(a, c.against);
         o["against"] = rod ? a["node"] : a["dof"];
+      }
+      if (c.along.size() == 1 && c.along.front() == std::pair<int, double>{c.dof, -1.0}) {
+        o["direction"] = -1;
+      } else if (!c.along.empty()) {
+        nlohmann::json d = nlohmann::json::object();
+        for (const auto& [j, w] : c.along) d[s.structure->dof_name(j)] = w;
+        o["direction"] = d;
       }
       list.push_back(o);
     }

@@ -37,7 +37,7 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
   const double h = 1.0 / (frequency_hz * static_cast<double>(p_count));
   const Eigen::MatrixXd step = (a0 * h).exp();  // e^{A₀h}
 
-  // b_c = (0, −M⁻¹ e_c): U (2n × n_c); e_cᵀ y = y(dof_c) − y(other_c).
+  // b_c = (0, −M⁻¹ e_c): U (2n × n_c); e_cᵀ y = Σ w y(dof) over the contact's direction.
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(2 * n, nc);
   for (Eigen::Index c = 0; c < nc; ++c) {
     u.col(c).tail(n) = -mlu.solve(contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)));
@@ -52,9 +52,8 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
   auto rows = [&](const Eigen::MatrixXd& y) {
     Eigen::MatrixXd r(nc, y.cols());
     for (Eigen::Index c = 0; c < nc; ++c) {
-      const auto& ct = contacts[static_cast<size_t>(c)];
-      r.row(c) = y.row(ct.dof);
-      if (ct.other >= 0) r.row(c) -= y.row(ct.other);
+      r.row(c).setZero();
+      for (const auto& [dof, w] : contacts[static_cast<size_t>(c)].terms()) r.row(c) += w * y.row(dof);
     }
     return r;
   };

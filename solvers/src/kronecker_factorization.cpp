@@ -609,12 +609,10 @@ Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool tra
   return spectral::stacked(setup_->phi * y);
 }
 
-Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& contact_dofs,
-                                                   const std::vector<Eigen::Index>& contact_rows,
-                                                   const std::vector<int>& other_dofs,
-                                                   const std::vector<Eigen::Index>& other_rows) {
-  const int nc = static_cast<int>(contact_dofs.size());
-  const auto m = static_cast<Eigen::Index>(contact_rows.size()) / std::max(nc, 1);
+Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
+                                                   const std::vector<StackedTerms>& rows) {
+  const int nc = static_cast<int>(directions.size());
+  const auto m = static_cast<Eigen::Index>(rows.size()) / std::max(nc, 1);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
   const Setup& su = *setup_;
   // H_cd = Σ_i φ_i(c) φ_i(d) (A + λ_i B)⁻¹ (M × M) scattered into h(k·n_c + c, l·n_c + d).
@@ -623,10 +621,11 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
       for (Eigen::Index k = 0; k < m; ++k) h(k * nc + c, l * nc + d) = hcd(k, l);
     }
   };
-  // ψ_c(i) = φ_i(dof_c) − φ_i(other_c): mode i along contact c's direction e_dof − e_other.
+  // ψ_c(i) = e_cᵀ φ_i: mode i along contact c's direction.
   const auto shape = [&](int c, Eigen::Index mode) {
-    const int other = other_dofs.empty() ? -1 : other_dofs[static_cast<size_t>(c)];
-    return su.phi(contact_dofs[c], mode) - (other >= 0 ? su.phi(other, mode) : 0.0);
+    double v = 0.0;
+    for (const auto& [dof, w] : directions[static_cast<size_t>(c)]) v += w * su.phi(dof, mode);
+    return v;
   };
   const auto weight = [&](size_t i, int c, int d) {
     const auto mode = static_cast<Eigen::Index>(i);
@@ -694,18 +693,13 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<int>& conta
     }
     return h;
   }
-  const auto other_row = [&](Eigen::Index j) {
-    return other_rows.empty() ? Eigen::Index{-1} : other_rows[static_cast<size_t>(j)];
-  };
   Eigen::MatrixXd selection = Eigen::MatrixXd::Zero(g_.rows(), nc * m);  // Pᵀ
   for (Eigen::Index j = 0; j < nc * m; ++j) {
-    selection(contact_rows[static_cast<size_t>(j)], j) = 1.0;
-    if (other_row(j) >= 0) selection(other_row(j), j) = -1.0;
+    for (const auto& [row, w] : rows[static_cast<size_t>(j)]) selection(row, j) = w;
   }
   const Eigen::MatrixXd z = lu_->solve(selection);
-  for (Eigen::Index i = 0; i < nc * m; ++i) {
-    h.row(i) = z.row(contact_rows[static_cast<size_t>(i)]);
-    if (other_row(i) >= 0) h.row(i) -= z.row(other_row(i));
+  for (Eigen::Index i = 0; i < nc * m; ++i) {  // P z
+    for (const auto& [row, w] : rows[static_cast<size_t>(i)]) h.row(i) += w * z.row(row);
   }
   return h;
 }

@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,6 +19,9 @@
 #include <wbm/solvers/weighted_residual.hpp>
 
 namespace wbm::solvers::detail {
+
+/// The nonzeros (stacked row, weight) of one row of the contact selection P.
+using StackedTerms = std::vector<std::pair<Eigen::Index, double>>;
 
 class KroneckerFactorization {
  public:
@@ -38,17 +42,14 @@ class KroneckerFactorization {
   [[nodiscard]] bool modal() const;
   /// G⁻¹ v, or G⁻ᵀ v, for a stacked v of length n·M. Requires factorized().
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
-  /// H = P G⁻¹ Pᵀ, n_c·M square in the contact ordering x(k·n_c + c): contact c at DOF
-  /// contact_dofs[c], whose unknown k sits at stacked row contact_rows[k·n_c + c]; for a relative
-  /// contact (other_dofs[c] ≥ 0, row other_rows[k·n_c + c]) P's row is e_dof − e_other (empty
-  /// vectors: no relative contact). Also keeps,
+  /// H = P G⁻¹ Pᵀ, n_c·M square in the contact ordering x(k·n_c + c): contact c has direction
+  /// e_c = Σ w e_dof over directions[c] (DOF, weight), and row j = k·n_c + c of P has the
+  /// nonzeros rows[j] (stacked row, weight). Also keeps,
   /// until the next factorize(), the per-pair blocks H_cd in the form compliance_product() uses:
   /// circulant (wavelet Galerkin pairs, Haar:B-spline) or A_K⁻¹ Σ_i w_i S_i with a
   /// shift-structured A_K (wavelet trial, Fourier weighting). Requires factorized().
-  [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<int>& contact_dofs,
-                                           const std::vector<Eigen::Index>& contact_rows,
-                                           const std::vector<int>& other_dofs = {},
-                                           const std::vector<Eigen::Index>& other_rows = {});
+  [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
+                                           const std::vector<StackedTerms>& rows);
   /// True when the last compliance() kept a structured form: compliance_product() then costs
   /// O(n_c² · columns · M log M) instead of the O(n_c² M² · columns) dense product with H.
   [[nodiscard]] bool fast_compliance_product() const { return compliance_structure_ != nullptr; }

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/SparseLU>
 
@@ -95,7 +96,7 @@ void HarmonicForcing::validate(int dofs) const {
 }
 
 void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs) {
-  std::set<std::pair<int, int>> seen;
+  std::set<std::vector<std::pair<int, double>>> seen;
   for (const auto& c : contacts) {
     if (c.dof < 0 || c.dof >= dofs) {
       throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
@@ -106,9 +107,36 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
                                   "): must be -1 (a fixed obstacle) or another DOF in [0, " + std::to_string(dofs) + ")");
     }
     if (!c.law) throw std::invalid_argument("ContactPoint.law is null for DOF " + std::to_string(c.dof));
-    if (!seen.insert({c.dof, c.other}).second) {
+    if (!c.along.empty()) {
+      const std::string where = "ContactPoint.along (contact at DOF " + std::to_string(c.dof) + ")";
+      if (c.other >= 0) {
+        throw std::invalid_argument(where + ": other = " + std::to_string(c.other) +
+                                    " beside a direction; put the other DOF in along with its weight");
+      }
+      std::set<int> dofs_in;
+      double norm = 0.0;
+      for (const auto& [j, w] : c.along) {
+        if (j < 0 || j >= dofs) {
+          throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " must lie in [0, " + std::to_string(dofs) + ")");
+        }
+        if (!std::isfinite(w)) throw std::invalid_argument(where + ": the weight of DOF " + std::to_string(j) + " is not finite");
+        if (!dofs_in.insert(j).second) {
+          throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " appears twice; give each DOF one weight");
+        }
+        norm += w * w;
+      }
+      if (!(norm > 0.0)) throw std::invalid_argument(where + ": every weight is zero; give a direction (e.g. a unit normal)");
+      if (dofs_in.count(c.dof) == 0) {
+        throw std::invalid_argument(where + ": dof " + std::to_string(c.dof) +
+                                    " is not among its DOFs; dof names the contact and must be one of them");
+      }
+    }
+    auto key = c.terms();
+    std::sort(key.begin(), key.end());
+    if (!seen.insert(key).second) {
       throw std::invalid_argument("ContactPoint.dof = " + std::to_string(c.dof) +
                                   (c.other >= 0 ? " against DOF " + std::to_string(c.other) : std::string()) +
+                                  (c.along.empty() ? std::string() : " (along a direction)") +
                                   " appears twice: combine the laws into one per DOF");
     }
   }

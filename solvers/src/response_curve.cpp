@@ -238,7 +238,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   const auto nc = static_cast<int>(contacts.size());
   int observed_contact = -1;  // the observed DOF's index among the contacts, if it is one
   for (int c = 0; c < nc; ++c) {
-    if (contacts[c].dof == dof && contacts[c].other < 0) observed_contact = c;
+    if (contacts[c].terms() == std::vector<std::pair<int, double>>{{dof, 1.0}}) observed_contact = c;
   }
   const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
   for (const auto& p : branch.points) {

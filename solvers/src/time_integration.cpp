@@ -61,8 +61,7 @@ int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* pa
   for (size_t c = 0; c < o.contacts.size(); ++c) {
     const auto& ct = o.contacts[c];
     const Eigen::VectorXd kcol = ct.law->stiffness(ct.displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
-    j.bottomRows(n).col(ct.dof) -= kcol;
-    if (ct.other >= 0) j.bottomRows(n).col(ct.other) += kcol;
+    for (const auto& [dof, w] : ct.terms()) j.bottomRows(n).col(dof) -= w * kcol;
   }
   Eigen::Map<Eigen::VectorXd> dt(dfdt, 2 * n);
   dt.setZero();

@@ -315,8 +315,9 @@ struct WeightedResidual::Impl {
     return kernel;
   }
   double scale = 1.0;
-  std::vector<Eigen::Index> contact_rows;  // row in a of contact unknown x(k·n_c + c)
-  std::vector<Eigen::Index> other_rows;    // the row of the other DOF of a relative contact, or −1
+  // Row j = k·n_c + c of P (contact c at instant k): its nonzeros (row in a, weight), the
+  // direction e_c of ContactPoint::terms() at coefficient k.
+  std::vector<detail::StackedTerms> contact_terms;
 
   // Rigid stops (every contact a RigidStop): the trial functions at τ_{k+1} (M × M, row k: the
   // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
@@ -404,12 +405,12 @@ struct WeightedResidual::Impl {
     bm.row(forcing.dof) = forcing.amplitude * smp->weighting->project(cosine);
     b = spectral::stacked(bm);
 
-    contact_rows.resize(static_cast<size_t>(nc) * m);
-    other_rows.assign(static_cast<size_t>(nc) * m, -1);
+    contact_terms.assign(static_cast<size_t>(nc) * m, {});
     for (int k = 0; k < m; ++k) {
       for (int c = 0; c < nc; ++c) {
-        contact_rows[static_cast<size_t>(k) * nc + c] = spectral::stacked_index(k, contacts[c].dof, n);
-        if (contacts[c].other >= 0) other_rows[static_cast<size_t>(k) * nc + c] = spectral::stacked_index(k, contacts[c].other, n);
+        for (const auto& [dof, w] : contacts[c].terms()) {
+          contact_terms[static_cast<size_t>(k) * nc + c].emplace_back(spectral::stacked_index(k, dof, n), w);
+        }
       }
     }
 
@@ -452,7 +453,7 @@ struct WeightedResidual::Impl {
         ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
         cell_average_rule(base.cell_average_rule),
         g(base.g->unfactorized()), b(base.b), scale(base.scale),
-        contact_rows(base.contact_rows), other_rows(base.other_rows), rigid(base.rigid), collocation(base.collocation) {
+        contact_terms(base.contact_terms), rigid(base.rigid), collocation(base.collocation) {
     forcing.frequency_hz = frequency_hz;
     forcing.validate(n);
     factorized = g->factorize(system, ops, forcing.frequency_hz);
@@ -524,7 +525,7 @@ struct WeightedResidual::Impl {
   }
 
   void set_compliance() {
-    h = g->compliance(contact_dofs(), contact_rows, other_dofs(), other_rows);
+    h = g->compliance(contact_directions(), contact_terms);
     const auto nonzeros = (h.array() != 0.0).count();
     h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
     h_sparse.reset();
@@ -600,22 +601,16 @@ struct WeightedResidual::Impl {
     return k;
   }
 
-  [[nodiscard]] std::vector<int> contact_dofs() const {
-    std::vector<int> d;
-    for (const auto& c : contacts) d.push_back(c.dof);
-    return d;
-  }
-  [[nodiscard]] std::vector<int> other_dofs() const {
-    std::vector<int> d;
-    for (const auto& c : contacts) d.push_back(c.other);
+  [[nodiscard]] std::vector<std::vector<std::pair<int, double>>> contact_directions() const {
+    std::vector<std::vector<std::pair<int, double>>> d;
+    for (const auto& c : contacts) d.push_back(c.terms());
     return d;
   }
 
-  // v(contact row) += s·x, v(other row) −= s·x: Pᵀ x for P the contact directions e_dof − e_other.
+  // v += s Pᵀ x: each contact unknown spread over its direction's rows.
   void scatter(Eigen::VectorXd& v, const Eigen::VectorXd& x, double s) const {
-    for (size_t j = 0; j < contact_rows.size(); ++j) {
-      v(contact_rows[j]) += s * x(static_cast<Eigen::Index>(j));
-      if (other_rows[j] >= 0) v(other_rows[j]) -= s * x(static_cast<Eigen::Index>(j));
+    for (size_t j = 0; j < contact_terms.size(); ++j) {
+      for (const auto& [row, w] : contact_terms[j]) v(row) += s * w * x(static_cast<Eigen::Index>(j));
     }
   }
 
@@ -718,10 +713,10 @@ struct WeightedResidual::Impl {
     return out;
   }
 
-  [[nodiscard]] Eigen::VectorXd gather(const Eigen::VectorXd& a) const {
-    Eigen::VectorXd x(contact_rows.size());
-    for (size_t j = 0; j < contact_rows.size(); ++j) {
-      x(static_cast<Eigen::Index>(j)) = a(contact_rows[j]) - (other_rows[j] >= 0 ? a(other_rows[j]) : 0.0);
+  [[nodiscard]] Eigen::VectorXd gather(const Eigen::VectorXd& a) const {  // P a
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(contact_terms.size()));
+    for (size_t j = 0; j < contact_terms.size(); ++j) {
+      for (const auto& [row, w] : contact_terms[j]) x(static_cast<Eigen::Index>(j)) += w * a(row);
     }
     return x;
   }
@@ -1047,14 +1042,14 @@ Eigen::MatrixXd WeightedResidual::jacobian(const Eigen::VectorXd& a) const {
     std::vector<Impl::ContactTangent> tangents;
     (void)p.contact_forces(p.gather(a), &tangents);
     const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
-    // Pᵀ N P with P the rows e_dof − e_other.
-    for (size_t i = 0; i < p.contact_rows.size(); ++i) {
-      for (size_t j = 0; j < p.contact_rows.size(); ++j) {
+    // Pᵀ N P with P's rows the contact directions.
+    for (size_t i = 0; i < p.contact_terms.size(); ++i) {
+      for (size_t j = 0; j < p.contact_terms.size(); ++j) {
         const double v = nj(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-        jac(p.contact_rows[i], p.contact_rows[j]) += v;
-        if (p.other_rows[j] >= 0) jac(p.contact_rows[i], p.other_rows[j]) -= v;
-        if (p.other_rows[i] >= 0) jac(p.other_rows[i], p.contact_rows[j]) -= v;
-        if (p.other_rows[i] >= 0 && p.other_rows[j] >= 0) jac(p.other_rows[i], p.other_rows[j]) += v;
+        if (v == 0.0) continue;
+        for (const auto& [ri, wi] : p.contact_terms[i]) {
+          for (const auto& [rj, wj] : p.contact_terms[j]) jac(ri, rj) += wi * v * wj;
+        }
       }
     }
   }

@@ -666,3 +666,51 @@ TEST(Scene, ContactBetweenTwoDofsEqualsTheTransformedWallContact) {
       [&] { (void)parse(two + "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4, dof = 0, against = 7 }\n"); },
       {"contact.against:", "[0, 1]"});
 }
+
+// `direction = -1` puts the stop on the −x side: the mirror image (u → −u) of the +x stop under
+// the mirrored forcing, for the rigid and the penalty law. A table of DOF weights is a normal
+// over several DOFs; both round-trip through JSON, and impossible directions are refused.
+TEST(Scene, AStopOnTheNegativeSideMirrorsThePositiveOne) {
+  const std::string rod = "[structure]\nyoung_modulus = 70e9\ndensity = 2700.0\narea = 25e-4\nlength = 1.0\n"
+                          "elements = 25\n[damping]\nbeta = 1e-4\n[basis]\ntrial = \"bspline\"\ndimension = 64\n";
+  for (const std::string law : {"law = \"rigid\"", "law = \"linear\"\nstiffness = 1e9"}) {
+    const auto plus = wbm::scene::run_analysis(
+        parse(rod + "[forcing]\namplitude = 250e3\nfrequency_hz = 150.0\n[contact]\n" + law + "\ngap = 1e-3\n"));
+    const Scene minus_scene = parse(rod + "[forcing]\namplitude = -250e3\nfrequency_hz = 150.0\n[contact]\n" + law +
+                                    "\ngap = 1e-3\ndirection = -1\n");
+    const auto minus = wbm::scene::run_analysis(minus_scene);
+    ASSERT_TRUE(plus.converged && minus.converged) << law;
+    const Eigen::VectorXd& up = column(plus, "displacement.csv", 2);
+    const Eigen::VectorXd& um = column(minus, "displacement.csv", 2);
+    EXPECT_LT((up + um).norm(), 1e-9 * up.norm()) << law;
+    EXPECT_LT(um.minCoeff(), -0.99e-3) << law;  // it reaches the stop at −g0
+    const nlohmann::json j = wbm::scene::to_json(minus_scene);
+    EXPECT_EQ(j["contact"][0]["direction"], -1);
+    EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("minus.json"))), j);
+  }
+  const std::string plane = "structure = { mass = [1.0, 1.0], stiffness = [4e4, 8e4], dofs = [\"x\", \"y\"] }\n"
+                            "forcing = { amplitude = 10.0, frequency_hz = 25.0, dof = \"y\" }\n";
+  const Scene normal = parse(plane + "contact = { law = \"rigid\", gap = 1e-4, dof = \"x\", direction = { x = 0.6, y = 0.8 } }\n");
+  ASSERT_EQ(normal.contacts.front().along.size(), 2u);
+  EXPECT_EQ(normal.contact_points().front().along[1], (std::pair<int, double>{1, 0.8}));
+  const nlohmann::json j = wbm::scene::to_json(normal);
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("normal.json"))), j);
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(plane + "contact = { law = \"rigid\", gap = 1e-4, dof = \"x\", direction = 2 }\n"); },
+      {"contact.direction: expected +1 or -1"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(plane + "contact = { law = \"rigid\", gap = 1e-4, dof = \"x\", direction = { y = 1.0 } }\n"); },
+      {"contact.direction: does not include the contact's DOF x"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(plane + "contact = { law = \"rigid\", gap = 1e-4, dof = \"x\", direction = { x = 1.0, z = 1.0 } }\n"); },
+      {"contact.direction.z: is not a DOF name"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse(plane + "contact = { law = \"rigid\", gap = 1e-4, dof = \"x\", against = \"y\", direction = -1 }\n");
+      },
+      {"contact.direction: beside against"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = 150.0\n[contact]\nlaw = \"rigid\"\ngap = 1e-3\n"
+                              "direction = { tip = 1.0 }\n"); },
+      {"contact.direction: the rod has one DOF per node: direction is +1 or -1"});
+}

@@ -37,6 +37,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/SparseCore>
@@ -108,6 +109,10 @@ struct Contact {
   /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
   /// g0 − (u[dof] − u[against]) and the force pushes the two apart. −1: a fixed obstacle.
   int against = -1;
+  /// `direction` in the scene: the contact acts along Σ w e_j over these (DOF, weight) pairs
+  /// (solvers::ContactPoint::along): {(dof, −1)} for a stop on the −x side, or a unit normal
+  /// over several DOFs (matrices). Empty: +e_dof.
+  std::vector<std::pair<int, double>> along;
 };
 
 struct Basis {

@@ -3,6 +3,7 @@
 /// Units: SI (kg, N·s/m, N/m, N, m, s, Hz where the name says _hz).
 
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,27 +38,41 @@ struct HarmonicForcing {
   void validate(int dofs) const;
 };
 
-/// A contact law acting on one DOF against a fixed obstacle, or between two DOFs (law shared,
-/// immutable). The law is evaluated on the contact displacement u_c = u[dof] − u[other] (u[dof]
-/// alone when other < 0), towards closing the gap, and its force f_c pushes the two apart:
-/// −f_c on `dof`, +f_c on `other` (the equation of motion has −e_c f_c with e_c = e_dof − e_other).
+/// A contact law acting along a direction over the DOFs (law shared, immutable). The law is
+/// evaluated on the contact displacement u_c = e_cᵀ u, towards closing the gap g0 − u_c, and its
+/// force f_c ≥ 0 enters the equation of motion as −e_c f_c. The direction e_c is
+///   - e_dof: one DOF against a fixed obstacle (the default);
+///   - e_dof − e_other: between two DOFs (two bodies; −f_c on dof, +f_c on other);
+///   - Σ_(j, w) ∈ along w e_j when `along` is given: any direction, e.g. n·u at a 3D node with
+///     n a unit normal (g = g0 − n·u), or −e_dof for a stop on the −x side. `dof` then names
+///     the contact and must be one of along's DOFs; `other` must be −1.
+/// Units: u_c in the units of the DOFs (m for a unit n over translations).
 struct ContactPoint {
   int dof;
   std::shared_ptr<const contact::ContactLaw> law;
   int other = -1;  // the second DOF of a relative contact (two bodies), or −1 (a fixed obstacle)
-  /// u_c for a vector indexed by DOF (length n).
-  [[nodiscard]] double displacement(const Eigen::Ref<const Eigen::VectorXd>& u) const {
-    return other < 0 ? u(dof) : u(dof) - u(other);
+  std::vector<std::pair<int, double>> along = {};  // (DOF, weight) of a general direction, or empty
+  /// The nonzeros of e_c as (DOF, weight), in the order given.
+  [[nodiscard]] std::vector<std::pair<int, double>> terms() const {
+    if (!along.empty()) return along;
+    if (other >= 0) return {{dof, 1.0}, {other, -1.0}};
+    return {{dof, 1.0}};
   }
-  /// e_c (length n): 1 at dof, −1 at other.
+  /// u_c = e_cᵀ u for a vector indexed by DOF (length n).
+  [[nodiscard]] double displacement(const Eigen::Ref<const Eigen::VectorXd>& u) const {
+    double v = 0.0;
+    for (const auto& [j, w] : terms()) v += w * u(j);
+    return v;
+  }
+  /// e_c (length n).
   [[nodiscard]] Eigen::VectorXd direction(int n) const {
     Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
-    e(dof) = 1.0;
-    if (other >= 0) e(other) = -1.0;
+    for (const auto& [j, w] : terms()) e(j) += w;
     return e;
   }
-  /// Throws std::invalid_argument for a DOF (or other DOF) out of range, other == dof, a null law
-  /// or a repeated (dof, other) pair.
+  /// Throws std::invalid_argument for a DOF (or other DOF) out of range, other == dof, a null law,
+  /// a direction (along) with a DOF out of range or repeated, a non-finite weight, all weights
+  /// zero, dof not among its DOFs or other ≥ 0 beside it, or the same direction twice.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
 
