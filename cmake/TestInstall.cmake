@@ -30,6 +30,17 @@ foreach(module wavelets spectral fem contact solvers)
     message(FATAL_ERROR "no installed headers for wbm::${module}")
   endif()
 endforeach()
+# The Python module lands under the prefix (never in the system's site-packages) and imports.
+if(PYTHON)
+  file(GLOB_RECURSE python_module ${prefix}/lib/python*/site-packages/wbm*.so)
+  if(NOT python_module)
+    message(FATAL_ERROR "cmake --install did not put the Python module wbm under ${prefix}/lib/python*/site-packages")
+  endif()
+  get_filename_component(site ${python_module} DIRECTORY)
+  step("import the installed wbm" ${CMAKE_COMMAND} -E env PYTHONPATH=${site} ${PYTHON} -c
+       "print(round(__import__('wbm').natural_frequencies_hz(__import__('wbm').rod(210e9, 7800.0, 1e-4, 1.0, 20))[0], 1))")
+  expect("${step_output}" "^1297\\.5")
+endif()
 step("configure examples" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/build
      -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
 step("build examples" ${CMAKE_COMMAND} --build ${WORK_DIR}/build -j 2)

@@ -47,6 +47,19 @@ if(WBM_BUILD_REPRODUCE)
   wbm_require(WBM_PYTHON python3-matplotlib "A python3 that imports matplotlib")
 endif()
 
+if(WBM_BUILD_PYTHON)
+  # Debian's interpreter, where scripts/install-deps puts numpy and pytest (the first python3 on
+  # PATH may be another one); -DPython3_EXECUTABLE=… chooses another.
+  if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+    set(Python3_EXECUTABLE /usr/bin/python3)
+  endif()
+  find_package(Python3 QUIET COMPONENTS Interpreter Development.Module)
+  wbm_require(Python3_Development.Module_FOUND python3-dev "Python 3 headers")
+  set(PYBIND11_FINDPYTHON ON)
+  find_package(pybind11 2.6 QUIET CONFIG)
+  wbm_require(pybind11_FOUND pybind11-dev "pybind11")
+endif()
+
 if(WBM_BUILD_TESTS)
   find_package(GTest QUIET)
   wbm_require(GTest_FOUND libgtest-dev "GoogleTest")

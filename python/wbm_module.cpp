@@ -1,0 +1,255 @@
+// The Python module `wbm` (pybind11): scenes, time bases, connection coefficients, explicit and
+// rod systems, contact laws and the forced-response solve for any trial:weighting pair, with
+// numpy arrays in and out (through Eigen) and C++ exceptions as Python exceptions with the same
+// message (std::invalid_argument → ValueError, std::out_of_range → IndexError, other
+// std::exception → RuntimeError). Issue #18.
+#include <filesystem>
+#include <numbers>
+#include <tuple>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <nlohmann/json.hpp>
+#include <wbm/contact/penalty.hpp>
+#include <wbm/contact/signorini.hpp>
+#include <wbm/fem/rod.hpp>
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/scene.hpp>
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/time_basis.hpp>
+#include <wbm/solvers/weighted_residual.hpp>
+#include <wbm/wavelets/connection_coefficients.hpp>
+
+namespace py = pybind11;
+using namespace wbm;
+
+namespace {
+
+// JSON (nlohmann) ↔ Python objects through the json module: exact for numbers and strings.
+py::object to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+nlohmann::json from_python(const py::handle& o) {
+  return nlohmann::json::parse(py::module_::import("json").attr("dumps")(o).cast<std::string>());
+}
+
+// A scene from a path (str or os.PathLike naming an existing file), a TOML string or a dict.
+scene::Scene scene_of(const py::object& source) {
+  if (py::isinstance<py::dict>(source)) return scene::scene_from_json(from_python(source), "<dict>");
+  const py::object fspath = py::module_::import("os").attr("fspath");
+  if (py::isinstance<py::str>(source)) {
+    const std::string text = source.cast<std::string>();
+    if (text.find('\n') == std::string::npos && text.find('=') == std::string::npos &&
+        std::filesystem::is_regular_file(text)) {
+      return scene::load_scene(text);
+    }
+    if (text.find('=') == std::string::npos) {
+      throw std::invalid_argument("run_scene: '" + text + "' is neither an existing scene file nor TOML text "
+                                  "(no key = value); pass a path, a TOML string or a dict");
+    }
+    return scene::parse_scene(text, "<string>");
+  }
+  if (py::hasattr(source, "__fspath__")) return scene::load_scene(fspath(source).cast<std::string>());
+  throw std::invalid_argument("run_scene: expected a path, a TOML string or a dict, got " +
+                              py::str(py::type::of(source)).cast<std::string>());
+}
+
+// AnalysisResult → {"converged", "summary", "warnings", "diagnostics", "tables"}, each table a
+// dict {column header: numpy array}, plus "status" (list of str) when the table has one.
+py::dict result_dict(const scene::AnalysisResult& r) {
+  py::dict tables;
+  for (const auto& t : r.tables) {
+    py::dict columns;
+    for (size_t c = 0; c < t.header.size(); ++c) columns[py::str(t.header[c])] = py::cast(t.columns[c]);
+    if (!t.status.empty()) columns["status"] = py::cast(t.status);
+    tables[py::str(t.file)] = columns;
+  }
+  py::dict out;
+  out["converged"] = r.converged;
+  out["summary"] = r.summary;
+  out["warnings"] = r.warnings;
+  out["diagnostics"] = to_python(r.diagnostics);
+  out["tables"] = tables;
+  return out;
+}
+
+// "haar", "bspline" or "db<L>" (Family::daubechies validates L and says what is allowed).
+wavelets::Family family_of(const std::string& name) {
+  if (name == "haar") return wavelets::Family::haar();
+  if (name == "bspline") return wavelets::Family::orthogonal_cubic_bspline();
+  if (name.size() > 2 && name.size() < 5 && name.rfind("db", 0) == 0 &&
+      name.find_first_not_of("0123456789", 2) == std::string::npos) {
+    return wavelets::Family::daubechies(std::stoi(name.substr(2)));
+  }
+  throw std::invalid_argument("family '" + name + "' is unknown; use haar, db4 … db20 (even) or bspline");
+}
+
+Eigen::SparseMatrix<double> sparse(const Eigen::MatrixXd& m) { return m.sparseView(); }
+
+}  // namespace
+
+PYBIND11_MODULE(wbm, m) {
+  m.doc() = "wbm: periodic vibrations of structures with unilateral contact, by weighted residuals in time "
+            "(wavelet balance, harmonic balance) [Jones & Legrand 2014; Laxalde & Legrand 2011]. SI units.";
+
+  m.def(
+      "run_scene", [](const py::object& source) { return result_dict(scene::run_analysis(scene_of(source))); },
+      py::arg("source"),
+      R"(Run a scene (docs/scenes.md) and return its results.
+
+source: a path to a .toml scene, TOML text, or a dict with the scene's keys (as scene_json() gives).
+Returns a dict: converged (bool, from verified residuals), summary (str), warnings (list of str),
+diagnostics (dict: statuses, iterations, residuals, timings), tables ({file name: {column header:
+1-D numpy array}}; headers carry the units, e.g. "u_tip [m]"; "status" is a list of str when a
+table has one). Nothing is written to disk. Raises ValueError for a bad scene, with the file, line,
+key, allowed range and a way out, as `wbm check` prints it.)");
+  m.def(
+      "scene_json", [](const py::object& source) { return to_python(scene::to_json(scene_of(source))); },
+      py::arg("source"), "The resolved scene (every default filled in) as a dict, accepted back by run_scene.");
+
+  // Time bases.
+  py::class_<solvers::TimeBasis>(m, "TimeBasis", "A family of M periodic trial or weighting functions on τ ∈ [0, 1).")
+      .def(py::init([](const std::string& name, int dimension) { return solvers::TimeBasis::from_name(name, dimension); }),
+           py::arg("name"), py::arg("dimension"),
+           "name: fourier, haar, db4 … db20, bspline; dimension M (a power of two for wavelets). Raises ValueError.")
+      .def_property_readonly("name", &solvers::TimeBasis::name)
+      .def_property_readonly("dimension", &solvers::TimeBasis::dimension)
+      .def(
+          "values",
+          [](const solvers::TimeBasis& b, const Eigen::VectorXd& tau, int derivative) { return b.values(tau, derivative); },
+          py::arg("tau"), py::arg("derivative") = 0,
+          "Values (or d-th τ-derivatives) at tau: array (len(tau), M), column k = function k. Raises ValueError "
+          "for a derivative the family does not have pointwise.")
+      .def("__repr__", [](const solvers::TimeBasis& b) {
+        return "TimeBasis('" + b.key() + "', " + std::to_string(b.dimension()) + ")";
+      });
+  m.def("basis_names", &solvers::TimeBasis::names, "The names TimeBasis accepts.");
+
+  m.def(
+      "connection_coefficients",
+      [](const std::string& family, int d1, int d2) {
+        const auto g = wavelets::connection_coefficients(family_of(family), d1, d2);
+        py::dict out;
+        out["first_shift"] = g.first_shift;
+        out["last_shift"] = g.last_shift;
+        out["values"] = py::cast(g.values);
+        out["residual"] = g.residual;
+        return out;
+      },
+      py::arg("family"), py::arg("d1"), py::arg("d2"),
+      R"(Connection coefficients Γ^{d1,d2}[k] = ∫ φ^(d1)(t) φ^(d2)(t − k) dt on the real line
+[Latto et al. 1991; Beylkin 1992]: a dict with first_shift, last_shift, values (values[k −
+first_shift] = Γ[k]) and residual. family: haar, db4 … db20, bspline. Raises ValueError for an
+order the family does not have.)");
+
+  // Systems.
+  py::class_<solvers::MechanicalSystem>(m, "MechanicalSystem", "M ü + C u̇ + K u = f: n × n SI matrices, stored sparse.")
+      .def(py::init([](const Eigen::MatrixXd& mass, const Eigen::MatrixXd& damping, const Eigen::MatrixXd& stiffness) {
+             solvers::MechanicalSystem s{sparse(mass), sparse(damping), sparse(stiffness)};
+             s.validate();
+             return s;
+           }),
+           py::arg("mass"), py::arg("damping"), py::arg("stiffness"),
+           "Dense n × n arrays M [kg], C [N·s/m], K [N/m]. Raises ValueError for sizes, symmetry or a mass that "
+           "is not positive definite.")
+      .def_property_readonly("dofs", &solvers::MechanicalSystem::dofs)
+      .def_property_readonly("mass", [](const solvers::MechanicalSystem& s) { return Eigen::MatrixXd(s.mass); })
+      .def_property_readonly("damping", [](const solvers::MechanicalSystem& s) { return Eigen::MatrixXd(s.damping); })
+      .def_property_readonly("stiffness", [](const solvers::MechanicalSystem& s) { return Eigen::MatrixXd(s.stiffness); });
+  m.def(
+      "rod",
+      [](double young_modulus, double density, double area, double length, int elements, double beta) {
+        return solvers::beta_damped(fem::Rod({young_modulus, density, area, length, elements}), beta);
+      },
+      py::arg("young_modulus"), py::arg("density"), py::arg("area"), py::arg("length"), py::arg("elements"),
+      py::arg("beta") = 0.0,
+      "The clamped-free FE rod of [JL14 Sec. 2] (linear elements, consistent mass, node 0 clamped; DOF i is "
+      "node i + 1, the tip is DOF elements − 1) with C = βK [s]. Raises ValueError.");
+  m.def(
+      "natural_frequencies_hz",
+      [](const solvers::MechanicalSystem& s) {
+        const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd(s.stiffness), Eigen::MatrixXd(s.mass));
+        return Eigen::VectorXd(es.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi));
+      },
+      py::arg("system"), "Undamped natural frequencies [Hz], ascending (dense generalized eigenproblem K φ = ω² M φ).");
+
+  // Contact laws.
+  py::class_<contact::ContactLaw, std::shared_ptr<contact::ContactLaw>>(m, "ContactLaw")
+      .def("force", &contact::ContactLaw::force, py::arg("u"), "Contact force f_c(u) ≥ 0 [N] at displacement u [m].")
+      .def("stiffness", &contact::ContactLaw::stiffness, py::arg("u"), "df_c/du [N/m].")
+      .def_property_readonly("gap", &contact::ContactLaw::gap)
+      .def_property_readonly("rigid", &contact::ContactLaw::rigid)
+      .def("__repr__", &contact::ContactLaw::describe);
+  py::class_<contact::ExponentialPenalty, contact::ContactLaw, std::shared_ptr<contact::ExponentialPenalty>>(
+      m, "ExponentialPenalty", "f = a_c (e^{α(u − g0)} − 1) for u > g0, else 0 [JL14 Eq. (5)].")
+      .def(py::init([](double coefficient, double exponent, double gap) {
+             return std::make_shared<contact::ExponentialPenalty>(contact::ExponentialPenaltyParameters{coefficient, exponent, gap});
+           }),
+           py::arg("coefficient"), py::arg("exponent"), py::arg("gap"));
+  py::class_<contact::LinearPenalty, contact::ContactLaw, std::shared_ptr<contact::LinearPenalty>>(
+      m, "LinearPenalty", "f = k max(u − g0, 0).")
+      .def(py::init([](double stiffness, double gap) {
+             return std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{stiffness, gap});
+           }),
+           py::arg("stiffness"), py::arg("gap"));
+  py::class_<contact::RigidStop, contact::ContactLaw, std::shared_ptr<contact::RigidStop>>(
+      m, "RigidStop", "Exact unilateral contact at g0 (Signorini conditions; force() and stiffness() raise).")
+      .def(py::init([](double gap) { return std::make_shared<contact::RigidStop>(gap); }), py::arg("gap"));
+
+  m.def(
+      "solve",
+      [](const solvers::MechanicalSystem& system, int dof, double amplitude, double frequency_hz,
+         const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
+         const solvers::TimeBasis& weighting, const std::string& formulation) {
+        std::vector<solvers::ContactPoint> points;
+        for (const auto& [d, law] : contacts) points.push_back({d, law});
+        solvers::WeightedResidualOptions options;
+        options.formulation = solvers::parse_formulation(formulation);
+        const auto s = solvers::solve_weighted_residual(system, {dof, amplitude, frequency_hz}, points, trial, weighting, options);
+        py::dict out;
+        out["converged"] = s.converged();
+        out["status"] = std::string(solvers::to_string(s.report.status));
+        out["message"] = s.report.message;
+        out["iterations"] = s.report.iterations;
+        out["relative_residual"] = s.relative_residual;
+        out["residual_tolerance"] = s.residual_tolerance;
+        out["coefficients"] = py::cast(s.coefficients);
+        out["max_penetration"] = s.max_penetration;
+        out["max_contact_force"] = s.max_contact_force;
+        if (s.contact_force_samples.size() > 0) out["contact_force_samples"] = py::cast(s.contact_force_samples);
+        out["wall_time_s"] = s.wall_time_s;
+        return out;
+      },
+      py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
+      py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional",
+      R"(Forced response by weighted residuals [JL14 Eqs. (14)–(17)] to F cos(2π f t) on DOF `dof`.
+
+contacts: list of (dof, ContactLaw) pairs (all RigidStop or all penalty). Returns a dict:
+converged (verified residual), status, message, iterations, relative_residual, residual_tolerance,
+coefficients (n × M array: row = DOF, column = trial function), max_penetration [m],
+max_contact_force [N], contact_force_samples (n_c × M, rigid stops only) and wall_time_s.
+Non-convergence is returned, not raised; bad input raises ValueError.)");
+  m.def(
+      "evaluate",
+      [](const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients, const Eigen::VectorXd& tau) -> Eigen::MatrixXd {
+        return coefficients * trial.values(tau, 0).transpose();
+      },
+      py::arg("trial"), py::arg("coefficients"), py::arg("tau"),
+      "Displacements u(τ) [m] of every DOF: array (n, len(tau)) from the n × M coefficients of solve().");
+
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const std::out_of_range& e) {
+      PyErr_SetString(PyExc_IndexError, e.what());
+    }
+  });
+}
