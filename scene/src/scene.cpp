@@ -5,6 +5,7 @@
 #include <functional>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -516,44 +517,81 @@ class Parser {
   void forcing(const toml::table& root) {
     const toml::table* t = r_.table(root, "forcing", true);
     if (t == nullptr) return;
-    r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "points"});
+    r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "frequency_rad_s", "frequencies_hz",
+                            "frequencies_rad_s", "points"});
     Forcing f;
     f.amplitude = r_.number(*t, "forcing", "amplitude", detail::finite("N"));
     f.dof = location(*t, "forcing", default_location());
-    const toml::node* freq = t->get("frequency_hz");
-    const Range hz = detail::positive("Hz");
+    // One of four keys: a frequency or a range [from, to] in Hz or rad/s, or an explicit list.
+    std::string key;
+    for (const char* k : {"frequency_hz", "frequency_rad_s", "frequencies_hz", "frequencies_rad_s"}) {
+      if (!t->contains(k)) continue;
+      if (!key.empty()) {
+        r_.error(Reader::source_of(*t, k), std::string("forcing.") + k,
+                 "given beside forcing." + key + "; give the frequencies once");
+        continue;
+      }
+      key = k;
+    }
+    const toml::node* freq = key.empty() ? nullptr : t->get(key);
+    const bool rad = key.ends_with("rad_s"), list = key.rfind("frequencies", 0) == 0;
+    const double to_hz = rad ? 1.0 / (2.0 * std::numbers::pi) : 1.0;  // ω [rad/s] = 2π f
+    const std::string full = "forcing." + key, unit = rad ? "rad/s" : "Hz";
+    const Range positive = detail::positive(unit);
     if (freq == nullptr) {
-      r_.error(t->source(), "forcing.frequency_hz", "missing; expected a number > 0 [Hz] or a range [from, to]");
+      r_.error(t->source(), "forcing.frequency_hz",
+               "missing; expected frequency_hz = f or [from, to] [Hz], frequency_rad_s (the same in rad/s), or a "
+               "list frequencies_hz = [f1, f2, …] (or frequencies_rad_s) for a sweep at given frequencies");
+    } else if (list) {
+      const toml::array* a = freq->as_array();
+      if (a == nullptr || a->size() < 2) {
+        r_.error(freq->source(), full, "expected a list of at least two numbers > 0 [" + unit +
+                                           "]; for one frequency use frequency_" + (rad ? "rad_s" : "hz"));
+      } else {
+        FrequencyRange range;
+        for (size_t i = 0; i < a->size(); ++i) {
+          range.list_hz.push_back(to_hz * r_.number_value((*a)[i], full + "[" + std::to_string(i) + "]", positive));
+        }
+        range.from_hz = range.list_hz.front();
+        range.to_hz = range.list_hz.back();
+        range.points = static_cast<int>(range.list_hz.size());
+        if (const toml::node* p = t->get("points")) {
+          r_.error(p->source(), "forcing.points", "the list " + key + " gives the points; remove points");
+        }
+        f.range = range;
+      }
     } else if (freq->is_array()) {
       const toml::array& a = *freq->as_array();
       if (a.size() != 2) {
-        r_.error(freq->source(), "forcing.frequency_hz", "a range is [from, to] (two numbers > 0 [Hz])");
+        r_.error(freq->source(), full, "a range is [from, to] (two numbers > 0 [" + unit + "]); for a list of "
+                                           "frequencies use frequencies_" + (rad ? "rad_s" : "hz"));
       } else {
         FrequencyRange range;
-        range.from_hz = r_.number_value(a[0], "forcing.frequency_hz[0]", hz);
-        range.to_hz = r_.number_value(a[1], "forcing.frequency_hz[1]", hz);
+        range.from_hz = to_hz * r_.number_value(a[0], full + "[0]", positive);
+        range.to_hz = to_hz * r_.number_value(a[1], full + "[1]", positive);
         range.points = static_cast<int>(r_.integer(*t, "forcing", "points", 2, 100000, 51));
         if (range.from_hz == range.to_hz) {
-          r_.error(freq->source(), "forcing.frequency_hz", "the range is empty (from = to); give one number instead");
+          r_.error(freq->source(), full, "the range is empty (from = to); give one number instead");
         }
         f.range = range;
       }
     } else {
-      f.frequency_hz = r_.number_value(*freq, "forcing.frequency_hz", hz);
+      f.frequency_hz = to_hz * r_.number_value(*freq, full, positive);
       if (const toml::node* p = t->get("points")) {
-        r_.error(p->source(), "forcing.points", "only used with a range frequency_hz = [from, to]; remove it");
+        r_.error(p->source(), "forcing.points", "only used with a range " + key + " = [from, to]; remove it");
       }
     }
-    if (freq != nullptr && !freq->is_array() && s_.analysis.kind == AnalysisKind::Continuation) {
-      r_.error(freq->source(), "forcing.frequency_hz",
-               "analysis \"continuation\" follows the branch over a range: give frequency_hz = [from, to]");
+    if (freq != nullptr && (!freq->is_array() || list) && s_.analysis.kind == AnalysisKind::Continuation) {
+      r_.error(freq->source(), full,
+               "analysis \"continuation\" follows the branch over a range: give frequency_hz = [from, to] "
+               "(or frequency_rad_s)");
     }
     if (f.range && s_.analysis.kind == AnalysisKind::Continuation && t->contains("points")) {
       r_.error(Reader::source_of(*t, "points"), "forcing.points",
                "continuation chooses its own points (analysis.max_step, max_frequency_step_hz); remove it");
     }
     if (f.range && s_.analysis.kind == AnalysisKind::Timestep) {
-      r_.error(freq->source(), "forcing.frequency_hz",
+      r_.error(freq->source(), full,
                "analysis \"timestep\" integrates at one frequency; give a number, or use type = \"solve\" for a sweep");
     }
     s_.forcing = f;
@@ -1027,6 +1065,7 @@ std::string Structure::dof_name(int dof) const {
 
 std::vector<double> Forcing::frequencies_hz() const {
   if (!range) return {frequency_hz};
+  if (!range->list_hz.empty()) return range->list_hz;
   std::vector<double> f(static_cast<size_t>(range->points));
   for (int i = 0; i < range->points; ++i) {
     f[static_cast<size_t>(i)] = range->from_hz + (range->to_hz - range->from_hz) * i / (range->points - 1);
@@ -1184,7 +1223,9 @@ nlohmann::json to_json(const Scene& s) {
   if (s.forcing) {
     nlohmann::json f = {{"amplitude", s.forcing->amplitude}};
     where(f, s.forcing->dof);
-    if (s.forcing->range) {
+    if (s.forcing->range && !s.forcing->range->list_hz.empty()) {
+      f["frequencies_hz"] = s.forcing->range->list_hz;
+    } else if (s.forcing->range) {
       f["frequency_hz"] = {s.forcing->range->from_hz, s.forcing->range->to_hz};
       if (s.analysis.kind != AnalysisKind::Continuation) f["points"] = s.forcing->range->points;
     } else {

@@ -714,3 +714,52 @@ TEST(Scene, AStopOnTheNegativeSideMirrorsThePositiveOne) {
                               "direction = { tip = 1.0 }\n"); },
       {"contact.direction: the rod has one DOF per node: direction is +1 or -1"});
 }
+
+// Frequencies in rad/s and an explicit list of frequencies: the 1-DOF oscillator's closed-form
+// amplitude F/|k − mω² + iωc| at ω = 2π·25 rad/s given as frequency_rad_s, and a sweep at four
+// listed frequencies (in the order given, both units), against the same closed form.
+TEST(Scene, FrequenciesInRadPerSecondAndAsAListMatchTheClosedForm) {
+  const std::string head = "structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n";
+  const double w = 2.0 * std::numbers::pi * 25.0;
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g", w);
+  const auto one = wbm::scene::run_analysis(parse(head + "forcing = { amplitude = 10.0, frequency_rad_s = " + text + " }\n"));
+  ASSERT_TRUE(one.converged);
+  const Eigen::VectorXd& a = column(one, "coefficients.csv", 1);
+  const double exact = oscillator_amplitude(2.0, 6.0, 8e4, 10.0, 25.0);
+  EXPECT_NEAR(std::hypot(a(1), a(2)), exact, 1e-9 * exact);
+  const std::vector<double> listed = {40.0, 10.0, 25.0, 31.0};
+  for (const std::string& key : {std::string("frequencies_hz = [40.0, 10.0, 25.0, 31.0]"),
+                                 std::string("frequencies_rad_s = [") + std::to_string(2 * std::numbers::pi * 40.0) +
+                                     ", " + std::to_string(2 * std::numbers::pi * 10.0) + ", " +
+                                     std::to_string(2 * std::numbers::pi * 25.0) + ", " +
+                                     std::to_string(2 * std::numbers::pi * 31.0) + "]"}) {
+    const Scene s = parse(head + "forcing = { amplitude = 10.0, " + key + " }\nbasis = { dimension = 8 }\n"
+                          "output = { samples = 4096 }\n");
+    const auto sweep = wbm::scene::run_analysis(s);
+    ASSERT_TRUE(sweep.converged) << key;
+    const Eigen::VectorXd& hz = column(sweep, "frequency_response.csv", 0);
+    const Eigen::VectorXd& max_u = column(sweep, "frequency_response.csv", 1);
+    ASSERT_EQ(hz.size(), 4);
+    for (Eigen::Index i = 0; i < 4; ++i) {
+      EXPECT_NEAR(hz(i), listed[static_cast<size_t>(i)], 1e-6) << key;
+      const double amp = oscillator_amplitude(2.0, 6.0, 8e4, 10.0, hz(i));
+      EXPECT_NEAR(max_u(i), amp, 1e-6 * amp) << key;
+    }
+    const nlohmann::json j = wbm::scene::to_json(s);
+    EXPECT_EQ(j["forcing"]["frequencies_hz"].size(), 4u);
+    EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("list.json"))), j);
+  }
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 1.0, frequency_hz = 5.0, frequency_rad_s = 30.0 }\n"); },
+      {"forcing.frequency_rad_s: given beside forcing.frequency_hz; give the frequencies once"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 1.0, frequencies_hz = [5.0] }\n"); },
+      {"forcing.frequencies_hz: expected a list of at least two numbers > 0 [Hz]; for one frequency use frequency_hz"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 1.0, frequencies_rad_s = [5.0, -1.0] }\n"); },
+      {"forcing.frequencies_rad_s[1]", "> 0 [rad/s]"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 1.0 }\n"); },
+      {"forcing.frequency_hz: missing", "frequency_rad_s", "frequencies_hz"});
+}

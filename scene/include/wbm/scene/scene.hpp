@@ -78,6 +78,9 @@ struct Damping {
 struct FrequencyRange {
   double from_hz = 0.0, to_hz = 0.0;
   int points = 0;  // >= 2, equispaced, both ends included
+  /// An explicit sweep (`frequencies_hz` / `frequencies_rad_s`), in the order given [Hz]; when
+  /// non-empty it is the sweep, from_hz/to_hz are its first and last values and points its size.
+  std::vector<double> list_hz;
 };
 
 struct Forcing {
