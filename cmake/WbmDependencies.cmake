@@ -30,6 +30,12 @@ find_package(nlohmann_json 3.10 QUIET)
 wbm_require(nlohmann_json_FOUND nlohmann-json3-dev "nlohmann-json")
 find_package(CLI11 2.1 QUIET)
 wbm_require(CLI11_FOUND libcli11-dev "CLI11")
+# Python: Debian's interpreter, where scripts/install-deps puts matplotlib, numpy and pytest (the
+# first python3 on PATH may be another one, e.g. a pyenv shim without them), unless
+# -DPython3_EXECUTABLE=… chooses another. Set before any find_package(Python3).
+if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+  set(Python3_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python interpreter (module wbm, its tests, plots)")
+endif()
 if(WBM_BUILD_REPRODUCE)
   # An interpreter that imports matplotlib: the first python3 on PATH may not be Debian's.
   set(WBM_PYTHON "" CACHE FILEPATH "Python interpreter with matplotlib, for reproduce/plot.py")
@@ -48,11 +54,6 @@ if(WBM_BUILD_REPRODUCE)
 endif()
 
 if(WBM_BUILD_PYTHON)
-  # Debian's interpreter, where scripts/install-deps puts numpy and pytest (the first python3 on
-  # PATH may be another one); -DPython3_EXECUTABLE=… chooses another.
-  if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
-    set(Python3_EXECUTABLE /usr/bin/python3)
-  endif()
   find_package(Python3 QUIET COMPONENTS Interpreter Development.Module)
   wbm_require(Python3_Development.Module_FOUND python3-dev "Python 3 headers")
   set(PYBIND11_FINDPYTHON ON)

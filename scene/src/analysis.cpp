@@ -10,6 +10,7 @@
 
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/solvers/response_curve.hpp>
+#include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/layout.hpp>
 
 namespace wbm::scene {
@@ -104,6 +105,31 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
       f.columns.push_back(force);
     }
     out.tables.push_back(std::move(f));
+  }
+  if (scene.output.harmonics > 0) {  // A_h, φ_h of u = Σ A_h cos(2πhτ + φ_h) from the P samples
+    const int h_max = scene.output.harmonics;
+    const spectral::Aft aft(2 * h_max + 1, static_cast<int>(tau.size()), 0.0);
+    const std::vector<int> dofs = scene.output_dofs();
+    Eigen::MatrixXd observed(static_cast<Eigen::Index>(dofs.size()), tau.size());
+    for (size_t i = 0; i < dofs.size(); ++i) observed.row(static_cast<Eigen::Index>(i)) = displacement.row(dofs[i]);
+    const Eigen::MatrixXd c = aft.to_frequency(observed);  // {1, cos 2πτ, sin 2πτ, cos 4πτ, …}
+    const Eigen::VectorXd h = Eigen::VectorXd::LinSpaced(h_max + 1, 0.0, h_max);
+    Table t{"harmonics.csv", {"h [-]", "frequency [Hz]"}, {h, h * frequency_hz}};
+    for (size_t i = 0; i < dofs.size(); ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      Eigen::VectorXd amplitude(h_max + 1), phase(h_max + 1);
+      amplitude(0) = c(r, 0);
+      phase(0) = 0.0;
+      for (int k = 1; k <= h_max; ++k) {
+        amplitude(k) = std::hypot(c(r, 2 * k - 1), c(r, 2 * k));
+        phase(k) = std::atan2(-c(r, 2 * k), c(r, 2 * k - 1));
+      }
+      t.header.push_back("A_" + st.dof_name(dofs[i]) + " [m]");
+      t.columns.push_back(amplitude);
+      t.header.push_back("phase_" + st.dof_name(dofs[i]) + " [rad]");
+      t.columns.push_back(phase);
+    }
+    out.tables.push_back(std::move(t));
   }
   if (velocity != nullptr) {
     out.tables.push_back({"energy.csv",

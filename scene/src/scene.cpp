@@ -955,8 +955,19 @@ class Parser {
       s_.moreau_jean.samples_per_period = s_.output.samples;
       return;
     }
-    r_.only(*t, "output", {"samples", "nodes", "dofs"});
+    r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics"});
     s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
+    if (t->contains("harmonics")) {
+      s_.output.harmonics =
+          static_cast<int>(r_.integer(*t, "output", "harmonics", 1, (s_.output.samples - 1) / 2, 0));
+      const AnalysisKind k = s_.analysis.kind;
+      const bool one_frequency = k == AnalysisKind::Timestep || (k == AnalysisKind::Solve && !(s_.forcing && s_.forcing->range));
+      if (!one_frequency) {
+        r_.error(Reader::source_of(*t, "harmonics"), "output.harmonics",
+                 "written for a solve at one frequency or a timestep run (harmonics.csv); not for sweeps, "
+                 "continuation, nnm or basis plots: remove it");
+      }
+    }
     s_.timestep.samples_per_period = s_.output.samples;
     s_.moreau_jean.samples_per_period = s_.output.samples;
     for (const char* key : {"nodes", "dofs"}) {
@@ -1296,6 +1307,7 @@ nlohmann::json to_json(const Scene& s) {
     }
   }
   nlohmann::json out = {{"samples", s.output.samples}};
+  if (s.output.harmonics > 0) out["harmonics"] = s.output.harmonics;
   if (s.structure) {
     nlohmann::json list = nlohmann::json::array();
     for (int dof : s.output_dofs()) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));

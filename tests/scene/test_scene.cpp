@@ -763,3 +763,40 @@ TEST(Scene, FrequenciesInRadPerSecondAndAsAListMatchTheClosedForm) {
       [&] { (void)parse(head + "forcing = { amplitude = 1.0 }\n"); },
       {"forcing.frequency_hz: missing", "frequency_rad_s", "frequencies_hz"});
 }
+
+// [output] harmonics = H: amplitudes and phases of u = Σ A_h cos(2πhft + φ_h). Linear oscillator:
+// A_1 = F/|k − mω² + iωc|, φ_1 = −arg(k − mω² + iωc), nothing else. With a stop (harmonic
+// balance), the harmonics recomputed from the samples equal the solver's Fourier coefficients.
+TEST(Scene, HarmonicsOfTheResponseMatchClosedFormAndCoefficients) {
+  const std::string head = "structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n"
+                           "forcing = { amplitude = 10.0, frequency_hz = 25.0 }\n";
+  const auto linear = wbm::scene::run_analysis(parse(head + "output = { harmonics = 5 }\n"));
+  ASSERT_TRUE(linear.converged);
+  const double w = 2.0 * std::numbers::pi * 25.0;
+  const std::complex<double> z(8e4 - 2.0 * w * w, w * 6.0);
+  const Eigen::VectorXd& amplitude = column(linear, "harmonics.csv", 2);
+  const Eigen::VectorXd& phase = column(linear, "harmonics.csv", 3);
+  ASSERT_EQ(amplitude.size(), 6);
+  EXPECT_DOUBLE_EQ(column(linear, "harmonics.csv", 1)(3), 75.0);  // frequency of h = 3 [Hz]
+  EXPECT_NEAR(amplitude(1), 10.0 / std::abs(z), 1e-12 * amplitude(1));
+  EXPECT_NEAR(phase(1), -std::arg(z), 1e-10);
+  for (int h : {0, 2, 3, 4, 5}) EXPECT_LT(std::abs(amplitude(h)), 1e-12 * amplitude(1)) << h;
+
+  const auto stop = wbm::scene::run_analysis(
+      parse(head + "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4 }\nbasis = { harmonics = 8 }\n"
+                   "output = { harmonics = 8 }\n"));
+  ASSERT_TRUE(stop.converged);
+  const Eigen::VectorXd& a = column(stop, "coefficients.csv", 1);  // {1, cos 2πτ, sin 2πτ, …}
+  const Eigen::VectorXd& amp = column(stop, "harmonics.csv", 2);
+  EXPECT_NEAR(amp(0), a(0), 1e-12 * amp(1));
+  for (int h = 1; h <= 8; ++h) EXPECT_NEAR(amp(h), std::hypot(a(2 * h - 1), a(2 * h)), 1e-12 * amp(1)) << h;
+  EXPECT_GT(amp(2), 1e-3 * amp(1));  // the stop makes harmonics
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse("structure = { mass = 2.0, stiffness = 8e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 9.0] }\n"
+                    "output = { harmonics = 3 }\n");
+      },
+      {"output.harmonics: written for a solve at one frequency or a timestep run"});
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(head + "output = { samples = 16, harmonics = 8 }\n"); },
+                                           {"output.harmonics"});
+}

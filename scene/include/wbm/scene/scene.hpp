@@ -167,6 +167,10 @@ struct Output {
   int samples = 1024;      // P samples per period, τ_p = p/P
   std::vector<int> dofs;   // 0-based DOFs written; empty = the forced and the contact DOFs
   bool all_dofs = false;
+  /// H > 0: harmonics.csv (solve at one frequency, timestep): amplitude A_h [m] and phase φ_h
+  /// [rad] of u(t) = Σ_h A_h cos(2π h f t + φ_h), h = 0 … H, per output DOF, from the P samples
+  /// (h = 0: the mean, phase 0). 0: not written.
+  int harmonics = 0;
 };
 
 /// A resolved scene: every default filled in, every location a 0-based DOF.
