@@ -515,6 +515,12 @@ class Parser {
   }
 
   void forcing(const toml::table& root) {
+    if (const toml::node* n = root.get("forcing"); n != nullptr && n->is_array_of_tables()) {
+      r_.error(n->source(), "[[forcing]]",
+               "several forcings are not supported yet: give one [forcing] table (amplitude, node or dof, "
+               "frequency_hz); for loads on several DOFs, superpose linear responses or move the load to one DOF");
+      return;
+    }
     const toml::table* t = r_.table(root, "forcing", true);
     if (t == nullptr) return;
     r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "frequency_rad_s", "frequencies_hz",

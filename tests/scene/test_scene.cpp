@@ -762,6 +762,12 @@ TEST(Scene, FrequenciesInRadPerSecondAndAsAListMatchTheClosedForm) {
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(head + "forcing = { amplitude = 1.0 }\n"); },
       {"forcing.frequency_hz: missing", "frequency_rad_s", "frequencies_hz"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse(head + "[[forcing]]\namplitude = 1.0\nfrequency_hz = 5.0\n[[forcing]]\namplitude = 2.0\n"
+                           "frequency_hz = 5.0\n");
+      },
+      {"[[forcing]]: several forcings are not supported yet: give one [forcing] table"});
 }
 
 // [output] harmonics = H: amplitudes and phases of u = Σ A_h cos(2πhft + φ_h). Linear oscillator:
