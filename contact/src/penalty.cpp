@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace wbm::contact {
 namespace {
@@ -95,6 +96,57 @@ double LinearPenalty::potential(double u) const {
 std::string LinearPenalty::describe() const {
   std::ostringstream os;
   os << "linear penalty k = " << p_.stiffness << " N/m, g0 = " << p_.gap << " m";
+  return os.str();
+}
+
+SeriesCompliance::SeriesCompliance(std::shared_ptr<const ContactLaw> inner, double flexibility)
+    : inner_(std::move(inner)), c_(flexibility) {
+  if (!inner_) throw std::invalid_argument("SeriesCompliance: the inner law is null");
+  if (inner_->rigid()) {
+    throw std::invalid_argument("SeriesCompliance: a rigid stop behind a spring of flexibility c is the linear penalty "
+                                "1/c; use LinearPenalty{1/c, g0}");
+  }
+  if (!(flexibility > 0.0) || !std::isfinite(flexibility)) {
+    bad("SeriesCompliance", "flexibility (c)", flexibility, "must be finite and > 0 [m/N]");
+  }
+}
+
+double SeriesCompliance::node_position(double s) const {
+  const double g0 = inner_->gap();
+  if (std::isnan(s)) return s;
+  if (s <= g0 || inner_->force(s) == 0.0) return s;  // open: the node sits where the spring puts it
+  // h(y) = y + c f(y) − s is increasing, h(g0) = g0 − s < 0 ≤ h(s) = c f(s): the root is in [g0, s].
+  double lo = g0, hi = s, y = s;
+  const double tolerance = 1e-15 * (std::abs(s) + std::abs(g0));
+  for (int k = 0; k < 200; ++k) {
+    const double h = y + c_ * inner_->force(y) - s;
+    if (h > 0.0) hi = y; else lo = y;
+    double next = y - h / (1.0 + c_ * inner_->stiffness(y));
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket: bisect
+    if (std::abs(next - y) <= tolerance || hi - lo <= tolerance) return next;
+    y = next;
+  }
+  std::ostringstream os;
+  os << "SeriesCompliance::node_position: no convergence in 200 steps at s = " << s << " m (" << describe() << ")";
+  throw std::runtime_error(os.str());
+}
+
+double SeriesCompliance::force(double s) const { return inner_->force(node_position(s)); }
+
+double SeriesCompliance::stiffness(double s) const {
+  const double k = inner_->stiffness(node_position(s));
+  return k / (1.0 + c_ * k);
+}
+
+double SeriesCompliance::potential(double s) const {
+  const double y = node_position(s);
+  const double f = inner_->force(y);
+  return inner_->potential(y) + 0.5 * c_ * f * f;
+}
+
+std::string SeriesCompliance::describe() const {
+  std::ostringstream os;
+  os << inner_->describe() << ", through a spring of flexibility " << c_ << " m/N (stiffness " << 1.0 / c_ << " N/m)";
   return os.str();
 }
 

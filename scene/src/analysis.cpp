@@ -64,17 +64,25 @@ std::string format(const char* spec, double v) {
   return b;
 }
 
-// A contact's column name: its DOF, or "dof-other" for a contact between two DOFs.
-std::string contact_label(const Structure& st, const solvers::ContactPoint& c) {
-  return c.other < 0 ? st.dof_name(c.dof) : st.dof_name(c.dof) + "-" + st.dof_name(c.other);
+// The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
+std::string contact_label(const Scene& scene, size_t c) {
+  const Structure& st = *scene.structure;
+  const Contact& k = scene.contacts[c];
+  return k.against < 0 ? st.dof_name(k.dof) : st.dof_name(k.dof) + "-" + st.dof_name(k.against);
 }
 
-// Per-period files from displacement/velocity of every DOF (n × P), shared by solve and timestep.
+// Per-period files from displacement/velocity of every solver DOF (n × P), shared by solve and
+// timestep; the written DOFs are the scene's (massless ones recovered, Scene::expand_displacement).
 void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
                    const solvers::MechanicalSystem& system, double frequency_hz, const Eigen::VectorXd& tau,
-                   const Eigen::MatrixXd& displacement, const Eigen::MatrixXd* velocity, AnalysisResult& out) {
+                   const Eigen::MatrixXd& solver_displacement, const Eigen::MatrixXd* solver_velocity,
+                   AnalysisResult& out) {
   const Structure& st = *scene.structure;
   const Eigen::VectorXd time = tau / frequency_hz;
+  const Eigen::MatrixXd displacement = scene.expand_displacement(solver_displacement);
+  std::optional<Eigen::MatrixXd> full_velocity;
+  if (solver_velocity != nullptr) full_velocity = scene.expand_velocity(solver_displacement, *solver_velocity);
+  const Eigen::MatrixXd* velocity = full_velocity ? &*full_velocity : nullptr;
   Table u{"displacement.csv", {"tau [-]", "time [s]"}, {tau, time}};
   nlohmann::json response = nlohmann::json::array();
   for (int dof : scene.output_dofs()) {
@@ -98,10 +106,11 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
   if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
-    for (const auto& c : contacts) {
+    for (size_t k = 0; k < contacts.size(); ++k) {
+      const auto& c = contacts[k];
       Eigen::VectorXd force(tau.size());
-      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(displacement.col(p)));
-      f.header.push_back("f_c_" + contact_label(st, c) + " [N]");
+      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(solver_displacement.col(p)));
+      f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
       f.columns.push_back(force);
     }
     out.tables.push_back(std::move(f));
@@ -134,7 +143,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   if (velocity != nullptr) {
     out.tables.push_back({"energy.csv",
                           {"tau [-]", "time [s]", "energy [J]"},
-                          {tau, time, solvers::system_energy(system, contacts, displacement, *velocity)}});
+                          {tau, time, solvers::system_energy(system, contacts, solver_displacement, *solver_velocity)}});
   }
 }
 
@@ -176,15 +185,16 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
     const Eigen::VectorXd tk = (Eigen::VectorXd::LinSpaced(m, 0.0, m - 1.0).array() + 0.5) / m;
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tk, tk / forcing.frequency_hz}};
     for (size_t c = 0; c < contacts.size(); ++c) {
-      f.header.push_back("f_c_" + contact_label(*scene.structure, contacts[c]) + " [N]");
+      f.header.push_back("f_c_" + contact_label(scene, c) + " [N]");
       f.columns.push_back(solution.contact_force_samples.row(static_cast<Eigen::Index>(c)).transpose());
     }
     out.tables.push_back(std::move(f));
   }
   Table c{"coefficients.csv", {"k [-]"}, {Eigen::VectorXd::LinSpaced(a.cols(), 0.0, static_cast<double>(a.cols() - 1))}};
   for (int dof : scene.output_dofs()) {
+    if (scene.solver_dof(dof) < 0) continue;  // a massless DOF has no coefficients (recovered in displacement.csv)
     c.header.push_back("a_" + scene.structure->dof_name(dof) + " [m]");
-    c.columns.push_back(a.row(dof).transpose());
+    c.columns.push_back(a.row(scene.solver_dof(dof)).transpose());
   }
   out.tables.push_back(std::move(c));
 }
@@ -243,14 +253,23 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
       out.warnings.push_back(
           "sweep: at f = " + format("%.6g", f) + " Hz the solve continued from the previous point ended " +
           continued_status + "; restarted from the linear response (" + std::string(solvers::to_string(solution.path)) +
-          "): amplitude of " + scene.structure->dof_name(forced) + " " + format("%.4g", previous_amplitude) + " m -> " +
+          "): amplitude of " + scene.structure->dof_name(scene.forcing->dof) + " " + format("%.4g", previous_amplitude) + " m -> " +
           format("%.4g", amplitude) + " m (" + (jump >= 0 ? "+" : "") + format("%.3g", jump) +
           " m); the sweep may have left its branch (a fold?): use [analysis] type = \"continuation\" to follow it");
     }
     previous_amplitude = amplitude;
     std::vector<double> row = {f};
+    Eigen::MatrixXd every;  // with massless DOFs: all of them, recovered from the retained ones
+    if (scene.condensation) {
+      Eigen::MatrixXd retained(solution.coefficients.rows(), p);
+      for (Eigen::Index d = 0; d < retained.rows(); ++d) {
+        retained.row(d) = solvers::evaluate_trial(trial, solution.coefficients, static_cast<int>(d), tau, f).transpose();
+      }
+      every = scene.expand_displacement(retained);
+    }
     for (int dof : dofs) {
-      const Eigen::VectorXd u = solvers::evaluate_trial(trial, solution.coefficients, dof, tau, f);
+      const Eigen::VectorXd u = scene.condensation ? Eigen::VectorXd(every.row(dof).transpose())
+                                                   : solvers::evaluate_trial(trial, solution.coefficients, dof, tau, f);
       row.insert(row.end(), {u.maxCoeff(), u.minCoeff(), solvers::rms(u)});
     }
     row.push_back(contacts.empty() ? 0.0 : solution.max_contact_force);
@@ -633,6 +652,12 @@ AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
     case AnalysisKind::BasisPlot: basis_plot(scene, out); break;
     case AnalysisKind::Continuation: continuation(scene, out); break;
     case AnalysisKind::NonlinearModes: nonlinear_modes(scene, out); break;
+  }
+  if (scene.condensation) {  // say which DOFs were condensed and how each contact reaches the structure
+    nlohmann::json massless = nlohmann::json::array(), laws = nlohmann::json::array();
+    for (int d : scene.condensation->massless) massless.push_back(scene.structure->dof_name(d));
+    for (const auto& c : scene.condensation->contacts) laws.push_back(c.law->describe());
+    out.diagnostics["condensation"] = {{"massless_dofs", massless}, {"contact_laws_on_the_structure", laws}};
   }
   out.diagnostics["analysis"] = std::string(to_string(scene.analysis.kind));
   out.diagnostics["converged"] = out.converged;

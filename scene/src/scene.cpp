@@ -1,4 +1,5 @@
 #include <wbm/scene/scene.hpp>
+#include <wbm/solvers/condensation.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -161,6 +162,11 @@ class Parser {
       }
       structure(root);
       contacts(root);
+      if (s_.structure && s_.structure->kind == StructureKind::Matrices && !solvers::massless_dofs(s_.structure->mass).empty()) {
+        r_.error(Reader::source_of(*root.get_as<toml::table>("structure"), "mass"), "structure.mass",
+                 "has massless DOFs (rows of zeros): analysis \"nnm\" does not condense them; give every DOF a mass "
+                 "(massless DOFs are condensed for solve, timestep and continuation)");
+      }
       const bool penalty = std::any_of(s_.contacts.begin(), s_.contacts.end(),
                                        [](const Contact& c) { return c.law == ContactLawKind::Linear; });
       if (penalty && s_.analysis.algorithm != NnmAlgorithm::Continuation) {
@@ -179,6 +185,7 @@ class Parser {
       contacts(root);
       solver(root);
       timestep(root);
+      condense(root);
     }
     if (s_.analysis.kind != AnalysisKind::NonlinearModes) basis(root);
     if (plot) basis_plot(root);
@@ -415,10 +422,35 @@ class Parser {
     if (have_stiffness) check(st.stiffness, "stiffness", "K");
     if (st.damping.size() > 0) check(st.damping, "damping", "C");
     if (r_.error_count() != errors) return;
-    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(st.mass);
-    if (llt.info() != Eigen::Success) {
+    // Massless DOFs (zero rows of M) are condensed statically (solvers/condensation.hpp); the
+    // DOFs with mass must have a positive definite M.
+    const std::vector<int> massless = solvers::massless_dofs(st.mass);
+    Eigen::SparseMatrix<double> massive = st.mass;
+    if (!massless.empty() && massless.size() < static_cast<size_t>(n)) {
+      std::vector<bool> zero(static_cast<size_t>(n), false);
+      for (int d : massless) zero[static_cast<size_t>(d)] = true;
+      std::vector<Eigen::Triplet<double>> keep;
+      int row = 0;
+      std::vector<int> index(static_cast<size_t>(n), -1);
+      for (int d = 0; d < n; ++d) if (!zero[static_cast<size_t>(d)]) index[static_cast<size_t>(d)] = row++;
+      for (int k = 0; k < st.mass.outerSize(); ++k) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(st.mass, k); it; ++it) {
+          const int i = index[static_cast<size_t>(it.row())], j = index[static_cast<size_t>(it.col())];
+          if (i >= 0 && j >= 0) keep.emplace_back(i, j, it.value());  // stored zeros of massless rows dropped
+        }
+      }
+      massive.resize(row, row);
+      massive.setFromTriplets(keep.begin(), keep.end());
+    }
+    const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(massive);
+    if (massless.size() == static_cast<size_t>(n)) {
+      r_.error(Reader::source_of(t, "mass"), "structure.mass", "M is zero: give the structure mass");
+    } else if (llt.info() != Eigen::Success) {
       r_.error(Reader::source_of(t, "mass"), "structure.mass",
-               "M is not positive definite (Cholesky failed): every DOF needs mass; condense massless DOFs out first");
+               massless.empty() ? "M is not positive definite (Cholesky failed); rows of zeros (massless DOFs) are "
+                                  "condensed statically, other DOFs need a positive definite mass block"
+                                : "M is not positive definite on the DOFs with mass (Cholesky failed after removing "
+                                  "the massless rows of zeros)");
     }
   }
 
@@ -687,6 +719,38 @@ class Parser {
                                            "; one law per DOF (combine them into one)");
       }
       s_.contacts.push_back(c);
+    }
+  }
+
+  // Static condensation of massless DOFs (solvers/condensation.hpp), checked here so that a
+  // scene it cannot condense is refused with the reason.
+  void condense(const toml::table& root) {
+    if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
+    const std::vector<int> massless = solvers::massless_dofs(s_.structure->mass);
+    if (massless.empty()) return;
+    const toml::node* where = root.get("structure");
+    for (const auto& c : s_.contacts) {
+      if (c.law == ContactLawKind::Rigid && std::find(massless.begin(), massless.end(), c.dof) != massless.end()) {
+        r_.error(where->source(), "contact.law",
+                 "\"rigid\" on the massless DOF " + s_.structure->dof_name(c.dof) + ": a rigid stop behind the "
+                 "node's spring acts on the structure as that spring (a penalty of stiffness 1/F_jj), which the exact-"
+                 "contact solvers do not take; write the stop as law = \"linear\" with a stiffness far above the "
+                 "node's springs (the series stiffness k/(1 + F_jj k) then tends to 1/F_jj), or give the DOF a mass");
+        return;
+      }
+    }
+    solvers::MechanicalSystem given;
+    given.mass = s_.structure->mass;
+    given.stiffness = s_.structure->stiffness;
+    given.damping = s_.structure->damping.size() > 0 ? s_.structure->damping
+                                                     : Eigen::SparseMatrix<double>(given.mass.rows(), given.mass.cols());
+    std::vector<int> forced;
+    if (s_.forcing) forced.push_back(s_.forcing->dof);
+    try {
+      s_.condensation = solvers::condense_massless(given, s_.contact_points(), forced, s_.structure->dof_names);
+    } catch (const std::invalid_argument& e) {
+      r_.error(where->source(), "structure", std::string(e.what()) + " (massless DOFs are condensed statically: "
+                                             "docs/scenes.md)");
     }
   }
 
@@ -1093,6 +1157,12 @@ std::vector<double> Forcing::frequencies_hz() const {
 solvers::MechanicalSystem Scene::system() const {
   if (!structure) throw std::logic_error("Scene::system: scene \"" + name + "\" has no [structure]");
   solvers::MechanicalSystem sys;
+  if (condensation) {  // C = C_mm + αM_mm + βK̃ (Rayleigh damping of the condensed model)
+    sys = condensation->system;
+    sys.damping += damping.beta * sys.stiffness + damping.alpha * sys.mass;
+    sys.validate();
+    return sys;
+  }
   if (structure->kind == StructureKind::Rod) {
     sys = solvers::beta_damped(fem::Rod(structure->rod), damping.beta);  // C = βK [JL14 Eq. (7)]
   } else {
@@ -1111,10 +1181,21 @@ solvers::HarmonicForcing Scene::harmonic_forcing(std::optional<double> frequency
   if (!frequency_hz && forcing->range) {
     throw std::logic_error("Scene::harmonic_forcing: scene \"" + name + "\" sweeps a range; pass the frequency");
   }
-  return {forcing->dof, forcing->amplitude, frequency_hz.value_or(forcing->frequency_hz)};
+  return {solver_dof(forcing->dof), forcing->amplitude, frequency_hz.value_or(forcing->frequency_hz)};
+}
+
+int Scene::solver_dof(int dof) const { return condensation ? condensation->retained_index(dof) : dof; }
+
+Eigen::MatrixXd Scene::expand_displacement(const Eigen::MatrixXd& u) const {
+  return condensation ? condensation->expand_displacement(u) : u;
+}
+
+Eigen::MatrixXd Scene::expand_velocity(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) const {
+  return condensation ? condensation->expand_velocity(u, v) : v;
 }
 
 std::vector<solvers::ContactPoint> Scene::contact_points() const {
+  if (condensation) return condensation->contacts;
   std::vector<solvers::ContactPoint> points;
   for (const auto& c : contacts) {
     std::shared_ptr<const contact::ContactLaw> law;

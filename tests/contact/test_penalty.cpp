@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
@@ -86,4 +87,42 @@ TEST(ContactLaw, RejectsInvalidParameters) {
   expect_throw_with<std::invalid_argument>([] { ExponentialPenalty l({1e8, 50.0, 0.0, 800.0}); },
                                            {"linear_beyond", "(0, 700]"});
   expect_throw_with<std::invalid_argument>([] { LinearPenalty l({0.0, 0.0}); }, {"stiffness"});
+}
+
+// A law behind a spring of flexibility c: y + c f(y) = s. For a linear law k it is the series
+// spring k/(1 + ck) (force, stiffness and potential in closed form); for the exponential law the
+// node position solves its equation, the stiffness is the derivative of the force and the
+// potential's derivative is the force (central differences).
+TEST(SeriesCompliance, IsTheLawInSeriesWithTheSpring) {
+  const double c = 1e-8;  // a 1e8 N/m spring
+  const auto linear = std::make_shared<LinearPenalty>(LinearPenaltyParameters{3e8, 1e-3});
+  const SeriesCompliance through(linear, c);
+  const double k = 3e8 / (1.0 + c * 3e8);
+  for (double s : {-1e-3, 0.0, 1e-3, 1.5e-3, 4e-3}) {
+    const double d = std::max(s - 1e-3, 0.0);
+    EXPECT_NEAR(through.force(s), k * d, 1e-12 * k * 3e-3) << s;
+    EXPECT_NEAR(through.stiffness(s), d > 0 ? k : 0.0, 1e-9 * k) << s;
+    EXPECT_NEAR(through.potential(s), 0.5 * k * d * d, 1e-12 * k * 1e-5 + 1e-18) << s;
+  }
+  const auto exponential = std::make_shared<ExponentialPenalty>(kCase1);
+  const SeriesCompliance series(exponential, c);
+  for (double s : {0.5e-3, 1e-3, 1.02e-3, 1.1e-3, 1.5e-3, 3e-3}) {
+    const double y = series.node_position(s);
+    EXPECT_NEAR(y + c * exponential->force(y), s, 1e-14) << s;
+    EXPECT_LE(y, s);
+    EXPECT_NEAR(series.force(s), exponential->force(y), 1e-12 * (1.0 + series.force(s))) << s;
+    const double h = 1e-9;
+    if (std::abs(s - 1e-3) > 2 * h) {
+      EXPECT_NEAR(series.stiffness(s), central([&](double v) { return series.force(v); }, s, h),
+                  1e-5 * (1.0 + series.stiffness(s))) << s;
+      EXPECT_NEAR(series.force(s), central([&](double v) { return series.potential(v); }, s, h),
+                  1e-5 * (1.0 + series.force(s))) << s;
+    }
+  }
+  // Far in: the node barely moves past the gap and the force approaches the spring's (s − y)/c.
+  EXPECT_NEAR(series.force(0.1), (0.1 - series.node_position(0.1)) / c, 1e-9 * series.force(0.1));
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)SeriesCompliance(linear, 0.0); },
+                                                         {"SeriesCompliance.flexibility (c) = 0", "> 0 [m/N]"});
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)SeriesCompliance(nullptr, c); },
+                                                         {"SeriesCompliance: the inner law is null"});
 }

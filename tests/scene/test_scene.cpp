@@ -260,8 +260,12 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
       [&] { (void)parse("[structure]\nmass = [1.0, 1.0]\nstiffness = [[1.0, 0.0], [0.0, -1.0, 3.0]]\n" + force); },
       {"inline.toml:3: structure.stiffness: row 1 has 3 entries; a square matrix of 2 rows needs 2"});
   expect_throw_with<std::invalid_argument>(
-      [&] { (void)parse("[structure]\nmass = [1.0, 0.0]\nstiffness = [1.0, 1.0]\n" + force); },
+      [&] { (void)parse("[structure]\nmass = [1.0, -1.0]\nstiffness = [1.0, 1.0]\n" + force); },
       {"structure.mass: M is not positive definite"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\nmass = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\n"
+                        "stiffness = [1.0, 1.0, 1.0]\n" + force); },
+      {"structure.mass: M is not positive definite on the DOFs with mass"});
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse("[structure]\nmass = [1.0, 1.0]\nstiffness = [1.0, 1.0]\n" + force); },
       {"inline.toml:4: forcing.dof: missing; which DOF (name or 0-based index)?"});
@@ -805,4 +809,124 @@ TEST(Scene, HarmonicsOfTheResponseMatchClosedFormAndCoefficients) {
       {"output.harmonics: written for a solve at one frequency or a timestep run"});
   expect_throw_with<std::invalid_argument>([&] { (void)parse(head + "output = { samples = 16, harmonics = 8 }\n"); },
                                            {"output.harmonics"});
+}
+
+// A 1-DOF oscillator whose contact node is massless and held by a spring (issue #18): mass m on a
+// ground spring k and a dashpot c, a spring kc to the node x_c, and a linear stop k_s on the −x
+// side of x_c at gap g0; forced at ω given in rad/s. The scene condenses x_c statically.
+// Closed forms, derived from the two DOFs' equations (node: kc (x_c − x) = k_s (−x_c − g0)₊):
+//  - prestressed (g0 < 0, contact closed throughout): x_c = (kc x − k_s g0)/(kc + k_s) and
+//      m ẍ + c ẋ + (k + k_e) x = F cos ωt − k_e g0,  k_e = kc k_s/(kc + k_s);
+//  - open (gap beyond the motion): x = Re(F e^{iωt}/(k − mω² + iωc)), x_c = x;
+//  - with impacts, the same response as a 1-DOF scene with the stop k_e on x (series springs).
+TEST(Scene, MasslessContactNodeOnASpringMatchesTheClosedForms) {
+  const double m = 1.0, c = 4.0, k = 4000.0, kc = 1e4, ks = 1e4, f0 = 1.0, w = 50.0;
+  const double ke = kc * ks / (kc + ks);
+  char text[512];
+  auto scene = [&](double g0, const std::string& extra) {
+    std::snprintf(text, sizeof text,
+                  "[structure]\ndofs = [\"x\", \"xc\"]\nmass = [[%.17g, 0.0], [0.0, 0.0]]\n"
+                  "stiffness = [[%.17g, %.17g], [%.17g, %.17g]]\ndamping = [[%.17g, 0.0], [0.0, 0.0]]\n"
+                  "[forcing]\namplitude = %.17g\ndof = \"x\"\nfrequency_rad_s = %.17g\n"
+                  "[contact]\nlaw = \"linear\"\nstiffness = %.17g\ngap = %.17g\ndof = \"xc\"\ndirection = -1\n",
+                  m, k + kc, -kc, -kc, kc, c, f0, w, ks, g0);
+    return parse(std::string(text) + "[output]\nsamples = 64\ndofs = [\"x\", \"xc\"]\n" + extra);
+  };
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(64, 0.0, 63.0 / 64.0);
+  for (const std::string basis : {"[basis]\nharmonics = 4\n",
+                                  "[basis]\ntrial = \"db6\"\nweighting = \"fourier\"\ndimension = 64\n"}) {
+    // Prestressed: g0 = −1 mm; |X| ≈ 1.5e-4 m < −g0 k/(k + k_e) = 4.4e-4 m keeps the contact closed.
+    const double g0 = -1e-3;
+    const Scene closed_scene = scene(g0, basis);
+    ASSERT_TRUE(closed_scene.condensation.has_value());
+    EXPECT_EQ(closed_scene.system().dofs(), 1);
+    const auto closed = wbm::scene::run_analysis(closed_scene);
+    ASSERT_TRUE(closed.converged) << basis << closed.diagnostics.dump();
+    const std::complex<double> amplitude = f0 / std::complex<double>(k + ke - m * w * w, c * w);
+    const double mean = -ke * g0 / (k + ke);
+    const double tolerance = basis.find("db6") != std::string::npos ? 1e-4 : 1e-10;  // DB6: discretization error
+    const Eigen::VectorXd& x = column(closed, "displacement.csv", 2);
+    const Eigen::VectorXd& xc = column(closed, "displacement.csv", 3);
+    const Eigen::VectorXd& fc = column(closed, "contact_force.csv", 2);
+    for (Eigen::Index p = 0; p < 64; ++p) {
+      const double exact = mean + std::real(amplitude * std::polar(1.0, 2.0 * std::numbers::pi * tau(p)));
+      EXPECT_NEAR(x(p), exact, tolerance * std::abs(mean)) << basis << " p = " << p;
+      EXPECT_NEAR(xc(p), (kc * exact - ks * g0) / (kc + ks), tolerance * std::abs(mean)) << basis << " p = " << p;
+      EXPECT_NEAR(fc(p), ks * (-(kc * exact - ks * g0) / (kc + ks) - g0), tolerance * ks * std::abs(mean)) << p;
+    }
+    if (basis.find("db6") == std::string::npos) {  // velocity: ẋ_c = kc ẋ/(kc + k_s) while closed
+      const Eigen::VectorXd& v = column(closed, "velocity.csv", 2);
+      const Eigen::VectorXd& vc = column(closed, "velocity.csv", 3);
+      for (Eigen::Index p = 0; p < 64; ++p) {
+        const double exact = std::real(std::complex<double>(0.0, w) * amplitude * std::polar(1.0, 2.0 * std::numbers::pi * tau(p)));
+        EXPECT_NEAR(v(p), exact, 1e-9 * std::abs(amplitude) * w) << p;
+        EXPECT_NEAR(vc(p), kc * exact / (kc + ks), 1e-9 * std::abs(amplitude) * w) << p;
+      }
+    }
+    // Open: the node follows the mass.
+    const auto open = wbm::scene::run_analysis(scene(1e-2, basis));
+    ASSERT_TRUE(open.converged) << basis;
+    const std::complex<double> free = f0 / std::complex<double>(k - m * w * w, c * w);
+    const Eigen::VectorXd& xo = column(open, "displacement.csv", 2);
+    const Eigen::VectorXd& xco = column(open, "displacement.csv", 3);
+    for (Eigen::Index p = 0; p < 64; ++p) {
+      const double exact = std::real(free * std::polar(1.0, 2.0 * std::numbers::pi * tau(p)));
+      EXPECT_NEAR(xo(p), exact, tolerance * std::abs(free)) << basis << " p = " << p;
+      EXPECT_NEAR(xco(p), exact, tolerance * std::abs(free)) << basis << " p = " << p;
+    }
+  }
+  {  // Time stepping (BDF) of the condensed model, prestressed case, from rest to the periodic state.
+    const auto bdf = wbm::scene::run_analysis(scene(-1e-3, "[analysis]\ntype = \"timestep\"\n"));
+    ASSERT_TRUE(bdf.converged) << bdf.diagnostics.dump();
+    const std::complex<double> amplitude = f0 / std::complex<double>(k + ke - m * w * w, c * w);
+    const double mean = ke * 1e-3 / (k + ke);
+    const Eigen::VectorXd& xc = column(bdf, "displacement.csv", 3);
+    for (Eigen::Index p = 0; p < 64; ++p) {
+      const double exact = mean + std::real(amplitude * std::polar(1.0, 2.0 * std::numbers::pi * tau(p)));
+      EXPECT_NEAR(xc(p), (kc * exact + ks * 1e-3) / (kc + ks), 1e-4 * mean) << p;
+    }
+  }
+  // With impacts (g0 = 0, F = 3 N): the 1-DOF scene with the series stiffness k_e as its stop.
+  std::snprintf(text, sizeof text,
+                "structure = { mass = %.17g, stiffness = %.17g, damping = %.17g, dofs = [\"x\"] }\n"
+                "forcing = { amplitude = 3.0, dof = \"x\", frequency_rad_s = %.17g }\n"
+                "contact = { law = \"linear\", stiffness = %.17g, gap = 0.0, dof = \"x\", direction = -1 }\n"
+                "basis = { harmonics = 16 }\noutput = { samples = 64 }\n",
+                m, k, c, w, ke);
+  const auto one = wbm::scene::run_analysis(parse(text));
+  Scene two_scene = scene(0.0, "[basis]\nharmonics = 16\n");
+  two_scene.forcing->amplitude = 3.0;
+  const auto two = wbm::scene::run_analysis(two_scene);
+  ASSERT_TRUE(one.converged && two.converged);
+  const Eigen::VectorXd& x1 = column(one, "displacement.csv", 2);
+  const Eigen::VectorXd& x2 = column(two, "displacement.csv", 2);
+  EXPECT_LT((x1 - x2).cwiseAbs().maxCoeff(), 1e-9 * x1.cwiseAbs().maxCoeff());
+  // The stop is met: a contact force, and the swing (max − min) well below the free 2|X| = 4.0 mm.
+  EXPECT_GT(column(two, "contact_force.csv", 2).maxCoeff(), 1.0);
+  EXPECT_LT(x1.maxCoeff() - x1.minCoeff(), 0.6 * 2.0 * 3.0 / std::abs(std::complex<double>(k - m * w * w, c * w)));
+  const nlohmann::json j = wbm::scene::to_json(two_scene);
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("massless.json"))), j);
+
+  // Refusals: a rigid stop on a massless node, a force on it, a dashpot on it, nnm.
+  const std::string two_dof = "[structure]\ndofs = [\"x\", \"xc\"]\nmass = [[1.0, 0.0], [0.0, 0.0]]\n"
+                              "stiffness = [[2.0e4, -1e4], [-1e4, 1e4]]\n";
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(two_dof + "[forcing]\namplitude = 1.0\ndof = \"x\"\nfrequency_hz = 5.0\n"
+                                  "[contact]\nlaw = \"rigid\"\ngap = 1e-3\ndof = \"xc\"\n"); },
+      {"contact.law: \"rigid\" on the massless DOF xc", "law = \"linear\""});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(two_dof + "[forcing]\namplitude = 1.0\ndof = \"xc\"\nfrequency_hz = 5.0\n"); },
+      {"the force acts on the massless DOF xc; force a DOF with mass"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(two_dof + "damping = [[1.0, 0.0], [0.0, 1.0]]\n[forcing]\namplitude = 1.0\ndof = \"x\"\n"
+                                  "frequency_hz = 5.0\n"); },
+      {"C has an entry at (xc, xc) on a massless DOF"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[analysis]\ntype = \"nnm\"\nenergy = [0.5, 2.0]\n" + two_dof +
+                        "[contact]\nlaw = \"rigid\"\ngap = 1e-3\ndof = \"x\"\n"); },
+      {"structure.mass: has massless DOFs", "nnm"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse("[structure]\ndofs = [\"x\", \"xc\"]\nmass = [[1.0, 0.0], [0.0, 0.0]]\n"
+                        "stiffness = [[1e4, 0.0], [0.0, 0.0]]\n[forcing]\namplitude = 1.0\ndof = \"x\"\nfrequency_hz = 5.0\n"); },
+      {"is not positive definite: a massless DOF must be held by springs"});
 }

@@ -88,4 +88,33 @@ class LinearPenalty final : public ContactLaw {
   LinearPenaltyParameters p_;
 };
 
+/// A penalty law reached through a spring: the law acts on a massless node that the structure
+/// holds with flexibility c [m/N] (a contact node on a spring, condensed statically). With s the
+/// position the node would take without contact (towards the stop) and y its actual position,
+///   y + c f(y) = s,          f_eff(s) = f(y(s)),
+///   f_eff'(s) = f'(y) / (1 + c f'(y)),   P_eff(s) = P(y) + ½ c f(y)²,
+/// where f, f', P are the inner law's force, stiffness and potential (P_eff: the energy of the
+/// stop and of the spring's share that the contact compresses; dP_eff/ds = f_eff). For a linear
+/// inner law k this is the series spring k / (1 + c k); a rigid stop behind a spring is the
+/// penalty 1/c (use LinearPenalty, as solvers::condense_massless does). y is solved by Newton on
+/// the monotone y + c f(y) − s (derivative ≥ 1), safeguarded by bisection on [g0, s]; it
+/// converges to |Δy| ≤ 1e-15 (|s| + |g0|) in at most 200 steps (else std::runtime_error).
+/// Throws std::invalid_argument for a rigid or null inner law, or c not finite and > 0.
+class SeriesCompliance final : public ContactLaw {
+ public:
+  SeriesCompliance(std::shared_ptr<const ContactLaw> inner, double flexibility);
+  [[nodiscard]] double force(double s) const override;
+  [[nodiscard]] double stiffness(double s) const override;
+  [[nodiscard]] double potential(double s) const override;
+  [[nodiscard]] double gap() const override { return inner_->gap(); }
+  [[nodiscard]] std::string describe() const override;
+  /// The contact node's position y(s) [m] (s itself while the contact is open).
+  [[nodiscard]] double node_position(double s) const;
+  [[nodiscard]] double flexibility() const { return c_; }
+
+ private:
+  std::shared_ptr<const ContactLaw> inner_;
+  double c_;
+};
+
 }  // namespace wbm::contact

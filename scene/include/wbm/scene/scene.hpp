@@ -44,6 +44,7 @@
 #include <nlohmann/json.hpp>
 
 #include <wbm/fem/rod.hpp>
+#include <wbm/solvers/condensation.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
@@ -190,8 +191,13 @@ struct Scene {
   [[nodiscard]] bool rigid() const { return !contacts.empty() && contacts.front().law == ContactLawKind::Rigid; }
   Output output;
   std::vector<std::string> warnings;   // sections given but unused by the analysis ("file:line: ...")
+  /// Set when the matrices have massless DOFs (rows of zeros of M): their static condensation
+  /// (solvers/condensation.hpp). system(), contact_points() and harmonic_forcing() are then the
+  /// condensed model's (retained numbering); DOF numbers elsewhere in the scene stay the full ones.
+  std::optional<solvers::MasslessCondensation> condensation;
 
-  /// M, C = C_given + αM + βK, K. Throws std::logic_error without a structure.
+  /// M, C = C_given + αM + βK, K (condensed: M_mm, C_mm + αM_mm + βK̃, K̃). Throws
+  /// std::logic_error without a structure.
   [[nodiscard]] solvers::MechanicalSystem system() const;
   /// F cos 2πft on the forced DOF at f (default: the single frequency).
   [[nodiscard]] solvers::HarmonicForcing harmonic_forcing(std::optional<double> frequency_hz = std::nullopt) const;
@@ -200,6 +206,14 @@ struct Scene {
   [[nodiscard]] solvers::TimeBasis trial() const;
   [[nodiscard]] solvers::TimeBasis weighting() const;
   [[nodiscard]] solvers::WeightedResidualOptions weighted_residual_options() const;
+  /// The solvers' number of a scene DOF: itself, or with a condensation its retained index
+  /// (−1 for a massless DOF).
+  [[nodiscard]] int solver_dof(int dof) const;
+  /// Displacements of every scene DOF (n × P) from the solvers' (n_solver × P): the same matrix,
+  /// or with a condensation the massless DOFs recovered statically. Velocities alike.
+  [[nodiscard]] Eigen::MatrixXd expand_displacement(const Eigen::MatrixXd& solver_displacement) const;
+  [[nodiscard]] Eigen::MatrixXd expand_velocity(const Eigen::MatrixXd& solver_displacement,
+                                                const Eigen::MatrixXd& solver_velocity) const;
   /// The DOFs [output] writes (sorted, unique).
   [[nodiscard]] std::vector<int> output_dofs() const;
 };
