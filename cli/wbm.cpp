@@ -5,6 +5,7 @@
 //   wbm --version
 // Exit status: 0 converged (or valid, for check); 1 not converged or a failed write;
 // 2 bad input (scene file, command line, unusable -o). Nothing is written on bad input.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -101,13 +102,27 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
                          {"converged", result.converged},
                          {"diagnostics", result.diagnostics},
                          {"build", wbm::scene::build_information()}};
+  size_t files_written = 0;
   try {
     nlohmann::json files = nlohmann::json::array();
-    for (const auto& t : result.tables) {
-      staged->table(t);
-      files.push_back(t.file);
+    const auto& formats = scene->output.formats;
+    if (std::find(formats.begin(), formats.end(), "csv") != formats.end()) {
+      for (const auto& t : result.tables) {
+        staged->table(t);
+        files.push_back(t.file);
+      }
+    }
+    if (std::find(formats.begin(), formats.end(), "mat") != formats.end()) {
+      staged->mat("result.mat", result.tables,
+                  {{"scene_file", json["scene_file"].get<std::string>()},
+                   {"scene", scene->name},
+                   {"converged", result.converged ? "true" : "false"},
+                   {"command", command_line},
+                   {"wbm_version", wbm::scene::build_information()["wbm"].get<std::string>()}});
+      files.push_back("result.mat");
     }
     json["files"] = files;
+    files_written = files.size();
     staged->text("result.json", json.dump(2) + "\n");
     staged->commit("result.json");
   } catch (const std::exception& e) {
@@ -118,7 +133,7 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
   if (!quiet) {
     std::cout << result.summary << "\n";
     std::cout << (result.converged ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "
-              << result.tables.size() << " CSV file(s) and result.json to " << out << "\n";
+              << files_written << " result file(s) and result.json to " << out << "\n";
   }
   return result.converged ? kConverged : kNotConverged;
 }

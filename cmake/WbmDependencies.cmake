@@ -30,6 +30,8 @@ find_package(nlohmann_json 3.10 QUIET)
 wbm_require(nlohmann_json_FOUND nlohmann-json3-dev "nlohmann-json")
 find_package(CLI11 2.1 QUIET)
 wbm_require(CLI11_FOUND libcli11-dev "CLI11")
+pkg_check_modules(MATIO QUIET IMPORTED_TARGET matio)  # [output] formats = ["mat"]
+wbm_require(MATIO_FOUND libmatio-dev "matio")
 # Python: Debian's interpreter, where scripts/install-deps puts matplotlib, numpy and pytest (the
 # first python3 on PATH may be another one, e.g. a pyenv shim without them), unless
 # -DPython3_EXECUTABLE=… chooses another. Set before any find_package(Python3).

@@ -1,5 +1,7 @@
 #include <wbm/scene/output.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -8,10 +10,14 @@
 
 #include <unistd.h>
 
+#include <matio.h>
+
 namespace wbm::scene {
 
-void write_table(const std::filesystem::path& path, const Table& table) {
-  const std::string name = path.filename().string();
+namespace {
+
+// The checks every written table passes (write_table's contract), `name` for messages.
+void check_table(const std::string& name, const Table& table) {
   if (table.header.size() != table.columns.size() || table.columns.empty()) {
     throw std::invalid_argument(name + ": " + std::to_string(table.header.size()) + " header names for " +
                                 std::to_string(table.columns.size()) + " columns");
@@ -41,6 +47,13 @@ void write_table(const std::filesystem::path& path, const Table& table) {
                                   "not written");
     }
   }
+}
+
+}  // namespace
+
+void write_table(const std::filesystem::path& path, const Table& table) {
+  check_table(path.filename().string(), table);
+  const bool with_status = !table.status.empty();
   std::ostringstream os;
   for (size_t c = 0; c < table.header.size(); ++c) os << (c ? "," : "") << table.header[c];
   if (with_status) os << ",status";
@@ -60,6 +73,126 @@ void write_table(const std::filesystem::path& path, const Table& table) {
     os << "\n";
   }
   write_text(path, os.str());
+}
+
+namespace {
+
+// A MATLAB identifier from any text: letters, digits and '_', starting with a letter, at most
+// 63 characters (namelengthmax), made unique among `taken` by a suffix _2, _3, ….
+std::string identifier(const std::string& text, std::vector<std::string>& taken) {
+  std::string id;
+  for (char ch : text) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(ch)) != 0;
+    if (ok) id += ch;
+    else if (!id.empty() && id.back() != '_') id += '_';
+  }
+  while (!id.empty() && id.back() == '_') id.pop_back();
+  if (id.empty() || std::isalpha(static_cast<unsigned char>(id.front())) == 0) id = "x_" + id;
+  id = id.substr(0, 60);
+  std::string unique = id;
+  for (int k = 2; std::find(taken.begin(), taken.end(), unique) != taken.end(); ++k) unique = id + "_" + std::to_string(k);
+  taken.push_back(unique);
+  return unique;
+}
+
+// "u_tip [m]" → ("u_tip", "m"); no bracket → (text, "").
+std::pair<std::string, std::string> name_and_unit(const std::string& header) {
+  const auto open = header.rfind(" [");
+  if (open == std::string::npos || header.back() != ']') return {header, ""};
+  return {header.substr(0, open), header.substr(open + 2, header.size() - open - 3)};
+}
+
+// Owns a matvar_t until released into a parent (struct field, cell) or written.
+struct Var {
+  matvar_t* v = nullptr;
+  explicit Var(matvar_t* p) : v(p) {
+    if (v == nullptr) throw std::runtime_error("matio: cannot create a variable");
+  }
+  ~Var() { if (v != nullptr) Mat_VarFree(v); }
+  Var(const Var&) = delete;
+  Var& operator=(const Var&) = delete;
+  matvar_t* release() { matvar_t* p = v; v = nullptr; return p; }
+};
+
+matvar_t* text_var(const std::string& s) {
+  size_t dims[2] = {1, s.size()};
+  return Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UINT8, 2, dims, const_cast<char*>(s.data()), 0);
+}
+
+matvar_t* column_var(const Eigen::VectorXd& c) {
+  size_t dims[2] = {static_cast<size_t>(c.size()), 1};
+  return Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(c.data()), 0);
+}
+
+matvar_t* cell_of_text(const std::vector<std::string>& texts) {
+  size_t dims[2] = {texts.size(), 1};
+  Var cell(Mat_VarCreate(nullptr, MAT_C_CELL, MAT_T_CELL, 2, dims, nullptr, 0));
+  for (size_t i = 0; i < texts.size(); ++i) {
+    Var t(text_var(texts[i]));
+    Mat_VarSetCell(cell.v, static_cast<int>(i), t.release());
+  }
+  return cell.release();
+}
+
+// A 1 × 1 struct named `name` (nullptr inside another struct) with `fields` in order.
+matvar_t* struct_var(const char* name, const std::vector<std::pair<std::string, matvar_t*>>& fields) {
+  std::vector<const char*> names;
+  for (const auto& f : fields) names.push_back(f.first.c_str());
+  names.push_back(nullptr);
+  size_t dims[2] = {1, 1};
+  Var s(Mat_VarCreateStruct2(name, 2, dims, names.data()));
+  for (const auto& [field, value] : fields) Mat_VarSetStructFieldByName(s.v, field.c_str(), 0, value);
+  return s.release();
+}
+
+}  // namespace
+
+void write_mat(const std::filesystem::path& path, const std::vector<Table>& tables,
+               const std::vector<std::pair<std::string, std::string>>& info) {
+  for (const auto& t : tables) check_table(t.file, t);
+  mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  if (mat == nullptr) throw std::runtime_error(path.string() + ": cannot create the MAT-file");
+  bool ok = true;
+  std::vector<std::string> variables = {"wbm"};
+  auto write = [&](matvar_t* v) {
+    Var owned(v);
+    ok = ok && Mat_VarWrite(mat, owned.v, MAT_COMPRESSION_NONE) == 0;
+  };
+  {
+    std::vector<std::pair<std::string, matvar_t*>> fields;
+    std::vector<std::string> files;
+    for (const auto& [key, value] : info) {
+      if (value == "true" || value == "false") {  // a MATLAB logical, so that `if r.wbm.converged` works
+        size_t dims[2] = {1, 1};
+        unsigned char b = value == "true" ? 1 : 0;
+        fields.emplace_back(key, Mat_VarCreate(nullptr, MAT_C_UINT8, MAT_T_UINT8, 2, dims, &b, MAT_F_LOGICAL));
+      } else {
+        fields.emplace_back(key, text_var(value));
+      }
+    }
+    for (const auto& t : tables) files.push_back(t.file);
+    fields.emplace_back("files", cell_of_text(files));
+    write(struct_var("wbm", fields));
+  }
+  for (const auto& t : tables) {
+    const std::string stem = std::filesystem::path(t.file).stem().string();
+    const std::string var = identifier(stem, variables);
+    std::vector<std::string> taken = {"units", "columns", "status", "file"};
+    std::vector<std::pair<std::string, matvar_t*>> fields, units;
+    for (size_t c = 0; c < t.columns.size(); ++c) {
+      const auto [label, unit] = name_and_unit(t.header[c]);
+      const std::string field = identifier(label, taken);
+      fields.emplace_back(field, column_var(t.columns[c]));
+      units.emplace_back(field, text_var(unit));
+    }
+    fields.emplace_back("units", struct_var(nullptr, units));
+    fields.emplace_back("columns", cell_of_text(t.header));
+    if (!t.status.empty()) fields.emplace_back("status", cell_of_text(t.status));
+    fields.emplace_back("file", text_var(t.file));
+    write(struct_var(var.c_str(), fields));
+  }
+  ok = Mat_Close(mat) == 0 && ok;
+  if (!ok) throw std::runtime_error(path.string() + ": MAT-file write failed");
 }
 
 void write_text(const std::filesystem::path& path, const std::string& content) {
@@ -87,6 +220,12 @@ StagedOutput::~StagedOutput() {
 void StagedOutput::table(const Table& table) {
   write_table(staging_ / table.file, table);
   files_.push_back(table.file);
+}
+
+void StagedOutput::mat(const std::string& file, const std::vector<Table>& tables,
+                       const std::vector<std::pair<std::string, std::string>>& info) {
+  write_mat(staging_ / file, tables, info);
+  files_.push_back(file);
 }
 
 void StagedOutput::text(const std::string& file, const std::string& content) {

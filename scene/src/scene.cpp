@@ -1025,8 +1025,27 @@ class Parser {
       s_.moreau_jean.samples_per_period = s_.output.samples;
       return;
     }
-    r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics"});
+    r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics", "formats"});
     s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
+    if (const toml::node* f = t->get("formats")) {
+      const toml::array* a = f->as_array();
+      std::vector<std::string> formats;
+      bool ok = a != nullptr && !a->empty() && a->is_homogeneous<std::string>();
+      if (ok) {
+        for (const auto& e : *a) {
+          const std::string v = e.as_string()->get();
+          if ((v != "csv" && v != "mat") || std::find(formats.begin(), formats.end(), v) != formats.end()) ok = false;
+          formats.push_back(v);
+        }
+      }
+      if (ok) {
+        s_.output.formats = formats;
+      } else {
+        r_.error(f->source(), "output.formats",
+                 "expected a non-empty list of distinct formats among \"csv\" (one CSV file per table) and \"mat\" "
+                 "(result.mat, one struct per table, for MATLAB and scipy.io.loadmat), e.g. [\"csv\", \"mat\"]");
+      }
+    }
     if (t->contains("harmonics")) {
       s_.output.harmonics =
           static_cast<int>(r_.integer(*t, "output", "harmonics", 1, (s_.output.samples - 1) / 2, 0));
@@ -1395,6 +1414,7 @@ nlohmann::json to_json(const Scene& s) {
   }
   nlohmann::json out = {{"samples", s.output.samples}};
   if (s.output.harmonics > 0) out["harmonics"] = s.output.harmonics;
+  out["formats"] = s.output.formats;
   if (s.structure) {
     nlohmann::json list = nlohmann::json::array();
     for (int dof : s.output_dofs()) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));

@@ -14,6 +14,7 @@ import pytest
 import wbm
 
 SCENES = Path(__file__).resolve().parents[2] / "reproduce" / "scenes"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 
 
 def test_db6_connection_coefficients_match_beylkin_1992():
@@ -76,6 +77,37 @@ def test_run_scene_equals_the_wbm_command(tmp_path):
     assert list(table.keys()) == header
     for j, name in enumerate(header):
         np.testing.assert_array_equal(table[name], values[:, j])
+
+
+def test_result_mat_reads_with_scipy_and_equals_the_csv_files(tmp_path):
+    # [output] formats = ["csv", "mat"]: result.mat (matio, MAT 5) read by an independent reader,
+    # scipy.io.loadmat; every column equals its CSV column, units and headers come along, and a
+    # massless contact node (issue #18) is in it like any DOF.
+    scipy_io = pytest.importorskip("scipy.io")
+    text = (EXAMPLES / "massless_contact_node.toml").read_text()
+    text = text.replace("[output]\n", '[output]\nformats = ["csv", "mat"]\n')
+    scene = tmp_path / "massless.toml"
+    scene.write_text(text)
+    out = tmp_path / "out"
+    subprocess.run([os.environ["WBM_CLI"], "run", str(scene), "-o", str(out), "-q"], check=True)
+    mat = scipy_io.loadmat(out / "result.mat", simplify_cells=True)
+    assert bool(mat["wbm"]["converged"]) is True
+    assert mat["wbm"]["scene"] == "massless"
+    files = list(mat["wbm"]["files"])
+    assert "displacement.csv" in files and "contact_force.csv" in files
+    for file in files:
+        with open(out / file, newline="") as f:
+            rows = list(csv.reader(f))
+        header, values = rows[0], np.array([[float(x) for x in r] for r in rows[1:]])
+        table = mat[Path(file).stem]
+        assert list(table["columns"]) == header
+        for j, column in enumerate(header):
+            name, unit = column[: column.rindex(" [")], column[column.rindex("[") + 1 : -1]
+            field = name.replace("-", "_")
+            np.testing.assert_array_equal(np.atleast_1d(table[field]), values[:, j])
+            assert table["units"][field] == unit
+    assert set(mat["displacement"]) >= {"u_x", "u_xc", "tau", "time"}
+    assert mat["displacement"]["units"]["u_xc"] == "m"
 
 
 def test_a_scene_from_a_path_a_string_or_a_dict_is_the_same_scene():

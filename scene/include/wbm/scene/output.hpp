@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -29,6 +30,19 @@ struct Table {
 /// file cannot be written (stream state checked after close).
 void write_table(const std::filesystem::path& path, const Table& table);
 
+/// Writes `tables` to one MAT-file (level 5, readable by MATLAB ≥ 7 and scipy.io.loadmat) through
+/// matio: a struct `wbm` with the fields of `info` (text; "true"/"false" become logicals, e.g.
+/// converged) and `files`
+/// (cell of the table files), then one struct per table, named after its file without ".csv"
+/// (letters, digits, '_'; e.g. frequency_response), whose fields are its columns (P × 1 double,
+/// named by the header without the unit: "u_tip [m]" → u_tip), `units` (a struct of the unit
+/// strings by the same field names), `columns` (cell of the CSV headers, units included),
+/// `status` (cell, when the table has one) and `file`. Names that clash get _2, _3, ….
+/// Missing values stay NaN beside their status. Throws as write_table for a bad table (nothing
+/// written) and std::runtime_error if matio cannot create or write the file.
+void write_mat(const std::filesystem::path& path, const std::vector<Table>& tables,
+               const std::vector<std::pair<std::string, std::string>>& info);
+
 /// Files staged in `target/.wbm-staging-<pid>/` and moved into `target` by commit():
 ///   1. every staged file is complete before any is moved;
 ///   2. commit() first removes `target/<last>` (the marker of a finished run, result.json),
@@ -49,6 +63,8 @@ class StagedOutput {
 
   void table(const Table& table);  // write_table into staging (throws as write_table)
   void text(const std::string& file, const std::string& content);  // throws std::runtime_error on a failed write
+  void mat(const std::string& file, const std::vector<Table>& tables,
+           const std::vector<std::pair<std::string, std::string>>& info);  // write_mat into staging
   /// Moves the files into target (created if missing), `last` last; returns their final paths.
   std::vector<std::filesystem::path> commit(const std::string& last);
 

@@ -25,7 +25,8 @@
 ///                              max_frequency_step_hz, max_points, max_state, stability for
 ///                              continuation; energy, harmonics, samples, algorithm,
 ///                              max_energy_step, max_points, levels for nnm)
-///   [output]                   samples per period, nodes | dofs to write
+///   [output]                   samples per period, nodes | dofs to write, harmonics, formats
+///                              ("csv", "mat")
 /// Rod locations are node numbers 1 … elements (node 0 is clamped) or "tip"; matrix locations
 /// are DOF names or 0-based indices.
 ///
@@ -172,6 +173,9 @@ struct Output {
   /// [rad] of u(t) = Σ_h A_h cos(2π h f t + φ_h), h = 0 … H, per output DOF, from the P samples
   /// (h = 0: the mean, phase 0). 0: not written.
   int harmonics = 0;
+  /// Result formats, a non-empty subset of {"csv", "mat"}: one CSV file per table and/or
+  /// result.mat (scene::write_mat: one struct per table). result.json is always written.
+  std::vector<std::string> formats = {"csv"};
 };
 
 /// A resolved scene: every default filled in, every location a 0-based DOF.
