@@ -1,10 +1,15 @@
 // The `wbm` command: run, check and list what a scene file can ask for (docs/scenes.md).
-//   wbm run SCENE [-o DIR] [--quiet]   solve; CSV files and result.json in DIR
+//   wbm run SCENE [-o DIR] [--quiet] [--no-plots]
+//                                      solve; CSV (and MAT) files and result.json in DIR, then
+//                                      PNG pictures of them (wbm_plot.py, matplotlib)
+//   wbm plot DIR [--quiet]             draw the PNG pictures of a result folder again
 //   wbm check SCENE [--json]           validate only; print the resolved scene
 //   wbm bases [-M M]                   bases and the formulations each admits
 //   wbm --version
 // Exit status: 0 converged (or valid, for check); 1 not converged or a failed write;
 // 2 bad input (scene file, command line, unusable -o). Nothing is written on bad input.
+// wbm plot: 0 drawn, 1 matplotlib missing or drawing failed, 2 not a result folder. A run whose
+// pictures fail still exits with the run's status (the pictures are extras; a warning says why).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,7 +18,10 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -58,6 +66,46 @@ class ProgressBar {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
+// wbm_plot.py: <bindir>/../share/wbm/wbm_plot.py (installed) or the source tree's (build tree).
+std::string plot_script() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / "share" / "wbm" / "wbm_plot.py";
+    if (std::filesystem::exists(installed)) return installed.string();
+  }
+  return WBM_PLOT_SCRIPT;
+}
+
+// Runs wbm_plot.py on `folder` (no shell); returns its exit status (3: no matplotlib), or -1 if
+// the interpreter could not be started.
+int draw(const std::string& folder, bool quiet) {
+  const std::string python = WBM_PYTHON, script = plot_script();
+  std::vector<std::string> args = {python, script, folder};
+  if (quiet) args.emplace_back("--quiet");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  pid_t pid = 0;
+  if (::posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  int status = 0;
+  if (::waitpid(pid, &status, 0) < 0 || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
+// After a run: pictures, or a line saying why there are none. Never changes the exit status.
+void draw_after_run(const std::string& folder, bool quiet) {
+  const int status = draw(folder, quiet);
+  if (status == 3) {
+    std::cerr << "wbm: plots skipped: matplotlib is not available to " << WBM_PYTHON
+              << " (install python3-matplotlib, or pass --no-plots)\n";
+  } else if (status != 0) {
+    std::cerr << "wbm: warning: drawing the pictures failed (" << WBM_PYTHON << " " << plot_script() << " " << folder
+              << ", exit " << status << "); the result files are complete\n";
+  }
+}
+
 void print_warnings(const wbm::scene::Scene& s) {
   for (const auto& w : s.warnings) std::cerr << w << "\n";
 }
@@ -78,7 +126,7 @@ std::optional<wbm::scene::Scene> load(const std::string& path) {
   return std::nullopt;
 }
 
-int run(const std::string& scene_path, std::string out, bool quiet, const std::string& command_line) {
+int run(const std::string& scene_path, std::string out, bool quiet, bool plots, const std::string& command_line) {
   const auto scene = load(scene_path);
   if (!scene) return kBadInput;
   if (out.empty()) out = (std::filesystem::path("wbm-out") / scene->name).string();
@@ -134,6 +182,14 @@ int run(const std::string& scene_path, std::string out, bool quiet, const std::s
     std::cout << result.summary << "\n";
     std::cout << (result.converged ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "
               << files_written << " result file(s) and result.json to " << out << "\n";
+  }
+  const auto& formats = scene->output.formats;
+  if (plots && !result.tables.empty()) {
+    if (std::find(formats.begin(), formats.end(), "csv") != formats.end()) {
+      draw_after_run(out, quiet);
+    } else if (!quiet) {
+      std::cout << "no pictures: they are drawn from the CSV files ([output] formats has no \"csv\")\n";
+    }
   }
   return result.converged ? kConverged : kNotConverged;
 }
@@ -213,6 +269,12 @@ int main(int argc, char** argv) {
   run_cmd->add_option("scene", scene_path, "Scene file (.toml), or a result.json to re-run")->required();
   run_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<scene name>)");
   run_cmd->add_flag("-q,--quiet", quiet, "No summary and no progress bar");
+  bool no_plots = false;
+  run_cmd->add_flag("--no-plots", no_plots, "Do not draw PNG pictures of the results (matplotlib)");
+  std::string plot_dir;
+  auto* plot_cmd = app.add_subcommand("plot", "Draw the PNG pictures of a result folder of `wbm run` (matplotlib)");
+  plot_cmd->add_option("folder", plot_dir, "Result folder (holds result.json)")->required();
+  plot_cmd->add_flag("-q,--quiet", quiet, "Do not list the pictures drawn");
   auto* check_cmd = app.add_subcommand("check", "Validate a scene without running it");
   check_cmd->add_option("scene", scene_path, "Scene file (.toml or .json)")->required();
   check_cmd->add_flag("--json", json, "Print the resolved scene (every default filled in) as JSON");
@@ -228,7 +290,17 @@ int main(int argc, char** argv) {
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   try {
-    if (*run_cmd) return run(scene_path, out, quiet, command_line);
+    if (*run_cmd) return run(scene_path, out, quiet, !no_plots, command_line);
+    if (*plot_cmd) {
+      const int status = draw(plot_dir, quiet);
+      if (status == 3) return kNotConverged;
+      if (status == 2) return kBadInput;
+      if (status != 0) {
+        std::cerr << "wbm plot: " << WBM_PYTHON << " " << plot_script() << " failed (exit " << status << ")\n";
+        return kNotConverged;
+      }
+      return kConverged;
+    }
     if (*check_cmd) return check(scene_path, json);
     if (*bases_cmd) return bases(dimension);
   } catch (const std::exception& e) {

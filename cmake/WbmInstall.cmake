@@ -15,6 +15,8 @@ install(TARGETS ${wbm_installed_targets} EXPORT wbmTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS wbm RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The pictures of `wbm run` / `wbm plot`: found by the command at <bindir>/../share/wbm.
+install(PROGRAMS ${PROJECT_SOURCE_DIR}/cli/wbm_plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/wbm)
 
 set(wbm_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/wbm)
 install(EXPORT wbmTargets NAMESPACE wbm:: DESTINATION ${wbm_cmake_dir})

@@ -82,7 +82,7 @@ std::string case1() { return (wbm::reproduce::scene_directory() / "jl14_case1.to
 // for digit, the harmonic-balance column of Fig. 6 written by jl14_fig06_tip_displacement.
 TEST(Cli, Case1ReproducesTheFigureExecutableExactly) {
   const fs::path out = work() / "case1", fig = work() / "fig";
-  const Outcome run = run_wbm("run " + case1() + " -o " + out.string());
+  const Outcome run = run_wbm("run --no-plots " + case1() + " -o " + out.string());
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_NE(run.out.find("converged"), std::string::npos);
   const std::string cmd = std::string(WBM_FIG06) + " --out " + fig.string() + " > /dev/null";
@@ -97,7 +97,7 @@ TEST(Cli, Case1ReproducesTheFigureExecutableExactly) {
   EXPECT_EQ(result["files"].size(), 5u);
   // Re-running the result.json gives the same files.
   const fs::path again = work() / "again";
-  ASSERT_EQ(run_wbm("run -q " + (out / "result.json").string() + " -o " + again.string()).status, 0);
+  ASSERT_EQ(run_wbm("run --no-plots -q " + (out / "result.json").string() + " -o " + again.string()).status, 0);
   EXPECT_EQ(slurp(out / "displacement.csv"), slurp(again / "displacement.csv"));
 }
 
@@ -107,7 +107,7 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
   std::ofstream(scene) << "[structure]\nmass = 1.0\nstiffness = -4.0e4\nstifness = 1\n"
                           "[forcing]\namplitude = 1.0\nfrequency_hz = 10.0\n"
                           "[basis]\ntrial = \"db6\"\nweighting = \"fourier\"\nformulation = \"strong\"\n";
-  const Outcome run = run_wbm("run " + scene.string() + " -o " + out.string());
+  const Outcome run = run_wbm("run --no-plots " + scene.string() + " -o " + out.string());
   EXPECT_EQ(run.status, 2);
   EXPECT_NE(run.err.find(scene.string() + ":4: structure.stifness: unknown key"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find(scene.string() + ":11: basis: not admissible: DB6:Fourier, strong form"), std::string::npos)
@@ -115,11 +115,11 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
   EXPECT_NE(run.err.find("not run; nothing written"), std::string::npos);
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(run_wbm("check " + scene.string()).status, 2);
-  EXPECT_EQ(run_wbm("run " + (work() / "absent.toml").string()).status, 2);
+  EXPECT_EQ(run_wbm("run --no-plots " + (work() / "absent.toml").string()).status, 2);
   EXPECT_EQ(run_wbm("frobnicate").status, 2);
   const fs::path file = work() / "a_file";
   std::ofstream(file) << "not a folder\n";
-  const Outcome blocked = run_wbm("run " + case1() + " -o " + file.string());
+  const Outcome blocked = run_wbm("run --no-plots " + case1() + " -o " + file.string());
   EXPECT_EQ(blocked.status, 2);
   EXPECT_NE(blocked.err.find("cannot create the output folder"), std::string::npos) << blocked.err;
 }
@@ -131,7 +131,7 @@ TEST(Cli, NonConvergenceExitsOneWithDiagnostics) {
                           "forcing = { amplitude = 100.0, frequency_hz = 30.0 }\n"
                           "contact = { law = \"linear\", stiffness = 1e9, gap = 1e-4 }\n"
                           "solver = { max_iterations = 1, line_search = false }\n";
-  const Outcome run = run_wbm("run -q " + scene.string() + " -o " + out.string());
+  const Outcome run = run_wbm("run --no-plots -q " + scene.string() + " -o " + out.string());
   EXPECT_EQ(run.status, 1) << run.out << run.err;
   const auto result = nlohmann::json::parse(slurp(out / "result.json"));
   EXPECT_FALSE(result["converged"].get<bool>());
@@ -155,4 +155,37 @@ TEST(Cli, CheckBasesAndVersion) {
   const Outcome version = run_wbm("--version");
   EXPECT_EQ(version.status, 0);
   EXPECT_NE(version.out.find("wbm 0.1.0"), std::string::npos) << version.out;
+}
+
+// Pictures: `wbm run` draws PNGs beside the CSV files (the massless-node example: one solve, so
+// time_histories.png), `wbm plot DIR` draws them again, --no-plots draws none, and a folder
+// without result.json is refused with exit 2. Checked: the PNG signature and the pixel size
+// that the plot style asks for (6.4 in at 150 dpi = 960 px wide).
+TEST(Cli, RunDrawsPicturesAndPlotRedrawsThem) {
+  const fs::path scene = fs::path(WBM_EXAMPLES) / "massless_contact_node.toml";
+  const fs::path out = work() / "pictures";
+  const Outcome run = run_wbm("run " + scene.string() + " -o " + out.string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  const fs::path png = out / "time_histories.png";
+  auto png_width = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    unsigned char h[24] = {};
+    in.read(reinterpret_cast<char*>(h), 24);
+    const bool signature = h[0] == 0x89 && h[1] == 'P' && h[2] == 'N' && h[3] == 'G' && h[12] == 'I' && h[13] == 'H';
+    return signature ? (h[16] << 24) | (h[17] << 16) | (h[18] << 8) | h[19] : -1;
+  };
+  ASSERT_TRUE(fs::exists(png)) << run.out << run.err;
+  EXPECT_EQ(png_width(png), 960);
+  EXPECT_NE(run.out.find("drew 1 picture(s)"), std::string::npos) << run.out;
+  fs::remove(png);
+  const Outcome again = run_wbm("plot " + out.string());
+  EXPECT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(png_width(png), 960);
+  const fs::path bare = work() / "no-pictures";
+  ASSERT_EQ(run_wbm("run --no-plots -q " + scene.string() + " -o " + bare.string()).status, 0);
+  EXPECT_TRUE(fs::exists(bare / "displacement.csv"));
+  EXPECT_FALSE(fs::exists(bare / "time_histories.png"));
+  const Outcome refused = run_wbm("plot " + (work() / "absent").string());
+  EXPECT_EQ(refused.status, 2);
+  EXPECT_NE(refused.err.find("no result.json"), std::string::npos) << refused.err;
 }

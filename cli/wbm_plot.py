@@ -1,0 +1,224 @@
+#!/usr/bin/env python3
+"""Draws the result folder of `wbm run` as PNG files beside its CSV files (`wbm run` calls it
+after a run unless --no-plots; `wbm plot DIR` calls it again).
+
+Usage: wbm_plot.py DIR [--quiet]. Reads DIR/result.json and the CSV files it lists; every number
+on a figure comes from those files. Figures (each only when its CSV exists):
+  time_histories.png   displacement, velocity, contact force and energy over one period
+  harmonics.png        amplitudes A_h of harmonics.csv (log scale)
+  frequency_response.png  max/min displacement per output DOF of a sweep (restarts marked)
+  response_curve.png   amplitude along a continuation branch, stable solid, unstable dashed,
+                       folds marked (a fold of the dynamics filled, of the truncation open)
+  backbone.png         frequency against energy of an nnm backbone, folds marked
+  mode_E<E>.png        displacement of the output DOFs over one period at each written level
+  basis_functions.png  the functions of a basis-plot
+Exit status: 0 drawn (possibly nothing, if the run wrote no curve), 2 DIR holds no result.json,
+3 matplotlib cannot be imported (`wbm run` then says plots were skipped).
+"""
+import csv
+import json
+import math
+import sys
+import textwrap
+from pathlib import Path
+
+try:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+except ImportError as error:  # pragma: no cover - depends on the machine
+    print(f"wbm plot: matplotlib is not available ({error}); no pictures drawn", file=sys.stderr)
+    sys.exit(3)
+
+STYLE = {"figure.figsize": (6.4, 4.0), "axes.grid": True, "grid.alpha": 0.3, "font.size": 10,
+         "legend.fontsize": 8, "savefig.dpi": 150}
+
+
+def read_csv(path):
+    """Columns of a result CSV by header; empty cells (missing values) read as NaN; the text
+    column "status" is kept as strings."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    table = {}
+    for i, name in enumerate(header):
+        if name == "status":
+            table[name] = [r[i] for r in body]
+        else:
+            table[name] = [float(r[i]) if r[i] != "" else math.nan for r in body]
+    return table
+
+
+def columns(table, prefix):
+    """(label, values) of the columns whose name starts with `prefix`."""
+    return [(name, values) for name, values in table.items() if name.startswith(prefix)]
+
+
+def save(fig, path, written):
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    written.append(path.name)
+
+
+def time_histories(folder, title, written):
+    panels = [(f, p) for f, p in (("displacement.csv", "u_"), ("velocity.csv", "v_"), ("contact_force.csv", "f_c_"),
+                                  ("energy.csv", "energy")) if (folder / f).exists()]
+    if not panels:
+        return
+    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(6.4, 2.0 + 1.6 * len(panels)), squeeze=False)
+    for ax, (file, prefix) in zip(axes[:, 0], panels):
+        table = read_csv(folder / file)
+        for name, values in columns(table, prefix):
+            # Rigid stops write one impulse per cell (a few points): mark them.
+            ax.plot(table["time [s]"], values, label=name, marker="." if len(values) <= 128 else None)
+        ax.set_ylabel(file.removesuffix(".csv").replace("_", " "))
+        ax.legend(loc="best")
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[0, 0].set_title(title, fontsize=9)
+    save(fig, folder / "time_histories.png", written)
+
+
+def harmonics(folder, title, written):
+    if not (folder / "harmonics.csv").exists():
+        return
+    table = read_csv(folder / "harmonics.csv")
+    fig, ax = plt.subplots()
+    h = table["h [-]"]
+    series = columns(table, "A_")
+    width = 0.8 / max(len(series), 1)
+    for k, (name, values) in enumerate(series):
+        ax.bar([x + k * width for x in h], [abs(v) for v in values], width=width, label=name, log=True)
+    ax.set_xlabel("harmonic h [-]")
+    ax.set_ylabel("amplitude |A_h| [m]")
+    ax.set_title(title, fontsize=9)
+    ax.legend()
+    save(fig, folder / "harmonics.png", written)
+
+
+def frequency_response(folder, title, written):
+    if not (folder / "frequency_response.csv").exists():
+        return
+    table = read_csv(folder / "frequency_response.csv")
+    f = table["frequency [Hz]"]
+    fig, ax = plt.subplots()
+    for name, values in columns(table, "max_u_") + columns(table, "min_u_"):
+        ax.plot(f, values, marker=".", label=name)
+    restarted = [i for i, r in enumerate(table["restarted_from_linear [-]"]) if r == 1.0]
+    if restarted:
+        first = columns(table, "max_u_")[0][1]
+        ax.plot([f[i] for i in restarted], [first[i] for i in restarted], "kx", label="restarted from linear")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("displacement [m]")
+    ax.set_title(title, fontsize=9)
+    ax.legend()
+    save(fig, folder / "frequency_response.png", written)
+
+
+def response_curve(folder, title, written):
+    if not (folder / "branch.csv").exists():
+        return
+    table = read_csv(folder / "branch.csv")
+    f = table["frequency [Hz]"]
+    (name, amplitude), = columns(table, "amplitude_")
+    stable = table.get("stable [-]")
+    fig, ax = plt.subplots()
+    if stable is None:
+        ax.plot(f, amplitude, "-", color="C0", label=name)
+    else:  # one line per run of equal stability, joined at the change
+        start = 0
+        for i in range(1, len(f) + 1):
+            if i == len(f) or stable[i] != stable[start]:
+                end = min(i + 1, len(f))
+                ax.plot(f[start:end], amplitude[start:end], "-" if stable[start] == 1.0 else "--", color="C0")
+                start = i
+        ax.plot([], [], "-", color="C0", label="stable")
+        ax.plot([], [], "--", color="C0", label="unstable")
+    if (folder / "folds.csv").exists():
+        folds = read_csv(folder / "folds.csv")
+        for hz, crossing in zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"]):
+            i = min(range(len(f)), key=lambda k: abs(f[k] - hz))
+            ax.plot(hz, amplitude[i], "o", color="C3", fillstyle="full" if crossing == 1.0 else "none")
+        ax.plot([], [], "o", color="C3", label="fold")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(name)
+    ax.set_title(title, fontsize=9)
+    ax.legend()
+    save(fig, folder / "response_curve.png", written)
+
+
+def backbone(folder, title, written):
+    if not (folder / "backbone.csv").exists():
+        return
+    table = read_csv(folder / "backbone.csv")
+    e, f = table["energy [-]"], table["frequency [Hz]"]
+    fig, ax = plt.subplots()
+    ax.plot(e, f, ".-", label="nonlinear mode")
+    if (folder / "folds.csv").exists():
+        for energy in read_csv(folder / "folds.csv")["energy [-]"]:
+            i = min(range(len(e)), key=lambda k: abs(e[k] - energy))
+            ax.plot(energy, f[i], "o", color="C3")
+    ax.axvline(1.0, color="0.5", linewidth=0.8, label="contact onset (energy 1)")
+    ax.set_xscale("log")
+    ax.set_xlabel("energy [-] (1 at contact onset)")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(title, fontsize=9)
+    ax.legend()
+    save(fig, folder / "backbone.png", written)
+
+
+def modes(folder, title, written):
+    for path in sorted(folder.glob("mode_E*.csv")):
+        if path.stem.endswith("_contact"):
+            continue
+        table = read_csv(path)
+        fig, ax = plt.subplots()
+        for name, values in columns(table, "u_"):
+            ax.plot(table["tau [-]"], values, label=name)
+        ax.set_xlabel("tau [-]")
+        ax.set_ylabel("displacement [m]")
+        ax.set_title(f"{title}: {path.stem}", fontsize=9)
+        if len(columns(table, "u_")) <= 12:
+            ax.legend(loc="best")
+        save(fig, folder / f"{path.stem}.png", written)
+
+
+def basis_functions(folder, title, written):
+    if not (folder / "basis_functions.csv").exists():
+        return
+    table = read_csv(folder / "basis_functions.csv")
+    fig, ax = plt.subplots()
+    for name, values in list(table.items())[1:]:
+        ax.plot(table["tau [-]"], values, label=name)
+    ax.set_xlabel("tau [-]")
+    ax.set_title(title, fontsize=9)
+    if len(table) <= 13:
+        ax.legend(loc="best")
+    save(fig, folder / "basis_functions.png", written)
+
+
+def main(argv):
+    args = [a for a in argv[1:] if a != "--quiet"]
+    quiet = len(args) != len(argv) - 1
+    if len(args) != 1:
+        print("usage: wbm_plot.py DIR [--quiet]", file=sys.stderr)
+        return 2
+    folder = Path(args[0])
+    if not (folder / "result.json").exists():
+        print(f"wbm plot: {folder}: no result.json (not a folder written by `wbm run`)", file=sys.stderr)
+        return 2
+    result = json.loads((folder / "result.json").read_text())
+    scene = result.get("scene", {})
+    title = "\n".join(textwrap.wrap(scene.get("title") or Path(result.get("scene_file", str(folder))).stem, 70))
+    plt.rcParams.update(STYLE)
+    written = []
+    for draw in (time_histories, harmonics, frequency_response, response_curve, backbone, modes, basis_functions):
+        draw(folder, title, written)
+    if not quiet:
+        print(f"wbm plot: drew {len(written)} picture(s) in {folder}" + (": " + ", ".join(written) if written else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
