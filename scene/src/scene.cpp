@@ -549,17 +549,29 @@ class Parser {
   void forcing(const toml::table& root) {
     if (const toml::node* n = root.get("forcing"); n != nullptr && n->is_array_of_tables()) {
       r_.error(n->source(), "[[forcing]]",
-               "several forcings are not supported yet: give one [forcing] table (amplitude, node or dof, "
-               "frequency_hz); for loads on several DOFs, superpose linear responses or move the load to one DOF");
+               "one [forcing] table holds the frequency; several loads go in it as [[forcing.loads]] tables "
+               "(amplitude, node or dof, phase_deg or phase_rad, harmonic) or as a force vector file "
+               "(vector = \"f.mtx\"): see docs/scenes.md");
       return;
     }
     const toml::table* t = r_.table(root, "forcing", true);
     if (t == nullptr) return;
     r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "frequency_rad_s", "frequencies_hz",
-                            "frequencies_rad_s", "points"});
+                            "frequencies_rad_s", "points", "loads", "vector"});
     Forcing f;
-    f.amplitude = r_.number(*t, "forcing", "amplitude", detail::finite("N"));
-    f.dof = location(*t, "forcing", default_location());
+    loads(*t, f);
+    const bool more = !f.loads.empty();
+    // With loads or a vector, amplitude/dof (the first load) are optional; the reported DOF is
+    // then that of the largest load.
+    f.amplitude = r_.number(*t, "forcing", "amplitude", detail::finite("N"), more ? std::optional<double>(0.0) : std::nullopt);
+    std::optional<int> fallback = default_location();
+    if (more && !t->contains("amplitude")) {
+      const auto largest = std::max_element(f.loads.begin(), f.loads.end(), [](const auto& a, const auto& b) {
+        return std::abs(a.amplitude) < std::abs(b.amplitude);
+      });
+      fallback = largest->dof;
+    }
+    f.dof = location(*t, "forcing", fallback);
     // One of four keys: a frequency or a range [from, to] in Hz or rad/s, or an explicit list.
     std::string key;
     for (const char* k : {"frequency_hz", "frequency_rad_s", "frequencies_hz", "frequencies_rad_s"}) {
@@ -633,6 +645,58 @@ class Parser {
                "analysis \"timestep\" integrates at one frequency; give a number, or use type = \"solve\" for a sweep");
     }
     s_.forcing = f;
+  }
+
+  // [[forcing.loads]] and forcing.vector: further loads F cos(2π h f t + φ) (Forcing::loads).
+  void loads(const toml::table& t, Forcing& f) {
+    if (const toml::node* n = t.get("loads")) {
+      if (!n->is_array_of_tables()) {
+        r_.error(n->source(), "forcing.loads", "expected [[forcing.loads]] tables, each with amplitude, node or dof, "
+                                               "and optionally phase_deg or phase_rad and harmonic");
+      } else {
+        const toml::array& a = *n->as_array();
+        for (size_t i = 0; i < a.size(); ++i) {
+          const toml::table& l = *a[i].as_table();
+          const std::string section = "forcing.loads[" + std::to_string(i) + "]";
+          r_.only(l, section, {"amplitude", "node", "dof", "phase_deg", "phase_rad", "harmonic"});
+          solvers::HarmonicLoad load{0, 0.0};
+          load.amplitude = r_.number(l, section, "amplitude", detail::finite("N"));
+          load.dof = location(l, section, default_location());
+          if (l.contains("phase_deg") && l.contains("phase_rad")) {
+            r_.error(Reader::source_of(l, "phase_rad"), section + ".phase_rad", "given beside phase_deg; give the phase once");
+          } else if (l.contains("phase_deg")) {
+            load.phase_rad = r_.number(l, section, "phase_deg", detail::finite("deg")) * std::numbers::pi / 180.0;
+          } else {
+            load.phase_rad = r_.number(l, section, "phase_rad", detail::finite("rad"), 0.0);
+          }
+          load.harmonic = static_cast<int>(r_.integer(l, section, "harmonic", 0, 1000, 1,
+                                                      " (0: a constant load F cos(phase), h: h times the forcing frequency)"));
+          f.loads.push_back(load);
+        }
+      }
+    }
+    if (const toml::node* v = t.get("vector")) {
+      if (!v->is_string()) {
+        r_.error(v->source(), "forcing.vector", "expected the name of a Matrix Market file (n x 1: the amplitude [N] "
+                                                "of F_i cos 2πft on each DOF), relative to the scene");
+      } else if (s_.structure) {
+        const std::filesystem::path p = base_ / v->as_string()->get();
+        try {
+          const Eigen::SparseMatrix<double> a = fem::read_matrix_market_file(p.string());
+          if (a.cols() != 1 || a.rows() != s_.structure->dofs()) {
+            r_.error(v->source(), "forcing.vector", p.string() + " is " + std::to_string(a.rows()) + " x " +
+                                                        std::to_string(a.cols()) + "; expected " +
+                                                        std::to_string(s_.structure->dofs()) + " x 1 (one amplitude per DOF)");
+          } else {
+            for (Eigen::SparseMatrix<double>::InnerIterator it(a, 0); it; ++it) {
+              if (it.value() != 0.0) f.loads.push_back({static_cast<int>(it.row()), it.value(), 0.0, 1});
+            }
+          }
+        } catch (const std::exception& e) {
+          r_.error(v->source(), "forcing.vector", e.what());
+        }
+      }
+    }
   }
 
   void contacts(const toml::table& root) {
@@ -745,7 +809,10 @@ class Parser {
     given.damping = s_.structure->damping.size() > 0 ? s_.structure->damping
                                                      : Eigen::SparseMatrix<double>(given.mass.rows(), given.mass.cols());
     std::vector<int> forced;
-    if (s_.forcing) forced.push_back(s_.forcing->dof);
+    if (s_.forcing) {
+      if (s_.forcing->amplitude != 0.0) forced.push_back(s_.forcing->dof);
+      for (const auto& l : s_.forcing->loads) forced.push_back(l.dof);
+    }
     try {
       s_.condensation = solvers::condense_massless(given, s_.contact_points(), forced, s_.structure->dof_names);
     } catch (const std::invalid_argument& e) {
@@ -1200,7 +1267,12 @@ solvers::HarmonicForcing Scene::harmonic_forcing(std::optional<double> frequency
   if (!frequency_hz && forcing->range) {
     throw std::logic_error("Scene::harmonic_forcing: scene \"" + name + "\" sweeps a range; pass the frequency");
   }
-  return {solver_dof(forcing->dof), forcing->amplitude, frequency_hz.value_or(forcing->frequency_hz)};
+  solvers::HarmonicForcing h{solver_dof(forcing->dof), forcing->amplitude, frequency_hz.value_or(forcing->frequency_hz)};
+  for (auto l : forcing->loads) {
+    l.dof = solver_dof(l.dof);
+    h.more.push_back(l);
+  }
+  return h;
 }
 
 int Scene::solver_dof(int dof) const { return condensation ? condensation->retained_index(dof) : dof; }
@@ -1252,7 +1324,10 @@ std::vector<int> Scene::output_dofs() const {
   }
   dofs = output.dofs;
   if (dofs.empty()) {
-    if (forcing) dofs.push_back(forcing->dof);
+    if (forcing) {
+      dofs.push_back(forcing->dof);
+      for (const auto& l : forcing->loads) dofs.push_back(l.dof);
+    }
     for (const auto& c : contacts) dofs.push_back(c.dof);
   }
   std::sort(dofs.begin(), dofs.end());
@@ -1340,6 +1415,15 @@ nlohmann::json to_json(const Scene& s) {
   if (s.forcing) {
     nlohmann::json f = {{"amplitude", s.forcing->amplitude}};
     where(f, s.forcing->dof);
+    if (!s.forcing->loads.empty()) {  // a vector file is written as its loads
+      nlohmann::json loads = nlohmann::json::array();
+      for (const auto& l : s.forcing->loads) {
+        nlohmann::json one = {{"amplitude", l.amplitude}, {"phase_rad", l.phase_rad}, {"harmonic", l.harmonic}};
+        where(one, l.dof);
+        loads.push_back(one);
+      }
+      f["loads"] = loads;
+    }
     if (s.forcing->range && !s.forcing->range->list_hz.empty()) {
       f["frequencies_hz"] = s.forcing->range->list_hz;
     } else if (s.forcing->range) {

@@ -80,7 +80,32 @@ MechanicalSystem beta_damped(const fem::Rod& rod, double beta) {
   return {rod.mass(), beta * rod.stiffness(), rod.stiffness()};
 }
 
+std::vector<HarmonicLoad> HarmonicForcing::loads() const {
+  std::vector<HarmonicLoad> all = {{dof, amplitude, 0.0, 1}};
+  all.insert(all.end(), more.begin(), more.end());
+  return all;
+}
+
+Eigen::VectorXd HarmonicForcing::at(double tau, int n) const {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+  for (const auto& l : loads()) f(l.dof) += l.amplitude * std::cos(2.0 * std::numbers::pi * l.harmonic * tau + l.phase_rad);
+  return f;
+}
+
 void HarmonicForcing::validate(int dofs) const {
+  for (size_t j = 0; j < more.size(); ++j) {
+    const auto& l = more[j];
+    const std::string where = "HarmonicForcing.more[" + std::to_string(j) + "]";
+    if (l.dof < 0 || l.dof >= dofs) {
+      throw std::invalid_argument(where + ".dof = " + std::to_string(l.dof) + ": must lie in [0, " + std::to_string(dofs) + ")");
+    }
+    if (!std::isfinite(l.amplitude)) throw std::invalid_argument(where + ".amplitude is not finite");
+    if (!std::isfinite(l.phase_rad)) throw std::invalid_argument(where + ".phase_rad is not finite");
+    if (l.harmonic < 0) {
+      throw std::invalid_argument(where + ".harmonic = " + std::to_string(l.harmonic) +
+                                  ": must be >= 0 (0: a constant load, 1: the forcing frequency, h: h times it)");
+    }
+  }
   if (dof < 0 || dof >= dofs) {
     throw std::invalid_argument("HarmonicForcing.dof = " + std::to_string(dof) +
                                 ": must lie in [0, " + std::to_string(dofs) + ")");
@@ -158,7 +183,14 @@ Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const Harmon
     throw std::runtime_error(os.str());
   }
   Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(system.dofs());
-  rhs(forcing.dof) = forcing.amplitude;
+  for (const auto& l : forcing.loads()) {
+    if (l.harmonic != 1) {
+      throw std::invalid_argument("frequency_response: the load on DOF " + std::to_string(l.dof) + " has harmonic " +
+                                  std::to_string(l.harmonic) + "; the complex response is at the forcing frequency "
+                                  "only: solve the weighted residual (any basis) for several harmonics");
+    }
+    rhs(l.dof) += l.amplitude * std::polar(1.0, l.phase_rad);
+  }
   return lu.solve(rhs);
 }
 

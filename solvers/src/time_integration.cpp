@@ -30,9 +30,10 @@ struct Ode {
   int n;
   Eigen::MatrixXd minv_k;        // T² M⁻¹ K
   Eigen::MatrixXd minv_c;        // T M⁻¹ C
-  Eigen::MatrixXd minv_cols;     // T² M⁻¹ e: column 0 for the forced DOF, c + 1 for contact c
-  double amplitude;
-  std::vector<ContactPoint> contacts;  // contact c uses column c + 1 of minv_cols
+  Eigen::MatrixXd minv_loads;    // T² M⁻¹ e_{dof_j}: column j for load j
+  std::vector<HarmonicLoad> loads;
+  Eigen::MatrixXd minv_cols;     // T² M⁻¹ e_c: column c for contact c
+  std::vector<ContactPoint> contacts;
 };
 
 int rhs(double tau, const double y[], double dydt[], void* params) {
@@ -42,9 +43,13 @@ int rhs(double tau, const double y[], double dydt[], void* params) {
   Eigen::Map<Eigen::VectorXd> du(dydt, n), dw(dydt + n, n);
   du = w;
   dw.noalias() = -o.minv_k * u - o.minv_c * w;
-  dw += o.amplitude * std::cos(2.0 * std::numbers::pi * tau) * o.minv_cols.col(0);
+  for (size_t j = 0; j < o.loads.size(); ++j) {
+    const auto& l = o.loads[j];
+    dw += l.amplitude * std::cos(2.0 * std::numbers::pi * l.harmonic * tau + l.phase_rad) *
+          o.minv_loads.col(static_cast<Eigen::Index>(j));
+  }
   for (size_t c = 0; c < o.contacts.size(); ++c) {
-    dw -= o.contacts[c].law->force(o.contacts[c].displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+    dw -= o.contacts[c].law->force(o.contacts[c].displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c));
   }
   return dw.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
 }
@@ -60,13 +65,16 @@ int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* pa
   const Eigen::Map<const Eigen::VectorXd> u(y, n);
   for (size_t c = 0; c < o.contacts.size(); ++c) {
     const auto& ct = o.contacts[c];
-    const Eigen::VectorXd kcol = ct.law->stiffness(ct.displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c) + 1);
+    const Eigen::VectorXd kcol = ct.law->stiffness(ct.displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c));
     for (const auto& [dof, w] : ct.terms()) j.bottomRows(n).col(dof) -= w * kcol;
   }
   Eigen::Map<Eigen::VectorXd> dt(dfdt, 2 * n);
   dt.setZero();
-  dt.tail(n) = -2.0 * std::numbers::pi * o.amplitude * std::sin(2.0 * std::numbers::pi * tau) *
-               o.minv_cols.col(0);
+  for (size_t j = 0; j < o.loads.size(); ++j) {
+    const auto& l = o.loads[j];
+    dt.tail(n) -= 2.0 * std::numbers::pi * l.harmonic * l.amplitude *
+                  std::sin(2.0 * std::numbers::pi * l.harmonic * tau + l.phase_rad) * o.minv_loads.col(static_cast<Eigen::Index>(j));
+  }
   return GSL_SUCCESS;
 }
 
@@ -74,8 +82,8 @@ struct DriverDeleter {
   void operator()(gsl_odeiv2_driver* d) const { gsl_odeiv2_driver_free(d); }
 };
 
-// The normalized ODE with time unit t_unit [s]: forcing on `forced_dof` (amplitude may be 0).
-Ode make_ode(const MechanicalSystem& system, int forced_dof, double amplitude,
+// The normalized ODE with time unit t_unit [s] and the loads of `loads` (may be empty).
+Ode make_ode(const MechanicalSystem& system, const std::vector<HarmonicLoad>& loads,
              const std::vector<ContactPoint>& contacts, double t_unit) {
   Ode ode;
   ode.n = system.dofs();
@@ -83,14 +91,17 @@ Ode make_ode(const MechanicalSystem& system, int forced_dof, double amplitude,
   const Eigen::PartialPivLU<Eigen::MatrixXd> mlu(mass);
   ode.minv_k = t_unit * t_unit * mlu.solve(Eigen::MatrixXd(system.stiffness));
   ode.minv_c = t_unit * mlu.solve(Eigen::MatrixXd(system.damping));
-  ode.minv_cols.resize(ode.n, static_cast<Eigen::Index>(contacts.size()) + 1);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(ode.n);
-  e(forced_dof) = 1.0;
-  ode.minv_cols.col(0) = t_unit * t_unit * mlu.solve(e);
-  for (size_t c = 0; c < contacts.size(); ++c) {
-    ode.minv_cols.col(static_cast<Eigen::Index>(c) + 1) = t_unit * t_unit * mlu.solve(contacts[c].direction(ode.n));
+  ode.minv_loads.resize(ode.n, static_cast<Eigen::Index>(loads.size()));
+  for (size_t j = 0; j < loads.size(); ++j) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(ode.n);
+    e(loads[j].dof) = 1.0;
+    ode.minv_loads.col(static_cast<Eigen::Index>(j)) = t_unit * t_unit * mlu.solve(e);
   }
-  ode.amplitude = amplitude;
+  ode.minv_cols.resize(ode.n, static_cast<Eigen::Index>(contacts.size()));
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    ode.minv_cols.col(static_cast<Eigen::Index>(c)) = t_unit * t_unit * mlu.solve(contacts[c].direction(ode.n));
+  }
+  ode.loads = loads;
   ode.contacts = contacts;
   return ode;
 }
@@ -153,10 +164,13 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   // v_free = M̂⁻¹ [(M − h(1−θ)C − h²θ(1−θ)K) v − hK q + h f_θ]
   const Eigen::MatrixXd a_v = lu.solve(m - h * (1.0 - th) * c - h * h * th * (1.0 - th) * k);
   const Eigen::MatrixXd a_q = lu.solve(-h * k);
-  Eigen::VectorXd a_f = Eigen::VectorXd::Zero(n);
-  a_f(forcing.dof) = h * forcing.amplitude;
-  a_f = lu.solve(a_f);
+  const std::vector<HarmonicLoad> loads = forcing.loads();
+  const auto nl = static_cast<Eigen::Index>(loads.size());
+  Eigen::MatrixXd e_loads = Eigen::MatrixXd::Zero(n, nl);
+  for (Eigen::Index j = 0; j < nl; ++j) e_loads(loads[static_cast<size_t>(j)].dof, j) = h;
+  const Eigen::MatrixXd a_f = lu.solve(e_loads);  // h M̂⁻¹ e_{dof_j}
   const double omega = 2.0 * std::numbers::pi * forcing.frequency_hz;
+  Eigen::VectorXd f_theta(nl);  // θ F_j cos(ω h_j t1 + φ_j) + (1 − θ) F_j cos(ω h_j t0 + φ_j)
 
   PeriodicResponse out;
   out.frequency_hz = forcing.frequency_hz;
@@ -175,8 +189,12 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
         force.col(step / stride).setZero();
       }
       const double t0 = static_cast<double>(step) * h, t1 = t0 + h;  // the forcing has period T
-      const double f_theta = th * std::cos(omega * t1) + (1.0 - th) * std::cos(omega * t0);
-      Eigen::VectorXd v_new = a_v * v + a_q * q + f_theta * a_f;
+      for (Eigen::Index j = 0; j < nl; ++j) {
+        const auto& l = loads[static_cast<size_t>(j)];
+        f_theta(j) = l.amplitude * (th * std::cos(omega * l.harmonic * t1 + l.phase_rad) +
+                                    (1.0 - th) * std::cos(omega * l.harmonic * t0 + l.phase_rad));
+      }
+      Eigen::VectorXd v_new = a_v * v + a_q * q + a_f * f_theta;
       impulse.setZero();
       if (nc > 0) {
         std::vector<Eigen::Index> active;
@@ -203,7 +221,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
         force.col(step / stride) += impulse / (h * stride);
       }
       const Eigen::VectorXd v_theta = th * v_new + (1.0 - th) * v;
-      input += h * forcing.amplitude * f_theta * v_theta(forcing.dof);
+      for (Eigen::Index j = 0; j < nl; ++j) input += h * f_theta(j) * v_theta(loads[static_cast<size_t>(j)].dof);
       dissipated += h * v_theta.dot(damping * v_theta);
       for (Eigen::Index i = 0; i < nc; ++i) absorbed += impulse(i) * contacts[static_cast<size_t>(i)].displacement(v_theta);
       q += h * v_theta;
@@ -257,7 +275,7 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   const auto start = std::chrono::steady_clock::now();
 
   const double t = 1.0 / forcing.frequency_hz;  // period T [s]
-  Ode ode = make_ode(system, forcing.dof, forcing.amplitude, contacts, t);
+  Ode ode = make_ode(system, forcing.loads(), contacts, t);
 
   gsl_set_error_handler_off();  // report GSL failures through return codes, never abort
   gsl_odeiv2_system sys{rhs, jacobian, static_cast<size_t>(2 * ode.n), &ode};
@@ -335,7 +353,7 @@ Trajectory integrate_free(const MechanicalSystem& system, const std::vector<Cont
   }
   if (periods < 1) throw std::invalid_argument("integrate_free: periods = " + std::to_string(periods) + ": must be >= 1");
   const auto start = std::chrono::steady_clock::now();
-  Ode ode = make_ode(system, 0, 0.0, contacts, period_s);
+  Ode ode = make_ode(system, {}, contacts, period_s);
   gsl_set_error_handler_off();
   gsl_odeiv2_system sys{rhs, jacobian, static_cast<size_t>(2 * n), &ode};
   const int p_count = options.samples_per_period;

@@ -399,10 +399,14 @@ struct WeightedResidual::Impl {
     g.emplace(system, ops, options.linear_solver,
               weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional);
 
-    Eigen::RowVectorXd cosine(q);
-    for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * smp->tau(k));
+    // b: the weighted projections of every load F_j cos(2π h_j τ + φ_j) on its DOF.
     Eigen::MatrixXd bm = Eigen::MatrixXd::Zero(n, m);
-    bm.row(forcing.dof) = forcing.amplitude * smp->weighting->project(cosine);
+    for (const auto& l : forcing.loads()) {
+      if (l.amplitude == 0.0) continue;
+      Eigen::RowVectorXd cosine(q);
+      for (int k = 0; k < q; ++k) cosine(k) = std::cos(2.0 * std::numbers::pi * l.harmonic * smp->tau(k) + l.phase_rad);
+      bm.row(l.dof) += l.amplitude * smp->weighting->project(cosine);
+    }
     b = spectral::stacked(bm);
 
     contact_terms.assign(static_cast<size_t>(nc) * m, {});

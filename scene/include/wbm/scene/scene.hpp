@@ -11,7 +11,9 @@
 ///                              file name relative to the scene; dofs = names)
 ///   [damping]                  C += alpha M + beta K
 ///   [forcing]                  F cos 2πft on one DOF: amplitude, node | dof, frequency_hz (a number,
-///                              or [from, to] with points for a sweep)
+///                              or [from, to] with points for a sweep), and further loads
+///                              [[forcing.loads]] (amplitude, node | dof, phase_deg | phase_rad,
+///                              harmonic) or vector (a Matrix Market n x 1 file)
 ///   [contact] / [[contact]]    law ("exponential": coefficient, exponent; "linear": stiffness;
 ///                              "rigid": exact Signorini contact, nnm only), gap, node | dof
 ///   [basis]                    trial, weighting, dimension | level | harmonics, formulation,
@@ -86,8 +88,11 @@ struct FrequencyRange {
 };
 
 struct Forcing {
-  double amplitude = 0.0;      // F [N]
-  int dof = 0;                 // forced DOF, 0-based
+  double amplitude = 0.0;      // F [N] of F cos 2πft on `dof` (0 when only `loads` are given)
+  int dof = 0;                 // forced DOF, 0-based (the DOF reported as "forced")
+  /// Further loads F_j cos(2π h_j f t + φ_j) on DOFs (0-based): [[forcing.loads]] and the
+  /// entries of a forcing.vector file, in that order.
+  std::vector<solvers::HarmonicLoad> loads;
   double frequency_hz = 0.0;   // single frequency (when range is empty) [Hz]
   std::optional<FrequencyRange> range;
   /// The frequencies to solve at, in order (one, or the sweep).
@@ -203,7 +208,7 @@ struct Scene {
   /// M, C = C_given + αM + βK, K (condensed: M_mm, C_mm + αM_mm + βK̃, K̃). Throws
   /// std::logic_error without a structure.
   [[nodiscard]] solvers::MechanicalSystem system() const;
-  /// F cos 2πft on the forced DOF at f (default: the single frequency).
+  /// F cos 2πft on the forced DOF and the further loads, at f (default: the single frequency).
   [[nodiscard]] solvers::HarmonicForcing harmonic_forcing(std::optional<double> frequency_hz = std::nullopt) const;
   /// One ContactPoint per [contact], in file order; empty without contact.
   [[nodiscard]] std::vector<solvers::ContactPoint> contact_points() const;

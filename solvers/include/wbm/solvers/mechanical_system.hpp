@@ -29,12 +29,31 @@ struct MechanicalSystem {
 /// β ≥ 0 and finite.
 [[nodiscard]] MechanicalSystem beta_damped(const fem::Rod& rod, double beta);
 
-/// Harmonic point force F cos(2π f t) on one DOF.
+/// One load F cos(2π h f t + φ) on a DOF: amplitude F [N], phase φ [rad], harmonic order h ≥ 0
+/// of the forcing frequency f (h = 0: a constant load F cos φ, e.g. a static preload).
+struct HarmonicLoad {
+  int dof;
+  double amplitude;
+  double phase_rad = 0.0;
+  int harmonic = 1;
+};
+
+/// External force of period T = 1/f:
+///   f_ext(t) = F cos(2π f t) e_dof + Σ_j F_j cos(2π h_j f t + φ_j) e_{dof_j}   (j over `more`),
+/// the first term the point force of [JL14 Eq. (7)], the sum further loads (several forced DOFs,
+/// phases, harmonics, a force vector). Amplitude continuation (response_curve.hpp) scales every
+/// load by λ/F.
 struct HarmonicForcing {
   int dof;              // forced DOF, 0 ≤ dof < n
-  double amplitude;     // F [N], finite
+  double amplitude;     // F [N], finite (may be 0 when `more` carries the loads)
   double frequency_hz;  // f [Hz] > 0; the period T = 1/f is the period of the response
-  /// Throws std::invalid_argument naming the field, its value and the allowed range.
+  std::vector<HarmonicLoad> more = {};
+  /// Every load, the first one {dof, amplitude, 0, 1}, then `more`.
+  [[nodiscard]] std::vector<HarmonicLoad> loads() const;
+  /// f_ext at normalized time τ = f t (length n) [N].
+  [[nodiscard]] Eigen::VectorXd at(double tau, int n) const;
+  /// Throws std::invalid_argument naming the field, its value and the allowed range (also for
+  /// each entry of `more`: DOF, finite amplitude and phase, harmonic ≥ 0).
   void validate(int dofs) const;
 };
 
@@ -76,8 +95,10 @@ struct ContactPoint {
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
 
-/// Direct complex frequency response without contact: (K − ω² M + iω C) U = F e_dof,
+/// Direct complex frequency response without contact: (K − ω² M + iω C) U = Σ_j F_j e^{iφ_j} e_{dof_j},
 /// ω = 2π f; u(t) = Re(U e^{iωt}). Sparse LU; returns U (length n, complex amplitudes [m]).
+/// Throws std::invalid_argument if a load has harmonic ≠ 1 (the response is then not at one
+/// frequency: solve the weighted residual without contact instead).
 [[nodiscard]] Eigen::VectorXcd frequency_response(const MechanicalSystem& system,
                                                   const HarmonicForcing& forcing);
 
