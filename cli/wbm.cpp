@@ -37,7 +37,8 @@ constexpr int kConverged = 0;
 constexpr int kNotConverged = 1;
 constexpr int kBadInput = 2;
 
-// A progress bar on standard error, only on a terminal and only once a run has lasted 1 s.
+// A progress bar on standard error, only on a terminal and only once a run has lasted 1 s:
+// fraction done, what the analysis says (point, parameter, step size) and the elapsed time.
 class ProgressBar {
  public:
   explicit ProgressBar(bool enabled) : enabled_(enabled && ::isatty(STDERR_FILENO) != 0) {}
@@ -52,7 +53,8 @@ class ProgressBar {
     constexpr int width = 30;
     const int filled = static_cast<int>(fraction * width + 0.5);
     std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#') << std::string(static_cast<size_t>(width - filled), '.')
-              << "] " << static_cast<int>(fraction * 100.0 + 0.5) << "% " << label << "   " << std::flush;
+              << "] " << static_cast<int>(fraction * 100.0 + 0.5) << "% " << label << ", " << static_cast<int>(t)
+              << " s   " << std::flush;
     drawn_ = true;
   }
 

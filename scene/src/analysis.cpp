@@ -231,7 +231,10 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     nlohmann::json point = to_json(solution);
     point["restarted_from_linear"] = restarted;
     points.push_back(point);
-    if (progress) progress(static_cast<double>(i + 1) / static_cast<double>(frequencies.size()), format("%.6g Hz", f));
+    if (progress) {
+      progress(static_cast<double>(i + 1) / static_cast<double>(frequencies.size()),
+               "point " + std::to_string(i + 1) + "/" + std::to_string(frequencies.size()) + ", f = " + format("%.6g", f) + " Hz");
+    }
     if (!solution.report.converged()) {
       ++failed;
       previous.resize(0);
@@ -374,7 +377,7 @@ void basis_plot(const Scene& scene, AnalysisResult& out) {
                 " functions on " + std::to_string(p) + " samples";
 }
 
-void continuation(const Scene& scene, AnalysisResult& out) {
+void continuation(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const auto started = std::chrono::steady_clock::now();
   const auto& range = *scene.forcing->range;
   const solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz), scene.contact_points(),
@@ -391,6 +394,14 @@ void continuation(const Scene& scene, AnalysisResult& out) {
   o.stability = scene.analysis.stability;
   o.corrector_tolerance = scene.solver.newton.tolerance;
   o.samples = scene.output.samples;
+  double reached = 0.0;  // the largest fraction of the range covered so far (a branch turns back at folds)
+  if (progress) {
+    o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
+      reached = std::max(reached, std::abs(p.parameter - range.from_hz) / std::abs(range.to_hz - range.from_hz));
+      progress(std::min(reached, 1.0), "point " + std::to_string(i + 1) + ", f = " + format("%.6g", p.parameter) +
+                                           " Hz, step " + format("%.2g", p.step));
+    };
+  }
   const auto curve = solvers::trace_response(base, o);
   const std::string dof = scene.structure->dof_name(scene.forcing->dof);
   const auto n = static_cast<Eigen::Index>(curve.points.size());
@@ -488,7 +499,7 @@ nlohmann::json to_json(const solvers::ModeLevel& l) {
           {"wall_time_s", l.wall_time_s}};
 }
 
-void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
+void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const ModeProblem problem = mode_problem(scene);
   const Analysis& a = scene.analysis;
   const solvers::NonlinearModes modes(problem.system, problem.stops, problem.options);
@@ -504,6 +515,14 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
     o.max_energy_step = a.max_energy_step;
     o.max_points = a.max_points;
     o.include = a.levels;
+    double reached = 0.0;
+    if (progress) {
+      o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
+        reached = std::max(reached, (p.parameter - o.energy_min) / (o.energy_max - o.energy_min));
+        progress(std::clamp(reached, 0.0, 1.0), "point " + std::to_string(i + 1) + ", E = " + format("%.4g", p.parameter) +
+                                                    ", step " + format("%.2g", p.step));
+      };
+    }
     b = modes.continue_backbone(o);
   } else {
     solvers::BackboneOptions o;
@@ -513,6 +532,15 @@ void nonlinear_modes(const Scene& scene, AnalysisResult& out) {
     o.initial_step = std::min(o.initial_step, o.max_step);
     o.min_step = std::min(o.min_step, o.initial_step);
     o.include = a.levels;
+    int count = 0;
+    if (progress) {
+      o.on_level = [&](const solvers::ModeLevel& l) {
+        ++count;
+        progress(std::clamp((l.energy - o.energy_min) / (o.energy_max - o.energy_min), 0.0, 1.0),
+                 "level " + std::to_string(count) + ", E = " + format("%.4g", l.energy) + ", " +
+                     std::to_string(l.powell_iterations) + " Powell iterations");
+      };
+    }
     b = modes.backbone(o);
   }
   const auto n = static_cast<Eigen::Index>(b.levels.size());
@@ -650,8 +678,8 @@ AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
       break;
     case AnalysisKind::Timestep: timestep(scene, progress, out); break;
     case AnalysisKind::BasisPlot: basis_plot(scene, out); break;
-    case AnalysisKind::Continuation: continuation(scene, out); break;
-    case AnalysisKind::NonlinearModes: nonlinear_modes(scene, out); break;
+    case AnalysisKind::Continuation: continuation(scene, progress, out); break;
+    case AnalysisKind::NonlinearModes: nonlinear_modes(scene, progress, out); break;
   }
   if (scene.condensation) {  // say which DOFs were condensed and how each contact reaches the structure
     nlohmann::json massless = nlohmann::json::array(), laws = nlohmann::json::array();

@@ -237,6 +237,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     ModeLevel level = solve(energy, start);
     if (level.converged()) {
       b.levels.push_back(std::move(level));
+      if (o.on_level) o.on_level(b.levels.back());
       if (energy >= o.energy_max) break;
       if (b.levels.back().powell_iterations <= 8) step = std::min(o.max_step, 1.5 * step);
     } else {

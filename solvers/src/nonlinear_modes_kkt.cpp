@@ -278,6 +278,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   pa.kink_step = 1e-5;
   pa.corner_restart = true;
   pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
+  pa.on_point = o.on_point;
   Branch branch = pseudo_arclength(system, x0, e0, pa);
   // A branch that comes back below contact onset after contact has retraced the backbone (the
   // linear mode is the only solution there): keep it up to where it turned back, and say so.

@@ -218,6 +218,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.max_corrector_iterations = o.max_corrector_iterations;
   pa.corrector_tolerance = o.corrector_tolerance;
   pa.initial_newton.tolerance = o.corrector_tolerance;
+  pa.on_point = o.on_point;
   Branch branch = pseudo_arclength(family, x0, lambda0, pa);
   // Rigid stops never drive the top function: it vanishes at every impulse instant.
   if (!rigid) cut_at_undamped_top_resonance(base, branch);

@@ -618,11 +618,18 @@ TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
                         "analysis = { type = \"continuation\", max_frequency_step_hz = 1.0 }\n");
   EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(wbm::scene::to_json(s), temp("c.json"))),
             wbm::scene::to_json(s));
-  const auto r = wbm::scene::run_analysis(s);
+  std::vector<std::pair<double, std::string>> reports;  // progress: one report per accepted point
+  const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
   ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
   const Eigen::VectorXd& hz = column(r, "branch.csv", 0);
   const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
   EXPECT_GE(hz.size(), 50);
+  ASSERT_EQ(reports.size(), static_cast<size_t>(hz.size()));
+  for (size_t i = 1; i < reports.size(); ++i) EXPECT_GE(reports[i].first, reports[i - 1].first);
+  EXPECT_NEAR(reports.back().first, 1.0, 1e-12);  // the range is covered (the fraction is capped at 1)
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "point 2, f = %.6g Hz, step ", hz(1));
+  EXPECT_EQ(reports[1].second.rfind(expected, 0), 0u) << reports[1].second;
   for (Eigen::Index i = 0; i < hz.size(); ++i) {
     if (hz(i) > 55.0) continue;  // the last point may lie one step beyond the range
     const double a = oscillator_amplitude(2.0, 6.0, 8e4, 10.0, hz(i));
@@ -997,4 +1004,19 @@ TEST(Scene, SeveralLoadsAndAForceVectorMatchTheClosedForms) {
       [&] { (void)wbm::scene::load_scene(write("bad_vector.toml", "structure = { mass = 2.0, stiffness = 8e4 }\n"
                                                                "forcing = { vector = \"f.mtx\", frequency_hz = 5.0 }\n")); },
       {"forcing.vector", "is 2 x 1; expected 1 x 1 (one amplitude per DOF)"});
+}
+
+// Progress of an nnm backbone: one report per accepted point of the energy continuation, the
+// fraction of the energy range covered, and a label with the point, its energy and the step.
+TEST(Scene, BackboneReportsProgressPerPoint) {
+  const Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  std::vector<std::pair<double, std::string>> reports;
+  const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
+  ASSERT_TRUE(r.converged);
+  ASSERT_GE(reports.size(), 10u);
+  EXPECT_EQ(reports.front().second.rfind("point 1, E = 0.5, step ", 0), 0u) << reports.front().second;
+  EXPECT_NEAR(reports.front().first, 0.0, 1e-12);
+  EXPECT_NEAR(reports.back().first, 1.0, 1e-9);  // E = 3 of [0.5, 3] reached
+  // Every backbone level is an accepted point (levels and points are the same list here).
+  EXPECT_EQ(reports.size(), static_cast<size_t>(column(r, "backbone.csv", 0).size()));
 }

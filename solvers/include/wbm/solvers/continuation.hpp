@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <concepts>
 #include <stdexcept>
 #include <string>
@@ -76,6 +77,17 @@ enum class StopReason {
   return "?";
 }
 
+struct BranchPoint {
+  double parameter = 0.0;       // λ
+  Eigen::VectorXd x;            // converged state
+  Eigen::VectorXd tangent;      // scaled tangent (x̂ part then λ̂), ⟨t, t⟩ = 1
+  double arclength = 0.0;       // scaled arclength from the first point
+  double step = 0.0;            // h that reached this point
+  int corrector_iterations = 0;
+  double residual_norm = 0.0;   // ‖R‖₂ at the point
+  [[nodiscard]] double parameter_tangent() const { return tangent(tangent.size() - 1); }
+};
+
 struct PseudoArclengthOptions {
   double parameter_min = 0.0, parameter_max = 0.0;  // the branch stops when λ leaves [min, max]
   double parameter_scale = 1.0;  // λ̂ = λ / parameter_scale (> 0), e.g. the start frequency
@@ -95,20 +107,13 @@ struct PseudoArclengthOptions {
   bool corner_restart = false;        // a corrector failing at h <= kink_step restarts along the
                                       // new piece's tangent (turning corners, see below)
   NewtonOptions initial_newton{};     // for the first point, at fixed λ
+  /// Called after each accepted point with its index (0 = the first) and the point, e.g. for a
+  /// progress display (λ, step h); may be empty. It must not throw.
+  std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
 };
 
-struct BranchPoint {
-  double parameter = 0.0;       // λ
-  Eigen::VectorXd x;            // converged state
-  Eigen::VectorXd tangent;      // scaled tangent (x̂ part then λ̂), ⟨t, t⟩ = 1
-  double arclength = 0.0;       // scaled arclength from the first point
-  double step = 0.0;            // h that reached this point
-  int corrector_iterations = 0;
-  double residual_norm = 0.0;   // ‖R‖₂ at the point
-  [[nodiscard]] double parameter_tangent() const { return tangent(tangent.size() - 1); }
-};
 
 struct Fold {
   double parameter = 0.0;  // λ at the turning point (Hermite interpolation)
@@ -193,6 +198,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   p0.corrector_iterations = first.report.iterations;
   p0.tangent = detail::tangent(solver, system.linearize(p0.x, lambda0), seed, xs, ls);
   branch.points.push_back(p0);
+  if (o.on_point) o.on_point(0, branch.points.back());
 
   const double cos_turn = std::cos(o.max_turn_degrees * 3.14159265358979323846 / 180.0);
   double h = o.initial_step;
@@ -268,6 +274,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       branch.folds.push_back({lambda_fold * ls, branch.points.size() - 1});
     }
     branch.points.push_back(std::move(p));
+    if (o.on_point) o.on_point(branch.points.size() - 1, branch.points.back());
     const double lambda = branch.points.back().parameter;
     if (o.max_state > 0.0 && branch.points.back().x.lpNorm<Eigen::Infinity>() / xs > o.max_state) {
       return finish(StopReason::StateBound, "‖x‖∞/state_scale > " + format_number(o.max_state) + " at λ = " +

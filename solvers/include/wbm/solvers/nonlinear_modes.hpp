@@ -42,6 +42,7 @@
 /// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
 
 #include <optional>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -136,6 +137,8 @@ struct BackboneContinuationOptions {
   std::vector<double> include;        // energies landed on exactly (Backbone::included), e.g. 0.7, 1.8
   double tolerance = 1e-10;           // ‖R‖₂ of the KKT residual below (dimensionless), every level
   int max_newton_iterations = 30;     // semismooth Newton at fixed E (first point, level_at)
+  /// Called after each accepted point (index, point: E, step h), e.g. for progress; may be empty.
+  std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
 };
@@ -145,6 +148,8 @@ struct BackboneOptions {
   double initial_step = 0.05, min_step = 1e-4, max_step = 0.1;  // in E
   std::vector<double> include;        // energies that must be levels (e.g. 0.7 and 1.8 for Fig. 5),
                                       // also returned in Backbone::included
+  /// Called after each converged level, e.g. for progress; may be empty.
+  std::function<void(const ModeLevel& level)> on_level = nullptr;
 };
 
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.

@@ -108,6 +108,8 @@ struct ResponseCurveOptions {
   /// the multipliers are bit-identical for any count); 0: std::thread::hardware_concurrency().
   /// stability_time_s is then wall time. Throws std::invalid_argument (trace_response) if < 0.
   int threads = 0;
+  /// Called after each accepted point (index, point: λ, step h), e.g. for progress; may be empty.
+  std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
 };
 
 /// Traces the response of `base` (its frequency and amplitude are the start) over the range of
