@@ -3,6 +3,8 @@
 // numpy arrays in and out (through Eigen) and C++ exceptions as Python exceptions with the same
 // message (std::invalid_argument → ValueError, std::out_of_range → IndexError, other
 // std::exception → RuntimeError). Issue #18.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <numbers>
 #include <tuple>
@@ -24,6 +26,8 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/nonlinear_modes.hpp>
+#include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/time_basis.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
@@ -91,6 +95,22 @@ wavelets::Family family_of(const std::string& name) {
 }
 
 Eigen::SparseMatrix<double> sparse(const Eigen::MatrixXd& m) { return m.sparseView(); }
+
+// (dof, amplitude [N], phase [rad], harmonic) of a further load.
+using Load = std::tuple<int, double, double, int>;
+
+solvers::HarmonicForcing forcing(int dof, double amplitude, double frequency_hz, const std::vector<Load>& loads) {
+  solvers::HarmonicForcing f{dof, amplitude, frequency_hz};
+  for (const auto& [d, a, phase, h] : loads) f.more.push_back({d, a, phase, h});
+  return f;
+}
+
+std::vector<solvers::ContactPoint> points(
+    const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts) {
+  std::vector<solvers::ContactPoint> out;
+  for (const auto& [d, law] : contacts) out.push_back({d, law});
+  return out;
+}
 
 }  // namespace
 
@@ -206,12 +226,11 @@ order the family does not have.)");
       "solve",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, double frequency_hz,
          const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
-         const solvers::TimeBasis& weighting, const std::string& formulation) {
-        std::vector<solvers::ContactPoint> points;
-        for (const auto& [d, law] : contacts) points.push_back({d, law});
+         const solvers::TimeBasis& weighting, const std::string& formulation, const std::vector<Load>& loads) {
         solvers::WeightedResidualOptions options;
         options.formulation = solvers::parse_formulation(formulation);
-        const auto s = solvers::solve_weighted_residual(system, {dof, amplitude, frequency_hz}, points, trial, weighting, options);
+        const auto s = solvers::solve_weighted_residual(system, forcing(dof, amplitude, frequency_hz, loads),
+                                                        points(contacts), trial, weighting, options);
         py::dict out;
         out["converged"] = s.converged();
         out["status"] = std::string(solvers::to_string(s.report.status));
@@ -228,13 +247,134 @@ order the family does not have.)");
       },
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional",
+      py::arg("loads") = std::vector<Load>{},
       R"(Forced response by weighted residuals [JL14 Eqs. (14)–(17)] to F cos(2π f t) on DOF `dof`.
 
-contacts: list of (dof, ContactLaw) pairs (all RigidStop or all penalty). Returns a dict:
+loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
+F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
+RigidStop or all penalty). Returns a dict:
 converged (verified residual), status, message, iterations, relative_residual, residual_tolerance,
 coefficients (n × M array: row = DOF, column = trial function), max_penetration [m],
 max_contact_force [N], contact_force_samples (n_c × M, rigid stops only) and wall_time_s.
 Non-convergence is returned, not raised; bad input raises ValueError.)");
+  m.def(
+      "trace_response",
+      [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,
+         const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
+         const solvers::TimeBasis& weighting, const std::string& formulation, bool stability, double max_step,
+         double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads) {
+        solvers::WeightedResidualOptions options;
+        options.formulation = solvers::parse_formulation(formulation);
+        const solvers::WeightedResidual base(system, forcing(dof, amplitude, frequency_hz.first, loads), points(contacts),
+                                             trial, weighting, options);
+        solvers::ResponseCurveOptions o;
+        o.parameter_min = std::min(frequency_hz.first, frequency_hz.second);
+        o.parameter_max = std::max(frequency_hz.first, frequency_hz.second);
+        o.direction = frequency_hz.second > frequency_hz.first ? +1 : -1;
+        o.stability = stability;
+        o.max_step = max_step;
+        o.initial_step = std::min(o.initial_step, max_step);
+        o.max_parameter_step = max_frequency_step_hz;
+        o.max_points = max_points;
+        o.samples = samples;
+        const auto curve = solvers::trace_response(base, o);
+        const auto n = static_cast<Eigen::Index>(curve.points.size());
+        Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n);
+        Eigen::Matrix<bool, Eigen::Dynamic, 1> stable(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const auto& p = curve.points[static_cast<size_t>(i)];
+          f(i) = p.frequency_hz;
+          umax(i) = p.max_displacement;
+          umin(i) = p.min_displacement;
+          amp(i) = p.amplitude;
+          force(i) = p.max_contact_force;
+          mu(i) = stability ? p.max_multiplier : NAN;
+          mu_error(i) = stability ? p.max_multiplier_error : NAN;
+          stable(i) = p.stable;
+        }
+        std::vector<double> folds;
+        for (const auto& fold : curve.folds) folds.push_back(fold.parameter);
+        py::dict out;
+        out["converged"] = curve.stop == solvers::StopReason::RangeReached;
+        out["stop"] = std::string(solvers::to_string(curve.stop));
+        out["message"] = curve.message;
+        out["frequency_hz"] = py::cast(f);
+        out["max_displacement"] = py::cast(umax);
+        out["min_displacement"] = py::cast(umin);
+        out["amplitude"] = py::cast(amp);
+        out["max_contact_force"] = py::cast(force);
+        if (stability) {
+          out["stable"] = py::cast(stable);
+          out["max_floquet_multiplier"] = py::cast(mu);
+          out["max_floquet_multiplier_error"] = py::cast(mu_error);
+        }
+        out["folds_hz"] = folds;
+        out["fold_confirmed"] = curve.fold_confirmed;
+        out["wall_time_s"] = curve.wall_time_s;
+        out["stability_time_s"] = curve.stability_time_s;
+        return out;
+      },
+      py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
+      py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional", py::arg("stability") = true,
+      py::arg("max_step") = 2e-2, py::arg("max_frequency_step_hz") = 0.0, py::arg("max_points") = 5000,
+      py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{},
+      R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
+[Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
+matrix on `samples` steps; refused for rigid stops: pass stability=False). Arguments as solve();
+max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|.
+Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
+min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
+(bool), max_floquet_multiplier, max_floquet_multiplier_error; and folds_hz (turning points),
+fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
+message, wall_time_s, stability_time_s. Non-convergence is returned, not raised.)");
+  m.def(
+      "nonlinear_mode",
+      [](const solvers::MechanicalSystem& system, const std::vector<std::pair<int, double>>& stops,
+         std::pair<double, double> energy, int harmonics, int samples, double penalty_stiffness, double max_energy_step) {
+        std::vector<solvers::RigidStop> rigid;
+        for (const auto& [dof, gap] : stops) rigid.push_back({dof, gap});
+        solvers::NonlinearModeOptions options;
+        options.harmonics = harmonics;
+        options.samples = samples;
+        const solvers::NonlinearModes modes(system, rigid, options);
+        solvers::BackboneContinuationOptions o;
+        o.energy_min = energy.first;
+        o.energy_max = energy.second;
+        o.penalty_stiffness = penalty_stiffness;
+        o.max_energy_step = max_energy_step;
+        const auto b = modes.continue_backbone(o);
+        const auto n = static_cast<Eigen::Index>(b.levels.size());
+        Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const auto& l = b.levels[static_cast<size_t>(i)];
+          e(i) = l.energy;
+          f(i) = l.frequency_hz;
+          fr(i) = l.rayleigh_frequency_hz;
+          pen(i) = l.max_penetration;
+          comp(i) = l.complementarity;
+        }
+        py::dict out;
+        out["converged"] = b.complete;
+        out["message"] = b.message;
+        out["linear_frequency_hz"] = modes.linear_frequency_hz();
+        out["energy"] = py::cast(e);
+        out["frequency_hz"] = py::cast(f);
+        out["rayleigh_frequency_hz"] = py::cast(fr);
+        out["max_penetration"] = py::cast(pen);
+        out["complementarity"] = py::cast(comp);
+        out["folds"] = b.folds;
+        out["wall_time_s"] = b.wall_time_s;
+        return out;
+      },
+      py::arg("system"), py::arg("stops"), py::arg("energy"), py::arg("harmonics") = 16, py::arg("samples") = 256,
+      py::arg("penalty_stiffness") = 0.0, py::arg("max_energy_step") = 0.05,
+      R"(First nonlinear normal mode of the undamped system (damping ignored) against rigid stops
+[LL11], by pseudo-arclength continuation in energy over energy = (min, max) (normalized: 1 at
+contact onset). stops: list of (dof, gap [m] > 0). harmonics N, samples m > 2N of the contact
+conditions; penalty_stiffness > 0 replaces exact contact by a linear spring [N/m].
+Returns a dict of arrays per backbone level: energy, frequency_hz (of the periodic orbit),
+rayleigh_frequency_hz, max_penetration and complementarity [gap]; and linear_frequency_hz, folds
+(energies where the branch turns back), converged (energy max reached), message, wall_time_s.)");
   m.def(
       "evaluate",
       [](const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients, const Eigen::VectorXd& tau) -> Eigen::MatrixXd {

@@ -110,6 +110,63 @@ def test_result_mat_reads_with_scipy_and_equals_the_csv_files(tmp_path):
     assert mat["displacement"]["units"]["u_xc"] == "m"
 
 
+def test_trace_response_follows_the_closed_form_below_the_stop():
+    # A stop 1 m away is never met: the branch is the linear oscillator's F/|k − mω² + iωc|, and
+    # every point is stable (largest Floquet multiplier e^{−ζω_n T} < 1).
+    s = wbm.MechanicalSystem(mass=np.array([[2.0]]), damping=np.array([[6.0]]), stiffness=np.array([[8e4]]))
+    fourier = wbm.TimeBasis("fourier", 8)
+    curve = wbm.trace_response(s, 0, 10.0, (5.0, 55.0), [(0, wbm.LinearPenalty(1e6, 1.0))], fourier, fourier,
+                               max_frequency_step_hz=1.0, samples=1024)
+    assert curve["converged"], curve["message"]
+    f = curve["frequency_hz"]
+    assert f.ndim == 1 and f.size >= 50 and curve["amplitude"].shape == f.shape
+    inside = f <= 55.0
+    w = 2 * math.pi * f[inside]
+    exact = 10.0 / np.abs(8e4 - 2.0 * w**2 + 1j * 6.0 * w)
+    np.testing.assert_allclose(curve["amplitude"][inside], exact, rtol=1e-5)
+    assert curve["stable"].all() and (curve["max_floquet_multiplier"] < 1.0).all()
+    assert curve["folds_hz"] == []
+    with pytest.raises(ValueError, match="stability"):
+        wbm.trace_response(s, 0, 10.0, (5.0, 55.0), [(0, wbm.RigidStop(1.0))], fourier, fourier)
+
+
+def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
+    # The 2-DOF chain of examples/scenes/two_dof_nnm.toml: below contact onset the frequency is the
+    # linear one, √(k (3 − √5)/2 / m)/2π; the whole backbone equals the one `wbm run` writes.
+    m = np.eye(2)
+    k = np.array([[2000.0, -1000.0], [-1000.0, 1000.0]])
+    s = wbm.MechanicalSystem(mass=m, damping=np.zeros((2, 2)), stiffness=k)
+    mode = wbm.nonlinear_mode(s, [(1, 1e-3)], (0.5, 3.0), harmonics=8, samples=64)
+    assert mode["converged"], mode["message"]
+    linear = math.sqrt(1000.0 * (3.0 - math.sqrt(5.0)) / 2.0) / (2.0 * math.pi)
+    assert mode["linear_frequency_hz"] == pytest.approx(linear, rel=1e-12)
+    # The levels before the branch first turns back in energy (its first fold, at contact onset).
+    before = np.arange(np.argmax(np.diff(mode["energy"]) < 0.0) + 1)
+    assert before.size >= 5
+    np.testing.assert_allclose(mode["frequency_hz"][before], linear, rtol=1e-10)
+    assert mode["frequency_hz"][-1] > 1.2 * linear  # the stop stiffens the mode
+    scene = wbm.run_scene(EXAMPLES / "two_dof_nnm.toml")
+    table = scene["tables"]["backbone.csv"]
+    np.testing.assert_array_equal(table["energy [-]"], mode["energy"])
+    np.testing.assert_array_equal(table["frequency [Hz]"], mode["frequency_hz"])
+
+
+def test_solve_with_several_loads_superposes_closed_forms():
+    # 10 N cos ωt + 4 N cos(2ωt + π/4) + a constant 3 N on one oscillator (docs: loads).
+    s = wbm.MechanicalSystem(mass=np.array([[2.0]]), damping=np.array([[6.0]]), stiffness=np.array([[8e4]]))
+    fourier = wbm.TimeBasis("fourier", 8)
+    r = wbm.solve(s, 0, 10.0, 25.0, [], fourier, fourier, loads=[(0, 4.0, math.pi / 4, 2), (0, 3.0, 0.0, 0)])
+    assert r["converged"]
+    tau = np.linspace(0.0, 1.0, 16, endpoint=False)
+    u = wbm.evaluate(fourier, r["coefficients"], tau)[0]
+    w = 2 * math.pi * 25.0
+    exact = sum(np.real(a * np.exp(1j * (phi + 2 * math.pi * h * tau)) / (8e4 - 2.0 * (h * w) ** 2 + 6j * h * w))
+                for a, phi, h in ((10.0, 0.0, 1), (4.0, math.pi / 4, 2), (3.0, 0.0, 0)))
+    np.testing.assert_allclose(u, exact, rtol=0, atol=1e-12 * np.abs(exact).max())
+    with pytest.raises(ValueError, match=r"HarmonicForcing.more\[0\].harmonic = -1"):
+        wbm.solve(s, 0, 10.0, 25.0, [], fourier, fourier, loads=[(0, 1.0, 0.0, -1)])
+
+
 def test_a_scene_from_a_path_a_string_or_a_dict_is_the_same_scene():
     scene = SCENES / "jl14_case1.toml"
     from_path = wbm.run_scene(scene)  # os.PathLike
