@@ -121,7 +121,8 @@ def response_curve(folder, title, written):
         return
     table = read_csv(folder / "branch.csv")
     f = table["frequency [Hz]"]
-    (name, amplitude), = columns(table, "amplitude_")
+    amplitudes = columns(table, "amplitude_")  # the forced DOF first, then [output] observe's
+    name, amplitude = amplitudes[0]
     stable = table.get("stable [-]")
     fig, ax = plt.subplots()
     if stable is None:
@@ -135,6 +136,8 @@ def response_curve(folder, title, written):
                 start = i
         ax.plot([], [], "-", color="C0", label="stable")
         ax.plot([], [], "--", color="C0", label="unstable")
+    for k, (other, values) in enumerate(amplitudes[1:]):
+        ax.plot(f, values, "-", color=f"C{k + 1}", linewidth=0.8, label=other)
     if (folder / "folds.csv").exists():
         folds = read_csv(folder / "folds.csv")
         for hz, crossing in zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"]):
@@ -142,7 +145,7 @@ def response_curve(folder, title, written):
             ax.plot(hz, amplitude[i], "o", color="C3", fillstyle="full" if crossing == 1.0 else "none")
         ax.plot([], [], "o", color="C3", label="fold")
     ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel(name)
+    ax.set_ylabel(name if len(amplitudes) == 1 else "amplitude [m]")
     ax.set_title(title, fontsize=9)
     ax.legend()
     save(fig, folder / "response_curve.png", written)

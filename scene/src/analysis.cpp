@@ -71,6 +71,23 @@ std::string contact_label(const Scene& scene, size_t c) {
   return k.against < 0 ? st.dof_name(k.dof) : st.dof_name(k.dof) + "-" + st.dof_name(k.against);
 }
 
+// A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
+// equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).
+void harmonics_of(const Eigen::MatrixXd& samples, int h_max, Eigen::MatrixXd& amplitude, Eigen::MatrixXd& phase) {
+  const spectral::Aft aft(2 * h_max + 1, static_cast<int>(samples.cols()), 0.0);
+  const Eigen::MatrixXd c = aft.to_frequency(samples);  // {1, cos 2πτ, sin 2πτ, cos 4πτ, …}
+  amplitude.resize(samples.rows(), h_max + 1);
+  phase.resize(samples.rows(), h_max + 1);
+  for (Eigen::Index r = 0; r < samples.rows(); ++r) {
+    amplitude(r, 0) = c(r, 0);
+    phase(r, 0) = 0.0;
+    for (int k = 1; k <= h_max; ++k) {
+      amplitude(r, k) = std::hypot(c(r, 2 * k - 1), c(r, 2 * k));
+      phase(r, k) = std::atan2(-c(r, 2 * k), c(r, 2 * k - 1));
+    }
+  }
+}
+
 // Per-period files from displacement/velocity of every solver DOF (n × P), shared by solve and
 // timestep; the written DOFs are the scene's (massless ones recovered, Scene::expand_displacement).
 void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
@@ -117,26 +134,19 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
   if (scene.output.harmonics > 0) {  // A_h, φ_h of u = Σ A_h cos(2πhτ + φ_h) from the P samples
     const int h_max = scene.output.harmonics;
-    const spectral::Aft aft(2 * h_max + 1, static_cast<int>(tau.size()), 0.0);
     const std::vector<int> dofs = scene.output_dofs();
     Eigen::MatrixXd observed(static_cast<Eigen::Index>(dofs.size()), tau.size());
     for (size_t i = 0; i < dofs.size(); ++i) observed.row(static_cast<Eigen::Index>(i)) = displacement.row(dofs[i]);
-    const Eigen::MatrixXd c = aft.to_frequency(observed);  // {1, cos 2πτ, sin 2πτ, cos 4πτ, …}
+    Eigen::MatrixXd amplitude, phase;
+    harmonics_of(observed, h_max, amplitude, phase);
     const Eigen::VectorXd h = Eigen::VectorXd::LinSpaced(h_max + 1, 0.0, h_max);
     Table t{"harmonics.csv", {"h [-]", "frequency [Hz]"}, {h, h * frequency_hz}};
     for (size_t i = 0; i < dofs.size(); ++i) {
       const auto r = static_cast<Eigen::Index>(i);
-      Eigen::VectorXd amplitude(h_max + 1), phase(h_max + 1);
-      amplitude(0) = c(r, 0);
-      phase(0) = 0.0;
-      for (int k = 1; k <= h_max; ++k) {
-        amplitude(k) = std::hypot(c(r, 2 * k - 1), c(r, 2 * k));
-        phase(k) = std::atan2(-c(r, 2 * k), c(r, 2 * k - 1));
-      }
       t.header.push_back("A_" + st.dof_name(dofs[i]) + " [m]");
-      t.columns.push_back(amplitude);
+      t.columns.push_back(amplitude.row(r).transpose());
       t.header.push_back("phase_" + st.dof_name(dofs[i]) + " [rad]");
-      t.columns.push_back(phase);
+      t.columns.push_back(phase.row(r).transpose());
     }
     out.tables.push_back(std::move(t));
   }
@@ -145,6 +155,60 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
                           {"tau [-]", "time [s]", "energy [J]"},
                           {tau, time, solvers::system_energy(system, contacts, solver_displacement, *solver_velocity)}});
   }
+}
+
+// Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `rows[i]` is
+// the observed DOFs' samples (k × P) at frequency `hz[i]`.
+Table point_harmonics(const Scene& scene, const std::string& file, const std::vector<int>& observed,
+                      const std::vector<double>& hz, const std::vector<Eigen::MatrixXd>& samples) {
+  const int h_max = scene.output.harmonics;
+  const auto n = static_cast<Eigen::Index>(hz.size());
+  Table t{file, {"frequency [Hz]"}, {Eigen::Map<const Eigen::VectorXd>(hz.data(), n)}};
+  std::vector<Eigen::VectorXd> columns(observed.size() * 2 * static_cast<size_t>(h_max + 1), Eigen::VectorXd(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::MatrixXd amplitude, phase;
+    harmonics_of(samples[static_cast<size_t>(i)], h_max, amplitude, phase);
+    size_t c = 0;
+    for (size_t d = 0; d < observed.size(); ++d) {
+      for (int h = 0; h <= h_max; ++h) {
+        columns[c++](i) = amplitude(static_cast<Eigen::Index>(d), h);
+        columns[c++](i) = phase(static_cast<Eigen::Index>(d), h);
+      }
+    }
+  }
+  for (int dof : observed) {
+    const std::string name = scene.structure->dof_name(dof);
+    for (int h = 0; h <= h_max; ++h) {
+      const std::string suffix = std::to_string(h) + "_" + name;  // (not "A" + to_string: GCC 12 -Wrestrict false positive)
+      t.header.push_back(std::string("A").append(suffix).append(" [m]"));
+      t.header.push_back(std::string("phase").append(suffix).append(" [rad]"));
+    }
+  }
+  t.columns.insert(t.columns.end(), columns.begin(), columns.end());
+  return t;
+}
+
+// Samples (rows: `observed` scene DOFs, P columns) of a weighted-residual solution given by the
+// trial coefficients of the solver DOFs `kept` (rows of `coefficients`; with a condensation, every
+// solver DOF, so that massless DOFs can be recovered).
+Eigen::MatrixXd observed_samples(const Scene& scene, const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients,
+                                 const std::vector<int>& kept, const std::vector<int>& observed,
+                                 const Eigen::VectorXd& tau, double frequency_hz) {
+  Eigen::MatrixXd u(coefficients.rows(), tau.size());
+  for (Eigen::Index r = 0; r < coefficients.rows(); ++r) {
+    u.row(r) = solvers::evaluate_trial(trial, coefficients, static_cast<int>(r), tau, frequency_hz).transpose();
+  }
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(observed.size()), tau.size());
+  if (scene.condensation) {
+    const Eigen::MatrixXd full = scene.expand_displacement(u);  // kept = every solver DOF
+    for (size_t i = 0; i < observed.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = full.row(observed[i]);
+    return out;
+  }
+  for (size_t i = 0; i < observed.size(); ++i) {
+    const auto at = std::find(kept.begin(), kept.end(), observed[i]);
+    out.row(static_cast<Eigen::Index>(i)) = u.row(at - kept.begin());
+  }
+  return out;
 }
 
 void solve_one(const Scene& scene, AnalysisResult& out) {
@@ -205,7 +269,9 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   const auto trial = scene.trial();
   const auto weighting = scene.weighting();
   const auto frequencies = scene.forcing->frequencies_hz();
-  const auto dofs = scene.output_dofs();
+  const auto dofs = scene.output.observe.empty() ? scene.output_dofs() : scene.output.observe;
+  std::vector<double> harmonic_hz;           // [output] harmonics: per converged point
+  std::vector<Eigen::MatrixXd> harmonic_samples;
   const int p = scene.output.samples;
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
   std::vector<std::vector<double>> rows;
@@ -270,10 +336,17 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
       }
       every = scene.expand_displacement(retained);
     }
-    for (int dof : dofs) {
+    Eigen::MatrixXd observed(static_cast<Eigen::Index>(dofs.size()), p);
+    for (size_t d = 0; d < dofs.size(); ++d) {
+      const int dof = dofs[d];
       const Eigen::VectorXd u = scene.condensation ? Eigen::VectorXd(every.row(dof).transpose())
                                                    : solvers::evaluate_trial(trial, solution.coefficients, dof, tau, f);
+      observed.row(static_cast<Eigen::Index>(d)) = u.transpose();
       row.insert(row.end(), {u.maxCoeff(), u.minCoeff(), solvers::rms(u)});
+    }
+    if (scene.output.harmonics > 0) {
+      harmonic_hz.push_back(f);
+      harmonic_samples.push_back(std::move(observed));
     }
     row.push_back(contacts.empty() ? 0.0 : solution.max_contact_force);
     row.push_back(solution.report.iterations);
@@ -292,6 +365,9 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     t.columns.push_back(column);
   }
   if (!rows.empty()) out.tables.push_back(std::move(t));
+  if (!harmonic_hz.empty()) {
+    out.tables.push_back(point_harmonics(scene, "sweep_harmonics.csv", dofs, harmonic_hz, harmonic_samples));
+  }
   out.converged = failed == 0;
   out.diagnostics["points"] = points;
   out.diagnostics["converged_points"] = rows.size();
@@ -394,6 +470,16 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   o.stability = scene.analysis.stability;
   o.corrector_tolerance = scene.solver.newton.tolerance;
   o.samples = scene.output.samples;
+  // Observed DOFs: their amplitudes (beyond the forced DOF's) and harmonics along the branch.
+  const std::vector<int> observed = scene.output.observe.empty() ? std::vector<int>{scene.forcing->dof} : scene.output.observe;
+  const bool per_point = !scene.output.observe.empty() || scene.output.harmonics > 0;
+  std::vector<int> kept;
+  if (per_point && scene.condensation) {
+    for (int d = 0; d < base.dofs(); ++d) kept.push_back(d);
+  } else if (per_point) {
+    for (int d : observed) kept.push_back(scene.solver_dof(d));
+  }
+  o.keep_dofs = kept;
   double reached = 0.0;  // the largest fraction of the range covered so far (a branch turns back at folds)
   if (progress) {
     o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
@@ -435,6 +521,29 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     }
     header.push_back("corrector_iterations [-]");
     columns.push_back(its);
+    if (per_point) {
+      const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);
+      std::vector<double> hz;
+      std::vector<Eigen::MatrixXd> samples;
+      for (const auto& p : curve.points) {
+        hz.push_back(p.frequency_hz);
+        samples.push_back(observed_samples(scene, base.trial(), p.kept_coefficients, kept, observed, tau, p.frequency_hz));
+      }
+      for (size_t d = 0; d < observed.size(); ++d) {
+        if (observed[d] == scene.forcing->dof) continue;  // its columns are there already
+        const std::string name = scene.structure->dof_name(observed[d]);
+        Eigen::VectorXd hi(n), lo(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          hi(i) = samples[static_cast<size_t>(i)].row(static_cast<Eigen::Index>(d)).maxCoeff();
+          lo(i) = samples[static_cast<size_t>(i)].row(static_cast<Eigen::Index>(d)).minCoeff();
+        }
+        header.insert(header.end(), {"u_max_" + name + " [m]", "u_min_" + name + " [m]", "amplitude_" + name + " [m]"});
+        columns.insert(columns.end(), {hi, lo, 0.5 * (hi - lo)});
+      }
+      if (scene.output.harmonics > 0) {
+        out.tables.push_back(point_harmonics(scene, "branch_harmonics.csv", observed, hz, samples));
+      }
+    }
     if (o.stability) {
       out.tables.push_back({"branch.csv", header, columns, verdict});
     } else {

@@ -1092,7 +1092,7 @@ class Parser {
       s_.moreau_jean.samples_per_period = s_.output.samples;
       return;
     }
-    r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics", "formats"});
+    r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics", "formats", "observe"});
     s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
     if (const toml::node* f = t->get("formats")) {
       const toml::array* a = f->as_array();
@@ -1117,15 +1117,32 @@ class Parser {
       s_.output.harmonics =
           static_cast<int>(r_.integer(*t, "output", "harmonics", 1, (s_.output.samples - 1) / 2, 0));
       const AnalysisKind k = s_.analysis.kind;
-      const bool one_frequency = k == AnalysisKind::Timestep || (k == AnalysisKind::Solve && !(s_.forcing && s_.forcing->range));
-      if (!one_frequency) {
+      if (k == AnalysisKind::NonlinearModes || k == AnalysisKind::BasisPlot) {
         r_.error(Reader::source_of(*t, "harmonics"), "output.harmonics",
-                 "written for a solve at one frequency or a timestep run (harmonics.csv); not for sweeps, "
-                 "continuation, nnm or basis plots: remove it");
+                 "written for solves (harmonics.csv; per point of a sweep: sweep_harmonics.csv), timestep runs and "
+                 "continuation (branch_harmonics.csv); not for nnm or basis plots: remove it");
       }
     }
     s_.timestep.samples_per_period = s_.output.samples;
     s_.moreau_jean.samples_per_period = s_.output.samples;
+    if (const toml::node* o = t->get("observe"); o != nullptr && s_.structure) {
+      const bool sweep = s_.analysis.kind == AnalysisKind::Solve && s_.forcing && s_.forcing->range;
+      if (!sweep && s_.analysis.kind != AnalysisKind::Continuation) {
+        r_.error(o->source(), "output.observe",
+                 "the DOFs reported per point of a sweep or a continuation branch; for other analyses list the DOFs "
+                 "to write with output." + std::string(s_.structure->kind == StructureKind::Rod ? "nodes" : "dofs"));
+      } else if (o->is_array() && !o->as_array()->empty()) {
+        for (const auto& e : *o->as_array()) {
+          if (auto dof = location_value(e, "output.observe")) {
+            if (std::find(s_.output.observe.begin(), s_.output.observe.end(), *dof) == s_.output.observe.end()) {
+              s_.output.observe.push_back(*dof);
+            }
+          }
+        }
+      } else {
+        r_.error(o->source(), "output.observe", "expected a non-empty list of locations (rod: nodes, matrices: DOF names)");
+      }
+    }
     for (const char* key : {"nodes", "dofs"}) {
       const toml::node* n = t->get(key);
       if (n == nullptr) continue;
@@ -1499,6 +1516,11 @@ nlohmann::json to_json(const Scene& s) {
   nlohmann::json out = {{"samples", s.output.samples}};
   if (s.output.harmonics > 0) out["harmonics"] = s.output.harmonics;
   out["formats"] = s.output.formats;
+  if (!s.output.observe.empty() && s.structure) {
+    nlohmann::json list = nlohmann::json::array();
+    for (int dof : s.output.observe) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));
+    out["observe"] = list;
+  }
   if (s.structure) {
     nlohmann::json list = nlohmann::json::array();
     for (int dof : s.output_dofs()) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));

@@ -186,6 +186,12 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     throw std::invalid_argument("trace_response: observed_dof = " + std::to_string(dof) + " outside [0, " +
                                 std::to_string(base.dofs()) + ")");
   }
+  for (int k : o.keep_dofs) {
+    if (k < 0 || k >= base.dofs()) {
+      throw std::invalid_argument("trace_response: keep_dofs has DOF " + std::to_string(k) + " outside [0, " +
+                                  std::to_string(base.dofs()) + ")");
+    }
+  }
   if (o.threads < 0) {
     throw std::invalid_argument("trace_response: threads = " + std::to_string(o.threads) +
                                 ": must be >= 0 (0: one per hardware thread, 1: serial)");
@@ -249,9 +255,16 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.amplitude_n = family.load(p.parameter) * base.forcing().amplitude;
     r.contact_unknowns = p.x;
     Eigen::VectorXd u;
+    auto keep = [&](const WeightedResidual& wr, const Eigen::VectorXd& a) {
+      if (o.keep_dofs.empty()) return;
+      const Eigen::MatrixXd all = spectral::as_coefficients(a, wr.dofs());
+      r.kept_coefficients.resize(static_cast<Eigen::Index>(o.keep_dofs.size()), all.cols());
+      for (size_t i = 0; i < o.keep_dofs.size(); ++i) r.kept_coefficients.row(static_cast<Eigen::Index>(i)) = all.row(o.keep_dofs[i]);
+    };
     if (rigid) {  // the impulses: expand at this point
       const WeightedResidual& wr = family.at(p.parameter);
       const Eigen::VectorXd a = wr.expand_forces(p.x, family.load(p.parameter));
+      keep(wr, a);
       r.max_contact_force = p.x.maxCoeff();
       u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
       r.max_displacement = u.maxCoeff();
@@ -267,13 +280,15 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
       }
     }
-    if (observed_contact >= 0) {
+    if (observed_contact >= 0 && o.keep_dofs.empty()) {
       u = uc.col(observed_contact);
-    } else {  // a DOF away from the contacts: expand (one more factorization of G at this point)
+    } else {  // a DOF away from the contacts, or kept DOFs: expand (one more factorization of G at this point)
       const WeightedResidual& wr = family.at(p.parameter);
       Eigen::VectorXd a = wr.expand(p.x);
       a += (family.load(p.parameter) - 1.0) * wr.linear_response();  // expand() is at load 1
-      u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
+      keep(wr, a);
+      u = observed_contact >= 0 ? Eigen::VectorXd(uc.col(observed_contact))
+                                : evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
     }
     r.max_displacement = u.maxCoeff();
     r.min_displacement = u.minCoeff();

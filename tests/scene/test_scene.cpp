@@ -810,10 +810,10 @@ TEST(Scene, HarmonicsOfTheResponseMatchClosedFormAndCoefficients) {
   EXPECT_GT(amp(2), 1e-3 * amp(1));  // the stop makes harmonics
   expect_throw_with<std::invalid_argument>(
       [&] {
-        (void)parse("structure = { mass = 2.0, stiffness = 8e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 9.0] }\n"
-                    "output = { harmonics = 3 }\n");
+        (void)parse("structure = { mass = 2.0, stiffness = 8e4 }\ncontact = { law = \"rigid\", gap = 1e-3 }\n"
+                    "analysis = { type = \"nnm\", energy = [0.5, 2.0] }\noutput = { harmonics = 3 }\n");
       },
-      {"output.harmonics: written for a solve at one frequency or a timestep run"});
+      {"output.harmonics: written for solves", "not for nnm or basis plots"});
   expect_throw_with<std::invalid_argument>([&] { (void)parse(head + "output = { samples = 16, harmonics = 8 }\n"); },
                                            {"output.harmonics"});
 }
@@ -1019,4 +1019,55 @@ TEST(Scene, BackboneReportsProgressPerPoint) {
   EXPECT_NEAR(reports.back().first, 1.0, 1e-9);  // E = 3 of [0.5, 3] reached
   // Every backbone level is an accepted point (levels and points are the same list here).
   EXPECT_EQ(reports.size(), static_cast<size_t>(column(r, "backbone.csv", 0).size()));
+}
+
+// Per point of a sweep and of a continuation branch: [output] observe and harmonics. Closed
+// forms: the 2-DOF chain m = 1 kg, K = [[2k, −k], [−k, k]], C = αM, forced on "a", with a stop
+// on "b" too far to be met, responds linearly, U = (K − ω²M + iωC)⁻¹ F e_a: A_1 = |U_j|,
+// φ_1 = arg U_j, A_0 = A_2 = 0, and the amplitude columns of the observed DOF "b" are |U_b|.
+TEST(Scene, ObservedDofsAndHarmonicsAlongASweepAndABranchMatchTheClosedForm) {
+  const std::string head = "structure = { mass = [1.0, 1.0], stiffness = [[2e4, -1e4], [-1e4, 1e4]], dofs = [\"a\", \"b\"] }\n"
+                           "damping = { alpha = 2.0 }\ncontact = { law = \"linear\", stiffness = 1e6, gap = 1.0, dof = \"b\" }\n"
+                           "basis = { dimension = 8 }\n";
+  auto exact = [](double hz) {
+    const double w = 2.0 * std::numbers::pi * hz;
+    Eigen::Matrix2cd d;
+    d << std::complex<double>(2e4 - w * w, 2.0 * w), -1e4, -1e4, std::complex<double>(1e4 - w * w, 2.0 * w);
+    return Eigen::Vector2cd(d.inverse() * Eigen::Vector2cd(10.0, 0.0));
+  };
+  const auto sweep = wbm::scene::run_analysis(parse(
+      head + "forcing = { amplitude = 10.0, dof = \"a\", frequencies_hz = [5.0, 12.0, 30.0] }\n"
+             "output = { samples = 64, harmonics = 2, observe = [\"b\", \"a\"] }\n"));
+  ASSERT_TRUE(sweep.converged);
+  // frequency_response.csv follows observe: b first; sweep_harmonics.csv: A0, φ0, A1, φ1, A2, φ2 per DOF.
+  const Eigen::VectorXd& hz = column(sweep, "sweep_harmonics.csv", 0);
+  ASSERT_EQ(hz.size(), 3);
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const Eigen::Vector2cd u = exact(hz(i));
+    const double scale = u.cwiseAbs().maxCoeff();
+    EXPECT_NEAR(column(sweep, "frequency_response.csv", 1)(i), std::abs(u(1)), 1e-3 * scale);  // max_u_b: sampled max
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 3)(i), std::abs(u(1)), 1e-12 * scale) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 4)(i), std::arg(u(1)), 1e-9) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 9)(i), std::abs(u(0)), 1e-12 * scale) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 10)(i), std::arg(u(0)), 1e-9) << hz(i);
+    for (size_t c : {1u, 5u, 7u, 11u}) EXPECT_LT(std::abs(column(sweep, "sweep_harmonics.csv", c)(i)), 1e-12 * scale) << c;
+  }
+  const auto branch = wbm::scene::run_analysis(parse(
+      head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = [5.0, 30.0] }\n"
+             "analysis = { type = \"continuation\", stability = false, max_frequency_step_hz = 1.0 }\n"
+             "output = { samples = 256, harmonics = 1, observe = [\"a\", \"b\"] }\n"));
+  ASSERT_TRUE(branch.converged);
+  const Eigen::VectorXd& f = column(branch, "branch.csv", 0);
+  const Eigen::VectorXd& amplitude_b = column(branch, "branch.csv", 8);  // after corrector_iterations: b's max, min, amplitude
+  const Eigen::VectorXd& a1_b = column(branch, "branch_harmonics.csv", 7);
+  ASSERT_GE(f.size(), 25);
+  for (Eigen::Index i = 0; i < f.size(); ++i) {
+    const Eigen::Vector2cd u = exact(f(i));
+    EXPECT_NEAR(amplitude_b(i), std::abs(u(1)), 1e-3 * std::abs(u(1))) << f(i);
+    EXPECT_NEAR(a1_b(i), std::abs(u(1)), 1e-9 * std::abs(u(1))) << f(i);
+    EXPECT_NEAR(column(branch, "branch_harmonics.csv", 3)(i), std::abs(u(0)), 1e-9 * std::abs(u(0))) << f(i);
+  }
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = 5.0 }\noutput = { observe = [\"b\"] }\n"); },
+      {"output.observe: the DOFs reported per point of a sweep or a continuation branch", "output.dofs"});
 }

@@ -174,10 +174,15 @@ struct Output {
   int samples = 1024;      // P samples per period, τ_p = p/P
   std::vector<int> dofs;   // 0-based DOFs written; empty = the forced and the contact DOFs
   bool all_dofs = false;
-  /// H > 0: harmonics.csv (solve at one frequency, timestep): amplitude A_h [m] and phase φ_h
+  /// H > 0: harmonics.csv (solve at one frequency, timestep; sweep_harmonics.csv and
+  /// branch_harmonics.csv per point of a sweep or a branch): amplitude A_h [m] and phase φ_h
   /// [rad] of u(t) = Σ_h A_h cos(2π h f t + φ_h), h = 0 … H, per output DOF, from the P samples
   /// (h = 0: the mean, phase 0). 0: not written.
   int harmonics = 0;
+  /// `observe` (0-based DOFs): the DOFs reported per point of a sweep (frequency_response.csv,
+  /// sweep_harmonics.csv; default: the output DOFs) or of a continuation branch (amplitude columns
+  /// in branch.csv beside the forced DOF's, branch_harmonics.csv; default: the forced DOF).
+  std::vector<int> observe;
   /// Result formats, a non-empty subset of {"csv", "mat"}: one CSV file per table and/or
   /// result.mat (scene::write_mat: one struct per table). result.json is always written.
   std::vector<std::string> formats = {"csv"};

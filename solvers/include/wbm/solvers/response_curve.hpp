@@ -68,6 +68,9 @@ struct ResponsePoint {
   bool stability_settled = true;       // FloquetResult::settled() at monodromy_steps
   bool stable = true;                  // every |μ| < 1 + 1e-6
   Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
+  /// The trial coefficients of ResponseCurveOptions::keep_dofs at this point (row i = DOF
+  /// keep_dofs[i], column = trial function) [m]; empty when keep_dofs is.
+  Eigen::MatrixXd kept_coefficients;
 };
 
 struct ResponseCurve {
@@ -108,6 +111,10 @@ struct ResponseCurveOptions {
   /// the multipliers are bit-identical for any count); 0: std::thread::hardware_concurrency().
   /// stability_time_s is then wall time. Throws std::invalid_argument (trace_response) if < 0.
   int threads = 0;
+  /// DOFs whose trial coefficients every point keeps (ResponsePoint::kept_coefficients), e.g. to
+  /// report their amplitudes or harmonics along the branch; each costs nothing more than the
+  /// expansion of the point's solution (one solve with G per point). Throws if out of range.
+  std::vector<int> keep_dofs = {};
   /// Called after each accepted point (index, point: λ, step h), e.g. for progress; may be empty.
   std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
 };
