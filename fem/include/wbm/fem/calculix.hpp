@@ -1,0 +1,75 @@
+#pragma once
+/// Finite-element models from CalculiX/Abaqus input decks, with the matrices assembled by
+/// CalculiX itself (`ccx`, Debian calculix-ccx): wbm writes no 3D elasticity elements. Units:
+/// those of the deck (e.g. N-mm-t-s); nothing is converted here.
+///
+/// Deck format [CalculiX CrunchiX User's Manual, Sec. 7]: keyword lines start with `*`
+/// (case-insensitive, parameters `NAME=value` after commas), `**` lines are comments, data lines
+/// are comma-separated. The model data is everything before the first `*STEP`; the deck's own
+/// steps are dropped and replaced by wbm's.
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace wbm::fem {
+
+/// What read_calculix_deck gathers from a deck's model data.
+struct CalculixDeck {
+  std::filesystem::path file;                          // the deck read (absolute)
+  /// The model data with every *INCLUDE inlined (its text, in order), up to the first *STEP of
+  /// the deck or of an included file: what a driver deck starts with.
+  std::string model_data;
+  std::map<int, Eigen::Vector3d> nodes;                // node number → (x, y, z) [deck units]
+  std::map<std::string, std::vector<int>> node_sets;   // NSET name (upper case) → node numbers, in order
+  std::map<std::string, int> element_types;            // TYPE (upper case) → number of elements
+  [[nodiscard]] int elements() const;
+  /// The node numbers of a set, by name (case-insensitive). Throws std::invalid_argument naming
+  /// the set and the sets the deck defines.
+  [[nodiscard]] const std::vector<int>& node_set(const std::string& name) const;
+};
+
+/// Reads a deck: *NODE (id, x[, y[, z]], NSET= adds the nodes to a set), *ELEMENT (TYPE=; data
+/// lines may continue after a trailing comma), *NSET (NSET=, GENERATE for first, last[, step];
+/// entries are node numbers or names of sets defined before), *INCLUDE (INPUT= relative to the
+/// including file; nested at most 16 deep). Other keywords are kept in model_data untouched.
+/// Throws std::runtime_error naming the path for a file that cannot be read, and
+/// std::invalid_argument with "file:line: what was expected" for a malformed keyword or data line
+/// (a node without coordinates, a non-numeric field, an *INCLUDE without INPUT=, a node set
+/// entry that is neither a number nor a known set, a repeated node number, too deep includes).
+[[nodiscard]] CalculixDeck read_calculix_deck(const std::filesystem::path& path);
+
+struct CalculixOptions {
+  std::string executable = "ccx";  // the CalculiX solver, searched on PATH
+  /// Scratch folder for the driver deck and ccx's files; empty: a fresh folder under the system
+  /// temporary directory, removed afterwards.
+  std::filesystem::path work_directory = {};
+};
+
+/// Stiffness and mass of the model as CalculiX assembles them, after its *BOUNDARY conditions:
+/// n × n, symmetric (ccx writes the upper triangle, mirrored here), rows in ccx's order.
+struct AssembledModel {
+  Eigen::SparseMatrix<double> stiffness;  // [force/length in deck units]
+  Eigen::SparseMatrix<double> mass;       // [mass in deck units]
+  std::vector<std::pair<int, int>> dofs;  // per row: (node number, direction 1 = x, 2 = y, 3 = z)
+};
+
+/// Runs `ccx` on a driver deck = the model data + "*STEP / *FREQUENCY, SOLVER=MATRIXSTORAGE /
+/// *END STEP" in a scratch folder and reads the .sti, .mas (1-based "row col value", upper
+/// triangle) and .dof ("node.direction" per row) files it writes, with std::from_chars.
+/// Throws std::runtime_error naming the deck: ccx not found (install calculix-ccx), ccx failing
+/// (its "*ERROR" lines quoted), or files missing or malformed.
+[[nodiscard]] AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOptions& options = {});
+
+/// Parses ccx's matrix files (also usable on files from another run): `stiffness` and `mass`
+/// text as written by SOLVER=MATRIXSTORAGE, `dofs` the .dof text. `source` names them in
+/// messages. Throws std::invalid_argument ("source:line: ...") on malformed content.
+[[nodiscard]] AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::string& mass,
+                                                     const std::string& dofs, const std::string& source);
+
+}  // namespace wbm::fem

@@ -1,0 +1,354 @@
+#include <wbm/fem/calculix.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <system_error>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace wbm::fem {
+namespace {
+
+std::string upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string trim(std::string_view s) {
+  size_t a = 0, b = s.size();
+  while (a < b && std::isspace(static_cast<unsigned char>(s[a])) != 0) ++a;
+  while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1])) != 0) --b;
+  return std::string(s.substr(a, b - a));
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) out.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw std::runtime_error(p.string() + ": cannot open the file");
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+template <typename T>
+bool parse_number(std::string_view s, T& v) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front())) != 0) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back())) != 0) s.remove_suffix(1);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc() && end == s.data() + s.size() && !s.empty();
+}
+
+// A keyword line: the keyword (upper case, spaces removed) and its parameters (upper-case names;
+// values as written, trimmed).
+struct Keyword {
+  std::string name;
+  std::map<std::string, std::string> parameters;
+};
+
+Keyword keyword(const std::string& line) {
+  const auto fields = split(line.substr(1));
+  Keyword k;
+  for (char c : fields.empty() ? std::string() : fields[0]) {
+    if (c != ' ') k.name += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  for (size_t i = 1; i < fields.size(); ++i) {
+    const auto eq = fields[i].find('=');
+    if (eq == std::string::npos) {
+      k.parameters[upper(fields[i])] = "";
+    } else {
+      k.parameters[upper(trim(fields[i].substr(0, eq)))] = trim(fields[i].substr(eq + 1));
+    }
+  }
+  return k;
+}
+
+class DeckReader {
+ public:
+  explicit DeckReader(CalculixDeck& deck) : d_(deck) {}
+
+  // Returns true when a *STEP was met (the model data ends there).
+  bool read(const std::filesystem::path& path, int depth) {
+    if (depth > 16) throw std::invalid_argument(path.string() + ": *INCLUDE nested more than 16 deep (a cycle?)");
+    const std::string text = read_file(path);
+    std::istringstream in(text);
+    std::string line;
+    int number = 0;
+    Keyword current;
+    std::string pending;  // an element line continued after a trailing comma
+    int pending_line = 0;
+    auto fail = [&](int at, const std::string& what) {
+      throw std::invalid_argument(path.string() + ":" + std::to_string(at) + ": " + what);
+    };
+    while (std::getline(in, line)) {
+      ++number;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      const std::string t = trim(line);
+      if (t.rfind("**", 0) == 0) {
+        d_.model_data += line + "\n";
+        continue;
+      }
+      if (t.empty()) continue;
+      if (t.front() == '*') {
+        if (!pending.empty()) fail(pending_line, "*ELEMENT data line ends with a comma but no line continues it");
+        current = keyword(t);
+        if (current.name == "STEP") return true;
+        if (current.name == "INCLUDE") {
+          const auto input = current.parameters.find("INPUT");
+          if (input == current.parameters.end() || input->second.empty()) {
+            fail(number, "*INCLUDE without INPUT=file");
+          }
+          std::filesystem::path inc = input->second;
+          if (inc.is_relative()) inc = path.parent_path() / inc;
+          if (read(inc, depth + 1)) return true;
+          current = Keyword{};
+          continue;
+        }
+        d_.model_data += line + "\n";
+        if (current.name == "ELEMENT") {
+          element_type_ = upper(current.parameters.count("TYPE") ? current.parameters.at("TYPE") : "");
+          if (element_type_.empty()) fail(number, "*ELEMENT without TYPE= (e.g. TYPE=C3D10)");
+        }
+        continue;
+      }
+      d_.model_data += line + "\n";
+      if (current.name == "NODE") {
+        const auto f = split(t);
+        int id = 0;
+        Eigen::Vector3d x = Eigen::Vector3d::Zero();
+        if (f.size() < 2 || !parse_number(f[0], id)) fail(number, "*NODE data: expected 'number, x[, y[, z]]', got '" + t + "'");
+        for (size_t i = 1; i < f.size() && i < 4; ++i) {
+          if (!f[i].empty() && !parse_number(f[i], x(static_cast<Eigen::Index>(i - 1)))) {
+            fail(number, "*NODE " + std::to_string(id) + ": coordinate '" + f[i] + "' is not a number");
+          }
+        }
+        if (!d_.nodes.emplace(id, x).second) fail(number, "*NODE " + std::to_string(id) + " is defined twice");
+        if (current.parameters.count("NSET")) d_.node_sets[upper(current.parameters.at("NSET"))].push_back(id);
+      } else if (current.name == "ELEMENT") {
+        pending += t;
+        if (pending_line == 0) pending_line = number;
+        if (t.back() == ',') continue;
+        int id = 0;
+        const auto f = split(pending);
+        if (f.size() < 2 || !parse_number(f[0], id)) fail(pending_line, "*ELEMENT data: expected 'number, node, node, …'");
+        ++d_.element_types[element_type_];
+        pending.clear();
+        pending_line = 0;
+      } else if (current.name == "NSET") {
+        const auto name = current.parameters.find("NSET");
+        if (name == current.parameters.end() || name->second.empty()) fail(number, "*NSET without NSET=name");
+        auto& set = d_.node_sets[upper(name->second)];
+        const auto f = split(t);
+        if (current.parameters.count("GENERATE")) {
+          int a = 0, b = 0, step = 1;
+          if (f.size() < 2 || !parse_number(f[0], a) || !parse_number(f[1], b) ||
+              (f.size() > 2 && !f[2].empty() && !parse_number(f[2], step)) || step <= 0 || b < a) {
+            fail(number, "*NSET, GENERATE: expected 'first, last[, step]' with first <= last and step > 0");
+          }
+          for (int k = a; k <= b; k += step) set.push_back(k);
+        } else {
+          for (const auto& e : f) {
+            if (e.empty()) continue;
+            int id = 0;
+            if (parse_number(e, id)) {
+              set.push_back(id);
+            } else if (auto other = d_.node_sets.find(upper(e)); other != d_.node_sets.end() && &other->second != &set) {
+              const std::vector<int> copy = other->second;
+              set.insert(set.end(), copy.begin(), copy.end());
+            } else {
+              fail(number, "*NSET " + name->second + ": '" + e + "' is neither a node number nor a node set defined before");
+            }
+          }
+        }
+      }
+    }
+    if (!pending.empty()) fail(pending_line, "*ELEMENT data line ends with a comma but the file ends");
+    return false;
+  }
+
+ private:
+  CalculixDeck& d_;
+  std::string element_type_;
+};
+
+// "row col value" lines (1-based, upper triangle) → the symmetric n × n matrix.
+Eigen::SparseMatrix<double> triangle(const std::string& text, int n, const std::string& source) {
+  std::vector<Eigen::Triplet<double>> t;
+  size_t pos = 0;
+  int number = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++number;
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back())) != 0) line.remove_suffix(1);
+    if (line.empty()) continue;
+    const char* p = line.data();
+    const char* e = line.data() + line.size();
+    int i = 0, j = 0;
+    double v = 0.0;
+    auto skip = [&] {
+      while (p < e && (*p == ' ' || *p == '\t')) ++p;
+    };
+    skip();
+    auto r1 = std::from_chars(p, e, i);
+    p = r1.ptr;
+    skip();
+    auto r2 = std::from_chars(p, e, j);
+    p = r2.ptr;
+    skip();
+    auto r3 = std::from_chars(p, e, v);
+    p = r3.ptr;
+    skip();
+    if (r1.ec != std::errc() || r2.ec != std::errc() || r3.ec != std::errc() || p != e || i < 1 || j < 1 || i > n ||
+        j > n || !std::isfinite(v)) {
+      throw std::invalid_argument(source + ":" + std::to_string(number) + ": expected 'row col value' with 1 <= row, col <= " +
+                                  std::to_string(n) + " and a finite value, got '" + std::string(line) + "'");
+    }
+    t.emplace_back(i - 1, j - 1, v);
+    if (i != j) t.emplace_back(j - 1, i - 1, v);
+  }
+  Eigen::SparseMatrix<double> a(n, n);
+  a.setFromTriplets(t.begin(), t.end());
+  return a;
+}
+
+}  // namespace
+
+int CalculixDeck::elements() const {
+  int n = 0;
+  for (const auto& [type, count] : element_types) n += count;
+  return n;
+}
+
+const std::vector<int>& CalculixDeck::node_set(const std::string& name) const {
+  const auto it = node_sets.find(upper(name));
+  if (it != node_sets.end()) return it->second;
+  std::string known;
+  for (const auto& [k, v] : node_sets) known += (known.empty() ? "" : ", ") + k;
+  throw std::invalid_argument(file.string() + ": no node set '" + name + "'; the deck defines: " +
+                              (known.empty() ? "none" : known));
+}
+
+CalculixDeck read_calculix_deck(const std::filesystem::path& path) {
+  CalculixDeck deck;
+  deck.file = std::filesystem::absolute(path).lexically_normal();
+  DeckReader(deck).read(deck.file, 0);
+  return deck;
+}
+
+AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::string& mass, const std::string& dofs,
+                                       const std::string& source) {
+  AssembledModel m;
+  std::istringstream in(dofs);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::string t = trim(line);
+    if (t.empty()) continue;
+    const auto dot = t.find('.');
+    int node = 0, direction = 0;
+    if (dot == std::string::npos || !parse_number(std::string_view(t).substr(0, dot), node) ||
+        !parse_number(std::string_view(t).substr(dot + 1), direction) || direction < 1 || direction > 6) {
+      throw std::invalid_argument(source + ".dof:" + std::to_string(number) + ": expected 'node.direction', got '" + t + "'");
+    }
+    m.dofs.emplace_back(node, direction);
+  }
+  if (m.dofs.empty()) throw std::invalid_argument(source + ".dof: no degree of freedom (every DOF constrained?)");
+  const int n = static_cast<int>(m.dofs.size());
+  m.stiffness = triangle(stiffness, n, source + ".sti");
+  m.mass = triangle(mass, n, source + ".mas");
+  return m;
+}
+
+AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOptions& options) {
+  namespace fs = std::filesystem;
+  const std::string name = deck.file.string();
+  static int counter = 0;
+  const bool scratch = options.work_directory.empty();
+  const fs::path dir = scratch ? fs::temp_directory_path() /
+                                     ("wbm-ccx-" + std::to_string(::getpid()) + "-" + std::to_string(counter++))
+                               : options.work_directory;
+  fs::create_directories(dir);
+  struct Cleanup {
+    fs::path dir;
+    bool on;
+    ~Cleanup() {
+      std::error_code ignored;
+      if (on) fs::remove_all(dir, ignored);
+    }
+  } cleanup{dir, scratch};
+  {
+    std::ofstream job(dir / "job.inp");
+    job << deck.model_data << "*STEP\n*FREQUENCY, SOLVER=MATRIXSTORAGE\n*END STEP\n";
+    if (!job) throw std::runtime_error(name + ": cannot write the driver deck in " + dir.string());
+  }
+  // ccx -i job, in dir, output to ccx.log (no shell).
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addchdir_np(&actions, dir.c_str());
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "ccx.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  std::string exe = options.executable, flag = "-i", job = "job";
+  char* argv[] = {exe.data(), flag.data(), job.data(), nullptr};
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, exe.c_str(), &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    throw std::runtime_error(name + ": cannot run '" + options.executable + "' (" + std::generic_category().message(spawned) +
+                             "): install CalculiX (Debian calculix-ccx) or set CalculixOptions::executable");
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  std::string log;
+  try {
+    log = read_file(dir / "ccx.log");
+  } catch (const std::exception&) {
+  }
+  std::string errors;  // ccx's own "*ERROR" lines and the line after each
+  {
+    std::istringstream in(log);
+    std::string line;
+    int keep = 0;
+    while (std::getline(in, line)) {
+      if (line.find("*ERROR") != std::string::npos) keep = 2;
+      if (keep > 0 && !trim(line).empty()) {
+        errors += "\n  " + trim(line);
+        --keep;
+      }
+    }
+  }
+  const bool exited = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (!exited || !errors.empty() || !fs::exists(dir / "job.sti") || !fs::exists(dir / "job.mas") ||
+      !fs::exists(dir / "job.dof")) {
+    throw std::runtime_error(name + ": CalculiX (" + options.executable + ") could not assemble the model" +
+                             (WIFEXITED(status) ? " (exit " + std::to_string(WEXITSTATUS(status)) + ")" : std::string()) +
+                             (errors.empty() ? "; no *ERROR line, see its output:\n" + log.substr(0, 2000)
+                                             : "; ccx says:" + errors));
+  }
+  return parse_calculix_matrices(read_file(dir / "job.sti"), read_file(dir / "job.mas"), read_file(dir / "job.dof"),
+                                 (dir / "job").string());
+}
+
+}  // namespace wbm::fem

@@ -1,0 +1,174 @@
+// CalculiX decks and matrices (fem/calculix.hpp). Truths not produced by this code: the deck's
+// own numbers (nodes, sets, element counts), the total mass ρV of a free bar (the sum of the
+// consistent mass matrix over one direction), rigid-body motions in the kernel of a free K, and
+// the natural frequencies CalculiX's own Lanczos *FREQUENCY step prints for the clamped bar, which
+// the eigenvalues of the matrices read back must equal.
+#include <wbm/fem/calculix.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "testing.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Scratch {
+  fs::path dir = fs::temp_directory_path() / ("wbm_test_calculix_" + std::to_string(::getpid()));
+  Scratch() { fs::create_directories(dir / "mesh"); }
+  ~Scratch() {
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);
+  }
+};
+
+const fs::path& work() {
+  static const Scratch scratch;
+  return scratch.dir;
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path p = work() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+// A 1 m × 0.1 m × 0.1 m steel bar of 4 C3D8 bricks along x, its root face as the set ROOT
+// (lower-case keywords: the format is case-insensitive), in mesh/bar.inp.
+void write_bar_mesh() {
+  std::ostringstream m;
+  m << "** a bar of 4 bricks\n*node, nset=NALL\n";
+  auto id = [](int i, int j, int k) { return 1 + 4 * i + 2 * j + k; };
+  for (int i = 0; i <= 4; ++i) {
+    for (int j = 0; j <= 1; ++j) {
+      for (int k = 0; k <= 1; ++k) m << id(i, j, k) << ", " << 0.25 * i << ", " << 0.1 * j << ", " << 0.1 * k << "\n";
+    }
+  }
+  m << "*element, type=c3d8, elset=EALL\n";
+  for (int i = 0; i < 4; ++i) {
+    m << i + 1 << ", " << id(i, 0, 0) << ", " << id(i + 1, 0, 0) << ", " << id(i + 1, 1, 0) << ", " << id(i, 1, 0) << ",\n"
+      << id(i, 0, 1) << ", " << id(i + 1, 0, 1) << ", " << id(i + 1, 1, 1) << ", " << id(i, 1, 1) << "\n";
+  }
+  m << "*nset, nset=root, generate\n1, 4\n*nset, nset=TIP\n17, 18\n19, 20\n*NSET, NSET=ENDS\nroot, tip\n";
+  write("mesh/bar.inp", m.str());
+}
+
+const std::string kMaterial = "*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7800.\n"
+                              "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n";
+
+}  // namespace
+
+TEST(CalculixDeck, ReadsNodesSetsAndElementsThroughIncludesUpToTheFirstStep) {
+  write_bar_mesh();
+  const auto deck = wbm::fem::read_calculix_deck(
+      write("bar.inp", "*INCLUDE, INPUT=mesh/bar.inp\n" + kMaterial +
+                           "*BOUNDARY\nROOT, 1, 3\n*STEP\n*STATIC\n*NODE\n999, 0, 0, 0\n*END STEP\n"));
+  EXPECT_EQ(deck.nodes.size(), 20u);  // node 999 lies in the deck's own step: not model data
+  EXPECT_EQ(deck.nodes.at(20), Eigen::Vector3d(1.0, 0.1, 0.1));
+  EXPECT_EQ(deck.elements(), 4);
+  EXPECT_EQ(deck.element_types.at("C3D8"), 4);
+  EXPECT_EQ(deck.node_set("root"), (std::vector<int>{1, 2, 3, 4}));
+  EXPECT_EQ(deck.node_set("Tip"), (std::vector<int>{17, 18, 19, 20}));
+  EXPECT_EQ(deck.node_set("ENDS").size(), 8u);
+  EXPECT_EQ(deck.node_set("NALL").size(), 20u);
+  EXPECT_EQ(deck.model_data.find("*STEP"), std::string::npos);
+  EXPECT_NE(deck.model_data.find("*element, type=c3d8"), std::string::npos);
+  using wbm::testing::expect_throw_with;
+  expect_throw_with<std::invalid_argument>([&] { (void)deck.node_set("casing"); },
+                                           {"no node set 'casing'; the deck defines: ENDS, NALL, ROOT, TIP"});
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::read_calculix_deck(write("b1.inp", "*NODE\n1, 0.0, abc\n")); },
+                                           {"b1.inp:2: *NODE 1: coordinate 'abc' is not a number"});
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::read_calculix_deck(write("b2.inp", "*NSET, NSET=A\nB\n")); },
+                                           {"b2.inp:2: *NSET A: 'B' is neither a node number nor a node set"});
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::read_calculix_deck(write("b3.inp", "*INCLUDE\n")); },
+                                           {"b3.inp:1: *INCLUDE without INPUT=file"});
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::read_calculix_deck(write("b4.inp", "*INCLUDE, INPUT=b4.inp\n")); },
+                                           {"*INCLUDE nested more than 16 deep"});
+  expect_throw_with<std::runtime_error>([&] { (void)wbm::fem::read_calculix_deck(work() / "absent.inp"); },
+                                        {"absent.inp: cannot open the file"});
+}
+
+// The free bar: Σ_ij M(x_i, x_j) = ρV = 78 kg per direction (a rigid translation's kinetic
+// energy), and K u = 0 for the rigid translations and the rotation about x.
+TEST(Calculix, AssemblesAFreeBarWithItsMassAndRigidBodyModes) {
+  write_bar_mesh();
+  const auto deck = wbm::fem::read_calculix_deck(write("free.inp", "*INCLUDE, INPUT=mesh/bar.inp\n" + kMaterial));
+  const auto model = wbm::fem::assemble_with_calculix(deck);
+  ASSERT_EQ(model.dofs.size(), 60u);  // 20 nodes × 3
+  const Eigen::MatrixXd k(model.stiffness), m(model.mass);
+  EXPECT_LT((k - k.transpose()).cwiseAbs().maxCoeff(), 1e-12 * k.cwiseAbs().maxCoeff());
+  for (int direction = 1; direction <= 3; ++direction) {
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(60);
+    for (size_t r = 0; r < 60; ++r) u(static_cast<Eigen::Index>(r)) = model.dofs[r].second == direction ? 1.0 : 0.0;
+    EXPECT_NEAR(u.dot(m * u), 7800.0 * 1.0 * 0.1 * 0.1, 1e-9 * 78.0) << direction;
+    EXPECT_LT((k * u).cwiseAbs().maxCoeff(), 1e-6 * k.cwiseAbs().maxCoeff()) << direction;
+  }
+  Eigen::VectorXd spin = Eigen::VectorXd::Zero(60);  // rotation about x: (0, −z, y)
+  for (size_t r = 0; r < 60; ++r) {
+    const auto& x = deck.nodes.at(model.dofs[r].first);
+    spin(static_cast<Eigen::Index>(r)) = model.dofs[r].second == 2 ? -x(2) : model.dofs[r].second == 3 ? x(1) : 0.0;
+  }
+  EXPECT_LT((k * spin).cwiseAbs().maxCoeff(), 1e-6 * k.cwiseAbs().maxCoeff() * 0.1);
+}
+
+// The clamped bar: the first five frequencies of the matrices read back equal those CalculiX's
+// own *FREQUENCY step (Lanczos) prints in its .dat file.
+TEST(Calculix, ClampedBarFrequenciesEqualCalculixsOwnEigenSolver) {
+  write_bar_mesh();
+  const std::string model = "*INCLUDE, INPUT=mesh/bar.inp\n" + kMaterial + "*BOUNDARY\nROOT, 1, 3\n";
+  const auto deck = wbm::fem::read_calculix_deck(write("clamped.inp", model + "*STEP\n*STATIC\n*END STEP\n"));
+  const auto assembled = wbm::fem::assemble_with_calculix(deck);
+  ASSERT_EQ(assembled.dofs.size(), 48u);  // the 4 root nodes removed
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(assembled.stiffness),
+                                                                      Eigen::MatrixXd(assembled.mass));
+  // CalculiX's own frequencies.
+  const fs::path dir = work() / "lanczos";
+  fs::create_directories(dir);
+  std::ofstream(dir / "f.inp") << "*INCLUDE, INPUT=" << (work() / "mesh" / "bar.inp").string() << "\n"
+                               << kMaterial << "*BOUNDARY\nROOT, 1, 3\n*STEP\n*FREQUENCY\n5\n*END STEP\n";
+  const std::string cmd = "cd " + dir.string() + " && ccx -i f > ccx.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream dat(dir / "f.dat");
+  std::string line;
+  std::vector<double> reference;
+  const std::regex row(R"(^\s*(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$)");
+  bool table = false;
+  while (std::getline(dat, line)) {
+    if (line.find("E I G E N V A L U E   O U T P U T") != std::string::npos) table = true;
+    if (line.find("P A R T I C I P A T I O N") != std::string::npos) break;
+    std::smatch s;
+    if (table && std::regex_match(line, s, row)) reference.push_back(std::stod(s[4]));  // CYCLES/TIME
+  }
+  ASSERT_EQ(reference.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    const double ours = std::sqrt(eig.eigenvalues()(static_cast<Eigen::Index>(i))) / (2.0 * std::numbers::pi);
+    EXPECT_NEAR(ours, reference[i], 1e-6 * reference[i]) << "mode " << i + 1;  // .dat prints 7 digits
+  }
+}
+
+TEST(Calculix, ReportsCalculixErrorsWithTheDeckNameAndAMissingExecutable) {
+  write_bar_mesh();
+  const auto bad = wbm::fem::read_calculix_deck(
+      write("no_material.inp", "*INCLUDE, INPUT=mesh/bar.inp\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"));
+  wbm::testing::expect_throw_with<std::runtime_error>(
+      [&] { (void)wbm::fem::assemble_with_calculix(bad); },
+      {"no_material.inp: CalculiX (ccx) could not assemble the model", "*ERROR reading *SOLID SECTION: nonexistent material"});
+  wbm::testing::expect_throw_with<std::runtime_error>(
+      [&] { (void)wbm::fem::assemble_with_calculix(bad, {.executable = "ccx-not-installed"}); },
+      {"cannot run 'ccx-not-installed'", "install CalculiX (Debian calculix-ccx)"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::parse_calculix_matrices("1 1 2.0\n1 3 1.0\n", "1 1 1.0\n", "5.1\n5.2\n", "m"); },
+      {"m.sti:2: expected 'row col value' with 1 <= row, col <= 2"});
+}
