@@ -20,6 +20,8 @@ wbm_require(GSL_FOUND libgsl-dev "GSL")
 find_package(Threads REQUIRED)  # the toolchain's threads (response-curve stability)
 
 list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
+find_package(spectra 1.0 QUIET CONFIG)  # Craig–Bampton's sparse eigenproblem (fem/)
+wbm_require(spectra_FOUND libspectra-dev "Spectra")
 find_package(KLU QUIET)  # cmake/FindKLU.cmake
 wbm_require(KLU_FOUND libsuitesparse-dev "SuiteSparse KLU")
 

@@ -1,0 +1,126 @@
+#include <wbm/fem/craig_bampton.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/SparseCholesky>
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <Spectra/MatOp/SymShiftInvert.h>
+#include <Spectra/SymGEigsShiftSolver.h>
+
+namespace wbm::fem {
+namespace {
+
+Eigen::SparseMatrix<double> selection(const std::vector<int>& dofs, Eigen::Index n) {
+  Eigen::SparseMatrix<double> p(static_cast<Eigen::Index>(dofs.size()), n);
+  std::vector<Eigen::Triplet<double>> t;
+  for (size_t i = 0; i < dofs.size(); ++i) t.emplace_back(static_cast<int>(i), dofs[i], 1.0);
+  p.setFromTriplets(t.begin(), t.end());
+  return p;
+}
+
+}  // namespace
+
+Eigen::MatrixXd CraigBamptonModel::expand(const Eigen::MatrixXd& reduced) const {
+  const auto nb = static_cast<Eigen::Index>(boundary.size());
+  const Eigen::MatrixXd inner = constraint_modes * reduced.topRows(nb) + normal_modes * reduced.bottomRows(normal_modes.cols());
+  Eigen::MatrixXd u(nb + static_cast<Eigen::Index>(interior.size()), reduced.cols());
+  for (Eigen::Index r = 0; r < nb; ++r) u.row(boundary[static_cast<size_t>(r)]) = reduced.row(r);
+  for (size_t r = 0; r < interior.size(); ++r) u.row(interior[r]) = inner.row(static_cast<Eigen::Index>(r));
+  return u;
+}
+
+CraigBamptonModel craig_bampton(const Eigen::SparseMatrix<double>& stiffness, const Eigen::SparseMatrix<double>& mass,
+                                const std::vector<int>& boundary, int modes) {
+  const Eigen::Index n = stiffness.rows();
+  if (stiffness.cols() != n || mass.rows() != n || mass.cols() != n) {
+    throw std::invalid_argument("craig_bampton: K is " + std::to_string(n) + " x " + std::to_string(stiffness.cols()) +
+                                " and M " + std::to_string(mass.rows()) + " x " + std::to_string(mass.cols()) +
+                                "; both must be n x n");
+  }
+  CraigBamptonModel r;
+  r.boundary = boundary;
+  std::vector<bool> kept(static_cast<size_t>(n), false);
+  for (int b : boundary) {
+    if (b < 0 || b >= n) {
+      throw std::invalid_argument("craig_bampton: boundary DOF " + std::to_string(b) + " outside [0, " + std::to_string(n) + ")");
+    }
+    if (kept[static_cast<size_t>(b)]) throw std::invalid_argument("craig_bampton: boundary DOF " + std::to_string(b) + " appears twice");
+    kept[static_cast<size_t>(b)] = true;
+  }
+  for (Eigen::Index d = 0; d < n; ++d) {
+    if (!kept[static_cast<size_t>(d)]) r.interior.push_back(static_cast<int>(d));
+  }
+  const auto ni = static_cast<Eigen::Index>(r.interior.size()), nb = static_cast<Eigen::Index>(boundary.size());
+  if (modes < 0 || modes >= ni) {
+    throw std::invalid_argument("craig_bampton: modes = " + std::to_string(modes) + ": must lie in [0, " +
+                                std::to_string(ni) + ") (the interior has " + std::to_string(ni) + " DOFs)");
+  }
+  const Eigen::SparseMatrix<double> pb = selection(boundary, n), pi = selection(r.interior, n);
+  const Eigen::SparseMatrix<double> kii = pi * stiffness * pi.transpose(), kib = pi * stiffness * pb.transpose();
+  const Eigen::SparseMatrix<double> mii = pi * mass * pi.transpose(), mib = pi * mass * pb.transpose();
+  const Eigen::SparseMatrix<double> kbb = pb * stiffness * pb.transpose(), mbb = pb * mass * pb.transpose();
+  // Constraint modes Ψ = −K_ii⁻¹ K_ib.
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(kii);
+  if (llt.info() != Eigen::Success) {
+    throw std::runtime_error("craig_bampton: K restricted to the interior DOFs is not positive definite (Cholesky "
+                             "failed): the interface and boundary conditions must remove every rigid-body motion");
+  }
+  r.constraint_modes = -llt.solve(Eigen::MatrixXd(kib));
+  // Fixed-interface normal modes: the m eigenvalues of K_ii φ = λ M_ii φ closest to 0.
+  if (modes > 0) {
+    using Op = Spectra::SymShiftInvert<double, Eigen::Sparse, Eigen::Sparse>;
+    using BOp = Spectra::SparseSymMatProd<double>;
+    Op op(kii, mii);
+    BOp bop(mii);
+    const Eigen::Index ncv = std::min<Eigen::Index>(ni, std::max<Eigen::Index>(2 * modes + 1, modes + 20));
+    Spectra::SymGEigsShiftSolver<Op, BOp, Spectra::GEigsMode::ShiftInvert> eigs(op, bop, modes, ncv, 0.0);
+    eigs.init();
+    eigs.compute(Spectra::SortRule::LargestMagn, 1000, 1e-12);
+    if (eigs.info() != Spectra::CompInfo::Successful) {
+      throw std::runtime_error("craig_bampton: Spectra's shift-invert Lanczos did not converge for " +
+                               std::to_string(modes) + " modes (status " + std::to_string(static_cast<int>(eigs.info())) +
+                               "); try fewer modes");
+    }
+    Eigen::VectorXd lambda = eigs.eigenvalues();
+    Eigen::MatrixXd phi = eigs.eigenvectors();
+    std::vector<Eigen::Index> order(static_cast<size_t>(lambda.size()));
+    for (size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Eigen::Index>(k);
+    std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return lambda(a) < lambda(b); });
+    r.normal_modes.resize(ni, modes);
+    r.normal_frequencies_hz.resize(modes);
+    for (int k = 0; k < modes; ++k) {
+      Eigen::VectorXd v = phi.col(order[static_cast<size_t>(k)]);
+      v /= std::sqrt(v.dot(mii * v));  // Φᵀ M_ii Φ = I
+      r.normal_modes.col(k) = v;
+      r.normal_frequencies_hz(k) = std::sqrt(std::max(lambda(order[static_cast<size_t>(k)]), 0.0)) / (2.0 * std::numbers::pi);
+    }
+  } else {
+    r.normal_modes.resize(ni, 0);
+    r.normal_frequencies_hz.resize(0);
+  }
+  const Eigen::MatrixXd& psi = r.constraint_modes;
+  const Eigen::MatrixXd& phi = r.normal_modes;
+  const Eigen::Index nr = nb + modes;
+  r.stiffness = Eigen::MatrixXd::Zero(nr, nr);
+  r.mass = Eigen::MatrixXd::Zero(nr, nr);
+  const Eigen::MatrixXd kbi_psi = Eigen::MatrixXd(kib.transpose()) * psi;
+  r.stiffness.topLeftCorner(nb, nb) = Eigen::MatrixXd(kbb) + 0.5 * (kbi_psi + kbi_psi.transpose());
+  const Eigen::MatrixXd mii_phi = mii * phi;
+  r.stiffness.bottomRightCorner(modes, modes) = phi.transpose() * (kii * phi);
+  const Eigen::MatrixXd mii_psi = mii * psi;
+  const Eigen::MatrixXd mbi_psi = Eigen::MatrixXd(mib.transpose()) * psi;
+  r.mass.topLeftCorner(nb, nb) = Eigen::MatrixXd(mbb) + mbi_psi + mbi_psi.transpose() + psi.transpose() * mii_psi;
+  const Eigen::MatrixXd coupling = Eigen::MatrixXd(mib.transpose()) * phi + psi.transpose() * mii_phi;
+  r.mass.topRightCorner(nb, modes) = coupling;
+  r.mass.bottomLeftCorner(modes, nb) = coupling.transpose();
+  r.mass.bottomRightCorner(modes, modes) = phi.transpose() * mii_phi;
+  r.stiffness = 0.5 * (r.stiffness + r.stiffness.transpose()).eval();
+  r.mass = 0.5 * (r.mass + r.mass.transpose()).eval();
+  return r;
+}
+
+}  // namespace wbm::fem
