@@ -23,6 +23,8 @@ list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
 find_package(spectra 1.0 QUIET CONFIG)  # Craig–Bampton's sparse eigenproblem (fem/)
 wbm_require(spectra_FOUND libspectra-dev "Spectra")
 find_package(KLU QUIET)  # cmake/FindKLU.cmake
+find_package(CHOLMOD QUIET)  # cmake/FindCHOLMOD.cmake (Craig–Bampton)
+wbm_require(CHOLMOD_FOUND libsuitesparse-dev "SuiteSparse CHOLMOD")
 wbm_require(KLU_FOUND libsuitesparse-dev "SuiteSparse KLU")
 
 # Scenes and the `wbm` command.
