@@ -157,7 +157,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
 }
 
-// Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `rows[i]` is
+// Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `samples[i]` is
 // the observed DOFs' samples (k × P) at frequency `hz[i]`.
 Table point_harmonics(const Scene& scene, const std::string& file, const std::vector<int>& observed,
                       const std::vector<double>& hz, const std::vector<Eigen::MatrixXd>& samples) {
