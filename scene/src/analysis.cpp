@@ -760,7 +760,7 @@ ModeProblem mode_problem(const Scene& scene) {
   p.system = scene.system();
   p.system.damping = Eigen::SparseMatrix<double>(p.system.dofs(), p.system.dofs());
   for (const auto& c : scene.contacts) {
-    p.stops.push_back({c.dof, c.gap});
+    p.stops.push_back({c.dof, c.gap, c.along});
     if (c.law == ContactLawKind::Linear) p.penalty_stiffness = c.stiffness;
   }
   p.options.harmonics = scene.analysis.harmonics;

@@ -776,7 +776,7 @@ class Parser {
           }
         }
       }
-      if (const toml::node* d = t->get("direction"); d != nullptr && s_.structure) c.along = direction(*d, section, c, modes);
+      if (const toml::node* d = t->get("direction"); d != nullptr && s_.structure) c.along = direction(*d, section, c);
       if (s_.structure && !dofs.insert({c.dof, c.against}).second && c.along.empty()) {
         r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
                                            (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
@@ -823,14 +823,9 @@ class Parser {
 
   // [contact] direction: ±1 (the side of the stop along the DOF) or a table {DOF name = weight}
   // (matrices); returns the (DOF, weight) pairs, empty for +1.
-  std::vector<std::pair<int, double>> direction(const toml::node& d, const std::string& section, const Contact& c,
-                                                bool modes) {
+  std::vector<std::pair<int, double>> direction(const toml::node& d, const std::string& section, const Contact& c) {
     const std::string full = section + ".direction";
     const Structure& st = *s_.structure;
-    if (modes) {
-      r_.error(d.source(), full, "analysis \"nnm\" takes stops along +u of a DOF; remove direction");
-      return {};
-    }
     if (c.against >= 0) {
       r_.error(d.source(), full, "beside against: a contact between two DOFs acts along u[dof] − u[against]; "
                                  "remove one of them");

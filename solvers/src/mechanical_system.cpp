@@ -120,6 +120,26 @@ void HarmonicForcing::validate(int dofs) const {
   }
 }
 
+void validate_direction(const std::vector<std::pair<int, double>>& along, int dof, int dofs, const std::string& where) {
+  std::set<int> dofs_in;
+  double norm = 0.0;
+  for (const auto& [j, w] : along) {
+    if (j < 0 || j >= dofs) {
+      throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " must lie in [0, " + std::to_string(dofs) + ")");
+    }
+    if (!std::isfinite(w)) throw std::invalid_argument(where + ": the weight of DOF " + std::to_string(j) + " is not finite");
+    if (!dofs_in.insert(j).second) {
+      throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " appears twice; give each DOF one weight");
+    }
+    norm += w * w;
+  }
+  if (!(norm > 0.0)) throw std::invalid_argument(where + ": every weight is zero; give a direction (e.g. a unit normal)");
+  if (dofs_in.count(dof) == 0) {
+    throw std::invalid_argument(where + ": dof " + std::to_string(dof) +
+                                " is not among its DOFs; dof names the contact and must be one of them");
+  }
+}
+
 void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs) {
   std::set<std::vector<std::pair<int, double>>> seen;
   for (const auto& c : contacts) {
@@ -138,23 +158,7 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
         throw std::invalid_argument(where + ": other = " + std::to_string(c.other) +
                                     " beside a direction; put the other DOF in along with its weight");
       }
-      std::set<int> dofs_in;
-      double norm = 0.0;
-      for (const auto& [j, w] : c.along) {
-        if (j < 0 || j >= dofs) {
-          throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " must lie in [0, " + std::to_string(dofs) + ")");
-        }
-        if (!std::isfinite(w)) throw std::invalid_argument(where + ": the weight of DOF " + std::to_string(j) + " is not finite");
-        if (!dofs_in.insert(j).second) {
-          throw std::invalid_argument(where + ": DOF " + std::to_string(j) + " appears twice; give each DOF one weight");
-        }
-        norm += w * w;
-      }
-      if (!(norm > 0.0)) throw std::invalid_argument(where + ": every weight is zero; give a direction (e.g. a unit normal)");
-      if (dofs_in.count(c.dof) == 0) {
-        throw std::invalid_argument(where + ": dof " + std::to_string(c.dof) +
-                                    " is not among its DOFs; dof names the contact and must be one of them");
-      }
+      validate_direction(c.along, c.dof, dofs, where);
     }
     auto key = c.terms();
     std::sort(key.begin(), key.end());

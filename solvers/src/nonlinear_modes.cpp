@@ -31,18 +31,20 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   n_ = system_.dofs();
   options_.validate(n_);
   if (stops_.empty()) throw std::invalid_argument("NonlinearModes: no rigid stop; a linear mode needs no solver");
-  g_ref_ = 0.0;
-  for (const auto& s : stops_) {
+  for (size_t i = 0; i < stops_.size(); ++i) {
+    const auto& s = stops_[i];
     if (s.dof < 0 || s.dof >= n_) {
       throw std::invalid_argument("NonlinearModes: stop DOF " + std::to_string(s.dof) + " outside [0, " +
                                   std::to_string(n_) + ")");
+    }
+    if (!s.along.empty()) {
+      validate_direction(s.along, s.dof, n_, std::string("NonlinearModes: stops[").append(std::to_string(i)).append("].along"));
     }
     if (!(s.gap > 0.0) || !std::isfinite(s.gap)) {
       throw std::invalid_argument("NonlinearModes: stop gap " + format_number(s.gap) + " m: must be > 0 (energies "
                                   "are normalized by contact onset; the normalized backbone does not depend on g0, "
                                   "so any small positive gap will do)");
     }
-    g_ref_ = std::max(g_ref_, s.gap);
   }
   n_harm_ = options_.harmonics;
   f_ = 2 * n_harm_ + 1;
@@ -58,12 +60,30 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k_, m_);
   if (eig.info() != Eigen::Success) throw std::invalid_argument("NonlinearModes: K φ = M φ ω² failed (is M SPD?)");
   omega0_ = std::sqrt(eig.eigenvalues()(0));
-  const int c0 = stops_.front().dof;
-  Eigen::VectorXd phi = eig.eigenvectors().col(0);
-  if (std::abs(phi(c0)) < 1e-12 * phi.cwiseAbs().maxCoeff()) {
-    throw std::invalid_argument("NonlinearModes: the first stop's DOF does not move in the first linear mode");
+  // Contact onset: the linear mode scaled so that the stop with the largest |e_cᵀφ|/g_c touches.
+  const Eigen::VectorXd phi = eig.eigenvectors().col(0);
+  double reach = 0.0, signed_reach = 0.0;
+  for (size_t i = 0; i < stops_.size(); ++i) {
+    double uc = 0.0;
+    for (const auto& [j, w] : stops_[i].terms()) uc += w * phi(j);
+    if (std::abs(uc) / stops_[i].gap > reach) {
+      reach = std::abs(uc) / stops_[i].gap;
+      signed_reach = uc / stops_[i].gap;
+      onset_stop_ = static_cast<int>(i);
+    }
   }
-  onset_ = phi * (stops_.front().gap / phi(c0));  // amplitude g0 at the stop: contact onset
+  double largest_gap = 0.0;
+  for (const auto& s : stops_) largest_gap = std::max(largest_gap, s.gap);
+  if (!(reach > 1e-12 * phi.cwiseAbs().maxCoeff() / largest_gap)) {
+    throw std::invalid_argument("NonlinearModes: no stop moves in the first linear mode (e_cᵀφ₁ = 0 for every stop): "
+                                "contact cannot start; check the stops' DOFs and directions");
+  }
+  const int c0 = stops_[static_cast<size_t>(onset_stop_)].dof;
+  onset_ = phi / signed_reach;  // e_cᵀφ = +g_c at τ = 0 at the first stop to touch: contact onset
+  // Unknowns in units of that stop's gap, so that Y/g_ref is O(1) near onset whatever the other
+  // gaps (with the largest gap a far stop shrank the scaled state and the continuation jumped
+  // branches).
+  g_ref_ = stops_[static_cast<size_t>(onset_stop_)].gap;
   const Eigen::VectorXd on = onset_ / g_ref_;
   m_c_ = 0.5 * on.dot(m_ * on);  // m̂ of the onset mode (cos 2πτ, w = ½, ν = 1), normalized units
   phase_index_ = static_cast<int>(spectral::stacked_index(2, options_.phase_dof >= 0 ? options_.phase_dof : c0, n_));
@@ -72,6 +92,45 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   ms_ = system_.mass / m_ref_;
   ks_.makeCompressed();
   ms_.makeCompressed();
+}
+
+Eigen::VectorXd NonlinearModes::gaps(const Eigen::Ref<const Eigen::MatrixXd>& ym) const {
+  const auto ms = static_cast<Eigen::Index>(options_.samples);
+  Eigen::VectorXd g(static_cast<Eigen::Index>(stops_.size()) * ms);
+  Eigen::RowVectorXd row(f_);
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    row.setZero();
+    for (const auto& [j, w] : stops_[c].terms()) row += w * ym.row(j);
+    g.segment(static_cast<Eigen::Index>(c) * ms, ms) = (theta_ * row.transpose()).array() - stops_[c].gap / g_ref_;
+  }
+  return g;
+}
+
+void NonlinearModes::add_contact_forces(Eigen::MatrixXd& grad, const Eigen::VectorXd& lambda) const {
+  const auto ms = static_cast<Eigen::Index>(options_.samples);
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    const Eigen::RowVectorXd force = (theta_.transpose() * lambda.segment(static_cast<Eigen::Index>(c) * ms, ms)).transpose();
+    for (const auto& [j, w] : stops_[c].terms()) grad.row(j) += w * force;
+  }
+}
+
+std::vector<Eigen::Triplet<double>> NonlinearModes::contact_curvature(const Eigen::VectorXd& curvature) const {
+  const auto ms = static_cast<Eigen::Index>(options_.samples);
+  std::vector<Eigen::Triplet<double>> out;
+  for (size_t c = 0; c < stops_.size(); ++c) {
+    const Eigen::VectorXd cc = curvature.segment(static_cast<Eigen::Index>(c) * ms, ms);
+    if (cc.isZero(0.0)) continue;
+    const Eigen::MatrixXd block = theta_.transpose() * cc.asDiagonal() * theta_;  // F × F
+    const auto terms = stops_[c].terms();
+    for (const auto& [i, wi] : terms) {
+      for (const auto& [j, wj] : terms) {
+        for (int k = 0; k < f_; ++k) {
+          for (int l = 0; l < f_; ++l) out.emplace_back(k * n_ + i, l * n_ + j, wi * wj * block(k, l));
+        }
+      }
+    }
+  }
+  return out;
 }
 
 Eigen::VectorXd NonlinearModes::with_phase(const Eigen::VectorXd& x) const {

@@ -46,16 +46,9 @@ NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, do
   const double denominator = w02 * (simultaneous ? mh : m_target);
   Eigen::MatrixXd grad = (dk - omega2 * dm) / denominator;  // ∇ρ (simultaneous) or ∇Q (sequential)
   // Constraints g_ck = u_c(τ_k) − g_c (units of g_ref) [LL11 Eq. (24b)].
-  const auto ms = static_cast<Eigen::Index>(options_.samples);
-  e.g.resize(static_cast<Eigen::Index>(stops_.size()) * ms);
-  for (size_t c = 0; c < stops_.size(); ++c) {
-    e.g.segment(static_cast<Eigen::Index>(c) * ms, ms) =
-        (theta_ * ym.row(stops_[c].dof).transpose()).array() - stops_[c].gap / g_ref_;
-  }
+  e.g = gaps(ym);
   const Eigen::VectorXd lambda = al.inequality_gradient(e.g);
-  for (size_t c = 0; c < stops_.size(); ++c) {
-    grad.row(stops_[c].dof) += (theta_.transpose() * lambda.segment(static_cast<Eigen::Index>(c) * ms, ms)).transpose();
-  }
+  add_contact_forces(grad, lambda);
   const double mu = al.equality_gradient(e.h);
   grad += (mu / m_c_) * dm;
   Eigen::VectorXd full = spectral::stacked(grad);
@@ -73,16 +66,7 @@ NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, do
     const Eigen::VectorXd dr = spectral::stacked((dk - e.r * dm) / mh);
     hs.noalias() -= (dmv * dr.transpose() + dr * dmv.transpose()) / (w02 * mh);
   }
-  const Eigen::VectorXd curvature = al.inequality_curvature(e.g);
-  for (size_t c = 0; c < stops_.size(); ++c) {
-    const Eigen::VectorXd cc = curvature.segment(static_cast<Eigen::Index>(c) * ms, ms);
-    if (cc.isZero(0.0)) continue;
-    const Eigen::MatrixXd block = theta_.transpose() * cc.asDiagonal() * theta_;  // F × F
-    const int d = stops_[c].dof;
-    for (int k = 0; k < f_; ++k) {
-      for (int l = 0; l < f_; ++l) hs(k * n_ + d, l * n_ + d) += block(k, l);
-    }
-  }
+  for (const auto& t : contact_curvature(al.inequality_curvature(e.g))) hs(t.row(), t.col()) += t.value();
   // Equality: κ_e ∇h ∇hᵀ + μ ∇²h, ∇h = ∇m̂/m_c, ∇²h = 2M̃/m_c.
   hs.noalias() += (al.equality_curvature() / (m_c_ * m_c_)) * dmv * dmv.transpose();
   for (int k = 0; k < f_; ++k) hs.block(k * n_, k * n_, n_, n_) += (2.0 * mu * wnu2(k) / m_c_) * m_;

@@ -66,11 +66,7 @@ NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(
   u.y = nm.with_phase(x.head(ny_));
   const Eigen::Map<const Eigen::MatrixXd> ym(u.y.data(), nm.n_, nm.f_);
   const auto n_stops = static_cast<Eigen::Index>(nm.stops_.size());
-  u.g.resize(n_stops * ms);
-  for (Eigen::Index c = 0; c < n_stops; ++c) {
-    const auto& stop = nm.stops_[static_cast<size_t>(c)];
-    u.g.segment(c * ms, ms) = (nm.theta_ * ym.row(stop.dof).transpose()).array() - stop.gap / nm.g_ref_;
-  }
+  u.g = nm.gaps(ym);
   if (penalty_ == 0.0) {
     u.lambda = x.tail(n_stops * ms);
   } else {  // λ = κ (g)₊ with g the normalized gap function: contact's linear penalty at gap 0
@@ -108,9 +104,7 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   const Eigen::MatrixXd ky = nm.ks_ * ym, my = nm.ms_ * ym;
   Eigen::MatrixXd hb(n, f);
   for (int k = 0; k < f; ++k) hb.col(k) = nm.weight_(k) * (ky.col(k) - nm.nu_(k) * nm.nu_(k) * s * my.col(k));
-  for (Eigen::Index c = 0; c < n_stops; ++c) {  // contact forces on the stop DOFs
-    hb.row(nm.stops_[static_cast<size_t>(c)].dof) += (nm.theta_.transpose() * lambda.segment(c * ms, ms)).transpose();
-  }
+  nm.add_contact_forces(hb, lambda);  // Θᵀλ_c along each stop's direction
   double mh = 0.0;
   for (int k = 0; k < f; ++k) mh += nm.weight_(k) * nm.nu_(k) * nm.nu_(k) * ym.col(k).dot(my.col(k)) * nm.m_ref_;
   SparseLinearization out;
@@ -156,31 +150,28 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
       if (reduced(row) >= 0) t.emplace_back(ny_, reduced(row), dn);
     }
   }
-  for (Eigen::Index c = 0; c < n_stops; ++c) {
-    const int d = nm.stops_[static_cast<size_t>(c)].dof;
-    if (exact) {
+  if (exact) {
+    for (Eigen::Index c = 0; c < n_stops; ++c) {
+      const auto terms = nm.stops_[static_cast<size_t>(c)].terms();
       for (int smp = 0; smp < ms; ++smp) {
         const Eigen::Index i = c * ms + smp, col = ny_ + 1 + i;
-        for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, nm.theta_(smp, k));  // ∂HB/∂λ
+        for (const auto& [d, w] : terms) {  // ∂HB/∂λ: w θ_sk in row (k, d)
+          for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, w * nm.theta_(smp, k));
+        }
         if (lambda(i) <= -g(i)) {
           t.emplace_back(col, col, 1.0);  // the min picks λ_s
         } else {
-          for (int k = 0; k < f; ++k) {  // the min picks −g_s
-            const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
-            if (r >= 0) t.emplace_back(col, r, -nm.theta_(smp, k));
+          for (const auto& [d, w] : terms) {  // the min picks −g_s = −Σ_d w θ_s Y_d + g_c
+            for (int k = 0; k < f; ++k) {
+              const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
+              if (r >= 0) t.emplace_back(col, r, -w * nm.theta_(smp, k));
+            }
           }
         }
       }
-    } else {  // penalty: ∂HB(k, d)/∂Y(l, d) = Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
-      const Eigen::VectorXd on = state.penalty_stiffness.segment(c * ms, ms);
-      if (on.isZero(0.0)) continue;
-      const Eigen::MatrixXd block = nm.theta_.transpose() * on.asDiagonal() * nm.theta_;
-      for (int k = 0; k < f; ++k) {
-        for (int l = 0; l < f; ++l) {
-          add(static_cast<Eigen::Index>(k) * n + d, static_cast<Eigen::Index>(l) * n + d, block(k, l));
-        }
-      }
     }
+  } else {  // penalty: ∂HB(k, i)/∂Y(l, j) = w_i w_j Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
+    for (const auto& e : nm.contact_curvature(state.penalty_stiffness)) add(e.row(), e.col(), e.value());
   }
   out.jacobian.resize(size_, size_);
   out.jacobian.setFromTriplets(t.begin(), t.end());

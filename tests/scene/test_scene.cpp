@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
+#include <regex>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
@@ -724,6 +725,28 @@ TEST(Scene, AStopOnTheNegativeSideMirrorsThePositiveOne) {
       [&] { (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = 150.0\n[contact]\nlaw = \"rigid\"\ngap = 1e-3\n"
                               "direction = { tip = 1.0 }\n"); },
       {"contact.direction: the rod has one DOF per node: direction is +1 or -1"});
+}
+
+// An nnm stop along a direction: `direction = -1` on the 2-DOF chain is the mirror image of the
+// +x stop (u → −u), so the backbone (energy, frequency, contact force) is the same, and the
+// mode shape at E = 2 is mirrored (u_b reaches −g0 instead of +g0).
+TEST(Scene, AnNnmStopOnTheNegativeSideMirrorsThePositiveOne) {
+  std::ifstream in(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string minus_text = std::regex_replace(text, std::regex("dof = \"b\""), "dof = \"b\"\ndirection = -1");
+  ASSERT_NE(minus_text, text);
+  const auto plus = wbm::scene::run_analysis(parse(text)), minus = wbm::scene::run_analysis(parse(minus_text));
+  ASSERT_TRUE(plus.converged && minus.converged);
+  for (int col : {0, 1, 6}) {
+    const Eigen::VectorXd &a = column(plus, "backbone.csv", col), &b = column(minus, "backbone.csv", col);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-9 * a.cwiseAbs().maxCoeff()) << "column " << col;
+  }
+  EXPECT_GT(column(plus, "backbone.csv", 1).maxCoeff(), 1.05 * column(plus, "backbone.csv", 1).minCoeff());  // contact
+  const Eigen::VectorXd &ub_plus = column(plus, "mode_E2.csv", 3), &ub_minus = column(minus, "mode_E2.csv", 3);
+  EXPECT_NEAR(ub_plus.maxCoeff(), 1e-3, 1e-9);
+  EXPECT_NEAR(ub_minus.minCoeff(), -1e-3, 1e-9);
+  EXPECT_NEAR(ub_plus.minCoeff(), -ub_minus.maxCoeff(), 1e-9);
 }
 
 // Frequencies in rad/s and an explicit list of frequencies: the 1-DOF oscillator's closed-form

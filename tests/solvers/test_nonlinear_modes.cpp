@@ -10,6 +10,7 @@
 #include <numbers>
 #include <vector>
 
+#include <Eigen/QR>
 #include <gtest/gtest.h>
 
 #include <wbm/fem/rod.hpp>
@@ -335,4 +336,152 @@ TEST(NonlinearModes, RefusesANonSymmetricStiffness) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { solvers::NonlinearModes nm(system, {{tip_dof(), 1e-3}}, {.harmonics = 4, .samples = 64}); },
       {"stiffness is not symmetric", "(3, 4)", "(X + X^T)/2"});
+}
+
+namespace {
+
+// The LL11 rod in coordinates v = Qᵀu, Q an orthogonal n × n matrix (a seeded random rotation):
+// M_v = QᵀMQ, K_v = QᵀKQ. The tip stop u_tip ≤ g becomes a stop along the direction
+// Σ_j Q(tip, j) v_j ≤ g over every DOF.
+struct Rotated {
+  solvers::MechanicalSystem system;
+  Eigen::MatrixXd q;
+  solvers::RigidStop stop;
+};
+
+Rotated rotated_rod(double gap) {
+  const auto s = ll11_system();
+  const int n = s.dofs();
+  std::srand(7);
+  const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(n, n)).householderQ();
+  Rotated r{{}, q, {0, gap}};
+  const Eigen::MatrixXd m = q.transpose() * Eigen::MatrixXd(s.mass) * q, k = q.transpose() * Eigen::MatrixXd(s.stiffness) * q;
+  r.system.mass = (0.5 * (m + m.transpose())).sparseView();
+  r.system.stiffness = (0.5 * (k + k.transpose())).sparseView();
+  r.system.damping.resize(n, n);
+  Eigen::Index big = 0;
+  q.row(tip_dof()).cwiseAbs().maxCoeff(&big);
+  r.stop.dof = static_cast<int>(big);
+  for (int j = 0; j < n; ++j) r.stop.along.emplace_back(j, q(tip_dof(), j));
+  return r;
+}
+
+// Harmonic amplitudes √(c_k² + s_k²) per DOF and harmonic (n × (N + 1)): independent of the time
+// origin, which each problem fixes on its own phase DOF.
+Eigen::MatrixXd harmonic_amplitudes(const Eigen::MatrixXd& y) {
+  const Eigen::Index harmonics = (y.cols() - 1) / 2;
+  Eigen::MatrixXd a(y.rows(), harmonics + 1);
+  a.col(0) = y.col(0).cwiseAbs();
+  for (Eigen::Index k = 1; k <= harmonics; ++k) a.col(k) = y.middleCols(2 * k - 1, 2).rowwise().norm();
+  return a;
+}
+
+}  // namespace
+
+// A stop along a direction is a change of coordinates [issue #15: radial contacts]: the rod
+// written in rotated coordinates v = Qᵀu, with its tip stop along the direction Qᵀe_tip over all
+// 20 DOFs, has the same backbone as the rod with the stop on the tip DOF — the same frequencies
+// below and above contact and the same harmonic amplitudes of u = Q Y_v at every DOF — by the KKT
+// continuation and by LL11 Alg. 1.
+TEST(NonlinearModes, StopAlongADirectionIsAChangeOfCoordinates) {
+  const double gap = 1e-3;
+  const auto r = rotated_rod(gap);
+  const solvers::NonlinearModeOptions o{.harmonics = 6, .samples = 96};
+  const solvers::NonlinearModes plain(ll11_system(), {{tip_dof(), gap}}, o), turned(r.system, {r.stop}, o);
+  EXPECT_NEAR(turned.linear_frequency_hz(), plain.linear_frequency_hz(), 1e-9 * plain.linear_frequency_hz());
+  EXPECT_LT((r.q * turned.onset_mode() - plain.onset_mode()).norm(), 1e-9 * plain.onset_mode().norm());
+  const std::vector<double> energies = {0.8, 1.2, 2.0};
+  const auto a = plain.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = energies});
+  const auto b = turned.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = energies});
+  ASSERT_TRUE(a.complete) << a.message;
+  ASSERT_TRUE(b.complete) << b.message;
+  for (double e : energies) {
+    const auto *la = included(a, e), *lb = included(b, e);
+    ASSERT_NE(la, nullptr) << e;
+    ASSERT_NE(lb, nullptr) << e;
+    EXPECT_NEAR(lb->frequency_hz, la->frequency_hz, 1e-9 * la->frequency_hz) << "E = " << e;
+    const Eigen::MatrixXd ha = harmonic_amplitudes(la->coefficients), hb = harmonic_amplitudes(r.q * lb->coefficients);
+    EXPECT_LT((hb - ha).cwiseAbs().maxCoeff(), 1e-8 * ha.maxCoeff()) << "E = " << e;
+    EXPECT_NEAR(lb->contact_force.maxCoeff(), la->contact_force.maxCoeff(), 1e-7 * la->contact_force.maxCoeff() + 1e-12);
+    EXPECT_LE(lb->max_penetration, 1e-10);
+  }
+  EXPECT_GT(included(a, 2.0)->frequency_hz, plain.linear_frequency_hz() + 1.0);  // in contact: not the linear mode
+  const auto alg1 = turned.solve(1.2);
+  ASSERT_TRUE(alg1.converged()) << alg1.message;
+  EXPECT_NEAR(alg1.frequency_hz, included(a, 1.2)->frequency_hz, 1e-7 * alg1.frequency_hz);
+}
+
+// The KKT and penalty Jacobians with a stop along a direction against central differences.
+TEST(NonlinearModes, DirectionalStopJacobianMatchesFiniteDifferences) {
+  const auto r = rotated_rod(1e-3);
+  const solvers::NonlinearModes nm(r.system, {r.stop}, {.harmonics = 3, .samples = 24});
+  for (double k : {0.0, 3e9}) {
+    const solvers::NonlinearModes::BackboneSystem system(nm, k);
+    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
+    const Eigen::Index ny = x.size() - 1 - (k == 0.0 ? 24 : 0);
+    x(ny) = 1.01;
+    x.head(40) += 1e-2 * Eigen::VectorXd::LinSpaced(40, -1.0, 1.0);
+    if (k == 0.0) {
+      x.tail(24) = Eigen::VectorXd::LinSpaced(24, 0.0, 0.05);
+      x(x.size() - 24 + 3) = 0.7;
+    }
+    const double energy = 1.4;
+    const Eigen::MatrixXd j(system.linearize(x, energy).jacobian);
+    Eigen::MatrixXd fd(j.rows(), j.cols());
+    const double h = 1e-7;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      Eigen::VectorXd p = x, m = x;
+      p(i) += h;
+      m(i) -= h;
+      fd.col(i) = (system.residual(p, energy) - system.residual(m, energy)) / (2 * h);
+    }
+    EXPECT_LT((j - fd).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "penalty " << k;
+  }
+}
+
+// With several stops the energy is normalized by the first stop to touch in the linear mode
+// (LL11 Fig. 7: "contact at 1"): a stop at mid-rod with a gap half the tip's touches first
+// (the first mode moves the mid node by ~0.7 of the tip), whatever the order of the stops; and a
+// tip stop too far to be reached changes nothing (the same frequencies as the mid stop alone).
+TEST(NonlinearModes, TheFirstStopToTouchDefinesContactOnset) {
+  const double gap = 1e-3;
+  const int mid = 9;
+  const solvers::NonlinearModeOptions o{.harmonics = 6, .samples = 96};
+  const solvers::NonlinearModes both(ll11_system(), {{tip_dof(), 10 * gap}, {mid, 0.5 * gap}}, o);
+  const solvers::NonlinearModes alone(ll11_system(), {{mid, 0.5 * gap}}, o);
+  EXPECT_EQ(both.onset_stop(), 1);
+  EXPECT_NEAR(both.onset_mode()(mid), 0.5 * gap, 1e-15);
+  EXPECT_LT(both.onset_mode()(tip_dof()), 10 * gap);
+  const auto a = both.continue_backbone({.energy_min = 0.5, .energy_max = 1.6, .include = {0.9, 1.5}});
+  const auto b = alone.continue_backbone({.energy_min = 0.5, .energy_max = 1.6, .include = {0.9, 1.5}});
+  ASSERT_TRUE(a.complete) << a.message;
+  ASSERT_TRUE(b.complete) << b.message;
+  for (double e : {0.9, 1.5}) {
+    const auto *la = included(a, e), *lb = included(b, e);
+    ASSERT_NE(la, nullptr);
+    ASSERT_NE(lb, nullptr);
+    EXPECT_NEAR(la->frequency_hz, lb->frequency_hz, 1e-10 * lb->frequency_hz) << "E = " << e;
+    EXPECT_LT(la->coefficients.row(tip_dof()).cwiseAbs().sum(), 10 * gap);  // the far stop never reached
+  }
+  EXPECT_NEAR(included(a, 0.9)->frequency_hz, both.linear_frequency_hz(), 1e-9 * both.linear_frequency_hz());
+  EXPECT_GT(included(a, 1.5)->frequency_hz, both.linear_frequency_hz() + 1.0);  // E = 1 is contact onset
+}
+
+TEST(NonlinearModes, RefusesBadDirectionsAndStopsTheModeDoesNotMove) {
+  const auto s = ll11_system();
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { solvers::NonlinearModes nm(s, {{tip_dof(), 1e-3, {{3, 1.0}}}}, {}); },
+      {"stops[0].along", "dof 19 is not among its DOFs"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { solvers::NonlinearModes nm(s, {{tip_dof(), 1e-3, {{tip_dof(), 0.0}}}}, {}); }, {"every weight is zero"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { solvers::NonlinearModes nm(s, {{tip_dof(), 1e-3, {{tip_dof(), 1.0}, {40, 1.0}}}}, {}); },
+      {"DOF 40 must lie in [0, 20)"});
+  solvers::MechanicalSystem two;  // decoupled: the first mode moves DOF 0 only
+  two.mass = Eigen::MatrixXd::Identity(2, 2).sparseView();
+  two.stiffness = Eigen::Vector2d(1.0, 4.0).asDiagonal().toDenseMatrix().sparseView();
+  two.damping.resize(2, 2);
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { solvers::NonlinearModes nm(two, {{1, 1e-3}}, {.harmonics = 2, .samples = 8}); },
+      {"no stop moves in the first linear mode"});
 }

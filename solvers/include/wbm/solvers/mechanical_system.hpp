@@ -3,6 +3,7 @@
 /// Units: SI (kg, N·s/m, N/m, N, m, s, Hz where the name says _hz).
 
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -94,6 +95,11 @@ struct ContactPoint {
   /// zero, dof not among its DOFs or other ≥ 0 beside it, or the same direction twice.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
+
+/// Checks a contact direction over the DOFs, given as (DOF, weight) pairs: every DOF in
+/// [0, dofs), none twice, finite weights, not all zero, and `dof` (the DOF that names the
+/// contact) among them. Throws std::invalid_argument starting with `where`, naming the entry.
+void validate_direction(const std::vector<std::pair<int, double>>& along, int dof, int dofs, const std::string& where);
 
 /// Direct complex frequency response without contact: (K − ω² M + iω C) U = Σ_j F_j e^{iφ_j} e_{dof_j},
 /// ω = 2π f; u(t) = Re(U e^{iωt}). Sparse LU; returns U (length n, complex amplitudes [m]).

@@ -10,13 +10,16 @@
 ///   k̂(Y) = Σ_k w_k Y_kᵀ K Y_k,   m̂(Y) = Σ_k w_k ν_k² Y_kᵀ M Y_k      [LL11 Eq. (11)]
 ///   ω² = r(Y) = k̂/m̂                                                  [LL11 Eq. (24a)]
 ///   g_ck = u_c(τ_k) − g_c ≤ 0 at τ_k = k/m, every stop c              [LL11 Eq. (24b)]
+///   (u_c = e_cᵀu: one DOF, or a direction over several, RigidStop::along)
 ///   h(Y) = ½ m̂(Y) − γ = 0                                              [LL11 Eq. (12)]
 /// The paper's Eq. (24c) drops the ν² of Eq. (12); we keep it: then h constrains the same
 /// functional that divides the Rayleigh quotient (so ω² m̂ = 2 × the time-averaged kinetic energy
 /// and h fixes it at ω² γ), and for the linear mode the two agree. The energy axis is normalized by
-///   γ_c = ½ m̂ of the linear first mode whose stop DOF just reaches its gap,
-/// so the reported energy E = γ/γ_c is exactly 1 at contact onset [LL11 Fig. 3]. The time origin
-/// is fixed by Y(c₀, sin 2πτ) = 0 at the phase DOF c₀ (the problem is invariant under time shifts).
+///   γ_c = ½ m̂ of the linear first mode scaled so that the first stop to touch just reaches its
+///   gap (max_c |e_cᵀφ₁|/g_c = 1; with one stop, its DOF's amplitude is its gap),
+/// so the reported energy E = γ/γ_c is exactly 1 at contact onset [LL11 Figs. 3, 7]. The time
+/// origin is fixed by Y(c₀, sin 2πτ) = 0 at the phase DOF c₀ (default: the `dof` of that first
+/// stop), since the problem is invariant under time shifts.
 ///
 /// Nonlinear modes are critical points of r on {h = 0, g ≤ 0} [LL11 Eq. (13)], not minima: on
 /// more than one harmonic, r decreases towards ω₁²/ν² along ν-th harmonics of the first mode. So
@@ -28,7 +31,7 @@
 ///  - ModeAlgorithm::Sequential [LL11 Alg. 2]: L_κ = (k̂ − ω² m̂)/(ω₀² 2γ) + φ(g, h) with ω fixed
 ///    during each primal solve and updated to √r after it; converged when Powell's measures and
 ///    the relative change of ω² are below ε.
-/// Everything is solved in units of the largest gap g_ref (g/g_ref, Y/g_ref) and ω₀ (the linear
+/// Everything is solved in units of g_ref, the gap of the first stop to touch (g/g_ref, Y/g_ref), and ω₀ (the linear
 /// first frequency), so tolerances are dimensionless.
 ///
 /// The frequency of the periodic orbit is ω² = r − μ ω₀² E (μ the normalization multiplier), not
@@ -41,9 +44,10 @@
 /// points and the corners where contact samples change state (to E = 10 on the LL11 rod with
 /// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
 
-#include <optional>
 #include <functional>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -59,10 +63,18 @@
 
 namespace wbm::solvers {
 
-/// A rigid stop: u_dof ≤ gap [m], gap > 0.
+/// A rigid stop: u_c ≤ gap [m], gap > 0, with u_c = u_dof, or u_c = Σ_(j, w) ∈ along w u_j along a
+/// direction (e.g. n·u at a 3D node with n the unit outward normal of a casing, g = g0 − n·u;
+/// −e_dof for a stop on the −x side). `dof` names the stop and, with `along`, must be one of its
+/// DOFs (it is the default phase DOF, so give the component that moves most).
 struct RigidStop {
   int dof;
   double gap;
+  std::vector<std::pair<int, double>> along = {};  // (DOF, weight) of a direction, or empty
+  /// The nonzeros of the direction e_c as (DOF, weight).
+  [[nodiscard]] std::vector<std::pair<int, double>> terms() const {
+    return along.empty() ? std::vector<std::pair<int, double>>{{dof, 1.0}} : along;
+  }
 };
 
 enum class ModeAlgorithm { Simultaneous, Sequential };
@@ -77,7 +89,7 @@ struct NonlinearModeOptions {
   /// solve reached it (and Powell's measures are below powell.tolerance).
   double stationarity_tolerance = 1e-10;
   int max_newton_iterations = 60;     // per primal solve (newton() with Levenberg–Marquardt fallback)
-  int phase_dof = -1;                 // DOF whose sin 2πτ coefficient is 0; −1: the first stop's
+  int phase_dof = -1;                 // DOF whose sin 2πτ coefficient is 0; −1: the first-touching stop's
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate(int dofs) const;
 };
@@ -153,15 +165,19 @@ struct BackboneOptions {
 };
 
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.
-/// Throws std::invalid_argument for invalid options, stops on invalid DOFs or with gap ≤ 0
+/// Throws std::invalid_argument for invalid options, stops on invalid DOFs (or directions with
+/// repeated, out-of-range or non-finite entries, zero norm, or not containing `dof`), gap ≤ 0, or
+/// a first linear mode that moves no stop
 /// (the energy normalization is by the gap; the normalized backbone does not depend on it).
 class NonlinearModes {
  public:
   NonlinearModes(const MechanicalSystem& system, std::vector<RigidStop> stops, NonlinearModeOptions options = {});
 
   [[nodiscard]] double linear_frequency_hz() const { return omega0_ / (2.0 * 3.14159265358979323846); }
-  /// φ₁ scaled so that the first stop's DOF has amplitude equal to its gap (the mode at E = 1).
+  /// φ₁ scaled so that the first stop to touch has amplitude |e_cᵀφ₁| equal to its gap (E = 1).
   [[nodiscard]] const Eigen::VectorXd& onset_mode() const { return onset_; }
+  /// Index (into the stops given) of the stop that touches first in the linear mode.
+  [[nodiscard]] int onset_stop() const { return onset_stop_; }
   [[nodiscard]] int harmonics() const { return n_harm_; }
   [[nodiscard]] int dofs() const { return n_; }
 
@@ -245,6 +261,14 @@ class NonlinearModes {
   Eigen::MatrixXd theta_;          // m × F values at τ_k = k/m
   Eigen::VectorXd onset_;
   int phase_index_ = 0;            // index in the stacked y of the fixed coefficient
+  int onset_stop_ = 0;             // the stop that touches first in the linear mode
+  // u_c(τ_s) − g_c/g_ref at the m samples of every stop (stop-major), Y in units of g_ref.
+  [[nodiscard]] Eigen::VectorXd gaps(const Eigen::Ref<const Eigen::MatrixXd>& ym) const;
+  // Adds Θᵀλ_c along every stop's direction to the rows of an n × F gradient.
+  void add_contact_forces(Eigen::MatrixXd& grad, const Eigen::VectorXd& lambda) const;
+  // The entries w_i w_j (Θᵀ diag(κ_c) Θ)_kl at (k n + i, l n + j) for every pair of a stop's DOFs
+  // (the curvature of a penalty on the samples, κ stop-major; zero blocks skipped).
+  [[nodiscard]] std::vector<Eigen::Triplet<double>> contact_curvature(const Eigen::VectorXd& curvature) const;
   Eigen::SparseMatrix<double> ks_, ms_;  // K/(ω₀² m_ref), M/m_ref (continue_backbone)
   double m_ref_ = 1.0;             // 2 m̂_c g_ref² [kg]
 };
