@@ -10,12 +10,9 @@
 #include <string_view>
 #include <system_error>
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
+#include "process.hpp"
 
 namespace wbm::fem {
 namespace {
@@ -41,13 +38,7 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
-std::string read_file(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) throw std::runtime_error(p.string() + ": cannot open the file");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using detail::read_file;
 
 template <typename T>
 bool parse_number(std::string_view s, T& v) {
@@ -305,46 +296,18 @@ AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOp
     if (!job) throw std::runtime_error(name + ": cannot write the driver deck in " + dir.string());
   }
   // ccx -i job, in dir, output to ccx.log (no shell).
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addchdir_np(&actions, dir.c_str());
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "ccx.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  std::string exe = options.executable, flag = "-i", job = "job";
-  char* argv[] = {exe.data(), flag.data(), job.data(), nullptr};
-  pid_t pid = 0;
-  const int spawned = posix_spawnp(&pid, exe.c_str(), &actions, nullptr, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    throw std::runtime_error(name + ": cannot run '" + options.executable + "' (" + std::generic_category().message(spawned) +
+  const auto ccx = detail::run_program(options.executable, {"-i", "job"}, dir, "ccx.log");
+  if (ccx.spawn_error != 0) {
+    throw std::runtime_error(name + ": cannot run '" + options.executable + "' (" +
+                             std::generic_category().message(ccx.spawn_error) +
                              "): install CalculiX (Debian calculix-ccx) or set CalculixOptions::executable");
   }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  std::string log;
-  try {
-    log = read_file(dir / "ccx.log");
-  } catch (const std::exception&) {
-  }
-  std::string errors;  // ccx's own "*ERROR" lines and the line after each
-  {
-    std::istringstream in(log);
-    std::string line;
-    int keep = 0;
-    while (std::getline(in, line)) {
-      if (line.find("*ERROR") != std::string::npos) keep = 2;
-      if (keep > 0 && !trim(line).empty()) {
-        errors += "\n  " + trim(line);
-        --keep;
-      }
-    }
-  }
-  const bool exited = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  if (!exited || !errors.empty() || !fs::exists(dir / "job.sti") || !fs::exists(dir / "job.mas") ||
+  const std::string errors = detail::quote_lines(ccx.log, "*ERROR", 1);  // ccx's own "*ERROR" lines and the next
+  if (!ccx.succeeded() || !errors.empty() || !fs::exists(dir / "job.sti") || !fs::exists(dir / "job.mas") ||
       !fs::exists(dir / "job.dof")) {
     throw std::runtime_error(name + ": CalculiX (" + options.executable + ") could not assemble the model" +
-                             (WIFEXITED(status) ? " (exit " + std::to_string(WEXITSTATUS(status)) + ")" : std::string()) +
-                             (errors.empty() ? "; no *ERROR line, see its output:\n" + log.substr(0, 2000)
+                             (ccx.exited ? " (exit " + std::to_string(ccx.exit_code) + ")" : std::string()) +
+                             (errors.empty() ? "; no *ERROR line, see its output:\n" + ccx.log.substr(0, 2000)
                                              : "; ccx says:" + errors));
   }
   return parse_calculix_matrices(read_file(dir / "job.sti"), read_file(dir / "job.mas"), read_file(dir / "job.dof"),
