@@ -445,12 +445,89 @@ def rigid_stop(folder):
             save(fig, folder, stem)
 
 
+def blade(folder):
+    """LL11 Figs. 6-8 on our blade: the mesh with the 24 contact nodes (Fig. 6), f/f1 against
+    normalized energy (Fig. 7), and the deformed blade at t = 0 and T/2 for the levels shown,
+    displacements in units of the gap (Fig. 8), with the tip's radial displacement along the chord."""
+    meta = json.loads((folder / "meta.json").read_text())
+    header, nodes = read_csv(folder / "mesh_nodes.csv")
+    ids, x, y, z = nodes
+    ch, cn = read_csv(folder / "contact_nodes.csv")
+    cx, cy, cz = (cn[ch.index(k)] for k in ("x [m]", "y [m]", "z [m]"))
+    fig = plt.figure(figsize=(10.0, 4.5))
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    ax.scatter([1e3 * v for v in x], [1e3 * v for v in y], [1e3 * v for v in z], s=0.3, c="0.6", alpha=0.4)
+    ax.scatter([1e3 * v for v in cx], [1e3 * v for v in cy], [1e3 * v for v in cz], s=12, c="r")
+    ax.set_xlabel("x (engine axis) [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_zlabel("z (radial) [mm]")
+    ax.set_box_aspect((1, 1, 1.6))
+    ax.set_title(f"LL11 Fig. 6: {meta['nodes']} nodes, {meta['c3d10_elements']} C3D10, {meta['dofs']} DOFs", fontsize=9)
+    ax2 = fig.add_subplot(1, 2, 2)
+    top = max(z)
+    tipx = [1e3 * a for a, c in zip(x, z) if abs(c - top) < 1e-9]
+    tipy = [1e3 * b for b, c in zip(y, z) if abs(c - top) < 1e-9]
+    ax2.plot(tipx, tipy, ".", color="0.6", ms=2, label="tip-face nodes")
+    ax2.plot([1e3 * v for v in cx], [1e3 * v for v in cy], "o", color="r", ms=4, label="contact interface (24 nodes)")
+    ax2.annotate("leading edge (#1)", (1e3 * cx[0], 1e3 * cy[0]), fontsize=8)
+    ax2.annotate("trailing edge (#24)", (1e3 * cx[-1], 1e3 * cy[-1]), fontsize=8)
+    ax2.set_aspect("equal")
+    ax2.set_xlabel("x [mm]")
+    ax2.set_ylabel("y [mm]")
+    ax2.set_title("tip face seen from the casing", fontsize=9)
+    ax2.legend(loc="lower right")
+    fig.tight_layout()
+    save(fig, folder, "mesh")
+
+    fig, ax = plt.subplots()
+    e = column(folder, "backbone.csv", "energy [-]")
+    r = column(folder, "backbone.csv", "frequency_over_f1 [-]")
+    ax.plot(e, r, "C0-", lw=1.2, label=f"first nonlinear mode, N = {meta['harmonics']}, m = {meta['samples']}")
+    for level in meta["levels"]:
+        ax.plot(level["energy"], level["frequency_over_f1"], "ko", mfc="none", ms=5)
+    ax.axvline(1.0, color="0.5", lw=0.6, ls=":")
+    ax.set_xlabel("normalized modal energy E [-] (1: contact onset)")
+    ax.set_ylabel("frequency / first linear frequency [-]")
+    ax.set_title(f"LL11 Fig. 7 (our blade): f1 = {meta['linear_frequency_hz']:.1f} Hz", fontsize=9)
+    ax.legend(loc="upper left")
+    save(fig, folder, "frequency_energy")
+
+    levels = [lv["energy"] for lv in meta["levels"]]
+    fig = plt.figure(figsize=(4.0 * len(levels), 8.0))
+    for i, energy in enumerate(levels):
+        dh, d = read_csv(folder / f"deformed_E{energy:g}.csv")
+        ax = fig.add_subplot(2, len(levels), i + 1, projection="3d")
+        umax = max(max(abs(v) for v in d[k]) for k in range(1, 7)) or 1.0
+        scale = 0.1 * (max(z) - min(z)) / umax  # the largest displacement drawn at 10 % of the span
+        for offset, colour, name in ((1, "C0", "t = 0"), (4, "C3", "t = T/2")):
+            ax.scatter([1e3 * (a + scale * u) for a, u in zip(x, d[offset])],
+                       [1e3 * (b + scale * u) for b, u in zip(y, d[offset + 1])],
+                       [1e3 * (c + scale * u) for c, u in zip(z, d[offset + 2])], s=0.2, c=colour, alpha=0.3, label=name)
+        ax.set_box_aspect((1, 1, 1.6))
+        ax.set_title(f"E = {energy:g}: f/f1 = {meta['levels'][i]['frequency_over_f1']:.4f}\n"
+                     f"max |u| = {umax:.1f} g0 drawn at 10 % of the span", fontsize=8)
+        ax.legend(loc="upper left", markerscale=10)
+        th, t = read_csv(folder / f"tip_E{energy:g}.csv")
+        ax2 = fig.add_subplot(2, len(levels), len(levels) + i + 1)
+        ax2.plot(t[0], t[1], "C0-o", ms=3, label="t = 0")
+        ax2.plot(t[0], t[2], "C3-s", ms=3, label="t = T/2")
+        ax2.plot(t[0], t[3], "k:", lw=0.8, label="max over the period")
+        ax2.axhline(1.0, color="r", lw=0.8, label="casing (gap)")
+        ax2.set_xlabel("tip chord fraction (0: leading edge) [-]")
+        ax2.set_ylabel("radial displacement / gap [-]")
+        ax2.legend(fontsize=7)
+    fig.suptitle("LL11 Fig. 8 (our blade): deformed shapes at three energies, displacements in units of the gap",
+                 fontsize=10)
+    fig.tight_layout()
+    save(fig, folder, "deformed")
+
+
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
            "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
            "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
            "jl14_speed_accuracy": speed_accuracy, "ll11_fig03": frequency_energy, "ll11_fig04": phase_space,
            "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration,
-           "jl14_rigid_stop": rigid_stop}
+           "jl14_rigid_stop": rigid_stop, "ll11_blade": blade}
 
 
 def main():

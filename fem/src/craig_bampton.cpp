@@ -96,7 +96,9 @@ CraigBamptonModel craig_bampton(const Eigen::SparseMatrix<double>& stiffness, co
                              "failed): the interface and boundary conditions must remove every rigid-body motion");
   }
   t = Clock::now();
-  r.constraint_modes = -llt.solve(Eigen::MatrixXd(kib));
+  // No interface: no constraint modes (CHOLMOD refuses a right-hand side with no columns); the
+  // reduction is then the first `modes` normal modes of the whole model.
+  r.constraint_modes = nb > 0 ? Eigen::MatrixXd(-llt.solve(Eigen::MatrixXd(kib))) : Eigen::MatrixXd::Zero(ni, 0);
   r.constraint_modes_s = seconds(t);
   t = Clock::now();
   // Fixed-interface normal modes: the m eigenvalues of K_ii φ = λ M_ii φ closest to 0.

@@ -120,6 +120,23 @@ TEST(CraigBampton, FrequenciesConvergeFromAboveAsModesAreAdded) {
   }
 }
 
+// No interface: the reduction is the model's own first modes (Spectra on the sparse matrices),
+// equal to a dense eigensolver's, and expand() returns them.
+TEST(CraigBampton, WithoutAnInterfaceGivesTheFullModelsModes) {
+  const auto& b = bar();
+  const Eigen::VectorXd full = full_frequencies_hz(b.model);
+  const auto r = wbm::fem::craig_bampton(b.model.stiffness, b.model.mass, {}, 10);
+  ASSERT_EQ(r.stiffness.rows(), 10);
+  EXPECT_EQ(r.constraint_modes.cols(), 0);
+  for (int k = 0; k < 10; ++k) EXPECT_NEAR(r.normal_frequencies_hz(k), full(k), 1e-9 * full(k)) << "mode " << k + 1;
+  const Eigen::MatrixXd phi = r.expand(Eigen::MatrixXd::Identity(10, 10));
+  const Eigen::MatrixXd k = Eigen::MatrixXd(b.model.stiffness) * phi, m = Eigen::MatrixXd(b.model.mass) * phi;
+  for (int j = 0; j < 10; ++j) {
+    const double w2 = std::pow(2.0 * std::numbers::pi * full(j), 2);
+    EXPECT_LT((k.col(j) - w2 * m.col(j)).norm(), 1e-8 * k.col(j).norm()) << "mode " << j + 1;
+  }
+}
+
 TEST(CraigBampton, RefusesBadInput) {
   const auto& b = bar();
   using wbm::testing::expect_throw_with;

@@ -35,7 +35,8 @@ struct CraigBamptonModel {
 
 /// Reduces (K, M) (n × n, symmetric; K_ii positive definite, i.e. the interface and the model's
 /// boundary conditions remove every rigid-body motion of the interior) onto `boundary` + `modes`
-/// fixed-interface modes. Throws std::invalid_argument for a size mismatch, a boundary DOF out of
+/// fixed-interface modes (an empty boundary gives the whole model's first `modes` normal modes,
+/// sparse, e.g. as the reference for the reduction's frequencies). Throws std::invalid_argument for a size mismatch, a boundary DOF out of
 /// range or repeated, modes < 0 or ≥ |i|, and std::runtime_error if K_ii is not positive definite
 /// (its Cholesky fails: name it) or the eigensolver does not converge (with Spectra's status).
 [[nodiscard]] CraigBamptonModel craig_bampton(const Eigen::SparseMatrix<double>& stiffness,
