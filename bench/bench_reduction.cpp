@@ -15,6 +15,9 @@
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/craig_bampton.hpp>
+#include <wbm/solvers/nonlinear_modes.hpp>
+
+#include "blade.hpp"
 
 namespace {
 
@@ -88,6 +91,44 @@ BENCHMARK(BM_CraigBampton_FromCalculixDeck)
     ->Args({140, 12})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
+
+// Cost of the first nonlinear mode against the number of contact nodes (issue #15): the LL11
+// blade (reproduce/blade/, mesh size 5 mm, ~12 000 DOFs) with 6, 12, 24 or 48 tip nodes as the
+// interface (3 DOFs each) + 20 fixed-interface modes, one exact radial stop per tip node, and the
+// KKT backbone from E = 0.5 to 3 at fixed N = 4, m = 64 (max energy step 0.1). Timed: the
+// backbone only (mesh, ccx and the reduction are set-up). Counters: reduced DOFs, KKT unknowns,
+// levels, time per level, and whether the branch completed.
+void BM_NonlinearMode_ContactNodes(benchmark::State& state) {
+  const int tip = static_cast<int>(state.range(0));
+  const fs::path dir = fs::temp_directory_path() / ("wbm_bench_contacts_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto blade = wbm::reproduce::build_blade(dir, 0.005, tip);
+  const auto cb = wbm::fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, 20);
+  fs::remove_all(dir);
+  wbm::solvers::MechanicalSystem reduced;
+  reduced.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
+  reduced.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
+  reduced.damping.resize(reduced.mass.rows(), reduced.mass.cols());
+  const int n = 4, m = 64;
+  const wbm::solvers::NonlinearModes nnm(reduced, wbm::reproduce::radial_stops(blade, 1e-4), {.harmonics = n, .samples = m});
+  wbm::solvers::BackboneContinuationOptions options;
+  options.energy_min = 0.5;
+  options.energy_max = 3.0;
+  options.max_energy_step = 0.1;
+  double levels = 0.0, complete = 0.0;
+  for (auto _ : state) {
+    const auto b = nnm.continue_backbone(options);
+    levels = static_cast<double>(b.levels.size());
+    complete = b.complete ? 1.0 : 0.0;
+  }
+  state.counters["contact_nodes"] = tip;
+  state.counters["reduced_dofs"] = static_cast<double>(reduced.dofs());
+  state.counters["kkt_unknowns"] = static_cast<double>(reduced.dofs() * (2 * n + 1) + tip * m);
+  state.counters["levels"] = levels;
+  state.counters["complete"] = complete;
+  state.counters["s_per_level"] = benchmark::Counter(levels, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_NonlinearMode_ContactNodes)->Arg(6)->Arg(12)->Arg(24)->Arg(48)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 

@@ -29,6 +29,7 @@
 #include <wbm/fem/gmsh.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
+#include "blade.hpp"
 #include "combinations.hpp"
 #include "run.hpp"
 
@@ -58,9 +59,8 @@ int main(int argc, char** argv) {
   return run.execute([](reproduce::Run& run) {
     using reproduce::format;
     const bool quick = run.quick();
-    const fs::path source = WBM_BLADE_DIR;
     const double mesh_size = quick ? 0.005 : 0.0025;            // m, the largest element edge
-    const double hub_radius = 0.25;                             // m, engine axis ∥ x at z = −0.25 (blade.geo)
+    const double hub_radius = reproduce::kHubRadius;            // m, engine axis ∥ x at z = −0.25 (blade.geo)
     const double gap = 1e-4;                                    // m, uniform radial gap (results are per gap)
     const int modes = 40, harmonics = quick ? 3 : 8, samples = quick ? 24 : 96;
     const double energy_max = quick ? 2.0 : 11.0;
@@ -68,50 +68,20 @@ int main(int argc, char** argv) {
     const Scratch scratch;
     nlohmann::json timing;
 
-    // 1. Mesh (gmsh), root node set, model deck, K and M (CalculiX).
-    auto t = std::chrono::steady_clock::now();
-    const int written = fem::mesh_with_gmsh(source / "blade.geo", scratch.dir / "blade_mesh.inp",
-                                            {.executable = "gmsh", .dimension = 3, .numbers = {{"size", mesh_size}}});
-    timing["gmsh_s"] = since(t);
-    const auto mesh = fem::read_calculix_deck(scratch.dir / "blade_mesh.inp");
-    {
-      std::ofstream root(scratch.dir / "root.inp");
-      root << "*NSET, NSET=ROOT\n";
-      for (const auto& [id, x] : mesh.nodes) {
-        if (std::abs(x(2)) < 1e-9) root << id << "\n";
-      }
-    }
-    fs::copy_file(source / "blade.inp", scratch.dir / "blade.inp");
-    const auto deck = fem::read_calculix_deck(scratch.dir / "blade.inp");
-    t = std::chrono::steady_clock::now();
-    const auto model = fem::assemble_with_calculix(deck);
-    timing["ccx_and_read_s"] = since(t);
+    // 1–2. Mesh (gmsh), root node set, model deck, K and M (CalculiX), the 24 tip nodes from the
+    // leading to the trailing edge (reproduce/common/blade.hpp).
+    const auto blade = reproduce::build_blade(scratch.dir, mesh_size, 24);
+    timing["gmsh_s"] = blade.gmsh_s;
+    timing["ccx_and_read_s"] = blade.ccx_s;
+    const auto& deck = blade.deck;
+    const auto& model = blade.model;
+    const auto& boundary = blade.boundary;
+    const auto& tip_nodes = blade.tip_nodes;
+    const Eigen::VectorXd& chord = blade.chord;
+    const int written = blade.nodes_written;
     const auto n_full = static_cast<Eigen::Index>(model.dofs.size());
     const int c3d10 = deck.element_types.count("C3D10") != 0 ? deck.element_types.at("C3D10") : 0;
-
-    // 2. The interface: the 24 tip nodes from leading to trailing edge (along the principal axis
-    // of their positions, oriented towards +x), and their radial directions from the engine axis.
-    const auto& tip_ids = deck.node_set("TIP");
-    if (tip_ids.size() != 24) run.fail("node set TIP has " + std::to_string(tip_ids.size()) + " nodes, expected 24");
-    Eigen::MatrixXd p(static_cast<Eigen::Index>(tip_ids.size()), 3);
-    for (size_t i = 0; i < tip_ids.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = deck.nodes.at(tip_ids[i]).transpose();
-    const Eigen::RowVector3d mean = p.colwise().mean();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca((p.rowwise() - mean).transpose() * (p.rowwise() - mean));
-    Eigen::Vector3d axis = pca.eigenvectors().col(2);
-    if (axis(0) < 0.0) axis = -axis;
-    std::vector<size_t> order(tip_ids.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-      return (p.row(static_cast<Eigen::Index>(a)) - mean).dot(axis.transpose()) <
-             (p.row(static_cast<Eigen::Index>(b)) - mean).dot(axis.transpose());
-    });
-    std::map<std::pair<int, int>, int> row_of;
-    for (size_t r = 0; r < model.dofs.size(); ++r) row_of[model.dofs[r]] = static_cast<int>(r);
-    std::vector<int> boundary, tip_nodes;
-    for (size_t i : order) {
-      tip_nodes.push_back(tip_ids[i]);
-      for (int d = 1; d <= 3; ++d) boundary.push_back(row_of.at({tip_ids[i], d}));
-    }
+    auto t = std::chrono::steady_clock::now();
 
     // 3. Craig–Bampton (72 + 40), and the full model's first 10 frequencies (Spectra, no interface).
     t = std::chrono::steady_clock::now();
@@ -152,20 +122,13 @@ int main(int argc, char** argv) {
     reduced.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
     reduced.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
     reduced.damping.resize(reduced.mass.rows(), reduced.mass.cols());
-    std::vector<solvers::RigidStop> stops;
-    Eigen::VectorXd chord(24), ny(24), nz(24), px(24), py(24), pz(24);
-    const Eigen::Vector3d le = deck.nodes.at(tip_nodes.front()), te = deck.nodes.at(tip_nodes.back());
-    for (int i = 0; i < static_cast<int>(tip_nodes.size()); ++i) {
-      const Eigen::Vector3d x = deck.nodes.at(tip_nodes[static_cast<size_t>(i)]);
-      const Eigen::Vector2d n = Eigen::Vector2d(x(1), x(2) + hub_radius).normalized();
-      stops.push_back({3 * i + 2, gap, {{3 * i + 1, n(0)}, {3 * i + 2, n(1)}}});
-      chord(i) = (x - le).dot(te - le) / (te - le).squaredNorm();
-      ny(i) = n(0);
-      nz(i) = n(1);
-      px(i) = x(0);
-      py(i) = x(1);
-      pz(i) = x(2);
+    const auto stops = reproduce::radial_stops(blade, gap);
+    Eigen::VectorXd ny(24), nz(24);
+    for (int i = 0; i < 24; ++i) {
+      ny(i) = stops[static_cast<size_t>(i)].along[0].second;
+      nz(i) = stops[static_cast<size_t>(i)].along[1].second;
     }
+    const Eigen::VectorXd px = blade.position.col(0), py = blade.position.col(1), pz = blade.position.col(2);
     t = std::chrono::steady_clock::now();
     const solvers::NonlinearModes nnm(reduced, stops, {.harmonics = harmonics, .samples = samples});
     solvers::BackboneContinuationOptions co;
@@ -210,9 +173,9 @@ int main(int argc, char** argv) {
                chord, px, py, pz, ny, nz, first_contact},
               contact_status);
     {
-      Eigen::VectorXd id(static_cast<Eigen::Index>(mesh.nodes.size())), x(id.size()), y(id.size()), z(id.size());
+      Eigen::VectorXd id(static_cast<Eigen::Index>(deck.nodes.size())), x(id.size()), y(id.size()), z(id.size());
       Eigen::Index k = 0;
-      for (const auto& [node, c] : mesh.nodes) {
+      for (const auto& [node, c] : deck.nodes) {
         id(k) = node;
         x(k) = c(0);
         y(k) = c(1);
@@ -255,10 +218,10 @@ int main(int argc, char** argv) {
         auto it = by_node.try_emplace(node, Eigen::Matrix<double, 3, 2>::Zero()).first;
         it->second.row(d - 1) = u.row(r);
       }
-      const auto nn = static_cast<Eigen::Index>(mesh.nodes.size());
+      const auto nn = static_cast<Eigen::Index>(deck.nodes.size());
       std::vector<Eigen::VectorXd> cols(7, Eigen::VectorXd::Zero(nn));
       Eigen::Index k = 0;
-      for (const auto& [node, c] : mesh.nodes) {
+      for (const auto& [node, c] : deck.nodes) {
         cols[0](k) = node;
         if (const auto it = by_node.find(node); it != by_node.end()) {
           for (int d = 0; d < 3; ++d) {

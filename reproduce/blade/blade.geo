@@ -8,18 +8,20 @@
 //    tiny elements); parabolic camber line, 8 % to 4 % camber;
 //  - stagger from 25° at the root to 50° at the tip (25° of twist), sections stacked at
 //    mid-chord on the radial line x = y = 0;
-//  - 24 points embedded in the tip face on the camber line, 4 % to 96 % of the chord (leading to
+//  - ntip = 24 points embedded in the tip face on the camber line, 4 % to 96 % of the chord (leading to
 //    trailing edge): they become mesh nodes, the node set TIP, the contact interface.
 // The engine axis is parallel to x at z = -0.25 m (hub radius 250 mm at the root); the root face
 // z = 0 is clamped by the model deck (blade.inp); the casing is at a uniform radial gap.
-// Parameter: size, the largest element edge [m] (-setnumber size 0.0025: about 15 000 nodes).
+// Parameters: size, the largest element edge [m] (-setnumber size 0.0025: about 14 400 nodes);
+// ntip, the number of contact points (24, as the paper; bench/ varies it).
 SetFactory("OpenCASCADE");
 span = 0.10;  c_root = 0.060; c_tip = 0.045;   // m
 t_root = 0.10; t_tip = 0.05;                   // thickness / chord
 h_root = 0.08; h_tip = 0.04;                   // camber / chord
 stag_root = 25*Pi/180; stag_tip = 50*Pi/180;   // stagger from the engine axis x
 te_half = 0.0004;                              // half the trailing-edge thickness [m]
-nsec = 5; npts = 18; ntip = 24;
+nsec = 5; npts = 18;
+If (!Exists(ntip)) ntip = 24; EndIf      // contact points on the tip camber line
 If (!Exists(size)) size = 0.0025; EndIf
 
 wires[] = {};
