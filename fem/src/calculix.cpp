@@ -306,7 +306,7 @@ AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOp
   if (!ccx.succeeded() || !errors.empty() || !fs::exists(dir / "job.sti") || !fs::exists(dir / "job.mas") ||
       !fs::exists(dir / "job.dof")) {
     throw std::runtime_error(name + ": CalculiX (" + options.executable + ") could not assemble the model" +
-                             (ccx.exited ? " (exit " + std::to_string(ccx.exit_code) + ")" : std::string()) +
+                             (ccx.exited ? std::string(" (exit ").append(std::to_string(ccx.exit_code)).append(")") : std::string()) +
                              (errors.empty() ? "; no *ERROR line, see its output:\n" + ccx.log.substr(0, 2000)
                                              : "; ccx says:" + errors));
   }

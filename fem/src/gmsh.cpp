@@ -16,11 +16,13 @@ int mesh_with_gmsh(const std::filesystem::path& geo, const std::filesystem::path
     throw std::invalid_argument("mesh_with_gmsh: geometry script " + geo.string() + " does not exist");
   }
   if (options.dimension < 1 || options.dimension > 3) {
-    throw std::invalid_argument("GmshOptions.dimension = " + std::to_string(options.dimension) + ": must be 1, 2 or 3");
+    throw std::invalid_argument(
+        std::string("GmshOptions.dimension = ").append(std::to_string(options.dimension)).append(": must be 1, 2 or 3"));
   }
   const fs::path script = fs::absolute(geo), mesh = fs::absolute(output), dir = mesh.parent_path();
   fs::create_directories(dir);
-  std::vector<std::string> args{"-" + std::to_string(options.dimension), script.string()};
+  // std::string(...).append, not "lit" + std::to_string: GCC 12's -Wrestrict false positive.
+  std::vector<std::string> args{std::string("-").append(std::to_string(options.dimension)), script.string()};
   for (const auto& [name, value] : options.numbers) {
     if (!std::isfinite(value)) {
       throw std::invalid_argument("GmshOptions.numbers[" + name + "] is not finite");
@@ -58,7 +60,7 @@ int mesh_with_gmsh(const std::filesystem::path& geo, const std::filesystem::path
   if (!r.succeeded() || !errors.empty() || nodes == 0) {
     fs::remove(mesh, ignored);  // gmsh writes a mesh after some errors: never leave one that looks complete
     throw std::runtime_error(name + ": gmsh (" + options.executable + ") could not mesh it" +
-                             (r.exited ? " (exit " + std::to_string(r.exit_code) + ")" : std::string()) +
+                             (r.exited ? std::string(" (exit ").append(std::to_string(r.exit_code)).append(")") : std::string()) +
                              (errors.empty() ? "; it wrote no nodes; its output is in " + (dir / log_name).string()
                                              : "; gmsh says:" + errors) +
                              " (log: " + (dir / log_name).string() + ")");
