@@ -1,4 +1,5 @@
 #include <wbm/fem/calculix.hpp>
+#include <wbm/fem/matrix_market.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -252,20 +253,7 @@ AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::
                                        const std::string& source) {
   AssembledModel m;
   std::istringstream in(dofs);
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::string t = trim(line);
-    if (t.empty()) continue;
-    const auto dot = t.find('.');
-    int node = 0, direction = 0;
-    if (dot == std::string::npos || !parse_number(std::string_view(t).substr(0, dot), node) ||
-        !parse_number(std::string_view(t).substr(dot + 1), direction) || direction < 1 || direction > 6) {
-      throw std::invalid_argument(source + ".dof:" + std::to_string(number) + ": expected 'node.direction', got '" + t + "'");
-    }
-    m.dofs.emplace_back(node, direction);
-  }
+  m.dofs = read_dof_map(in, source + ".dof");
   if (m.dofs.empty()) throw std::invalid_argument(source + ".dof: no degree of freedom (every DOF constrained?)");
   const int n = static_cast<int>(m.dofs.size());
   m.stiffness = triangle(stiffness, n, source + ".sti");

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
@@ -158,6 +159,67 @@ Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read Matrix Market file " + path);
   return read_matrix_market(in, path);
+}
+
+std::vector<std::pair<int, int>> read_dof_map(std::istream& in, const std::string& source) {
+  std::vector<std::pair<int, int>> dofs;
+  std::map<std::pair<int, int>, size_t> row_of;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::string t = line;
+    std::replace(t.begin(), t.end(), ',', ' ');
+    const auto w = words(t);
+    if (w.empty() || w[0].front() == '%' || w[0].front() == '#' || w[0].rfind("**", 0) == 0) continue;
+    long long node = 0, direction = 0;
+    bool ok = false;
+    if (w.size() == 1) {
+      const auto dot = w[0].find('.');
+      ok = dot != std::string_view::npos && parse_integer(w[0].substr(0, dot), node) &&
+           parse_integer(w[0].substr(dot + 1), direction);
+    } else if (w.size() == 2) {
+      ok = parse_integer(w[0], node) && parse_integer(w[1], direction);
+    }
+    if (!ok || node < 1 || node > std::numeric_limits<int>::max() || direction < 1 || direction > 6) {
+      throw std::invalid_argument(source + ":" + std::to_string(number) +
+                                  ": expected 'node.direction', 'node direction' or 'node, direction' with node >= 1 "
+                                  "and direction 1-6, got '" + line + "'");
+    }
+    const std::pair<int, int> key{static_cast<int>(node), static_cast<int>(direction)};
+    if (const auto [it, fresh] = row_of.emplace(key, dofs.size()); !fresh) {
+      throw std::invalid_argument(source + ":" + std::to_string(number) + ": node " + std::to_string(node) +
+                                  " direction " + std::to_string(direction) + " is also row " +
+                                  std::to_string(it->second + 1) + "; each row must be a different DOF");
+    }
+    dofs.push_back(key);
+  }
+  return dofs;
+}
+
+MatrixMarketModel read_matrix_market_model(const std::filesystem::path& stiffness, const std::filesystem::path& mass,
+                                           const std::filesystem::path& dofs, const std::filesystem::path& damping) {
+  MatrixMarketModel m;
+  {
+    std::ifstream in(dofs);
+    if (!in) throw std::runtime_error("cannot read DOF map " + dofs.string());
+    m.dofs = read_dof_map(in, dofs.string());
+  }
+  const auto n = static_cast<Eigen::Index>(m.dofs.size());
+  auto load = [&](const std::filesystem::path& p, const char* what) {
+    Eigen::SparseMatrix<double> a = read_matrix_market_file(p.string());
+    if (a.rows() != n || a.cols() != n) {
+      throw std::invalid_argument(std::string(what).append(" ").append(p.string()).append(" is ")
+                                      .append(std::to_string(a.rows())).append(" x ").append(std::to_string(a.cols()))
+                                      .append(", but the DOF map ").append(dofs.string()).append(" has ")
+                                      .append(std::to_string(n)).append(" rows: give the matrices and the map of one model"));
+    }
+    return a;
+  };
+  m.stiffness = load(stiffness, "stiffness");
+  m.mass = load(mass, "mass");
+  if (!damping.empty()) m.damping = load(damping, "damping");
+  return m;
 }
 
 }  // namespace wbm::fem

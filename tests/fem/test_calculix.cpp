@@ -4,6 +4,7 @@
 // the natural frequencies CalculiX's own Lanczos *FREQUENCY step prints for the clamped bar, which
 // the eigenvalues of the matrices read back must equal.
 #include <wbm/fem/calculix.hpp>
+#include <wbm/fem/matrix_market.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -171,4 +172,69 @@ TEST(Calculix, ReportsCalculixErrorsWithTheDeckNameAndAMissingExecutable) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)wbm::fem::parse_calculix_matrices("1 1 2.0\n1 3 1.0\n", "1 1 1.0\n", "5.1\n5.2\n", "m"); },
       {"m.sti:2: expected 'row col value' with 1 <= row, col <= 2"});
+}
+
+namespace {
+
+// K as a Matrix Market symmetric file (lower triangle, 17 significant digits).
+void write_matrix_market(const fs::path& p, const Eigen::SparseMatrix<double>& a) {
+  std::ofstream out(p);
+  out.precision(17);
+  Eigen::Index entries = 0;
+  for (Eigen::Index c = 0; c < a.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) entries += it.row() >= it.col() ? 1 : 0;
+  }
+  out << "%%MatrixMarket matrix coordinate real symmetric\n% written by test_calculix\n"
+      << a.rows() << " " << a.cols() << " " << entries << "\n";
+  for (Eigen::Index c = 0; c < a.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
+      if (it.row() >= it.col()) out << it.row() + 1 << " " << it.col() + 1 << " " << it.value() << "\n";
+    }
+  }
+}
+
+}  // namespace
+
+// Another FE code's matrices: K, M, C as Matrix Market files with a DOF map — here CalculiX's
+// own .dof file for the clamped bar (its real format, "node.direction"), and the same map as
+// "node, direction" lines. The model read back is ccx's, entry for entry, row for row.
+TEST(MatrixMarketModel, ReadsAnFeCodesMatricesWithItsDofMap) {
+  write_bar_mesh();
+  const auto deck = wbm::fem::read_calculix_deck(
+      write("mm.inp", "*INCLUDE, INPUT=mesh/bar.inp\n" + kMaterial + "*BOUNDARY\nROOT, 1, 3\n"));
+  const fs::path dir = work() / "mm";
+  fs::create_directories(dir);
+  const auto ccx = wbm::fem::assemble_with_calculix(deck, {.executable = "ccx", .work_directory = dir});
+  write_matrix_market(dir / "k.mtx", ccx.stiffness);
+  write_matrix_market(dir / "m.mtx", ccx.mass);
+  write_matrix_market(dir / "c.mtx", 1e-4 * ccx.stiffness);
+  const auto a = wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "job.dof", dir / "c.mtx");
+  EXPECT_EQ(a.dofs, ccx.dofs);
+  EXPECT_EQ(Eigen::MatrixXd(a.stiffness - ccx.stiffness).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(Eigen::MatrixXd(a.mass - ccx.mass).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(Eigen::MatrixXd(a.damping - 1e-4 * ccx.stiffness).cwiseAbs().maxCoeff(), 1e-15 * 1e-4 * ccx.stiffness.coeffs().cwiseAbs().maxCoeff());
+  {
+    std::ofstream map(dir / "map.txt");
+    map << "# node, direction\n";
+    for (const auto& [node, d] : ccx.dofs) map << node << ", " << d << "\n";
+  }
+  const auto b = wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "map.txt");
+  EXPECT_EQ(b.dofs, ccx.dofs);
+  EXPECT_EQ(b.damping.rows(), 0);  // no damping file: none
+  // Refusals: a map of another model, a repeated DOF, a malformed line, a missing file.
+  std::ofstream(dir / "short.txt") << "5.1\n5.2\n";
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "short.txt"); },
+      {"stiffness", "k.mtx is 48 x 48, but the DOF map", "short.txt has 2 rows"});
+  std::ofstream(dir / "twice.txt") << "5.1\n5 2\n5, 1\n";
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "twice.txt"); },
+      {"twice.txt:3: node 5 direction 1 is also row 1"});
+  std::ofstream(dir / "bad.txt") << "5.1\n5.7\n";
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "bad.txt"); },
+      {"bad.txt:2: expected 'node.direction'", "direction 1-6, got '5.7'"});
+  wbm::testing::expect_throw_with<std::runtime_error>(
+      [&] { (void)wbm::fem::read_matrix_market_model(dir / "k.mtx", dir / "m.mtx", dir / "none.txt"); },
+      {"cannot read DOF map", "none.txt"});
 }

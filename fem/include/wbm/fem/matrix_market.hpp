@@ -3,8 +3,11 @@
 /// Formats"], the exchange format of FE codes' assembled matrices (mass, stiffness, damping).
 /// Units: whatever the file's FE model uses; nothing is converted here.
 
+#include <filesystem>
 #include <istream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <Eigen/SparseCore>
 
@@ -29,5 +32,30 @@ namespace wbm::fem {
 
 /// The same from a file; throws std::runtime_error naming the path if it cannot be opened.
 [[nodiscard]] Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path);
+
+/// A DOF map: what each row of an FE code's matrices is, one line per row in row order:
+/// "node.direction" (CalculiX's .dof file), "node direction" or "node, direction", with
+/// direction 1, 2, 3 = x, y, z and 4, 5, 6 = rotations about them. Blank lines and comment lines
+/// (starting with '%', '#' or "**") are skipped. Returns (node, direction) per row.
+/// Throws std::invalid_argument "source:line: expected 'node.direction' …" for anything else,
+/// and naming both rows for a (node, direction) given twice.
+[[nodiscard]] std::vector<std::pair<int, int>> read_dof_map(std::istream& in, const std::string& source);
+
+/// Mass, stiffness and optional damping from another FE code, as Matrix Market files, with the
+/// DOF map of their rows (users whose FE code is not CalculiX; issue #15).
+struct MatrixMarketModel {
+  Eigen::SparseMatrix<double> stiffness;  // K, n × n [the FE model's units]
+  Eigen::SparseMatrix<double> mass;       // M, n × n
+  Eigen::SparseMatrix<double> damping;    // C, n × n, or 0 × 0 when no file was given
+  std::vector<std::pair<int, int>> dofs;  // per row: (node, direction)
+};
+
+/// Reads K, M (and C unless `damping` is empty) and the DOF map. Throws std::runtime_error naming
+/// a file that cannot be opened, and std::invalid_argument (naming the files and sizes) unless
+/// every matrix is square and of the map's length n.
+[[nodiscard]] MatrixMarketModel read_matrix_market_model(const std::filesystem::path& stiffness,
+                                                         const std::filesystem::path& mass,
+                                                         const std::filesystem::path& dofs,
+                                                         const std::filesystem::path& damping = {});
 
 }  // namespace wbm::fem
