@@ -226,9 +226,11 @@ order the family does not have.)");
       "solve",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, double frequency_hz,
          const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
-         const solvers::TimeBasis& weighting, const std::string& formulation, const std::vector<Load>& loads) {
+         const solvers::TimeBasis& weighting, const std::string& formulation, const std::vector<Load>& loads,
+         const std::vector<int>& harmonics) {
         solvers::WeightedResidualOptions options;
         options.formulation = solvers::parse_formulation(formulation);
+        options.harmonics = harmonics;
         const auto s = solvers::solve_weighted_residual(system, forcing(dof, amplitude, frequency_hz, loads),
                                                         points(contacts), trial, weighting, options);
         py::dict out;
@@ -242,17 +244,20 @@ order the family does not have.)");
         out["max_penetration"] = s.max_penetration;
         out["max_contact_force"] = s.max_contact_force;
         if (s.contact_force_samples.size() > 0) out["contact_force_samples"] = py::cast(s.contact_force_samples);
+        if (!harmonics.empty()) out["dropped_harmonics_residual"] = s.dropped_harmonics_residual;
         out["wall_time_s"] = s.wall_time_s;
         return out;
       },
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional",
-      py::arg("loads") = std::vector<Load>{},
+      py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
       R"(Forced response by weighted residuals [JL14 Eqs. (14)–(17)] to F cos(2π f t) on DOF `dof`.
 
 loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
-RigidStop or all penalty). Returns a dict:
+RigidStop or all penalty). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
+(empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
+dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖. Returns a dict:
 converged (verified residual), status, message, iterations, relative_residual, residual_tolerance,
 coefficients (n × M array: row = DOF, column = trial function), max_penetration [m],
 max_contact_force [N], contact_force_samples (n_c × M, rigid stops only) and wall_time_s.
@@ -262,9 +267,11 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,
          const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
          const solvers::TimeBasis& weighting, const std::string& formulation, bool stability, double max_step,
-         double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads) {
+         double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads,
+         const std::vector<int>& harmonics) {
         solvers::WeightedResidualOptions options;
         options.formulation = solvers::parse_formulation(formulation);
+        options.harmonics = harmonics;
         const solvers::WeightedResidual base(system, forcing(dof, amplitude, frequency_hz.first, loads), points(contacts),
                                              trial, weighting, options);
         solvers::ResponseCurveOptions o;
@@ -279,7 +286,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
         o.samples = samples;
         const auto curve = solvers::trace_response(base, o);
         const auto n = static_cast<Eigen::Index>(curve.points.size());
-        Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n);
+        Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n), dropped(n);
         Eigen::Matrix<bool, Eigen::Dynamic, 1> stable(n);
         for (Eigen::Index i = 0; i < n; ++i) {
           const auto& p = curve.points[static_cast<size_t>(i)];
@@ -291,6 +298,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
           mu(i) = stability ? p.max_multiplier : NAN;
           mu_error(i) = stability ? p.max_multiplier_error : NAN;
           stable(i) = p.stable;
+          dropped(i) = p.dropped_harmonics_residual;
         }
         std::vector<double> folds;
         for (const auto& fold : curve.folds) folds.push_back(fold.parameter);
@@ -303,6 +311,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
         out["min_displacement"] = py::cast(umin);
         out["amplitude"] = py::cast(amp);
         out["max_contact_force"] = py::cast(force);
+        if (!harmonics.empty()) out["dropped_harmonics_residual"] = py::cast(dropped);
         if (stability) {
           out["stable"] = py::cast(stable);
           out["max_floquet_multiplier"] = py::cast(mu);
@@ -317,7 +326,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional", py::arg("stability") = true,
       py::arg("max_step") = 2e-2, py::arg("max_frequency_step_hz") = 0.0, py::arg("max_points") = 5000,
-      py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{},
+      py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
 [Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
 matrix on `samples` steps; refused for rigid stops: pass stability=False). Arguments as solve();
@@ -326,7 +335,8 @@ Returns a dict of arrays in branch order (length = points): frequency_hz, max_di
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
 (bool), max_floquet_multiplier, max_floquet_multiplier_error; and folds_hz (turning points),
 fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
-message, wall_time_s, stability_time_s. Non-convergence is returned, not raised.)");
+message, wall_time_s, stability_time_s; with harmonics (a selection, as in solve()):
+dropped_harmonics_residual per point. Non-convergence is returned, not raised.)");
   m.def(
       "nonlinear_mode",
       [](const solvers::MechanicalSystem& system, const std::vector<std::pair<int, double>>& stops,

@@ -53,6 +53,7 @@ nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
           {"complementarity_m", finite_or_null(s.complementarity)},
           {"contact_unknowns", s.contact_unknowns},
           {"condition_number", finite_or_null(s.condition_number)},
+          {"dropped_harmonics_residual", finite_or_null(s.dropped_harmonics_residual)},
           {"linear_solver", s.linear_solver},
           {"operators", s.operator_rule},
           {"wall_time_s", s.wall_time_s}};
@@ -211,6 +212,36 @@ Eigen::MatrixXd observed_samples(const Scene& scene, const solvers::TimeBasis& t
   return out;
 }
 
+// [basis] harmonic_selection: warn when the solutions leave more than kDroppedWarning ‖b‖ of the
+// full residual in the dropped harmonics (the selection is then an approximation, not the full
+// harmonic balance), with the largest value and where.
+constexpr double kDroppedWarning = 1e-6;
+std::string selection_label(const Scene& scene) {
+  if (scene.basis.harmonic_selection == "odd") return "\"odd\"";
+  std::string l = "[";
+  for (size_t i = 0; i < scene.basis.selected_harmonics.size(); ++i) {
+    l.append(i == 0 ? "" : ", ").append(std::to_string(scene.basis.selected_harmonics[i]));
+  }
+  return l + "]";
+}
+void warn_dropped_harmonics(const Scene& scene, const std::vector<double>& hz, const std::vector<double>& dropped,
+                            AnalysisResult& out) {
+  if (scene.basis.selected_harmonics.empty()) return;
+  double worst = 0.0, at = 0.0;
+  for (size_t i = 0; i < dropped.size(); ++i) {
+    if (std::isfinite(dropped[i]) && dropped[i] > worst) {
+      worst = dropped[i];
+      at = hz[i];
+    }
+  }
+  if (!(worst > kDroppedWarning)) return;
+  out.warnings.push_back("harmonic_selection = " + selection_label(scene) + ": the contact forces have " +
+                         "harmonics outside the selection (e.g. the mean and even harmonics of a one-sided stop); the "
+                         "residual left in the dropped harmonics reaches " + format("%.3g", worst) + " ‖b‖ at f = " +
+                         format("%.6g", at) + " Hz (> " + format("%g", kDroppedWarning) + "), so these results are "
+                         "not the full harmonic balance's: keep every harmonic (remove harmonic_selection) to compare");
+}
+
 void solve_one(const Scene& scene, AnalysisResult& out) {
   const auto system = scene.system();
   const auto forcing = scene.harmonic_forcing();
@@ -225,6 +256,11 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
                 std::string(solvers::to_string(scene.basis.formulation)) + ", f = " +
                 format("%g", forcing.frequency_hz) + " Hz: " + solution.report.message + ", relative residual " +
                 format("%.2e", solution.relative_residual) + ", " + format("%.3f", solution.wall_time_s * 1e3) + " ms";
+  if (!scene.basis.selected_harmonics.empty()) {
+    out.summary += "; harmonic_selection = " + selection_label(scene) + ": residual in the dropped harmonics " +
+                   format("%.2e", solution.dropped_harmonics_residual) + " ‖b‖";
+    warn_dropped_harmonics(scene, {forcing.frequency_hz}, {solution.dropped_harmonics_residual}, out);
+  }
   if (!out.converged) return;  // no curve from an unconverged iterate
   const int p = scene.output.samples;
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
@@ -281,6 +317,8 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   int failed = 0, restarts = 0;
   nlohmann::json restarted_points = nlohmann::json::array();
   const int forced = scene.harmonic_forcing(frequencies.front()).dof;
+  const bool selection = !scene.basis.selected_harmonics.empty();
+  std::vector<double> dropped_hz, dropped;  // with a selection: per converged point
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < frequencies.size(); ++i) {
     const double f = frequencies[i];
@@ -349,6 +387,11 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
       harmonic_samples.push_back(std::move(observed));
     }
     row.push_back(contacts.empty() ? 0.0 : solution.max_contact_force);
+    if (selection) {
+      row.push_back(solution.dropped_harmonics_residual);
+      dropped_hz.push_back(f);
+      dropped.push_back(solution.dropped_harmonics_residual);
+    }
     row.push_back(solution.report.iterations);
     row.push_back(restarted ? 1.0 : 0.0);
     rows.push_back(row);
@@ -358,13 +401,16 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
     const std::string name = scene.structure->dof_name(dof);
     t.header.insert(t.header.end(), {"max_u_" + name + " [m]", "min_u_" + name + " [m]", "rms_u_" + name + " [m]"});
   }
-  t.header.insert(t.header.end(), {"max_contact_force [N]", "newton_iterations [-]", "restarted_from_linear [-]"});
+  t.header.push_back("max_contact_force [N]");
+  if (selection) t.header.push_back("dropped_harmonics_residual [-]");
+  t.header.insert(t.header.end(), {"newton_iterations [-]", "restarted_from_linear [-]"});
   for (size_t c = 0; c < t.header.size(); ++c) {
     Eigen::VectorXd column(static_cast<Eigen::Index>(rows.size()));
     for (size_t r = 0; r < rows.size(); ++r) column(static_cast<Eigen::Index>(r)) = rows[r][c];
     t.columns.push_back(column);
   }
   if (!rows.empty()) out.tables.push_back(std::move(t));
+  warn_dropped_harmonics(scene, dropped_hz, dropped, out);
   if (!harmonic_hz.empty()) {
     out.tables.push_back(point_harmonics(scene, "sweep_harmonics.csv", dofs, harmonic_hz, harmonic_samples));
   }
@@ -518,6 +564,14 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
       header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]",
                                    "monodromy_steps [-]"});
       columns.insert(columns.end(), {stable, mu, mu_error, steps});
+    }
+    if (!scene.basis.selected_harmonics.empty()) {
+      Eigen::VectorXd dropped(n);
+      for (Eigen::Index i = 0; i < n; ++i) dropped(i) = curve.points[static_cast<size_t>(i)].dropped_harmonics_residual;
+      header.push_back("dropped_harmonics_residual [-]");
+      columns.push_back(dropped);
+      warn_dropped_harmonics(scene, std::vector<double>(f.data(), f.data() + n),
+                             std::vector<double>(dropped.data(), dropped.data() + n), out);
     }
     header.push_back("corrector_iterations [-]");
     columns.push_back(its);

@@ -897,7 +897,7 @@ class Parser {
     }
     r_.only(*t, "basis",
             {"trial", "weighting", "dimension", "level", "harmonics", "formulation", "time_samples", "operators",
-             "contact_quadrature"});
+             "contact_quadrature", "harmonic_selection"});
     Basis& b = s_.basis;
     const std::string trial = r_.text(*t, "basis", "trial", b.trial);
     const std::string weighting = r_.text(*t, "basis", "weighting", trial);
@@ -976,9 +976,13 @@ class Parser {
     }
     if (plot) {
       if (t->contains("weighting")) r_.warn(Reader::source_of(*t, "weighting"), "basis.weighting is not used by basis-plot");
+      if (t->contains("harmonic_selection")) {
+        r_.warn(Reader::source_of(*t, "harmonic_selection"), "basis.harmonic_selection is not used by basis-plot");
+      }
       b.weighting = b.trial;
       return;
     }
+    harmonic_selection(*t, harmonic_balance, rigid);
     if (!tb && !t->contains("weighting")) return;  // the weighting defaults to the trial name reported above
     try {
       wb = solvers::TimeBasis::from_name(weighting, b.dimension);
@@ -993,6 +997,64 @@ class Parser {
                  "not admissible: " + why);
       }
     }
+  }
+
+  // [basis] harmonic_selection: "all", "odd" (1, 3, …) or a list of harmonic numbers, for
+  // Fourier:Fourier with penalty laws; every load must act at a kept harmonic.
+  void harmonic_selection(const toml::table& t, bool harmonic_balance, bool rigid) {
+    const toml::node* n = t.get("harmonic_selection");
+    if (n == nullptr) return;
+    Basis& b = s_.basis;
+    const int highest = b.dimension / 2;  // H for M = 2H + 1, M/2 for M = 2^J
+    const std::string where = "basis.harmonic_selection";
+    const std::string allowed = "\"all\", \"odd\" (harmonics 1, 3, …, the usual choice for a symmetric system) or a "
+                                "list of harmonic numbers in [0, " + std::to_string(highest) + "], e.g. [0, 1, 2, 3]";
+    std::vector<int> kept;
+    if (const auto name = n->value<std::string>()) {
+      if (*name == "all") return;
+      if (*name != "odd") {
+        r_.error(n->source(), where, "\"" + *name + "\" is not a selection; use " + allowed);
+        return;
+      }
+      for (int h = 1; h <= highest; h += 2) kept.push_back(h);
+      b.harmonic_selection = "odd";
+    } else if (const toml::array* list = n->as_array(); list != nullptr && !list->empty()) {
+      for (const auto& e : *list) kept.push_back(static_cast<int>(r_.integer_value(e, where, 0, highest)));
+      std::sort(kept.begin(), kept.end());
+      if (std::adjacent_find(kept.begin(), kept.end()) != kept.end()) {
+        r_.error(n->source(), where, "harmonic " + std::to_string(*std::adjacent_find(kept.begin(), kept.end())) +
+                                         " is listed twice; list each harmonic once");
+        return;
+      }
+      b.harmonic_selection = "list";
+    } else {
+      r_.error(n->source(), where, "expected " + allowed + ", got " + Reader::type_name(*n));
+      return;
+    }
+    if (!harmonic_balance) {
+      r_.error(n->source(), where, "selects harmonics of the Fourier basis: it needs trial = weighting = \"fourier\" "
+                                   "(harmonic balance); wavelet bases have no harmonics. Remove it, or use Fourier");
+      return;
+    }
+    if (rigid) {
+      r_.error(n->source(), where, "rigid stops impose the Signorini conditions at M instants, which need every "
+                                   "harmonic; remove the selection or use law = \"linear\"");
+      return;
+    }
+    if (s_.forcing) {
+      std::vector<solvers::HarmonicLoad> loads = s_.forcing->loads;
+      if (s_.forcing->amplitude != 0.0) loads.insert(loads.begin(), {s_.forcing->dof, s_.forcing->amplitude, 0.0, 1});
+      for (const auto& l : loads) {
+        if (l.amplitude != 0.0 && !std::binary_search(kept.begin(), kept.end(), l.harmonic)) {
+          r_.error(n->source(), where, "drops harmonic " + std::to_string(l.harmonic) + ", at which a load acts on DOF " +
+                                           (s_.structure ? s_.structure->dof_name(l.dof) : std::to_string(l.dof)) +
+                                           " (the projection would remove it): keep harmonic " +
+                                           std::to_string(l.harmonic) + " or remove the load");
+          return;
+        }
+      }
+    }
+    b.selected_harmonics = std::move(kept);
   }
 
   void basis_plot(const toml::table& root) {
@@ -1324,7 +1386,8 @@ solvers::WeightedResidualOptions Scene::weighted_residual_options() const {
           .operators = basis.operators,
           .contact_quadrature = basis.contact_quadrature,
           .linear_solver = solver.linear_solver,
-          .newton = solver.newton};
+          .newton = solver.newton,
+          .harmonics = basis.selected_harmonics};
 }
 
 std::vector<int> Scene::output_dofs() const {
@@ -1486,6 +1549,10 @@ nlohmann::json to_json(const Scene& s) {
       b["time_samples"] = s.basis.time_samples;
       b["operators"] = s.basis.operators == solvers::OperatorRule::Discrete ? "discrete" : "automatic";
       b["contact_quadrature"] = std::string(solvers::to_string(s.basis.contact_quadrature));
+      if (!s.basis.selected_harmonics.empty()) {  // as given: "odd", or the list
+        b["harmonic_selection"] = s.basis.harmonic_selection == "odd" ? nlohmann::json("odd")
+                                                                       : nlohmann::json(s.basis.selected_harmonics);
+      }
     }
     j["basis"] = b;
   }

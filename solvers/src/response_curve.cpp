@@ -274,6 +274,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       curve.points.push_back(std::move(r));
       continue;
     }
+    if (!base.harmonics().empty()) {
+      r.dropped_harmonics_residual = family.at(p.parameter).dropped_harmonics_residual(p.x, family.load(p.parameter));
+    }
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(p.x, nc).transpose();  // P × n_c
     for (int c = 0; c < nc; ++c) {
       for (Eigen::Index k = 0; k < uc.rows(); ++k) {

@@ -120,6 +120,9 @@ struct SampledBasis {
   SparseRows values;                          // wavelets (Q × M)
   Eigen::RowVectorXd top_derivative;          // Fourier, d = 1, M = 2^J: −πM sin πMτ_q (outside the span)
   Eigen::SparseMatrix<double> derivative_matrix;  // Fourier, d = 1: coefficients of the derivative
+  // Harmonic selection of a weighting basis: keep(k) = 1 for a kept function, 0 for a dropped
+  // one, applied to every projection (Π of WeightedResidualOptions::harmonics); empty: all kept.
+  Eigen::RowVectorXd keep;
   int q = 0, m = 0, derivative = 0;
 
   SampledBasis(const TimeBasis& basis, const Eigen::VectorXd& tau, int d, std::shared_ptr<const spectral::Aft> fft)
@@ -149,7 +152,14 @@ struct SampledBasis {
   }
 
   // (1/Q) Σ_q S(i, q) v_j^{(d)}(τ_q): n × Q samples → n × M (the Q-point rule for ∫ v_j s dτ).
+  // With a selection, only the kept functions' projections (the others 0).
   [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& s) const {
+    Eigen::MatrixXd out = unselected_projection(s);
+    if (keep.size() > 0) out *= keep.asDiagonal();
+    return out;
+  }
+  // The projection on every function, selection or not.
+  [[nodiscard]] Eigen::MatrixXd unselected_projection(const Eigen::MatrixXd& s) const {
     if (aft && derivative == 0) return aft->project(s);
     if (aft) throw std::logic_error("SampledBasis::project: derivative samples of a Fourier basis are not projected");
     return Eigen::MatrixXd(s * values) / static_cast<double>(q);
@@ -169,6 +179,7 @@ struct SampledBasis {
         out.col(it.col()) += (it.value() / q) * x.col(static_cast<Eigen::Index>(i));
       }
     }
+    if (keep.size() > 0) out *= keep.asDiagonal();
     return out;
   }
 };
@@ -248,6 +259,9 @@ struct WeightedResidual::Impl {
   };
   std::shared_ptr<const Sampling> sampling;
   bool cell_average_rule = false;
+  // Harmonic selection (WeightedResidualOptions::harmonics, sorted): keep(k) = 1 if function k's
+  // harmonic is kept, else 0 (length M); empty without a selection.
+  Eigen::RowVectorXd keep;
 
   // The rows of V (low_rank_contact_jacobian) of one contact: the trial functions at its samples
   // in contact (by FFTW for a Fourier trial basis, else these sparse rows), then their slopes at
@@ -387,6 +401,7 @@ struct WeightedResidual::Impl {
                                   "along the slope u̇ of the trial functions; the trial basis " + trial.name() +
                                   " has no pointwise derivative: use ContactQuadrature::Midpoint (the paper's rule)");
     }
+    select_harmonics();
     auto smp = std::make_shared<Sampling>();
     smp->tau.resize(q);
     for (int k = 0; k < q; ++k) smp->tau(k) = (k + 0.5) / q;
@@ -394,8 +409,10 @@ struct WeightedResidual::Impl {
     smp->trial.emplace(trial, smp->tau, 0, smp->aft);
     if (cell_average_rule) smp->trial_slope.emplace(trial, smp->tau, 1, smp->aft);
     smp->weighting.emplace(weighting, smp->tau, 0, smp->aft);
+    smp->weighting->keep = keep;
     sampling = smp;
     assemble_time_operators();
+    if (keep.size() > 0) require_block_diagonal_operators();
     g.emplace(system, ops, options.linear_solver,
               weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional);
 
@@ -455,7 +472,7 @@ struct WeightedResidual::Impl {
       : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
         weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
         ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
-        cell_average_rule(base.cell_average_rule),
+        cell_average_rule(base.cell_average_rule), keep(base.keep),
         g(base.g->unfactorized()), b(base.b), scale(base.scale),
         contact_terms(base.contact_terms), rigid(base.rigid), collocation(base.collocation) {
     forcing.frequency_hz = frequency_hz;
@@ -587,8 +604,11 @@ struct WeightedResidual::Impl {
     };
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
-        Eigen::VectorXd kappa = Eigen::VectorXd::Constant(q, at(0, c, 0, d));
+        // With a selection, W = Π W: only the kept harmonics enter the kernel.
+        const auto kept = [&](int k) { return keep.size() == 0 || keep(k) != 0.0; };
+        Eigen::VectorXd kappa = Eigen::VectorXd::Constant(q, kept(0) ? at(0, c, 0, d) : 0.0);
         for (int hh = 1; hh <= paired; ++hh) {
+          if (!kept(cos_index[static_cast<size_t>(hh)])) continue;
           const int ci = cos_index[static_cast<size_t>(hh)], si = sin_index[static_cast<size_t>(hh)];
           const double a = at(ci, c, ci, d), b = at(ci, c, si, d);
           if (std::abs(a - at(si, c, si, d)) > tol || std::abs(b + at(si, c, ci, d)) > tol) return std::nullopt;
@@ -598,11 +618,73 @@ struct WeightedResidual::Impl {
             if (index >= q) index -= q;
           }
         }
-        if (top) k.top(c, d) = at(m - 1, c, m - 1, d);
+        if (top && kept(m - 1)) k.top(c, d) = at(m - 1, c, m - 1, d);
         k.kappa[static_cast<size_t>(c) * nc + d] = std::move(kappa);
       }
     }
     return k;
+  }
+
+  // WeightedResidualOptions::harmonics: validated, sorted, and the mask `keep` built.
+  void select_harmonics() {
+    auto& kept = options.harmonics;
+    if (kept.empty()) return;
+    const std::string what = "WeightedResidualOptions.harmonics (harmonic selection)";
+    if (!trial.is_fourier() || !weighting.is_fourier()) {
+      throw std::invalid_argument(what + ": needs the Fourier basis as trial and weighting (harmonic balance); " +
+                                  trial.name() + ":" + weighting.name() + " has no harmonics to select: leave the "
+                                  "list empty, or use Fourier:Fourier");
+    }
+    if (rigid) {
+      throw std::invalid_argument(what + ": rigid stops impose the Signorini conditions at M collocation instants, "
+                                  "which need every function of the basis; leave the list empty, or model the stops "
+                                  "as penalty laws");
+    }
+    const spectral::FourierBasis basis(m);
+    const int highest = basis.highest_harmonic();
+    std::sort(kept.begin(), kept.end());
+    for (size_t i = 0; i < kept.size(); ++i) {
+      if (kept[i] < 0 || kept[i] > highest) {
+        throw std::invalid_argument(what + ": harmonic " + std::to_string(kept[i]) + " is outside [0, " +
+                                    std::to_string(highest) + "], the harmonics of the Fourier basis of M = " +
+                                    std::to_string(m) + " functions; remove it or raise the number of harmonics");
+      }
+      if (i > 0 && kept[i] == kept[i - 1]) {
+        throw std::invalid_argument(what + ": harmonic " + std::to_string(kept[i]) + " is listed twice; list each once");
+      }
+    }
+    std::vector<char> chosen(static_cast<size_t>(highest) + 1, 0);
+    for (int h : kept) chosen[static_cast<size_t>(h)] = 1;
+    for (const auto& l : forcing.loads()) {
+      if (l.amplitude != 0.0 && l.harmonic <= highest && chosen[static_cast<size_t>(l.harmonic)] == 0) {
+        throw std::invalid_argument(what + ": the load on DOF " + std::to_string(l.dof) + " acts at harmonic " +
+                                    std::to_string(l.harmonic) + ", which is not kept: the projection would drop it; "
+                                    "add " + std::to_string(l.harmonic) + " to the harmonics or remove the load");
+      }
+    }
+    keep.resize(m);
+    for (int k = 0; k < m; ++k) keep(k) = chosen[static_cast<size_t>(basis.harmonic(k))];
+  }
+
+  // A selection projects the weighting functions only; that is the Galerkin projection on the
+  // kept span only if no time operator couples a kept function with a dropped one. True for the
+  // analytic Fourier operators and for discrete ones on Q ≥ M midpoints (products of harmonics
+  // up to M − 1 are integrated exactly); checked, as an invariant, in case that ever changes.
+  void require_block_diagonal_operators() const {
+    const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+    for (const auto* op : a) {
+      const double tol = 1e-12 * std::max(op->cwiseAbs().maxCoeff(), 1.0);
+      for (int j = 0; j < m; ++j) {
+        for (int k = 0; k < m; ++k) {
+          if (keep(j) != keep(k) && std::abs((*op)(j, k)) > tol) {
+            throw std::logic_error("weighted residual, harmonic selection: the time operators (" + ops.rule +
+                                   ") couple a kept harmonic with a dropped one (entry " + format_number((*op)(j, k)) +
+                                   " at functions " + std::to_string(j) + ", " + std::to_string(k) +
+                                   "): the projection would not be Galerkin; please report this");
+          }
+        }
+      }
+    }
   }
 
   [[nodiscard]] std::vector<std::vector<std::pair<int, double>>> contact_directions() const {
@@ -736,7 +818,10 @@ struct WeightedResidual::Impl {
   // bases by their sparse rows (O(active · support²)).
   [[nodiscard]] Eigen::MatrixXd contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const {
     const Sampling& smp = *sampling;
-    if (trial.is_fourier() && weighting.is_fourier()) return smp.aft->jacobian(kc);
+    if (trial.is_fourier() && weighting.is_fourier()) {
+      if (keep.size() == 0) return smp.aft->jacobian(kc);
+      return keep.transpose().asDiagonal() * smp.aft->jacobian(kc);  // rows: the weighting functions kept
+    }
     if (weighting.is_fourier() || trial.is_fourier()) {
       const SparseRows& v = weighting.is_fourier() ? smp.trial->values : smp.weighting->values;
       Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(m, q);  // S(k, q) = κ_q v_k(τ_q)
@@ -782,6 +867,11 @@ struct WeightedResidual::Impl {
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
   // the law's derivatives at the samples, one ContactTangent per contact.
   Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
+    return spectral::stacked(sampling->weighting->project(contact_force_samples(x, tangents)));
+  }
+
+  // f_c(u_c(τ_q)) (f̄_q for CellAverage), n_c × Q, and optionally the tangents.
+  Eigen::MatrixXd contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
     refuse_rigid("contact forces as a function of the displacement");
     const Sampling& smp = *sampling;
     const Eigen::MatrixXd u = contact_samples(x);
@@ -806,7 +896,7 @@ struct WeightedResidual::Impl {
       t.kc = kc;
       t.kd = kd;
     }
-    return spectral::stacked(smp.weighting->project(force));
+    return force;
   }
 
   // N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
@@ -819,7 +909,7 @@ struct WeightedResidual::Impl {
         // CellAverage: + Σ_q p_j(τ_q)/Q ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the
         // law's kink (a few per crossing): their rows are evaluated here.
         const auto [ts, ks] = sloped_samples(t);
-        block.noalias() += (ks.asDiagonal() * weighting.values(ts, 0)).transpose() * trial.values(ts, 1);
+        block.noalias() += (ks.asDiagonal() * weighting_values(ts)).transpose() * trial.values(ts, 1);
       }
       for (int k = 0; k < m; ++k) {
         for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
@@ -833,6 +923,13 @@ struct WeightedResidual::Impl {
     Eigen::MatrixXd j = compliance_times(contact_force_jacobian(tangents));
     j.diagonal().array() += 1.0;
     return j;
+  }
+
+  // The weighting functions at τ (rows = times), the dropped ones of a selection as 0.
+  [[nodiscard]] Eigen::MatrixXd weighting_values(const Eigen::VectorXd& tau) const {
+    Eigen::MatrixXd v = weighting.values(tau, 0);
+    if (keep.size() > 0) v *= keep.asDiagonal();
+    return v;
   }
 
   // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
@@ -896,7 +993,7 @@ struct WeightedResidual::Impl {
       }
       if (!t.sloped.empty()) {
         const auto [ts, ks] = sloped_samples(t);
-        const Eigen::MatrixXd ws = ks.asDiagonal() * weighting.values(ts, 0);
+        const Eigen::MatrixXd ws = ks.asDiagonal() * weighting_values(ts);
         for (int j = 0; j < m; ++j) {
           w.block(static_cast<Eigen::Index>(j) * nc + c, first + na, 1, ws.rows()) = ws.col(j).transpose();
         }
@@ -1007,7 +1104,15 @@ const TimeOperators& WeightedResidual::time_operators() const { return impl_->op
 std::string WeightedResidual::linear_solver() const { return impl_->g->modal() ? "modal" : "sparse-lu"; }
 
 std::string WeightedResidual::describe() const {
-  return impl_->trial.name() + ":" + impl_->weighting.name() + ", " + std::string(to_string(formulation()));
+  std::string d = impl_->trial.name() + ":" + impl_->weighting.name() + ", " + std::string(to_string(formulation()));
+  if (!impl_->options.harmonics.empty()) {
+    d += ", harmonics";
+    for (size_t i = 0; i < impl_->options.harmonics.size(); ++i) {
+      d.append(i == 0 ? " " : ", ").append(std::to_string(impl_->options.harmonics[i]));
+    }
+    d += " only";
+  }
+  return d;
 }
 
 double WeightedResidual::condition_number() const {
@@ -1066,6 +1171,27 @@ Eigen::VectorXd WeightedResidual::linear_response() const {
 }
 
 Eigen::VectorXd WeightedResidual::contact_unknowns(const Eigen::VectorXd& a) const { return impl_->gather(a); }
+
+const std::vector<int>& WeightedResidual::harmonics() const { return impl_->options.harmonics; }
+
+double WeightedResidual::dropped_harmonics_residual(const Eigen::VectorXd& x, double load) const {
+  const auto& p = *impl_;
+  if (p.keep.size() == 0) return std::numeric_limits<double>::quiet_NaN();
+  p.require_factorized();
+  if (p.nc == 0) return 0.0;
+  if (x.size() != static_cast<Eigen::Index>(p.nc) * p.m) {
+    throw std::invalid_argument("WeightedResidual::dropped_harmonics_residual: x has length " + std::to_string(x.size()) +
+                                ", expected n_c*M = " + std::to_string(p.nc * p.m));
+  }
+  // G a − b vanishes on the dropped functions (G is block-diagonal by harmonic, a and b are in
+  // the kept span): (I − Π) R = (I − Π) Pᵀ n(a), the contact forces' projection there.
+  Eigen::MatrixXd dropped = p.sampling->weighting->unselected_projection(p.contact_force_samples(x, nullptr));
+  dropped *= (Eigen::RowVectorXd::Ones(p.m) - p.keep).asDiagonal();
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.n) * p.m);
+  p.scatter(r, spectral::stacked(dropped), 1.0);
+  const double bnorm = std::abs(load) * p.b.norm();
+  return r.norm() / (bnorm > 0.0 ? bnorm : 1.0);
+}
 
 Eigen::VectorXd WeightedResidual::contact_residual(const Eigen::VectorXd& x, double load) const {
   return impl_->contact_residual(x, load);
@@ -1532,6 +1658,7 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
     }
   }
   s.residual_tolerance = p.options.residual_tolerance;
+  if (p.keep.size() > 0) s.dropped_harmonics_residual = p.nc > 0 ? dropped_harmonics_residual(x) : 0.0;
   if (s.report.converged() && (!std::isfinite(s.relative_residual) || !s.coefficients.allFinite())) {
     s.report.status = SolveStatus::NonFinite;
     s.report.message = "non-finite full residual after convergence of the condensed system";

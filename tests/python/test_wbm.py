@@ -197,3 +197,27 @@ def test_bad_arguments_raise_with_the_message():
         wbm.solve(wbm.MechanicalSystem([[1.0]], [[0.0]], [[1.0]]), 0, 1.0, 1.0, [], basis, basis, formulation="galerkin")
     with pytest.raises(RuntimeError, match="a rigid stop has no force law"):  # std::logic_error
         wbm.RigidStop(1e-3).force(0.0)
+
+
+def test_harmonic_selection_keeps_only_the_listed_harmonics():
+    # Linear oscillator: the closed-form response is harmonic 1 alone, so keeping [1] loses
+    # nothing. Fourier M = 8 ordering: 1, cos 2πτ, sin 2πτ, cos 4πτ, sin 4πτ, cos 6πτ, sin 6πτ, cos 8πτ.
+    m, c, k, force, f = 2.0, 6.0, 8e4, 10.0, 25.0
+    system = wbm.MechanicalSystem([[m]], [[c]], [[k]])
+    basis = wbm.TimeBasis("fourier", 8)
+    s = wbm.solve(system, 0, force, f, [], basis, basis, harmonics=[1])
+    assert s["converged"], s["message"]
+    w = 2 * math.pi * f
+    a = s["coefficients"]
+    assert math.hypot(a[0, 1], a[0, 2]) == pytest.approx(force / abs(complex(k - m * w * w, w * c)), rel=1e-12)
+    assert s["dropped_harmonics_residual"] == 0.0
+    # A one-sided stop: odd harmonics only leave the mean and harmonic 2 out (exact zeros), and
+    # the residual they would carry is reported, not hidden.
+    stop = wbm.LinearPenalty(1e6, 1e-4)
+    s = wbm.solve(system, 0, force, 32.0, [(0, stop)], basis, basis, harmonics=[1, 3])
+    assert s["converged"], s["message"]
+    assert s["max_contact_force"] > 0.0
+    np.testing.assert_array_equal(s["coefficients"][0, [0, 3, 4, 7]], 0.0)
+    assert s["dropped_harmonics_residual"] > 1e-3
+    with pytest.raises(ValueError, match=r"harmonic 5 is outside \[0, 4\]"):
+        wbm.solve(system, 0, force, f, [], basis, basis, harmonics=[1, 5])

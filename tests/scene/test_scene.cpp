@@ -1,6 +1,7 @@
 // Scene files (wbm::scene): the shipped scenes hold Table 1 of [JL14]; resolved JSON round
 // trips; every class of bad input is reported with file, line, key and what was expected; the
 // analyses a scene runs agree with closed forms.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <complex>
@@ -1093,4 +1094,76 @@ TEST(Scene, ObservedDofsAndHarmonicsAlongASweepAndABranchMatchTheClosedForm) {
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = 5.0 }\noutput = { observe = [\"b\"] }\n"); },
       {"output.observe: the DOFs reported per point of a sweep or a continuation branch", "output.dofs"});
+}
+
+// [basis] harmonic_selection = "odd": on a 1-DOF oscillator between two symmetric stops (odd in
+// u) the odd-harmonic branch is the full one and drops nothing (half-wave symmetry); with one
+// stop the branch says how much it drops where the stop is touched and nothing where it is not.
+// The selection is echoed, round-trips through JSON, and what cannot be projected is refused.
+TEST(Scene, OddHarmonicSelectionOfASymmetricOscillatorIsTheFullBranch) {
+  const std::string oscillator =
+      "structure = { mass = [1.0], stiffness = [4e4] }\ndamping = { beta = 2e-4 }\n"
+      "forcing = { amplitude = 30.0, frequency_hz = [25.0, 40.0] }\n"
+      "analysis = { type = \"continuation\", stability = false }\n";
+  const std::string plus = "[[contact]]\nlaw = \"linear\"\nstiffness = 4e5\ngap = 1e-3\ndof = 0\n";
+  const std::string minus = plus + "direction = -1\n";
+  const std::string odd = "[basis]\nharmonics = 9\nharmonic_selection = \"odd\"\n";
+  const std::string all = "[basis]\nharmonics = 9\n";
+  const auto full = wbm::scene::run_analysis(parse(oscillator + all + plus + minus));
+  const Scene odd_scene = parse(oscillator + odd + plus + minus);
+  EXPECT_EQ(odd_scene.basis.selected_harmonics, (std::vector<int>{1, 3, 5, 7, 9}));
+  const auto sel = wbm::scene::run_analysis(odd_scene);
+  ASSERT_TRUE(full.converged && sel.converged);
+  const Eigen::VectorXd& f_full = column(full, "branch.csv", 0);
+  const Eigen::VectorXd& f_sel = column(sel, "branch.csv", 0);
+  ASSERT_EQ(f_full.size(), f_sel.size());
+  EXPECT_LT((f_full - f_sel).cwiseAbs().maxCoeff(), 1e-6);
+  const Eigen::VectorXd& a_full = column(full, "branch.csv", 3);
+  EXPECT_GT(a_full.maxCoeff(), 1.2e-3);  // both stops (gap 1 mm) are reached
+  EXPECT_LT((a_full - column(sel, "branch.csv", 3)).cwiseAbs().maxCoeff(), 1e-8 * a_full.maxCoeff());
+  const auto header = [](const wbm::scene::AnalysisResult& r) {
+    for (const auto& t : r.tables) {
+      if (t.file == "branch.csv") return t.header;
+    }
+    return std::vector<std::string>{};
+  };
+  ASSERT_EQ(header(sel).at(5), "dropped_harmonics_residual [-]");
+  EXPECT_NE(header(full).at(5), "dropped_harmonics_residual [-]");
+  EXPECT_LT(column(sel, "branch.csv", 5).maxCoeff(), 1e-9);
+  const nlohmann::json j = wbm::scene::to_json(odd_scene);
+  EXPECT_EQ(j["basis"]["harmonic_selection"], "odd");
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("odd.json"))), j);
+
+  const auto one = wbm::scene::run_analysis(parse(oscillator + odd + plus));
+  ASSERT_TRUE(one.converged);
+  const Eigen::VectorXd& dropped = column(one, "branch.csv", 5);
+  const Eigen::VectorXd& force = column(one, "branch.csv", 4);
+  for (Eigen::Index i = 0; i < dropped.size(); ++i) {
+    if (force(i) == 0.0) {
+      EXPECT_EQ(dropped(i), 0.0);
+    }
+  }
+  EXPECT_GT(dropped.maxCoeff(), 1e-2);
+  const auto warned = [](const wbm::scene::AnalysisResult& r) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(),
+                       [](const std::string& w) { return w.find("harmonics outside the selection") != std::string::npos; });
+  };
+  EXPECT_TRUE(warned(one));
+  EXPECT_FALSE(warned(sel));
+
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = \"even\"\n" + plus); },
+      {"basis.harmonic_selection", "\"even\" is not a selection", "\"odd\""});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = [1, 10]\n" + plus); },
+      {"basis.harmonic_selection", "[0, 9]"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = [0, 3]\n" + plus); },
+      {"drops harmonic 1, at which a load acts on DOF dof0", "keep harmonic 1"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\ntrial = \"db6\"\ndimension = 32\nharmonic_selection = \"odd\"\n" + plus); },
+      {"basis.harmonic_selection", "wavelet bases have no harmonics"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + odd + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\ndof = 0\n"); },
+      {"basis.harmonic_selection", "rigid stops", "law = \"linear\""});
 }

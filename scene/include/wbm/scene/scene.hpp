@@ -143,6 +143,10 @@ struct Basis {
   /// continuation passes a stiff stop smoothly) and the paper's midpoint rule for M = 2^J and the
   /// wavelet bases (the reproductions keep the paper's discretization).
   solvers::ContactQuadrature contact_quadrature = solvers::ContactQuadrature::Midpoint;
+  /// [basis] harmonic_selection = "all" (default) | "odd" | [h, …] (Fourier:Fourier only): the
+  /// harmonics kept (solvers::WeightedResidualOptions::harmonics), ascending; empty = all.
+  std::vector<int> selected_harmonics;
+  std::string harmonic_selection = "all";  // "all", "odd" or "list", as given
 };
 
 struct Solver {

@@ -5,6 +5,7 @@
 /// WeightedResidual, so each corrector iteration costs one refactorization of G(f) and an
 /// (n_c·M + 1) bordered LU. Units: SI, Hz.
 
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -60,6 +61,9 @@ struct ResponsePoint {
   double min_displacement = 0.0;       // min [m]
   double amplitude = 0.0;              // (max − min)/2 [m], the curve's amplitude measure
   double max_contact_force = 0.0;      // max over contacts and P samples of f_c [N]
+  /// With a harmonic selection: WeightedResidual::dropped_harmonics_residual at this point
+  /// (one more factorization of G per point); NaN without one.
+  double dropped_harmonics_residual = std::numeric_limits<double>::quiet_NaN();
   int corrector_iterations = 0;
   // Stability (ResponseCurveOptions::stability): floquet.hpp.
   double max_multiplier = 0.0;         // spectral radius of the monodromy matrix

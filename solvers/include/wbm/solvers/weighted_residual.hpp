@@ -129,6 +129,23 @@ struct WeightedResidualOptions {
   /// (>= 2; std::invalid_argument at construction otherwise).
   bool contact_homotopy = true;
   int homotopy_max_points = 2000;
+  /// Harmonic selection (Fourier:Fourier only; empty = every harmonic of the basis): the harmonic
+  /// numbers h kept in both the trial and the weighting spaces, each with its cos 2πhτ and
+  /// sin 2πhτ (h = 0: the constant; h = M/2: the top function cos πMτ of M = 2^J), e.g.
+  /// {1, 3, 5, …} for odd harmonics only. The residual is the Galerkin projection on the kept
+  /// functions, Π R(a) = 0 with a in the kept span: since G is block-diagonal by harmonic
+  /// (checked on the time operators at construction), this is G a = Π (b − n(a)), i.e. the
+  /// forcing and the contact forces projected on the kept harmonics only (Π applied to the
+  /// weighting functions). Exact when the solution has no other harmonics (e.g. odd harmonics
+  /// of a symmetric system: two symmetric stops, forcing in harmonic 1); otherwise an
+  /// approximation whose size WeightedResidual::dropped_harmonics_residual measures (a single
+  /// stop makes a contact force with a mean and even harmonics: odd harmonics alone are then
+  /// wrong). The dropped unknowns are kept and solved as zeros: the selection does not reduce
+  /// the cost. Throws std::invalid_argument (at construction) for a wavelet basis, a harmonic
+  /// outside [0, highest harmonic] or listed twice, a load at a harmonic not kept, rigid stops
+  /// (their M collocation instants need every function). (G's block-diagonal structure is
+  /// checked at construction; std::logic_error if it ever fails.)
+  std::vector<int> harmonics = {};
 };
 
 /// The three time operators (M × M, dense; row = weighting j, column = trial k), including the
@@ -166,6 +183,10 @@ struct WeightedResidualSolution {
     return report.status == SolveStatus::ResidualNotVerified && relative_residual <= kRoundingFloorFactor * rounding_floor;
   }
   double wall_time_s = 0.0;        // set-up and solve
+  /// With a harmonic selection (WeightedResidualOptions::harmonics), the part of the full
+  /// residual in the harmonics left out, ‖(I − Π) R(a)‖₂ / ‖b‖₂ (WeightedResidual::
+  /// dropped_harmonics_residual); NaN without a selection.
+  double dropped_harmonics_residual = std::numeric_limits<double>::quiet_NaN();
   /// Rigid stops only (WeightedResidual::rigid()), else empty / NaN:
   ///  - contact_force_samples: λ, n_c × M [N], row = contact, column k = impulse instant
   ///    τ_k = (k + ½)/M; λ_k/M is the impulse (N·period), λ_k the mean force over one cell;
@@ -277,6 +298,15 @@ class WeightedResidual {
   /// Throws std::runtime_error if G is singular.
   [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
+  /// Harmonic selection (WeightedResidualOptions::harmonics): ‖(I − Π) R(a(x))‖₂ / ‖s b‖₂ at the
+  /// contact unknowns x and load s (a(x) = G⁻¹Π(s b − Pᵀ n(x))): the weighted residual of the
+  /// contact forces in the harmonics left out (G a and b have none there), relative to the
+  /// forcing (‖s b‖₂ replaced by 1 N when it vanishes); 0 when the contact forces have no
+  /// dropped harmonic (a symmetric system in odd harmonics). NaN without a selection. Throws
+  /// std::invalid_argument for x of another length than n_c·M, like contact_residual otherwise.
+  [[nodiscard]] double dropped_harmonics_residual(const Eigen::VectorXd& x, double load = 1.0) const;
+  /// The kept harmonic numbers, ascending (empty: every harmonic).
+  [[nodiscard]] const std::vector<int>& harmonics() const;
 
   /// True when every contact is a rigid stop (the Signorini path above; the penalty-law
   /// functions contact_residual, contact_jacobian, contact_jacobian_low_rank, expand and the
