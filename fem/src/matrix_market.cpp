@@ -161,6 +161,51 @@ Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path) {
   return read_matrix_market(in, path);
 }
 
+void write_matrix_market(std::ostream& out, const Eigen::MatrixXd& a, bool symmetric, const std::string& comment) {
+  const auto at = [](Eigen::Index i, Eigen::Index j) {
+    return std::string("(").append(std::to_string(i + 1)).append(", ").append(std::to_string(j + 1)).append(")");
+  };
+  if (symmetric && a.rows() != a.cols()) {
+    throw std::invalid_argument("write_matrix_market: a symmetric matrix must be square, this one is " +
+                                std::to_string(a.rows()) + " x " + std::to_string(a.cols()));
+  }
+  Eigen::Index entries = 0;
+  for (Eigen::Index j = 0; j < a.cols(); ++j) {
+    for (Eigen::Index i = symmetric ? j : 0; i < a.rows(); ++i) {
+      if (!std::isfinite(a(i, j))) throw std::invalid_argument("write_matrix_market: entry " + at(i, j) + " is not finite");
+      if (symmetric && a(i, j) != a(j, i)) {
+        throw std::invalid_argument("write_matrix_market: entry " + at(i, j) + " differs from " + at(j, i) +
+                                    ": not symmetric; write general instead");
+      }
+      if (a(i, j) != 0.0) ++entries;
+    }
+  }
+  out << "%%MatrixMarket matrix coordinate real " << (symmetric ? "symmetric" : "general") << "\n";
+  size_t begin = 0;
+  while (!comment.empty() && begin <= comment.size()) {
+    const size_t end = std::min(comment.find('\n', begin), comment.size());
+    out << "% " << comment.substr(begin, end - begin) << "\n";
+    begin = end + 1;
+  }
+  out << a.rows() << " " << a.cols() << " " << entries << "\n";
+  char buffer[64];
+  for (Eigen::Index j = 0; j < a.cols(); ++j) {
+    for (Eigen::Index i = symmetric ? j : 0; i < a.rows(); ++i) {
+      if (a(i, j) == 0.0) continue;
+      const auto r = std::to_chars(buffer, buffer + sizeof buffer, a(i, j));
+      out << i + 1 << " " << j + 1 << " " << std::string_view(buffer, static_cast<size_t>(r.ptr - buffer)) << "\n";
+    }
+  }
+}
+
+void write_matrix_market_file(const std::filesystem::path& path, const Eigen::MatrixXd& a, bool symmetric,
+                              const std::string& comment) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write Matrix Market file " + path.string());
+  write_matrix_market(out, a, symmetric, comment);
+  if (!out) throw std::runtime_error("writing Matrix Market file " + path.string() + " failed (disk full?)");
+}
+
 std::vector<std::pair<int, int>> read_dof_map(std::istream& in, const std::string& source) {
   std::vector<std::pair<int, int>> dofs;
   std::map<std::pair<int, int>, size_t> row_of;

@@ -5,10 +5,12 @@
 
 #include <filesystem>
 #include <istream>
+#include <ostream>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
 #include <Eigen/SparseCore>
 
 namespace wbm::fem {
@@ -32,6 +34,18 @@ namespace wbm::fem {
 
 /// The same from a file; throws std::runtime_error naming the path if it cannot be opened.
 [[nodiscard]] Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path);
+
+/// Writes A as "%%MatrixMarket matrix coordinate real general|symmetric" text that
+/// read_matrix_market reads back bit for bit: symmetric = true writes the lower triangle
+/// (i ≥ j) of a matrix that must be symmetric (checked exactly; std::invalid_argument naming the
+/// first asymmetric entry otherwise, with "write general instead"), general the whole matrix;
+/// exact zeros are left out; each value in the shortest decimal form that reads back to the
+/// same double (std::to_chars). `comment` lines (split on '\n') are written as "% …" after the header.
+/// Throws std::invalid_argument for a non-finite entry (naming it), a non-square symmetric
+/// matrix, and std::runtime_error naming the path when the file cannot be written.
+void write_matrix_market(std::ostream& out, const Eigen::MatrixXd& a, bool symmetric, const std::string& comment = {});
+void write_matrix_market_file(const std::filesystem::path& path, const Eigen::MatrixXd& a, bool symmetric,
+                              const std::string& comment = {});
 
 /// A DOF map: what each row of an FE code's matrices is, one line per row in row order:
 /// "node.direction" (CalculiX's .dof file), "node direction" or "node, direction", with
