@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -29,6 +30,7 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/build_information.hpp>
 #include <wbm/scene/output.hpp>
+#include <wbm/scene/reduce.hpp>
 #include <wbm/scene/scene.hpp>
 
 namespace {
@@ -126,6 +128,37 @@ std::optional<wbm::scene::Scene> load(const std::string& path) {
   }
   std::cerr << "wbm: " << path << ": not run; nothing written\n";
   return std::nullopt;
+}
+
+// `wbm reduce`: exit 0 when written, 2 for bad input (nothing written), 1 when ccx or the
+// reduction fails.
+int reduce(const wbm::scene::ReductionRequest& request, std::string out, bool quiet) {
+  if (out.empty()) out = (std::filesystem::path("wbm-out") / (request.deck.stem().string() + "-reduced")).string();
+  try {
+    const nlohmann::json s = wbm::scene::reduce_deck(request, out);
+    if (!quiet) {
+      const auto& f = s["reduced_frequencies_hz"];
+      std::cout << "wbm reduce: " << s["full_dofs"].get<int>() << " DOFs -> " << s["interface"]["dofs"].get<int>()
+                << " interface DOFs (" << s["interface"]["nodes"].size() << " nodes) + " << s["modes"].get<int>()
+                << " modes = " << s["reduced_dofs"].get<int>() << " in " << std::setprecision(3)
+                << s["timings_s"]["total"].get<double>() << " s; first reduced frequency "
+                << std::setprecision(7) << (f.empty() ? 0.0 : f[0].get<double>()) << " Hz";
+      if (!s["check"].is_null()) {
+        std::cout << "; worst relative error of the first " << s["check"]["relative_errors"].size()
+                  << " frequencies against the full model " << std::setprecision(3)
+                  << s["check"]["worst_relative_error"].get<double>();
+      }
+      std::cout << "\nwrote stiffness.mtx, mass.mtx, dofs.txt" << (request.recovery ? ", recovery.mtx, full_dofs.txt" : "")
+                << " and reduction.json to " << out << "\n";
+    }
+    return kConverged;
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "wbm reduce: " << e.what() << "\nwbm reduce: nothing written\n";
+    return kBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "wbm reduce: " << e.what() << "\nwbm reduce: nothing written\n";
+    return kNotConverged;
+  }
 }
 
 int run(const std::string& scene_path, std::string out, bool quiet, bool plots, const std::string& command_line) {
@@ -280,6 +313,23 @@ int main(int argc, char** argv) {
   auto* check_cmd = app.add_subcommand("check", "Validate a scene without running it");
   check_cmd->add_option("scene", scene_path, "Scene file (.toml or .json)")->required();
   check_cmd->add_flag("--json", json, "Print the resolved scene (every default filled in) as JSON");
+  wbm::scene::ReductionRequest reduction;
+  std::string deck_path;
+  auto* reduce_cmd = app.add_subcommand(
+      "reduce", "Reduce a CalculiX/Abaqus deck by Craig-Bampton (ccx assembles it); write Matrix Market K_r, M_r, "
+                "dofs.txt and reduction.json for scenes");
+  reduce_cmd->add_option("deck", deck_path, "Deck (.inp): nodes, elements, material, *BOUNDARY; its *STEPs are ignored")
+      ->required();
+  reduce_cmd->add_option("-i,--interface", reduction.interface,
+                         "Interface: a node set of the deck, or node numbers \"17,18,19\"")->required();
+  reduce_cmd->add_option("-m,--modes", reduction.modes, "Fixed-interface normal modes")->capture_default_str();
+  reduce_cmd->add_option("--check", reduction.check_modes,
+                         "Compare the first N frequencies with the full model's (sparse Lanczos); 0: no check")
+      ->capture_default_str();
+  reduce_cmd->add_flag("--recovery", reduction.recovery, "Also write recovery.mtx (u = T q) and full_dofs.txt");
+  reduce_cmd->add_option("--ccx", reduction.ccx, "CalculiX executable")->capture_default_str();
+  reduce_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<deck>-reduced)");
+  reduce_cmd->add_flag("-q,--quiet", quiet, "No summary");
   auto* bases_cmd = app.add_subcommand("bases", "List the time bases and the formulations each admits");
   bases_cmd->add_option("-M,--dimension", dimension, "Dimension M = 2^J used for the check")->capture_default_str();
 
@@ -305,6 +355,10 @@ int main(int argc, char** argv) {
     }
     if (*check_cmd) return check(scene_path, json);
     if (*bases_cmd) return bases(dimension);
+    if (*reduce_cmd) {
+      reduction.deck = deck_path;
+      return reduce(reduction, out, quiet);
+    }
   } catch (const std::exception& e) {
     std::cerr << "wbm: " << e.what() << "\n";
     return kNotConverged;

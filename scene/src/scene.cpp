@@ -461,20 +461,46 @@ class Parser {
       for (size_t i = 0; i < n; ++i) st.dof_names.push_back("dof" + std::to_string(i));
       return;
     }
-    const toml::array* a = d->as_array();
-    if (a == nullptr || a->size() != n || !a->is_homogeneous<std::string>()) {
-      r_.error(d->source(), "structure.dofs", "expected a list of " + std::to_string(n) + " names (one per row of M)");
-      return;
+    // (name, where it was given) from the list, or from a file of one name per line (the
+    // dofs.txt of `wbm reduce`; blank lines and lines starting with # or % skipped).
+    std::vector<std::pair<std::string, toml::source_region>> given;
+    if (d->is_string()) {
+      const std::filesystem::path p = std::filesystem::absolute(base_ / d->as_string()->get()).lexically_normal();
+      std::ifstream in(p);
+      if (!in) {
+        r_.error(d->source(), "structure.dofs", "cannot read the DOF name file " + p.string() +
+                                                    " (one name per row of M, e.g. the dofs.txt of wbm reduce)");
+        return;
+      }
+      std::string line;
+      while (std::getline(in, line)) {
+        const auto first = line.find_first_not_of(" \t\r");
+        if (first == std::string::npos || line[first] == '#' || line[first] == '%') continue;
+        const auto last = line.find_last_not_of(" \t\r");
+        given.emplace_back(line.substr(first, last - first + 1), d->source());
+      }
+      if (given.size() != n) {
+        r_.error(d->source(), "structure.dofs", p.string() + " names " + std::to_string(given.size()) +
+                                                    " DOFs, but M has " + std::to_string(n) + " rows: give the file of this model");
+        return;
+      }
+    } else {
+      const toml::array* a = d->as_array();
+      if (a == nullptr || a->size() != n || !a->is_homogeneous<std::string>()) {
+        r_.error(d->source(), "structure.dofs", "expected a list of " + std::to_string(n) +
+                                                    " names (one per row of M), or the name of a file of them");
+        return;
+      }
+      for (const auto& e : *a) given.emplace_back(e.as_string()->get(), e.source());
     }
     static const std::regex identifier("[A-Za-z_][A-Za-z0-9_]*");
     std::set<std::string> seen;
-    for (const auto& e : *a) {
-      const std::string name = e.as_string()->get();
+    for (const auto& [name, where] : given) {
       if (!std::regex_match(name, identifier)) {
-        r_.error(e.source(), "structure.dofs", "\"" + name + "\" is not a name (letters, digits and _, not starting "
-                                                             "with a digit); it heads CSV columns");
+        r_.error(where, "structure.dofs", "\"" + name + "\" is not a name (letters, digits and _, not starting "
+                                                        "with a digit); it heads CSV columns");
       } else if (!seen.insert(name).second) {
-        r_.error(e.source(), "structure.dofs", "\"" + name + "\" appears twice");
+        r_.error(where, "structure.dofs", "\"" + name + "\" appears twice");
       }
       st.dof_names.push_back(name);
     }

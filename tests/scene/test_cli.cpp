@@ -1,17 +1,26 @@
 // The `wbm` command end to end (the executable, run as a user would): the Case 1 scene gives the
 // reproduce executable's numbers exactly; bad input exits 2 and writes nothing; non-convergence
 // exits 1 with its diagnostics; a result.json re-runs to the same files.
+#include <algorithm>
+#include <complex>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <wbm/fem/calculix.hpp>
+#include <wbm/fem/matrix_market.hpp>
 
 #include "scene.hpp"  // reproduce/common: the shipped scene directory
 
@@ -188,4 +197,171 @@ TEST(Cli, RunDrawsPicturesAndPlotRedrawsThem) {
   const Outcome refused = run_wbm("plot " + (work() / "absent").string());
   EXPECT_EQ(refused.status, 2);
   EXPECT_NE(refused.err.find("no result.json"), std::string::npos) << refused.err;
+}
+
+namespace {
+
+// A 1 m × 0.1 m × 0.1 m steel bar along x of 8 C3D8 bricks, clamped at x = 0 (set ROOT, nodes
+// 1–4), its tip face the set TIP (nodes 33–36): 96 free DOFs.
+fs::path write_reduce_bar() {
+  const fs::path dir = work() / "reduce";
+  fs::create_directories(dir);
+  std::ostringstream m;
+  auto id = [](int i, int j, int k) { return 1 + 4 * i + 2 * j + k; };
+  m << "*NODE\n";
+  for (int i = 0; i <= 8; ++i)
+    for (int j = 0; j <= 1; ++j)
+      for (int k = 0; k <= 1; ++k) m << id(i, j, k) << ", " << 0.125 * i << ", " << 0.1 * j << ", " << 0.1 * k << "\n";
+  m << "*ELEMENT, TYPE=C3D8, ELSET=EALL\n";
+  for (int i = 0; i < 8; ++i) {
+    m << i + 1 << ", " << id(i, 0, 0) << ", " << id(i + 1, 0, 0) << ", " << id(i + 1, 1, 0) << ", " << id(i, 1, 0) << ", "
+      << id(i, 0, 1) << ", " << id(i + 1, 0, 1) << ", " << id(i + 1, 1, 1) << ", " << id(i, 1, 1) << "\n";
+  }
+  m << "*NSET, NSET=ROOT, GENERATE\n1, 4\n*NSET, NSET=TIP, GENERATE\n33, 36\n"
+    << "*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7800.\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
+    << "*BOUNDARY\nROOT, 1, 3\n*STEP\n*STATIC\n*END STEP\n";
+  std::ofstream(dir / "bar.inp") << m.str();
+  return dir / "bar.inp";
+}
+
+std::vector<std::string> lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
+}
+
+}  // namespace
+
+// `wbm reduce` on the clamped bar, interface = TIP (12 DOFs), 12 fixed-interface modes. Truths
+// from the full model (CalculiX's own matrices, dense Eigen), none from the reduction code:
+// - the interface block of K_r is the inverse of the full flexibility (K⁻¹)_bb (static
+//   condensation), and K_r does not couple interface and modes;
+// - recovery.mtx maps the reduced static solution of a tip load onto the full one exactly;
+// - --check's full-model frequencies (sparse Lanczos) are the dense generalized eigenvalues, and
+//   the reduced ones bound them from above (Rayleigh–Ritz) within 1 %;
+// - a scene on the written files (structure.dofs = "dofs.txt") gives the full model's harmonic
+//   response at half the first frequency.
+TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
+  const fs::path deck = write_reduce_bar(), out = work() / "reduce" / "red";
+  const Outcome run = run_wbm("reduce " + deck.string() + " -i tip -m 12 --check 6 --recovery -o " + out.string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.out.find("96 DOFs -> 12 interface DOFs (4 nodes) + 12 modes = 24"), std::string::npos) << run.out;
+
+  const auto full = wbm::fem::assemble_with_calculix(wbm::fem::read_calculix_deck(deck));
+  const Eigen::MatrixXd k = Eigen::MatrixXd(full.stiffness), m = Eigen::MatrixXd(full.mass);
+  ASSERT_EQ(k.rows(), 96);
+  const Eigen::MatrixXd kr = Eigen::MatrixXd(wbm::fem::read_matrix_market_file((out / "stiffness.mtx").string()));
+  const Eigen::MatrixXd mr = Eigen::MatrixXd(wbm::fem::read_matrix_market_file((out / "mass.mtx").string()));
+  ASSERT_EQ(kr.rows(), 24);
+  EXPECT_EQ(kr, kr.transpose());
+  EXPECT_EQ(mr, mr.transpose());
+
+  // dofs.txt: the tip nodes' translations in order, then the modes; rows of the full model.
+  const auto names = lines_of(out / "dofs.txt");
+  ASSERT_EQ(names.size(), 24u);
+  std::vector<int> b;
+  const char* axis[] = {"x", "y", "z"};
+  for (int node = 33; node <= 36; ++node) {
+    for (int d = 1; d <= 3; ++d) {
+      EXPECT_EQ(names[b.size()], std::string("n").append(std::to_string(node)).append("_").append(axis[d - 1]));
+      const auto it = std::find(full.dofs.begin(), full.dofs.end(), std::make_pair(node, d));
+      ASSERT_NE(it, full.dofs.end());
+      b.push_back(static_cast<int>(it - full.dofs.begin()));
+    }
+  }
+  EXPECT_EQ(names[12], "mode1");
+  EXPECT_EQ(names[23], "mode12");
+
+  // Static condensation: K_r,bb⁻¹ = (K⁻¹)_bb; K_r,bη = 0.
+  const Eigen::MatrixXd flexibility = k.ldlt().solve(Eigen::MatrixXd::Identity(96, 96));
+  Eigen::MatrixXd flexibility_bb(12, 12);
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j) flexibility_bb(i, j) = flexibility(b[i], b[j]);
+  EXPECT_LT(relative(kr.topLeftCorner(12, 12).inverse(), flexibility_bb), 1e-8);
+  EXPECT_LT(kr.topRightCorner(12, 12).cwiseAbs().maxCoeff(), 1e-8 * kr.cwiseAbs().maxCoeff());
+
+  // Recovery: T K_r⁻¹ Tᵀ f = K⁻¹ f for a load on the interface (1 kN along y at node 36).
+  const Eigen::MatrixXd t = Eigen::MatrixXd(wbm::fem::read_matrix_market_file((out / "recovery.mtx").string()));
+  ASSERT_EQ(t.rows(), 96);
+  ASSERT_EQ(t.cols(), 24);
+  const auto full_dofs = lines_of(out / "full_dofs.txt");
+  ASSERT_EQ(full_dofs.size(), 96u);
+  EXPECT_EQ(full_dofs[b[10]], "36.2");
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(96);
+  f(b[10]) = 1e3;
+  const Eigen::VectorXd u = k.ldlt().solve(f);
+  const Eigen::VectorXd ur = t * kr.ldlt().solve(t.transpose() * f);
+  EXPECT_LT((ur - u).cwiseAbs().maxCoeff(), 1e-9 * u.cwiseAbs().maxCoeff());
+
+  // Frequencies: --check's reference is the full model's; the reduced ones are upper bounds.
+  const auto summary = nlohmann::json::parse(slurp(out / "reduction.json"));
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k, m, Eigen::EigenvaluesOnly);
+  const Eigen::VectorXd f_full = eig.eigenvalues().head(6).cwiseSqrt() / (2.0 * 3.14159265358979323846);
+  const auto& check = summary["check"];
+  ASSERT_EQ(check["full_frequencies_hz"].size(), 6u);
+  for (int i = 0; i < 6; ++i) {
+    const double reference = check["full_frequencies_hz"][i].get<double>(), reduced = check["reduced_frequencies_hz"][i].get<double>();
+    EXPECT_NEAR(reference, f_full(i), 1e-8 * f_full(i)) << "mode " << i + 1;
+    EXPECT_GE(reduced, f_full(i) * (1.0 - 1e-10)) << "mode " << i + 1;
+    EXPECT_LT(reduced / f_full(i) - 1.0, 1e-2) << "mode " << i + 1;
+  }
+
+  // A scene on the reduced files: the tip's harmonic response at f1/2, C = 5 M, 1 kN along y
+  // at node 36, against the full model's (K − ω²M + iωC)⁻¹ f.
+  const double f1 = f_full(0), omega = 2.0 * 3.14159265358979323846 * 0.5 * f1, alpha = 5.0;
+  const fs::path scene = work() / "reduce" / "tip.toml", result = work() / "reduce" / "tip";
+  std::ofstream(scene) << "[structure]\nstiffness = \"red/stiffness.mtx\"\nmass = \"red/mass.mtx\"\ndofs = \"red/dofs.txt\"\n"
+                       << "[damping]\nalpha = " << alpha << "\n[forcing]\namplitude = 1000.0\ndof = \"n36_y\"\n"
+                       << "frequency_hz = " << std::setprecision(17) << 0.5 * f1 << "\n"
+                       << "[basis]\ntrial = \"fourier\"\ndimension = 16\n"
+                       << "[output]\nsamples = 64\ndofs = [\"n36_y\"]\nharmonics = 2\n";
+  const Outcome solved = run_wbm("run --no-plots -q " + scene.string() + " -o " + result.string());
+  ASSERT_EQ(solved.status, 0) << solved.err;
+  const Eigen::MatrixXcd dynamic = k.cast<std::complex<double>>() - omega * omega * m.cast<std::complex<double>>() +
+                                   std::complex<double>(0.0, omega * alpha) * m.cast<std::complex<double>>();
+  const double expected = std::abs(dynamic.partialPivLu().solve(f.cast<std::complex<double>>())(b[10]));
+  const auto amplitude = csv_column(result / "harmonics.csv", "A_n36_y [m]");
+  ASSERT_EQ(amplitude.size(), 3u);
+  std::printf("tip amplitude at f1/2 = %.6g Hz: reduced %s m, full %.17g m\n", 0.5 * f1, amplitude[1].c_str(), expected);
+  EXPECT_NEAR(std::stod(amplitude[1]), expected, 1e-5 * expected);  // measured 9.7e-7: modes 13+ left out
+
+  // A DOF name file of another model is refused by the scene, naming both sizes.
+  const fs::path wrong = work() / "reduce" / "wrong.toml";
+  std::ofstream(wrong) << "[structure]\nstiffness = \"red/stiffness.mtx\"\nmass = \"red/mass.mtx\"\ndofs = \"red/full_dofs.txt\"\n"
+                       << "[forcing]\namplitude = 1.0\ndof = 0\nfrequency_hz = 10.0\n";
+  const Outcome refused = run_wbm("check " + wrong.string());
+  EXPECT_EQ(refused.status, 2);
+  EXPECT_NE(refused.err.find("names 96 DOFs, but M has 24 rows"), std::string::npos) << refused.err;
+}
+
+// `wbm reduce` refuses bad input with exit 2, says why and how out, and creates nothing; a deck
+// CalculiX cannot assemble exits 1 with ccx's reason.
+TEST(Cli, ReduceRefusesBadInputAndWritesNothing) {
+  const fs::path deck = write_reduce_bar(), out = work() / "reduce" / "never";
+  auto refused = [&](const std::string& args, const std::string& message, int status = 2) {
+    const Outcome r = run_wbm("reduce " + args + " -o " + out.string());
+    EXPECT_EQ(r.status, status) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("nothing written"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  };
+  refused(deck.string() + " -i BLADE_TIP", "no node set 'BLADE_TIP'; the deck defines: ");
+  refused(deck.string() + " -i 35,999", "node 999 is not a node of");
+  refused(deck.string() + " -i 1,33", "node 1 has no free DOF");
+  refused(deck.string() + " -i 33,33", "node 33 is listed twice");
+  refused(deck.string() + " -i TIP -m 84", "the interior has only 84 DOFs");
+  refused(deck.string() + " -i TIP -m -1", "modes = -1: must be >= 0");
+  refused((work() / "reduce" / "absent.inp").string() + " -i TIP", "deck: no file");
+  refused(deck.string() + " -i TIP --ccx " + (work() / "no-ccx").string(), "cannot run", 1);
+  // The bar without its *MATERIAL: CalculiX refuses it, and the message names the deck.
+  std::string text = slurp(deck);
+  text.erase(text.find("*MATERIAL"), text.find("*SOLID SECTION") - text.find("*MATERIAL"));
+  const fs::path no_material = work() / "reduce" / "no_material.inp";
+  std::ofstream(no_material) << text;
+  refused(no_material.string() + " -i TIP", "no_material.inp: CalculiX (ccx) could not assemble the model", 1);
 }

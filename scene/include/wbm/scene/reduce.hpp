@@ -1,0 +1,49 @@
+#pragma once
+/// `wbm reduce`: a CalculiX/Abaqus deck, assembled by CalculiX (fem/calculix.hpp), reduced by
+/// Craig–Bampton (fem/craig_bampton.hpp) onto the translations (and rotations, if the elements
+/// have them) of an interface node set plus fixed-interface normal modes, and written as Matrix
+/// Market files with a DOF name file, so that a scene runs many analyses on one reduction
+/// (`structure = { stiffness = "stiffness.mtx", mass = "mass.mtx", dofs = "dofs.txt" }`;
+/// docs/scenes.md, issue #15). Units: those of the deck, unconverted (N-mm-t-s decks give K in
+/// N/mm and M in t; frequencies are in Hz for any consistent system).
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace wbm::scene {
+
+struct ReductionRequest {
+  std::filesystem::path deck;  // the deck (*NODE, *ELEMENT, *MATERIAL, *BOUNDARY, …); its *STEPs are ignored
+  /// The interface: a node set of the deck (case-insensitive), or node numbers separated by
+  /// commas or spaces ("17, 18, 19"). Every DOF CalculiX keeps at these nodes is retained.
+  std::string interface;
+  int modes = 40;           // fixed-interface normal modes m ≥ 0
+  int check_modes = 0;      // > 0: the full model's first check_modes frequencies (Spectra) beside the reduced ones
+  bool recovery = false;    // also write recovery.mtx (n × (|b| + m), u = T q) and full_dofs.txt
+  std::string ccx = "ccx";  // the CalculiX executable
+};
+
+/// The reduction (Craig & Bampton 1968; LL11 Sec. 5.2): u = T q, q = (u_b, η),
+/// T = [I 0; −K_ii⁻¹K_ib Φ], K_ii Φ = M_ii Φ Λ, ΦᵀM_iiΦ = I (the m lowest fixed-interface modes),
+/// K_r = TᵀKT = [K_bb − K_bi K_ii⁻¹ K_ib, 0; 0, Λ], M_r = TᵀMT; sizes (|b| + m) × (|b| + m), rows
+/// ordered as dofs.txt (interface nodes in the order given, each node's DOFs by direction, then the
+/// modes by increasing frequency).
+/// Reads and assembles the deck, reduces it, and only when every step succeeded writes into
+/// `output` (created): stiffness.mtx and mass.mtx (K_r, M_r, symmetric, Matrix Market),
+/// dofs.txt (one name per reduced coordinate: "n<node>_<x|y|z|rx|ry|rz>" for the interface,
+/// "mode<k>" for the modal coordinates, k = 1 … m), reduction.json (the returned summary: deck,
+/// interface nodes and coordinates, sizes, fixed-interface and reduced frequencies [Hz], with
+/// check_modes the full model's and the relative errors, the symmetry defects of K_r and M_r
+/// before symmetrization, timings [s]) and, with `recovery`, recovery.mtx and full_dofs.txt
+/// ("node.direction" per full row, CalculiX's .dof format).
+/// Throws std::invalid_argument naming the option and a way out for: a deck that is not a file,
+/// a syntax error in the deck, modes < 0, modes ≥ interior DOFs, check_modes < 0,
+/// an empty interface, a node number not in the deck, an unknown node set (listing the deck's
+/// sets), an interface node with no free DOF (all fixed by *BOUNDARY); std::runtime_error for an
+/// unreadable deck or ccx failing (fem::assemble_with_calculix), a K_ii that is not positive
+/// definite, or a file that cannot be written. Nothing is written when it throws.
+[[nodiscard]] nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesystem::path& output);
+
+}  // namespace wbm::scene

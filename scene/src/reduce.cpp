@@ -1,0 +1,202 @@
+#include <wbm/scene/reduce.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+#include <wbm/fem/calculix.hpp>
+#include <wbm/fem/craig_bampton.hpp>
+#include <wbm/fem/matrix_market.hpp>
+#include <wbm/scene/build_information.hpp>
+
+namespace wbm::scene {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Node numbers of `interface`: a list of integers, or a node set of the deck.
+std::vector<int> interface_nodes(const fem::CalculixDeck& deck, const std::string& interface) {
+  const bool numbers = !interface.empty() && interface.find_first_not_of("0123456789, \t") == std::string::npos;
+  std::vector<int> nodes;
+  if (numbers) {
+    std::string s = interface;
+    std::replace(s.begin(), s.end(), ',', ' ');
+    std::istringstream in(s);
+    long long v = 0;
+    while (in >> v) {
+      if (v < 1 || v > 2147483647 || deck.nodes.count(static_cast<int>(v)) == 0) {
+        throw std::invalid_argument(std::string("interface: node ").append(std::to_string(v)) + " is not a node of " + deck.file.string() +
+                                    "; give node numbers of the deck or the name of one of its node sets");
+      }
+      nodes.push_back(static_cast<int>(v));
+    }
+  } else {
+    nodes = deck.node_set(interface);  // throws naming the sets the deck defines
+  }
+  if (nodes.empty()) {
+    throw std::invalid_argument("interface '" + interface + "' has no node; give a node set of the deck or node numbers");
+  }
+  std::vector<int> sorted = nodes;
+  std::sort(sorted.begin(), sorted.end());
+  if (const auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end()) {
+    throw std::invalid_argument(std::string("interface: node ").append(std::to_string(*twice)) + " is listed twice; list each node once");
+  }
+  return nodes;
+}
+
+std::string direction_name(int direction) {
+  static const char* names[] = {"x", "y", "z", "rx", "ry", "rz"};
+  return direction >= 1 && direction <= 6 ? names[direction - 1] : std::string("d").append(std::to_string(direction));
+}
+
+// max |A − Aᵀ| / max |A|, then A ← (A + Aᵀ)/2.
+double symmetrize(Eigen::MatrixXd& a) {
+  const double scale = std::max(a.cwiseAbs().maxCoeff(), 1e-300);
+  const double defect = (a - a.transpose()).cwiseAbs().maxCoeff() / scale;
+  a = (0.5 * (a + a.transpose())).eval();
+  return defect;
+}
+
+Eigen::VectorXd frequencies_hz(const Eigen::MatrixXd& k, const Eigen::MatrixXd& m, Eigen::Index count) {
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k, m, Eigen::EigenvaluesOnly);
+  if (eig.info() != Eigen::Success) throw std::runtime_error("reduce: the reduced model's eigenproblem failed (is M_r SPD?)");
+  const Eigen::Index n = std::min(count, eig.eigenvalues().size());
+  return eig.eigenvalues().head(n).cwiseMax(0.0).cwiseSqrt() / (2.0 * 3.14159265358979323846);
+}
+
+std::vector<double> as_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+}  // namespace
+
+nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesystem::path& output) {
+  namespace fs = std::filesystem;
+  if (request.modes < 0) {
+    throw std::invalid_argument(std::string("modes = ").append(std::to_string(request.modes)) +
+                                ": must be >= 0 (fixed-interface normal modes; LL11's blade uses 40)");
+  }
+  if (request.check_modes < 0) {
+    throw std::invalid_argument(std::string("check = ").append(std::to_string(request.check_modes)) +
+                                ": must be >= 0 (0: no full-model reference; e.g. 10)");
+  }
+  if (!fs::is_regular_file(request.deck)) {
+    throw std::invalid_argument("deck: no file " + request.deck.string() +
+                                " (give the path of a CalculiX/Abaqus .inp deck)");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const fem::CalculixDeck deck = fem::read_calculix_deck(request.deck);
+  const std::vector<int> nodes = interface_nodes(deck, request.interface);
+  auto t = std::chrono::steady_clock::now();
+  const fem::AssembledModel model = fem::assemble_with_calculix(deck, {.executable = request.ccx});
+  const double ccx_s = seconds_since(t);
+
+  std::map<int, std::vector<std::pair<int, int>>> rows_of;  // node → (direction, row)
+  for (size_t r = 0; r < model.dofs.size(); ++r) rows_of[model.dofs[r].first].emplace_back(model.dofs[r].second, static_cast<int>(r));
+  std::vector<int> boundary;
+  std::vector<std::string> names;
+  nlohmann::json coordinates = nlohmann::json::array();
+  for (int node : nodes) {
+    auto it = rows_of.find(node);
+    if (it == rows_of.end()) {
+      throw std::invalid_argument(std::string("interface: node ").append(std::to_string(node)) + " has no free DOF in " + deck.file.string() +
+                                  " (fixed by *BOUNDARY, or on no element); remove it from the interface");
+    }
+    std::sort(it->second.begin(), it->second.end());
+    for (const auto& [direction, row] : it->second) {
+      boundary.push_back(row);
+      names.push_back(std::string("n").append(std::to_string(node)) + "_" + direction_name(direction));
+    }
+    const Eigen::Vector3d& x = deck.nodes.at(node);
+    coordinates.push_back({x(0), x(1), x(2)});
+  }
+  const int full = static_cast<int>(model.dofs.size());
+  const int interior = full - static_cast<int>(boundary.size());
+  if (request.modes >= interior) {
+    throw std::invalid_argument(std::string("modes = ").append(std::to_string(request.modes)) + ": the interior has only " +
+                                std::to_string(interior) + " DOFs; ask for fewer modes (< " + std::to_string(interior) + ")");
+  }
+  fem::CraigBamptonModel cb = fem::craig_bampton(model.stiffness, model.mass, boundary, request.modes);
+  for (int k = 1; k <= request.modes; ++k) names.push_back(std::string("mode").append(std::to_string(k)));
+  Eigen::MatrixXd kr = cb.stiffness, mr = cb.mass;
+  const double k_defect = symmetrize(kr), m_defect = symmetrize(mr);
+  const Eigen::VectorXd reduced = frequencies_hz(kr, mr, 10);
+
+  nlohmann::json check = nullptr;
+  double check_s = 0.0;
+  if (request.check_modes > 0) {
+    t = std::chrono::steady_clock::now();
+    const int count = std::min(request.check_modes, full - 1);
+    const fem::CraigBamptonModel whole = fem::craig_bampton(model.stiffness, model.mass, {}, count);
+    check_s = seconds_since(t);
+    const Eigen::VectorXd ours = frequencies_hz(kr, mr, count);
+    std::vector<double> errors;
+    for (Eigen::Index i = 0; i < std::min(ours.size(), whole.normal_frequencies_hz.size()); ++i) {
+      errors.push_back(ours(i) / whole.normal_frequencies_hz(i) - 1.0);
+    }
+    check = {{"full_frequencies_hz", as_vector(whole.normal_frequencies_hz)},
+             {"reduced_frequencies_hz", as_vector(ours)},
+             {"relative_errors", errors},
+             {"worst_relative_error", errors.empty() ? 0.0 : *std::max_element(errors.begin(), errors.end(),
+                                                                               [](double a, double b) { return std::abs(a) < std::abs(b); })}};
+  }
+
+  nlohmann::json summary = {
+      {"deck", deck.file.string()},
+      {"units", "those of the deck, unconverted (K in force/length, M in mass; frequencies in Hz for a consistent system)"},
+      {"full_dofs", full},
+      {"interface", {{"given", request.interface}, {"nodes", nodes}, {"coordinates", coordinates},
+                     {"dofs", static_cast<int>(boundary.size())}}},
+      {"modes", request.modes},
+      {"reduced_dofs", static_cast<int>(names.size())},
+      {"fixed_interface_frequencies_hz", as_vector(cb.normal_frequencies_hz)},
+      {"reduced_frequencies_hz", as_vector(reduced)},
+      {"check", check},
+      {"symmetry_defect", {{"stiffness", k_defect}, {"mass", m_defect}}},
+      {"timings_s", {{"ccx_and_reading", ccx_s}, {"factorization", cb.factorization_s},
+                     {"constraint_modes", cb.constraint_modes_s}, {"eigensolve", cb.eigensolve_s},
+                     {"assembly", cb.assembly_s}, {"check", check_s}}},
+      {"files", {{"stiffness", "stiffness.mtx"}, {"mass", "mass.mtx"}, {"dofs", "dofs.txt"}}},
+      {"scene", "structure = { stiffness = \"stiffness.mtx\", mass = \"mass.mtx\", dofs = \"dofs.txt\" }"},
+      {"build", build_information()}};
+  if (request.recovery) summary["files"]["recovery"] = {"recovery.mtx", "full_dofs.txt"};
+
+  // Everything computed: now write.
+  t = std::chrono::steady_clock::now();
+  fs::create_directories(output);
+  const std::string origin = "wbm reduce: Craig-Bampton of " + deck.file.filename().string() + ", " +
+                             std::to_string(boundary.size()) + " interface DOFs + " + std::to_string(request.modes) +
+                             " fixed-interface modes; rows and columns named in dofs.txt";
+  fem::write_matrix_market_file(output / "stiffness.mtx", kr, true, "K_r [deck units]\n" + origin);
+  fem::write_matrix_market_file(output / "mass.mtx", mr, true, "M_r [deck units]\n" + origin);
+  {
+    std::ofstream d(output / "dofs.txt");
+    for (const auto& n : names) d << n << "\n";
+    if (!d) throw std::runtime_error("cannot write " + (output / "dofs.txt").string());
+  }
+  if (request.recovery) {
+    const Eigen::MatrixXd recovery = cb.expand(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(names.size()),
+                                                                         static_cast<Eigen::Index>(names.size())));
+    fem::write_matrix_market_file(output / "recovery.mtx", recovery, false,
+                                  "T: full displacements (rows: full_dofs.txt) = T q (columns: dofs.txt)\n" + origin);
+    std::ofstream d(output / "full_dofs.txt");
+    for (const auto& [node, direction] : model.dofs) d << node << "." << direction << "\n";
+    if (!d) throw std::runtime_error("cannot write " + (output / "full_dofs.txt").string());
+  }
+  summary["timings_s"]["writing"] = seconds_since(t);
+  summary["timings_s"]["total"] = seconds_since(start);
+  std::ofstream j(output / "reduction.json");
+  j << summary.dump(2) << "\n";
+  if (!j) throw std::runtime_error("cannot write " + (output / "reduction.json").string());
+  return summary;
+}
+
+}  // namespace wbm::scene
