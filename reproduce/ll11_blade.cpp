@@ -22,7 +22,6 @@
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
-#include <unistd.h>
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/craig_bampton.hpp>
@@ -35,22 +34,7 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace wbm;
-
-double since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// A scratch folder for the mesh and ccx, removed on every exit path.
-struct Scratch {
-  fs::path dir = fs::temp_directory_path() / ("wbm_ll11_blade_" + std::to_string(::getpid()));
-  Scratch() { fs::create_directories(dir); }
-  ~Scratch() {
-    std::error_code ignored;
-    fs::remove_all(dir, ignored);
-  }
-};
 
 }  // namespace
 
@@ -65,7 +49,7 @@ int main(int argc, char** argv) {
     const int modes = 40, harmonics = quick ? 3 : 8, samples = quick ? 24 : 96;
     const double energy_max = quick ? 2.0 : 11.0;
     const std::vector<double> shown = quick ? std::vector<double>{0.8, 1.5} : std::vector<double>{0.8, 4.7, 10.4};
-    const Scratch scratch;
+    const reproduce::ScratchFolder scratch("wbm_ll11_blade");
     nlohmann::json timing;
 
     // 1–2. Mesh (gmsh), root node set, model deck, K and M (CalculiX), the 24 tip nodes from the
@@ -86,13 +70,13 @@ int main(int argc, char** argv) {
     // 3. Craig–Bampton (72 + 40), and the full model's first 10 frequencies (Spectra, no interface).
     t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(model.stiffness, model.mass, boundary, modes);
-    timing["craig_bampton_s"] = since(t);
+    timing["craig_bampton_s"] = reproduce::seconds_since(t);
     timing["cholesky_s"] = cb.factorization_s;
     timing["constraint_modes_s"] = cb.constraint_modes_s;
     timing["lanczos_s"] = cb.eigensolve_s;
     t = std::chrono::steady_clock::now();
     const auto full = fem::craig_bampton(model.stiffness, model.mass, {}, 10);
-    timing["full_model_modes_s"] = since(t);
+    timing["full_model_modes_s"] = reproduce::seconds_since(t);
     const Eigen::VectorXd f_full = full.normal_frequencies_hz;
     const auto nb = static_cast<Eigen::Index>(boundary.size());
     // Reduced frequencies with the first m fixed-interface modes: the leading (72 + m) block.
@@ -137,7 +121,7 @@ int main(int argc, char** argv) {
     co.max_energy_step = 0.1;
     co.include = shown;
     const auto b = nnm.continue_backbone(co);
-    timing["backbone_s"] = since(t);
+    timing["backbone_s"] = reproduce::seconds_since(t);
     if (!b.complete) run.fail("backbone incomplete: " + b.message);
     const double f1 = nnm.linear_frequency_hz();
 

@@ -522,12 +522,41 @@ def blade(folder):
     save(fig, folder, "deformed")
 
 
+def blade_forced(folder):
+    """Beyond LL11: the reduced blade's forced response near its first bending resonance (penalty
+    stops, Fourier:Fourier and B-spline:B-spline), the linear response, and the backbone of the
+    same stops overlaid; amplitudes in gaps."""
+    meta = json.loads((folder / "meta.json").read_text())
+    bh, b = read_csv(folder / "branches.csv")
+    curve, ratio, amp = (b[bh.index(k)] for k in ("curve [-]", "frequency_over_f1 [-]", "amplitude [gap]"))
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    ax.plot(column(folder, "linear.csv", "frequency_over_f1 [-]"), column(folder, "linear.csv", "amplitude [gap]"),
+            color="0.6", lw=0.8, ls=":", label="linear (no casing)")
+    styles = ["C0-", "C2--"]
+    for i, c in enumerate(meta["curves"]):
+        xs = [r for r, j in zip(ratio, curve) if j == i]
+        ys = [a for a, j in zip(amp, curve) if j == i]
+        ax.plot(xs, ys, styles[i % len(styles)], lw=1.2, label=f"{c['curve']} ({c['points']} points)")
+    ax.plot(column(folder, "backbone.csv", "frequency_over_f1 [-]"), column(folder, "backbone.csv", "amplitude [gap]"),
+            "k-.", lw=1.0, label=f"backbone, same stops ({meta['backbone_levels']} levels)")
+    top = max(amp) * 1.15
+    ax.set_ylim(0.0, top)
+    ax.set_xlim(min(ratio), max(ratio))
+    ax.set_xlabel(f"forcing frequency / f1 [-] (f1 = {meta['linear_frequency_hz']:.1f} Hz)")
+    ax.set_ylabel(f"circumferential amplitude of tip node #{meta['onset_node_index']} / gap [-]")
+    ax.set_title(f"Reduced blade against the casing: zeta = {meta['zeta']:g}, gap {1e3 * meta['gap_m']:g} mm, "
+                 f"{meta['reduced_dofs']} DOFs", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    save(fig, folder, "forced_response")
+
+
 FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
            "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
            "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
            "jl14_speed_accuracy": speed_accuracy, "ll11_fig03": frequency_energy, "ll11_fig04": phase_space,
            "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration,
-           "jl14_rigid_stop": rigid_stop, "ll11_blade": blade}
+           "jl14_rigid_stop": rigid_stop, "ll11_blade": blade,
+           "ll11_blade_forced": blade_forced}
 
 
 def main():

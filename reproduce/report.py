@@ -10,7 +10,7 @@ from pathlib import Path
 ORDER = ["jl14_table1", "jl14_fig02", "jl14_fig03", "jl14_fig04", "jl14_fig05", "jl14_connection_coefficients",
          "jl14_fig06", "jl14_fig07", "jl14_fig08", "jl14_fig09", "jl14_fig10", "jl14_fig11", "jl14_fig12", "jl14_table2",
          "jl14_speed_accuracy", "jl14_extremes", "jl14_rigid_stop", "ll11_fig03", "ll11_fig04", "ll11_fig05", "ll11_penalty_limit",
-         "ll11_free_vibration", "ll11_extremes", "ll11_blade"]
+         "ll11_free_vibration", "ll11_extremes", "ll11_blade", "ll11_blade_forced"]
 
 HEADER = """# wbm reproduction report
 

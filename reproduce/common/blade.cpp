@@ -9,6 +9,7 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#include <unistd.h>
 
 #include <wbm/fem/gmsh.hpp>
 
@@ -67,6 +68,20 @@ Blade build_blade(const std::filesystem::path& work, double mesh_size, int tip_p
   const Eigen::RowVector3d le = b.position.row(0), te = b.position.row(b.position.rows() - 1);
   b.chord = ((b.position.rowwise() - le) * (te - le).transpose()) / (te - le).squaredNorm();
   return b;
+}
+
+ScratchFolder::ScratchFolder(const std::string& prefix)
+    : dir(std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid()))) {
+  std::filesystem::create_directories(dir);
+}
+
+ScratchFolder::~ScratchFolder() {
+  std::error_code ignored;
+  std::filesystem::remove_all(dir, ignored);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 std::vector<solvers::RigidStop> radial_stops(const Blade& blade, double gap) {

@@ -4,7 +4,9 @@
 /// leading to the trailing edge, and its radial contact directions. Shared by reproduce/ll11_blade
 /// and bench/bench_reduction. SI units.
 
+#include <chrono>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -29,6 +31,19 @@ struct Blade {
 /// contact points are blade.geo's parameters `size` and `ntip`. Throws std::runtime_error from
 /// gmsh or ccx (their messages), or if the node set TIP does not have `tip_points` nodes.
 [[nodiscard]] Blade build_blade(const std::filesystem::path& work, double mesh_size, int tip_points);
+
+/// A scratch folder `<temp>/<prefix>_<pid>` for the mesh and ccx, created at construction and
+/// removed on every exit path.
+struct ScratchFolder {
+  explicit ScratchFolder(const std::string& prefix);
+  ~ScratchFolder();
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  std::filesystem::path dir;
+};
+
+/// Wall time since `t` [s].
+[[nodiscard]] double seconds_since(std::chrono::steady_clock::time_point t);
 
 /// The hub radius of blade.geo: the engine axis is parallel to x at z = −hub_radius [m].
 inline constexpr double kHubRadius = 0.25;
