@@ -91,8 +91,9 @@ int main(int argc, char** argv) {
     auto t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, modes);
     timing["craig_bampton_s"] = reproduce::seconds_since(t);
-    // Coordinates scaled to unit modal mass, q = D q̂, D = diag(M_r)^(-1/2): the interface
-    // DOFs (m, about a gram each) and the mass-normalized modal coordinates then weigh alike,
+    // Coordinates scaled to unit diagonal mass, q = D q̂, D = diag(M_r)^(-1/2): the interface
+    // DOFs (metres, each with a small share of the mass) and the mass-normalized modal
+    // coordinates then weigh alike,
     // which brings the condition estimate of G from 1.1e9 to 3.1e7 (measured on the --quick mesh;
     // 1.0e7 scaled on the full one, meta.json).
     // Stops, load and amplitudes are mapped accordingly; every number written is physical.
