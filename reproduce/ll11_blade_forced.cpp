@@ -306,7 +306,8 @@ int main(int argc, char** argv) {
        << "). Backbone: KKT continuation of the first nonlinear mode with the same stops (N = " << mode_harmonics
        << ", m = " << mode_samples << ", E = 0.5 to " << format("%g", co.energy_max) << ", " << nl
        << " levels). Linear equations verified to ‖R‖ ≤ " << format("%g", residual_tolerance)
-       << " ‖b‖ (the default 1e-8 is below the rounding of this G). Figure: `forced_response.png`. Not computed: "
+       << " ‖b‖ (the default " << format("%g", solvers::WeightedResidualOptions{}.residual_tolerance)
+       << " is below the rounding of this G). Figure: `forced_response.png`. Not computed: "
           "stability (cost) and rigid stops (the continuation stalls at grazing contact).\n\n"
        << "| basis pair | points | folds | peak f/f1 | peak amplitude [gap] | backbone f/f1 at that amplitude | peak − "
           "backbone [f1] | time [s] |\n|---|---|---|---|---|---|---|---|\n"
