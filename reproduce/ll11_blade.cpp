@@ -128,6 +128,7 @@ int main(int argc, char** argv) {
     // Backbone table and, per tip node, the first energy where it carries a contact force.
     const auto nl = static_cast<Eigen::Index>(b.levels.size());
     Eigen::VectorXd e(nl), ratio(nl), fhz(nl), pen(nl), comp(nl), fmax(nl), touching(nl);
+    Eigen::VectorXd first_share(nl), other_mode(nl), other_harmonic(nl), other_share(nl);  // modal_components
     Eigen::VectorXd first_contact = Eigen::VectorXd::Constant(24, std::nan(""));
     for (Eigen::Index k = 0; k < nl; ++k) {
       const auto& l = b.levels[static_cast<size_t>(k)];
@@ -137,6 +138,11 @@ int main(int argc, char** argv) {
       pen(k) = l.max_penetration;
       comp(k) = l.complementarity;
       fmax(k) = l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0;
+      const auto mc = nnm.modal_components(l);
+      first_share(k) = mc.first_mode_share;
+      other_mode(k) = mc.mode;
+      other_harmonic(k) = mc.harmonic;
+      other_share(k) = mc.share;
       int count = 0;
       for (Eigen::Index c = 0; c < 24; ++c) {
         if (l.contact_force.segment(c * samples, samples).maxCoeff() > 0.0) {
@@ -147,8 +153,9 @@ int main(int argc, char** argv) {
       touching(k) = count;
     }
     run.table("backbone.csv", {"energy [-]", "frequency_over_f1 [-]", "frequency [Hz]", "max_penetration [gap]",
-                               "complementarity [gap]", "max_contact_force [N]", "nodes_in_contact [-]"},
-              {e, ratio, fhz, pen, comp, fmax, touching});
+                               "complementarity [gap]", "max_contact_force [N]", "nodes_in_contact [-]",
+                               "first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"},
+              {e, ratio, fhz, pen, comp, fmax, touching, first_share, other_mode, other_harmonic, other_share});
     std::vector<std::string> contact_status;
     for (Eigen::Index c = 0; c < 24; ++c) contact_status.push_back(std::isnan(first_contact(c)) ? "never in contact" : "");
     run.table("contact_nodes.csv", {"index [-]", "node [-]", "chord_fraction [-]", "x [m]", "y [m]", "z [m]", "n_y [-]",
@@ -221,9 +228,12 @@ int main(int argc, char** argv) {
       int in_contact = 0;
       for (Eigen::Index c = 0; c < 24; ++c) in_contact += force(c) > 0.0 ? 1 : 0;
       trailing_max = umax(23);
+      const auto mc = nnm.modal_components(l);
       level_rows << "| " << tag << " | " << format("%.5f", l.frequency_hz / f1) << " | " << format("%.2f", l.frequency_hz)
                  << " | " << in_contact << " | " << format("%.2f", umax.maxCoeff()) << " | "
-                 << format("%.1e", l.max_penetration) << " | " << format("%.1e", l.complementarity) << " |\n";
+                 << format("%.1e", l.max_penetration) << " | " << format("%.1e", l.complementarity) << " | "
+                 << format("%.3f", mc.first_mode_share) << " | mode " << mc.mode << ", h = " << mc.harmonic << ": "
+                 << format("%.3f", mc.share) << " |\n";
       levels.push_back({{"energy", l.energy}, {"frequency_hz", l.frequency_hz}, {"frequency_over_f1", l.frequency_hz / f1},
                         {"nodes_in_contact", in_contact}, {"max_radial_over_gap", umax.maxCoeff()}});
     }
@@ -257,6 +267,18 @@ int main(int argc, char** argv) {
     Eigen::Index peak = 0;
     ratio.maxCoeff(&peak);
     const bool hardening = ratio(nl - 1) > 1.0 + 1e-6 && ratio.minCoeff() >= 1.0 - 1e-8;  // 1e-8: the KKT tolerance's reach
+    // (e) Is the branch the first mode's? The first level where mode 1 at the fundamental holds
+    // less than half of m̂ (modal_energy_shares), and at the last level the largest other
+    // component (mode j, harmonic h): an h:1 internal resonance if it holds more than half and
+    // h f is within 1 % of f_j.
+    Eigen::Index leaves = -1;
+    for (Eigen::Index k = 0; k < nl && leaves < 0; ++k) {
+      if (first_share(k) < 0.5) leaves = k;
+    }
+    const int end_mode = static_cast<int>(other_mode(nl - 1)), end_harmonic = static_cast<int>(other_harmonic(nl - 1));
+    const double end_fj = nnm.linear_frequencies_hz()(end_mode - 1);
+    const double end_detuning = end_harmonic * fhz(nl - 1) / end_fj - 1.0;
+    const bool end_resonant = other_share(nl - 1) > 0.5 && std::abs(end_detuning) <= 1e-2;
     // Touch order along the chord: nodes sorted by first-contact energy, at most 8.
     std::vector<Eigen::Index> by_energy;
     for (Eigen::Index c = 0; c < 24; ++c) {
@@ -278,7 +300,11 @@ int main(int argc, char** argv) {
               {"full_first_frequency_hz", f_full(0)}, {"timing_s", timing}, {"pipeline_s", total},
               {"backbone_levels", nl}, {"kinks", b.kinks}, {"folds", b.folds}, {"levels", levels},
               {"onset_node_index", onset + 1}, {"leading_edge_contact", leading}, {"trailing_edge_contact", trailing}, {"first_contact_energy", std::isfinite(first_energy) ? nlohmann::json(first_energy) : nlohmann::json()},
-              {"worst_penetration_gaps", worst_pen}, {"worst_complementarity_gaps", worst_comp}});
+              {"worst_penetration_gaps", worst_pen}, {"worst_complementarity_gaps", worst_comp},
+              {"first_mode_share_below_half_from_energy", leaves >= 0 ? nlohmann::json(e(leaves)) : nlohmann::json()},
+              {"end_component", {{"mode", end_mode}, {"harmonic", end_harmonic}, {"share", other_share(nl - 1)},
+                                 {"first_mode_share", first_share(nl - 1)}, {"detuning", end_detuning},
+                                 {"internal_resonance", end_resonant}}}});
 
     std::ostringstream md;
     md << "## LL11 Figs. 6–8 — compressor blade against a rigid casing (`ll11_blade`)\n\n"
@@ -308,8 +334,9 @@ int main(int argc, char** argv) {
        << (cb_ok ? "**agrees**" : "**disagrees**") << " (" << format("%.1e", worst5(3)) << ").\n\n"
        << "**Nonlinear mode** (frequency normalized by the reduced model's first linear frequency f1 = "
        << format("%.2f", f1) << " Hz; full model " << format("%.2f", f_full(0)) << " Hz):\n\n"
-       << "| E | f/f1 | f [Hz] | tip nodes in contact | max radial u/g0 | worst penetration [g0] | complementarity [g0] |\n"
-       << "|---|---|---|---|---|---|---|\n"
+       << "| E | f/f1 | f [Hz] | tip nodes in contact | max radial u/g0 | worst penetration [g0] | complementarity [g0] | "
+          "share of mode 1 at h = 1 | largest other component |\n"
+       << "|---|---|---|---|---|---|---|---|---|\n"
        << level_rows.str()
        << "\nOver the whole branch (" << nl << " levels, E = " << format("%.2f", e(0)) << " to "
        << format("%.2f", e(nl - 1)) << ", " << b.folds.size() << " folds, " << b.kinks
@@ -321,6 +348,24 @@ int main(int argc, char** argv) {
        << format("%.2f", e(nl - 1)) << ", minimum " << format("%.10f", ratio.minCoeff())
        << "; the largest f/f1 is " << format("%.4f", ratio.maxCoeff()) << " at E = " << format("%.2f", e(peak))
        << (ratio(nl - 1) < ratio.maxCoeff() - 1e-6 ? ", after which it decreases: not monotone" : ": monotone") << ").\n\n"
+       << "Claim (Fig. 7 is \"the first nonlinear mode\"): along the whole branch the first linear mode at the "
+          "fundamental holds at least half of the energy m̂ (`NonlinearModes::modal_energy_shares`, columns of "
+          "backbone.csv): "
+       << (leaves < 0 ? "**agrees**" : "**disagrees**")
+       << (leaves >= 0 ? std::string(" (below ½ from E = ").append(format("%.2f", e(leaves))).append(")") : std::string())
+       << ". At E = " << format("%.2f", e(nl - 1)) << " it holds " << format("%.3f", first_share(nl - 1)) << ", and mode "
+       << end_mode << " at harmonic " << end_harmonic << " holds " << format("%.3f", other_share(nl - 1)) << " (f_"
+       << end_mode << " = " << format("%.4f", end_fj / f1) << " f1 = " << end_harmonic << " × "
+       << format("%.5f", end_fj / (end_harmonic * f1)) << " f1). Claim: the branch ends in a " << end_harmonic
+       << ":1 internal resonance with mode " << end_mode << " (more than half of m̂ and h f within 1 % of f_j): "
+       << (end_resonant ? "**agrees**" : "**disagrees**") << " (h f/f_j − 1 = " << format("%+.1e", end_detuning) << ")"
+       << (end_resonant && leaves >= 0
+               ? std::string(". Past E = ").append(format("%.2f", e(leaves)))
+                     .append(" the curve is therefore the tongue of that internal resonance (its frequency tends to f_j/h), "
+                             "not the first bending mode the paper draws; with penalty stops, `ll11_blade_forced` traces "
+                             "the first-mode branch beyond it from a forced resonance peak")
+               : std::string())
+       << ". The paper's blade is another geometry, whose frequency ratios we do not know.\n\n"
        << "Claim (LL11 Sec. 5.2): the leading and trailing edges touch first. In the linear mode the first node "
           "to reach the gap is #" << onset + 1 << " (chord " << format("%.2f", chord(onset)) << "); along the branch "
           "the first contact forces appear at E = " << format("%.3f", first_energy) << " on " << first_nodes

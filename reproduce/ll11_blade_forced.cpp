@@ -3,7 +3,10 @@
 // uniform gap (f = k (n·u − g0)₊), traced by pseudo-arclength continuation in the forcing
 // frequency [JL14 Sec. 5.6] with Fourier:Fourier (harmonic balance, harmonics 0 … H) and
 // B-spline:B-spline (periodized orthogonal cubic B-spline, distributional form, M = 2^J), with
-// the backbone of the first nonlinear mode with the same stops (KKT continuation) overlaid.
+// two backbone branches of the same stops (KKT continuation) overlaid: the one from the linear
+// first mode, and the one through harmonic balance's resonance peak (its orbit corrected without
+// damping and load, continued both ways in energy). Each level says where its energy sits
+// (first mode at the fundamental, or an h:1 internal resonance with mode j, f_j ≈ h f).
 // The load is F(t) = s M_r φ₁ cos 2πft (φ₁ the first linear mode, mass-normalized): in the linear
 // regime it excites the first mode only. s puts the linear resonance peak of the first stop to
 // touch at `overload` gaps. Damping C = β K_r with β = 2ζ/ω₁ (ζ₁ = ζ). Amplitude measure, for the
@@ -44,22 +47,49 @@ struct Traced {
   double condition = 0.0;  // 1-norm condition estimate of G at the start
 };
 
-// Backbone levels as (frequency [Hz], amplitude of the observed DOF [gap]) pairs, E ascending.
+// Backbone levels in branch order: energy, frequency [Hz], amplitude of the observed DOF [gap],
+// and where the energy sits (reproduce::modal_components).
 struct BackboneCurve {
-  Eigen::VectorXd energy, frequency_hz, amplitude;
+  Eigen::VectorXd energy, frequency_hz, amplitude, first_share, other_mode, other_harmonic, other_share;
   double time_s = 0.0;
+  std::string stop;  // why the continuation ended
 };
 
-// Frequency of a backbone at amplitude a [gap] by linear interpolation between the levels that bracket
-// it (the first bracketing pair along E); NaN if no level pair brackets a.
-double backbone_frequency_at(const BackboneCurve& b, double a) {
+BackboneCurve backbone_curve(const solvers::NonlinearModes& nnm, const std::vector<solvers::ModeLevel>& levels,
+                             int observed, double unit) {
+  BackboneCurve b;
+  const auto nl = static_cast<Eigen::Index>(levels.size());
+  for (auto* v : {&b.energy, &b.frequency_hz, &b.amplitude, &b.first_share, &b.other_mode, &b.other_harmonic, &b.other_share}) {
+    v->resize(nl);
+  }
+  for (Eigen::Index k = 0; k < nl; ++k) {
+    const auto& l = levels[static_cast<size_t>(k)];
+    const Eigen::RowVectorXd u = nnm.displacement(l, 64).row(observed);
+    const auto c = nnm.modal_components(l);
+    b.energy(k) = l.energy;
+    b.frequency_hz(k) = l.frequency_hz;
+    b.amplitude(k) = 0.5 * (u.maxCoeff() - u.minCoeff()) * unit;  // [gap]
+    b.first_share(k) = c.first_mode_share;
+    b.other_mode(k) = c.mode;
+    b.other_harmonic(k) = c.harmonic;
+    b.other_share(k) = c.share;
+  }
+  return b;
+}
+
+// Frequency of a backbone at amplitude a [gap] by linear interpolation between levels that
+// bracket it: of all bracketing pairs (a branch may pass an amplitude several times), the one
+// closest to `near` [Hz]; NaN if no level pair brackets a.
+double backbone_frequency_at(const BackboneCurve& b, double a, double near) {
+  double best = std::nan("");
   for (Eigen::Index k = 0; k + 1 < b.amplitude.size(); ++k) {
     const double a0 = b.amplitude(k), a1 = b.amplitude(k + 1);
     if ((a0 - a) * (a1 - a) <= 0.0 && a0 != a1) {
-      return b.frequency_hz(k) + (a - a0) / (a1 - a0) * (b.frequency_hz(k + 1) - b.frequency_hz(k));
+      const double f = b.frequency_hz(k) + (a - a0) / (a1 - a0) * (b.frequency_hz(k + 1) - b.frequency_hz(k));
+      if (std::isnan(best) || std::abs(f - near) < std::abs(best - near)) best = f;
     }
   }
-  return std::nan("");
+  return best;
 }
 
 }  // namespace
@@ -146,7 +176,7 @@ int main(int argc, char** argv) {
     // Forced responses.
     std::vector<Traced> traced;
     auto trace = [&](const std::string& label, const std::string& key, solvers::TimeBasis trial,
-                     solvers::TimeBasis weighting, double max_step) {
+                     solvers::TimeBasis weighting, double max_step, bool keep_all) {
       t = std::chrono::steady_clock::now();
       const solvers::WeightedResidual base(reduced, forcing, contacts, std::move(trial), std::move(weighting),
                                            {.formulation = reproduce::kFigureFormulation,
@@ -158,6 +188,9 @@ int main(int argc, char** argv) {
       o.observed_dof = observed;
       o.stability = false;
       o.max_state = 50.0;
+      if (keep_all) {  // every DOF's trial coefficients: the peak's orbit starts a backbone below
+        for (Eigen::Index j = 0; j < n; ++j) o.keep_dofs.push_back(static_cast<int>(j));
+      }
       traced.push_back({label, key, solvers::trace_response(base, o), 0.0, 0.0});
       traced.back().time_s = reproduce::seconds_since(t);
       traced.back().condition = base.condition_number();
@@ -169,11 +202,13 @@ int main(int argc, char** argv) {
     };
     // Harmonic balance densely; the wavelet pair (about 4 times the cost per point) with larger steps.
     trace("Fourier:Fourier", "fourier_fourier", solvers::TimeBasis::fourier_harmonics(harmonics),
-          solvers::TimeBasis::fourier_harmonics(harmonics), quick ? 4e-3 : 1e-3);
+          solvers::TimeBasis::fourier_harmonics(harmonics), quick ? 4e-3 : 1e-3, true);
     trace("B-spline:B-spline", "bspline_bspline", solvers::TimeBasis::from_name("bspline", wavelet_m),
-          solvers::TimeBasis::from_name("bspline", wavelet_m), quick ? 4e-3 : 2e-3);
+          solvers::TimeBasis::from_name("bspline", wavelet_m), quick ? 4e-3 : 2e-3, false);
 
-    // The backbone of the same stops (damping and load ignored), amplitude of the observed DOF.
+    // The backbone of the same stops (damping and load ignored) from the linear mode, and the
+    // branch through harmonic balance's resonance peak: its orbit (every DOF's coefficients),
+    // corrected by Newton without damping and load, continued down and up in energy.
     t = std::chrono::steady_clock::now();
     solvers::BackboneContinuationOptions co;
     co.energy_min = 0.5;
@@ -182,19 +217,40 @@ int main(int argc, char** argv) {
     co.penalty_stiffness = k_pen;
     const auto b = nnm.continue_backbone(co);
     if (!b.complete) run.fail("backbone incomplete: " + b.message);
-    BackboneCurve backbone;
-    const auto nl = static_cast<Eigen::Index>(b.levels.size());
-    backbone.energy.resize(nl);
-    backbone.frequency_hz.resize(nl);
-    backbone.amplitude.resize(nl);
-    for (Eigen::Index k = 0; k < nl; ++k) {
-      const auto& l = b.levels[static_cast<size_t>(k)];
-      const Eigen::RowVectorXd u = nnm.displacement(l, 64).row(observed);
-      backbone.energy(k) = l.energy;
-      backbone.frequency_hz(k) = l.frequency_hz;
-      backbone.amplitude(k) = 0.5 * (u.maxCoeff() - u.minCoeff()) * unit;  // [gap]
-    }
+    BackboneCurve backbone = backbone_curve(nnm, b.levels, observed, unit);
     backbone.time_s = reproduce::seconds_since(t);
+    backbone.stop = b.message;
+    const auto nl = static_cast<Eigen::Index>(b.levels.size());
+
+    t = std::chrono::steady_clock::now();
+    const auto& ff_points = traced[0].curve.points;
+    const auto ff_peak = std::max_element(ff_points.begin(), ff_points.end(),
+                                          [](const auto& p, const auto& q) { return p.amplitude < q.amplitude; });
+    solvers::BackboneContinuationOptions cp = co;
+    cp.start = solvers::PeriodicOrbit{ff_peak->kept_coefficients, ff_peak->frequency_hz};
+    const double peak_energy = nnm.energy(ff_peak->kept_coefficients);
+    // Twice the peak's energy: enough to see where the branch goes on both sides of the peak.
+    cp.energy_min = 0.5 * peak_energy;
+    cp.energy_max = 2.0 * peak_energy;
+    std::vector<solvers::ModeLevel> through;
+    std::string through_stop;
+    bool through_complete = true;
+    for (int direction : {-1, +1}) {
+      cp.direction = direction;
+      const auto part = nnm.continue_backbone(cp);
+      through_complete = through_complete && part.complete;
+      through_stop += std::string(direction < 0 ? "down: " : "; up: ") + part.message;
+      if (direction < 0) {
+        through.assign(part.levels.rbegin(), part.levels.rend());
+      } else if (!part.levels.empty()) {
+        through.insert(through.end(), part.levels.begin() + 1, part.levels.end());  // the start is already in
+      }
+    }
+    if (!through_complete) run.fail("backbone through the forced peak incomplete: " + through_stop);
+    BackboneCurve peak_branch = backbone_curve(nnm, through, observed, unit);
+    peak_branch.time_s = reproduce::seconds_since(t);
+    peak_branch.stop = through_stop;
+    const auto np = static_cast<Eigen::Index>(through.size());
 
     // Files.
     std::vector<double> id, freq, ratio, amp, umax, umin, fmax, its;
@@ -217,8 +273,26 @@ int main(int argc, char** argv) {
               {"curve [-]", "frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]", "u_max [gap]", "u_min [gap]",
                "max_contact_force [N]", "corrector_iterations [-]"},
               {column(id), column(freq), column(ratio), column(amp), column(umax), column(umin), column(fmax), column(its)});
-    run.table("backbone.csv", {"energy [-]", "frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]"},
-              {backbone.energy, backbone.frequency_hz, backbone.frequency_hz / f1, backbone.amplitude});
+    {
+      const BackboneCurve* parts[] = {&backbone, &peak_branch};
+      std::vector<Eigen::VectorXd> cols(9, Eigen::VectorXd(nl + np));
+      for (int part = 0; part < 2; ++part) {
+        const auto& c = *parts[part];
+        const Eigen::Index at = part == 0 ? 0 : nl, len = c.energy.size();
+        cols[0].segment(at, len).setConstant(part);
+        cols[1].segment(at, len) = c.energy;
+        cols[2].segment(at, len) = c.frequency_hz;
+        cols[3].segment(at, len) = c.frequency_hz / f1;
+        cols[4].segment(at, len) = c.amplitude;
+        cols[5].segment(at, len) = c.first_share;
+        cols[6].segment(at, len) = c.other_mode;
+        cols[7].segment(at, len) = c.other_harmonic;
+        cols[8].segment(at, len) = c.other_share;
+      }
+      run.table("backbone.csv", {"branch [-]", "energy [-]", "frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]",
+                                 "first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"},
+                cols);
+    }
     const int nlin = quick ? 26 : 201;
     Eigen::VectorXd lf(nlin), lr(nlin), la(nlin);
     for (int i = 0; i < nlin; ++i) {
@@ -230,15 +304,16 @@ int main(int argc, char** argv) {
     }
     run.table("linear.csv", {"frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]"}, {lf, lr, la});
 
-    // Claims, computed: (a) each curve's resonance peak lies on the backbone (the backbone's
-    // frequency at the peak's amplitude, within 2ζ f1: a lightly damped peak sits on the
-    // undamped mode up to O(ζ)); (b) the wavelet pair's peak is harmonic balance's.
-    Eigen::Index top = 0;
-    backbone.frequency_hz.maxCoeff(&top);
+    // Claims, computed: (a) each curve's resonance peak lies on a backbone branch (the branch's
+    // frequency at the peak's amplitude, within 2ζ f1: a lightly damped peak sits on an undamped
+    // mode up to O(ζ)); (b) the wavelet pair's peak is harmonic balance's; (c) where the energy
+    // of each branch sits (first mode at the fundamental, or an internal resonance).
     std::ostringstream rows;
     nlohmann::json stats = nlohmann::json::array();
     std::vector<double> peak_ratio, peak_amp;
-    bool on_backbone = true;
+    bool on_linear_branch = true, on_peak_branch = true;
+    auto cell = [&](double v) { return std::isfinite(v) ? format("%.5f", v) : std::string("—"); };
+    auto json_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     for (const auto& tr : traced) {
       double pa = 0.0, pf = std::nan("");
       for (const auto& p : tr.curve.points) {
@@ -247,18 +322,21 @@ int main(int argc, char** argv) {
           pf = p.frequency_hz;
         }
       }
-      const double fb = backbone_frequency_at(backbone, pa);  // NaN: the backbone never has this amplitude
-      const double off = (pf - fb) / f1;
-      const bool on = std::isfinite(off) && std::abs(off) <= 2.0 * zeta;
-      on_backbone = on_backbone && on;
+      // NaN: the branch never has this amplitude.
+      const double f0 = backbone_frequency_at(backbone, pa, pf), fp = backbone_frequency_at(peak_branch, pa, pf);
+      const double off0 = (pf - f0) / f1, offp = (pf - fp) / f1;
+      on_linear_branch = on_linear_branch && std::isfinite(off0) && std::abs(off0) <= 2.0 * zeta;
+      on_peak_branch = on_peak_branch && std::isfinite(offp) && std::abs(offp) <= 2.0 * zeta;
       peak_ratio.push_back(pf / f1);
       peak_amp.push_back(pa);
       rows << "| " << tr.label << " | " << tr.curve.points.size() << " | " << tr.curve.folds.size() << " | "
-           << format("%.5f", pf / f1) << " | " << format("%.3f", pa) << " | " << format("%.5f", fb / f1) << " | "
-           << format("%+.1e", off) << " | " << format("%.1f", tr.time_s) << " |\n";
+           << format("%.5f", pf / f1) << " | " << format("%.3f", pa) << " | " << cell(f0 / f1) << " | " << cell(fp / f1)
+           << " | " << (std::isfinite(offp) ? format("%+.1e", offp) : std::string("—")) << " | "
+           << format("%.1f", tr.time_s) << " |\n";
       stats.push_back({{"curve", tr.label}, {"points", tr.curve.points.size()}, {"folds", tr.curve.folds.size()},
                        {"peak_frequency_over_f1", pf / f1}, {"peak_amplitude_gap", pa},
-                       {"backbone_frequency_over_f1_at_peak", std::isfinite(fb) ? nlohmann::json(fb / f1) : nlohmann::json()},
+                       {"linear_mode_branch_frequency_over_f1_at_peak", json_or_null(f0 / f1)},
+                       {"peak_branch_frequency_over_f1_at_peak", json_or_null(fp / f1)},
                        {"time_s", tr.time_s}, {"condition_number_of_g", tr.condition},
                        {"corrector_iterations", tr.curve.corrector_iterations},
                        {"rejected_steps", tr.curve.rejected_steps}, {"corners", tr.curve.kinks},
@@ -267,15 +345,50 @@ int main(int argc, char** argv) {
     const double wavelet_df = peak_ratio[1] - peak_ratio[0], wavelet_da = peak_amp[1] / peak_amp[0] - 1.0;
     const bool wavelet_ok = std::abs(wavelet_df) <= 1e-3 && std::abs(wavelet_da) <= 1e-2;
     const double linear_peak = la.maxCoeff();
-    // Computed, for the sentence after the table: does the backbone turn back past its highest
-    // frequency, and do the forced peaks lie beyond it in both frequency and amplitude?
-    const bool backbone_turns = top + 1 < nl && backbone.frequency_hz(nl - 1) < backbone.frequency_hz(top) - 1e-6 * f1;
-    bool beyond = true;
-    for (size_t k = 0; k < traced.size(); ++k) {
-      beyond = beyond && peak_ratio[k] > backbone.frequency_hz(top) / f1 && peak_amp[k] > backbone.amplitude.maxCoeff();
+    Eigen::Index top = 0;
+    backbone.frequency_hz.maxCoeff(&top);
+
+    // Where the branch from the linear mode leaves the first mode: the first level whose first-mode
+    // share is below ½, and at its last level the largest other component (mode j, harmonic h):
+    // an h:1 internal resonance if that component holds most of the energy and h f = f_j within 1 %.
+    const Eigen::VectorXd& fj = nnm.linear_frequencies_hz();
+    auto resonance = [&](const BackboneCurve& c, Eigen::Index k) {
+      const int j = static_cast<int>(c.other_mode(k)), h = static_cast<int>(c.other_harmonic(k));
+      const double detuning = h * c.frequency_hz(k) / fj(j - 1) - 1.0;  // h f/f_j − 1
+      return std::pair{detuning, c.other_share(k) > 0.5 && std::abs(detuning) <= 1e-2};
+    };
+    auto describe = [&](const BackboneCurve& c, Eigen::Index k) {
+      const int j = static_cast<int>(c.other_mode(k)), h = static_cast<int>(c.other_harmonic(k));
+      return std::string("E = ").append(format("%.2f", c.energy(k))).append(", f/f1 = ")
+          .append(format("%.5f", c.frequency_hz(k) / f1)).append(": mode 1 at the fundamental holds ")
+          .append(format("%.3f", c.first_share(k))).append(" of the energy, mode ").append(std::to_string(j))
+          .append(" at harmonic ").append(std::to_string(h)).append(" holds ").append(format("%.3f", c.other_share(k)))
+          .append(" (f_").append(std::to_string(j)).append(" = ").append(format("%.4f", fj(j - 1) / f1))
+          .append(" f1 = ").append(std::to_string(h)).append(" × ").append(format("%.5f", fj(j - 1) / (h * f1)))
+          .append(" f1)");
+    };
+    Eigen::Index leaves = -1;
+    for (Eigen::Index k = 0; k < nl && leaves < 0; ++k) {
+      if (backbone.first_share(k) < 0.5) leaves = k;
+    }
+    const auto [end_detuning, linear_branch_resonant] = resonance(backbone, nl - 1);
+    // The branch through the peak: its share at the start (the peak's orbit corrected) and its ends.
+    Eigen::Index start_level = 0;
+    for (Eigen::Index k = 0; k < np; ++k) {
+      if (std::abs(peak_branch.energy(k) - peak_energy) < std::abs(peak_branch.energy(start_level) - peak_energy)) {
+        start_level = k;
+      }
+    }
+    Eigen::Index first_mode_from = np, first_mode_to = -1;  // first and last level (branch order) where mode 1 holds at least half
+    for (Eigen::Index k = 0; k < np; ++k) {
+      if (peak_branch.first_share(k) >= 0.5) {
+        first_mode_from = std::min(first_mode_from, k);
+        first_mode_to = k;
+      }
     }
 
     timing["backbone_s"] = backbone.time_s;
+    timing["backbone_through_peak_s"] = peak_branch.time_s;
     for (const auto& tr : traced) timing[tr.key + "_s"] = tr.time_s;
     run.meta({{"figure", "LL11 blade, forced response (beyond the paper)"}, {"mesh_size_m", mesh_size},
               {"dofs", blade.model.dofs.size()}, {"reduced_dofs", n}, {"gap_m", gap}, {"zeta", zeta}, {"beta_s", beta},
@@ -284,9 +397,12 @@ int main(int argc, char** argv) {
               {"linear_frequency_hz", f1}, {"onset_node_index", onset + 1}, {"curves", stats}, {"timing_s", timing},
               {"linear_peak_amplitude_gap", linear_peak}, {"residual_tolerance", residual_tolerance},
               {"backbone_levels", nl}, {"backbone_max_frequency_over_f1", backbone.frequency_hz(top) / f1},
-              {"backbone_amplitude_at_max_frequency_gap", backbone.amplitude(top)},
-              {"backbone_max_amplitude_gap", backbone.amplitude.maxCoeff()}, {"peaks_on_backbone", on_backbone},
-              {"backbone_turns_back", backbone_turns}, {"forced_peaks_beyond_backbone", beyond},
+              {"backbone_stop", backbone.stop}, {"peak_branch_levels", np}, {"peak_branch_stop", peak_branch.stop},
+              {"peak_orbit_energy", peak_energy},
+              {"linear_mode_branch_leaves_first_mode_at_energy", leaves >= 0 ? nlohmann::json(backbone.energy(leaves)) : nlohmann::json()},
+              {"linear_mode_branch_end_internal_resonance", linear_branch_resonant},
+              {"linear_mode_branch_end_detuning", end_detuning},
+              {"peaks_on_linear_mode_branch", on_linear_branch}, {"peaks_on_peak_branch", on_peak_branch},
               {"wavelet_agrees_with_harmonic_balance", wavelet_ok}});
 
     std::ostringstream md;
@@ -303,35 +419,48 @@ int main(int argc, char** argv) {
        << " Hz; Fourier:Fourier H = " << harmonics << " (M = " << 2 * harmonics + 1 << "), B-spline:B-spline M = "
        << wavelet_m << ", distributional form. Amplitude: half the peak-to-peak circumferential displacement "
           "of node #" << onset + 1 << ", in gaps (the linear peak: " << format("%.3f", linear_peak)
-       << "). Backbone: KKT continuation of the first nonlinear mode with the same stops (N = " << mode_harmonics
-       << ", m = " << mode_samples << ", E = 0.5 to " << format("%g", co.energy_max) << ", " << nl
-       << " levels). Linear equations verified to ‖R‖ ≤ " << format("%g", residual_tolerance)
+       << "). Linear equations verified to ‖R‖ ≤ " << format("%g", residual_tolerance)
        << " ‖b‖ (the default " << format("%g", solvers::WeightedResidualOptions{}.residual_tolerance)
        << " is below the rounding of this G). Figure: `forced_response.png`. Not computed: "
           "stability (cost) and rigid stops (the continuation stalls at grazing contact).\n\n"
-       << "| basis pair | points | folds | peak f/f1 | peak amplitude [gap] | backbone f/f1 at that amplitude | peak − "
-          "backbone [f1] | time [s] |\n|---|---|---|---|---|---|---|---|\n"
-       << rows.str()
-       << "\nClaim: the resonance peaks lie on the backbone (within 2ζ = " << format("%g", 2.0 * zeta) << " f1): "
-       << (on_backbone ? "**agrees**" : "**disagrees**") << ". The backbone's frequency is at most "
-       << format("%.5f", backbone.frequency_hz(top) / f1) << " f1 (amplitude " << format("%.3f", backbone.amplitude(top))
-       << " gaps, E = " << format("%.2f", backbone.energy(top)) << "), and its amplitude at most "
-       << format("%.3f", backbone.amplitude.maxCoeff()) << " gaps"
-       << (backbone_turns ? std::string("; past its highest frequency the backbone turns back to lower frequencies "
-                                        "(f/f1 = ") + format("%.5f", backbone.frequency_hz(nl - 1) / f1) + " at E = " +
-                                format("%.2f", backbone.energy(nl - 1)) + ")"
-                          : std::string())
-       << (beyond ? std::string(", while the forced peaks lie at higher frequencies and amplitudes: the mode traced "
-                                "by continuation and the forced resonance are not on the same branch there")
-                  : std::string())
-       << " (a \"—\": the backbone never reaches the peak's amplitude).\n\n"
+       << "Two backbone branches of the same stops (undamped, unforced; KKT continuation, N = " << mode_harmonics
+       << ", m = " << mode_samples << "): (0) from the linear first mode, E = 0.5 to " << format("%g", co.energy_max)
+       << " (" << nl << " levels); (1) through harmonic balance's resonance peak: the peak's orbit (every DOF's "
+          "coefficients, E = " << format("%.3f", peak_energy) << ") corrected by Newton without damping and load, "
+          "then continued down and up in energy (" << np << " levels, E = " << format("%.2f", peak_branch.energy.minCoeff())
+       << " to " << format("%.2f", peak_branch.energy.maxCoeff()) << "). backbone.csv gives, per level, the share of "
+          "m̂ held by the first linear mode at the fundamental and the largest other (mode, harmonic) component "
+          "(NonlinearModes::modal_energy_shares).\n\n"
+       << "| basis pair | points | folds | peak f/f1 | peak amplitude [gap] | branch 0 f/f1 at that amplitude | "
+          "branch 1 f/f1 at that amplitude | peak − branch 1 [f1] | time [s] |\n|---|---|---|---|---|---|---|---|---|\n"
+       << rows.str() << "\n(\"—\": the branch never has the peak's amplitude.)\n\n"
+       << "Claim: the resonance peaks lie on the branch from the linear mode (within 2ζ = " << format("%g", 2.0 * zeta)
+       << " f1): " << (on_linear_branch ? "**agrees**" : "**disagrees**") << "; on the branch through the peak: "
+       << (on_peak_branch ? "**agrees**" : "**disagrees**") << ".\n\n"
+       << "Claim: the branch from the linear mode stays on the first mode (its fundamental holds at least half of "
+          "the energy) up to E = " << format("%g", co.energy_max) << ": "
+       << (leaves < 0 ? "**agrees**" : "**disagrees**")
+       << (leaves >= 0 ? std::string(" (below ½ from E = ").append(format("%.2f", backbone.energy(leaves))).append(")")
+                       : std::string())
+       << ". Its highest frequency is " << format("%.5f", backbone.frequency_hz(top) / f1) << " f1 at E = "
+       << format("%.2f", backbone.energy(top)) << "; at its end, " << describe(backbone, nl - 1) << ". Claim: that "
+          "end is an h:1 internal resonance (the other component holds more than half and h f within 1 % of f_j): "
+       << (linear_branch_resonant ? "**agrees**" : "**disagrees**") << " (h f/f_j − 1 = " << format("%+.1e", end_detuning)
+       << "). The branch through the peak: at its start, " << describe(peak_branch, start_level) << "; mode 1 holds "
+       << "at least half of the energy "
+       << (first_mode_to >= 0 ? std::string("from E = ").append(format("%.2f", peak_branch.energy(first_mode_from)))
+                                    .append(" to E = ").append(format("%.2f", peak_branch.energy(first_mode_to)))
+                              : std::string("nowhere"))
+       << " (branch order) along it; where the downward continuation ended, " << describe(peak_branch, 0)
+       << ", and where the upward one ended, " << describe(peak_branch, np - 1) << ".\n\n"
        << "Claim: B-spline:B-spline (M = " << wavelet_m << ") gives harmonic balance's resonance (peak frequency within "
           "1e-3 f1 and amplitude within 1 %): "
        << (wavelet_ok ? "**agrees**" : "**disagrees**") << " (Δf = " << format("%+.1e", wavelet_df) << " f1, Δa/a = "
        << format("%+.1e", wavelet_da) << ").\n\n"
        << "Timings: gmsh " << format("%.1f", blade.gmsh_s) << " s, ccx " << format("%.1f", blade.ccx_s)
-       << " s, Craig–Bampton " << format("%.1f", timing["craig_bampton_s"].get<double>()) << " s, backbone "
-       << format("%.1f", backbone.time_s) << " s.\n";
+       << " s, Craig–Bampton " << format("%.1f", timing["craig_bampton_s"].get<double>()) << " s, backbone from the "
+          "linear mode " << format("%.1f", backbone.time_s) << " s, through the peak " << format("%.1f", peak_branch.time_s)
+       << " s.\n";
     run.report(md.str());
   });
 }

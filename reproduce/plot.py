@@ -447,7 +447,8 @@ def rigid_stop(folder):
 
 def blade(folder):
     """LL11 Figs. 6-8 on our blade: the mesh with the 24 contact nodes (Fig. 6), f/f1 against
-    normalized energy (Fig. 7), and the deformed blade at t = 0 and T/2 for the levels shown,
+    normalized energy (Fig. 7; levels where the first mode at the fundamental holds less than half
+    of the energy marked), and the deformed blade at t = 0 and T/2 for the levels shown,
     displacements in units of the gap (Fig. 8), with the tip's radial displacement along the chord."""
     meta = json.loads((folder / "meta.json").read_text())
     header, nodes = read_csv(folder / "mesh_nodes.csv")
@@ -483,6 +484,13 @@ def blade(folder):
     e = column(folder, "backbone.csv", "energy [-]")
     r = column(folder, "backbone.csv", "frequency_over_f1 [-]")
     ax.plot(e, r, "C0-", lw=1.2, label=f"first nonlinear mode, N = {meta['harmonics']}, m = {meta['samples']}")
+    share = column(folder, "backbone.csv", "first_mode_share [-]")
+    low = [(a, b) for a, b, s in zip(e, r, share) if s < 0.5]
+    if low:
+        end = meta["end_component"]
+        ax.plot([a for a, _ in low], [b for _, b in low], ".", color="0.45", ms=2.5,
+                label=f"mode 1 at h = 1 holds < 1/2 of the energy (mode {end['mode']} at h = {end['harmonic']} "
+                      f"holds {end['share']:.2f} at the end)")
     for level in meta["levels"]:
         ax.plot(level["energy"], level["frequency_over_f1"], "ko", mfc="none", ms=5)
     ax.axvline(1.0, color="0.5", lw=0.6, ls=":")
@@ -524,8 +532,9 @@ def blade(folder):
 
 def blade_forced(folder):
     """Beyond LL11: the reduced blade's forced response near its first bending resonance (penalty
-    stops, Fourier:Fourier and B-spline:B-spline), the linear response, and the backbone of the
-    same stops overlaid; amplitudes in gaps."""
+    stops, Fourier:Fourier and B-spline:B-spline), the linear response, and two backbone branches of
+    the same stops overlaid (from the linear mode; through the resonance peak), their levels marked
+    where the first mode holds less than half of the energy; amplitudes in gaps."""
     meta = json.loads((folder / "meta.json").read_text())
     bh, b = read_csv(folder / "branches.csv")
     curve, ratio, amp = (b[bh.index(k)] for k in ("curve [-]", "frequency_over_f1 [-]", "amplitude [gap]"))
@@ -537,8 +546,18 @@ def blade_forced(folder):
         xs = [r for r, j in zip(ratio, curve) if j == i]
         ys = [a for a, j in zip(amp, curve) if j == i]
         ax.plot(xs, ys, styles[i % len(styles)], lw=1.2, label=f"{c['curve']} ({c['points']} points)")
-    ax.plot(column(folder, "backbone.csv", "frequency_over_f1 [-]"), column(folder, "backbone.csv", "amplitude [gap]"),
-            "k-.", lw=1.0, label=f"backbone, same stops ({meta['backbone_levels']} levels)")
+    kh, k = read_csv(folder / "backbone.csv")
+    branch, kr, ka, share = (k[kh.index(c)] for c in ("branch [-]", "frequency_over_f1 [-]", "amplitude [gap]",
+                                                      "first_mode_share [-]"))
+    labels = [f"backbone from the linear mode ({meta['backbone_levels']} levels)",
+              f"backbone through the peak ({meta['peak_branch_levels']} levels)"]
+    for i, (style, label) in enumerate(zip(["k-.", "m--"], labels)):
+        ax.plot([r for r, j in zip(kr, branch) if j == i], [a for a, j in zip(ka, branch) if j == i], style, lw=1.0,
+                label=label)
+    low = [(r, a) for r, a, s in zip(kr, ka, share) if s < 0.5]
+    if low:
+        ax.plot([r for r, _ in low], [a for _, a in low], ".", color="0.45", ms=2.5,
+                label="backbone levels where mode 1 at the fundamental holds < 1/2 of the energy")
     top = max(amp) * 1.15
     ax.set_ylim(0.0, top)
     ax.set_xlim(min(ratio), max(ratio))

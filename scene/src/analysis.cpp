@@ -708,6 +708,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
   }
   const auto n = static_cast<Eigen::Index>(b.levels.size());
   Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n), norm(n), force(n), its(n), gi(n), ge(n), powell(n);
+  Eigen::VectorXd first_share(n), other_mode(n), other_harmonic(n), other_share(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& l = b.levels[static_cast<size_t>(i)];
     e(i) = l.energy;
@@ -721,6 +722,11 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     gi(i) = l.inequality_measure;
     ge(i) = l.equality_measure;
     powell(i) = l.powell_iterations;
+    const auto mc = modes.modal_components(l);
+    first_share(i) = mc.first_mode_share;
+    other_mode(i) = mc.mode;
+    other_harmonic(i) = mc.harmonic;
+    other_share(i) = mc.share;
   }
   if (n > 0) {
     std::vector<std::string> header = {"energy [-]", "frequency [Hz]", "rayleigh_frequency [Hz]",
@@ -731,6 +737,8 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
       header.insert(header.end(), {"powell_iterations [-]", "G_i [gap]", "G_e [-]"});
       columns.insert(columns.end(), {powell, gi, ge});
     }
+    header.insert(header.end(), {"first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"});
+    columns.insert(columns.end(), {first_share, other_mode, other_harmonic, other_share});
     out.tables.push_back({"backbone.csv", header, columns});
   }
   if (!b.folds.empty()) {

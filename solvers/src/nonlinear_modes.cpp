@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -60,6 +61,8 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k_, m_);
   if (eig.info() != Eigen::Success) throw std::invalid_argument("NonlinearModes: K φ = M φ ω² failed (is M SPD?)");
   omega0_ = std::sqrt(eig.eigenvalues()(0));
+  modes_ = eig.eigenvectors();
+  frequencies_ = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi);
   // Contact onset: the linear mode scaled so that the stop with the largest |e_cᵀφ|/g_c touches.
   const Eigen::VectorXd phi = eig.eigenvectors().col(0);
   double reach = 0.0, signed_reach = 0.0;
@@ -131,6 +134,48 @@ std::vector<Eigen::Triplet<double>> NonlinearModes::contact_curvature(const Eige
     }
   }
   return out;
+}
+
+Eigen::MatrixXd NonlinearModes::modal_energy_shares(const ModeLevel& level) const {
+  const Eigen::MatrixXd& y = level.coefficients;
+  if (y.rows() != n_ || y.cols() != f_) {
+    throw std::invalid_argument("NonlinearModes::modal_energy_shares: coefficients " + std::to_string(y.rows()) + " × " +
+                                std::to_string(y.cols()) + ": need " + std::to_string(n_) + " × " + std::to_string(f_));
+  }
+  const Eigen::MatrixXd eta = modes_.transpose() * (m_ * y);  // modal coordinates, n × F
+  Eigen::MatrixXd shares = Eigen::MatrixXd::Zero(n_, n_harm_ + 1);
+  for (int k = 1; k < f_; ++k) shares.col((k + 1) / 2) += weight_(k) * nu_(k) * nu_(k) * eta.col(k).cwiseAbs2();
+  const double total = shares.sum();
+  if (!(total > 0.0) || !std::isfinite(total)) {
+    throw std::invalid_argument("NonlinearModes::modal_energy_shares: the level carries no kinetic energy (m̂ = " +
+                                format_number(total) + ")");
+  }
+  return shares / total;
+}
+
+ModalComponents NonlinearModes::modal_components(const ModeLevel& level) const {
+  Eigen::MatrixXd s = modal_energy_shares(level);
+  ModalComponents c;
+  c.first_mode_share = s(0, 1);
+  s(0, 1) = -1.0;  // excluded from the search
+  Eigen::Index j = 0, h = 0;
+  c.share = s.maxCoeff(&j, &h);
+  c.mode = static_cast<int>(j) + 1;
+  c.harmonic = static_cast<int>(h);
+  return c;
+}
+
+double NonlinearModes::energy(const Eigen::MatrixXd& coefficients) const {
+  if (coefficients.rows() != n_) {
+    throw std::invalid_argument("NonlinearModes::energy: coefficients with " + std::to_string(coefficients.rows()) +
+                                " rows: need " + std::to_string(n_) + " (one per DOF)");
+  }
+  double mh = 0.0;
+  for (Eigen::Index k = 0; k < std::min<Eigen::Index>(coefficients.cols(), f_); ++k) {
+    const Eigen::VectorXd yk = coefficients.col(k) / g_ref_;
+    mh += weight_(k) * nu_(k) * nu_(k) * yk.dot(m_ * yk);
+  }
+  return mh / m_c_;
 }
 
 Eigen::VectorXd NonlinearModes::with_phase(const Eigen::VectorXd& x) const {

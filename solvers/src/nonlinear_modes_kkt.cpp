@@ -30,6 +30,10 @@ void BackboneContinuationOptions::validate() const {
   if (max_newton_iterations < 1) {
     fail("max_newton_iterations = " + std::to_string(max_newton_iterations) + ": must be >= 1");
   }
+  if (direction != 1 && direction != -1) fail("direction = " + std::to_string(direction) + ": must be +1 or -1");
+  if (start && (!(start->frequency_hz > 0.0) || !std::isfinite(start->frequency_hz))) {
+    fail("start.frequency_hz = " + format_number(start->frequency_hz) + ": must be > 0 [Hz]");
+  }
 }
 
 NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
@@ -52,6 +56,37 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) cons
   x.head(nm.phase_index_) = full.head(nm.phase_index_);
   x.segment(nm.phase_index_, ny_ - nm.phase_index_) = full.tail(ny_ - nm.phase_index_);
   x(ny_) = 1.0;
+  return x;
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::state(const Eigen::MatrixXd& coefficients, double frequency_hz) const {
+  const auto& nm = *nm_;
+  if (coefficients.rows() != nm.n_ || coefficients.cols() < 1 || !coefficients.allFinite()) {
+    throw std::invalid_argument("BackboneSystem::state: coefficients " + std::to_string(coefficients.rows()) + " × " +
+                                std::to_string(coefficients.cols()) + ": need " + std::to_string(nm.n_) +
+                                " rows (one per DOF), at least one column, finite values");
+  }
+  if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
+    throw std::invalid_argument("BackboneSystem::state: frequency_hz = " + format_number(frequency_hz) + ": must be > 0");
+  }
+  const Eigen::Index keep = std::min<Eigen::Index>(coefficients.cols(), nm.f_);
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(nm.n_, nm.f_);
+  y.leftCols(keep) = coefficients.leftCols(keep) / nm.g_ref_;
+  // Time shift τ → τ + θ₀/2π: (a_k, b_k) of harmonic k rotate by k θ₀, θ₀ = atan2(b₁, a₁) at the phase DOF.
+  const Eigen::Index c = nm.phase_index_ - 2 * static_cast<Eigen::Index>(nm.n_);
+  const double theta0 = std::atan2(y(c, 2), y(c, 1));
+  for (int k = 1; k <= nm.n_harm_; ++k) {
+    const double cs = std::cos(k * theta0), sn = std::sin(k * theta0);
+    const Eigen::VectorXd a = y.col(2 * k - 1), b = y.col(2 * k);
+    y.col(2 * k - 1) = a * cs + b * sn;
+    y.col(2 * k) = b * cs - a * sn;
+  }
+  const Eigen::VectorXd full = spectral::stacked(y);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(size_);
+  x.head(nm.phase_index_) = full.head(nm.phase_index_);
+  x.segment(nm.phase_index_, ny_ - nm.phase_index_) = full.tail(ny_ - nm.phase_index_);
+  const double ratio = 2.0 * std::numbers::pi * frequency_hz / nm.omega0_;
+  x(ny_) = ratio * ratio;
   return x;
 }
 
@@ -251,11 +286,18 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   const BackboneSystem system(*this, o.penalty_stiffness);
   Backbone b;
   // Start below contact on the linear mode (an exact solution); above onset, from the linear
-  // mode corrected by Newton at fixed E.
-  const double e0 = o.energy_min;
-  const Eigen::VectorXd x0 = system.linear_state(std::min(e0, 1.0));
+  // mode corrected by Newton at fixed E; or from the orbit given, at its own energy.
+  const double e0 = o.start ? energy(o.start->coefficients) : o.energy_min;
+  if (o.start && !(e0 >= o.energy_min && e0 <= o.energy_max)) {
+    throw std::invalid_argument("BackboneContinuationOptions.start: the orbit's energy E = " + format_number(e0) +
+                                " lies outside [energy_min, energy_max] = [" + format_number(o.energy_min) + ", " +
+                                format_number(o.energy_max) + "]; widen the range to include it");
+  }
+  const Eigen::VectorXd x0 = o.start ? system.state(o.start->coefficients, o.start->frequency_hz)
+                                     : system.linear_state(std::min(e0, 1.0));
   PseudoArclengthOptions pa;
-  pa.parameter_min = 0.5 * e0;
+  pa.direction = o.start ? o.direction : +1;
+  pa.parameter_min = o.start ? o.energy_min : 0.5 * e0;
   pa.parameter_max = o.energy_max;
   pa.parameter_scale = 1.0;
   pa.state_scale = 1.0;
@@ -275,7 +317,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   // linear mode is the only solution there): keep it up to where it turned back, and say so.
   bool retraced = false;
   double highest = 0.0;
-  for (size_t k = 0; k < branch.points.size(); ++k) {
+  for (size_t k = 0; k < (o.start ? 0 : branch.points.size()); ++k) {
     const double e = branch.points[k].parameter;
     if (highest > 1.0 + 1e-6 && e < 1.0) {
       size_t top = 0;
@@ -293,8 +335,10 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
     highest = std::max(highest, e);
   }
   for (const auto& pt : branch.points) {
-    if (pt.parameter > o.energy_max) {  // the last point overshoots the range: land on energy_max
-      ModeLevel last = level_at(system, pt.x, o.energy_max, o);
+    if (pt.parameter > o.energy_max || (o.start && pt.parameter < o.energy_min)) {
+      // The last point overshoots the range: land on its end.
+      const double end = pt.parameter > o.energy_max ? o.energy_max : o.energy_min;
+      ModeLevel last = level_at(system, pt.x, end, o);
       if (last.converged()) b.levels.push_back(std::move(last));
       break;
     }
@@ -316,7 +360,8 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   b.rejected_steps = branch.rejected_steps;
   b.stop = branch.stop;
   b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
-               b.levels.back().energy >= o.energy_max * (1.0 - 1e-12);
+               (b.levels.back().energy >= o.energy_max * (1.0 - 1e-12) ||
+                (o.start && b.levels.back().energy <= o.energy_min * (1.0 + 1e-12)));
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
   b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return b;

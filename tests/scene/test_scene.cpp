@@ -738,12 +738,16 @@ TEST(Scene, AnNnmStopOnTheNegativeSideMirrorsThePositiveOne) {
   ASSERT_NE(minus_text, text);
   const auto plus = wbm::scene::run_analysis(parse(text)), minus = wbm::scene::run_analysis(parse(minus_text));
   ASSERT_TRUE(plus.converged && minus.converged);
-  for (int col : {0, 1, 6}) {
+  // Columns 8 and 11: first_mode_share and other_share, invariant under the mirror too.
+  for (int col : {0, 1, 6, 8, 11}) {
     const Eigen::VectorXd &a = column(plus, "backbone.csv", col), &b = column(minus, "backbone.csv", col);
     ASSERT_EQ(a.size(), b.size());
     EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-9 * a.cwiseAbs().maxCoeff()) << "column " << col;
   }
   EXPECT_GT(column(plus, "backbone.csv", 1).maxCoeff(), 1.05 * column(plus, "backbone.csv", 1).minCoeff());  // contact
+  EXPECT_NEAR(column(plus, "backbone.csv", 8)(0), 1.0, 1e-12);  // E = 0.5: the linear first mode holds it all
+  EXPECT_LT(column(plus, "backbone.csv", 8).minCoeff(), 1.0 - 1e-3);  // in contact: other components appear
+  EXPECT_LE((column(plus, "backbone.csv", 8) + column(plus, "backbone.csv", 11)).maxCoeff(), 1.0 + 1e-12);
   const Eigen::VectorXd &ub_plus = column(plus, "mode_E2.csv", 3), &ub_minus = column(minus, "mode_E2.csv", 3);
   EXPECT_NEAR(ub_plus.maxCoeff(), 1e-3, 1e-9);
   EXPECT_NEAR(ub_minus.minCoeff(), -1e-3, 1e-9);

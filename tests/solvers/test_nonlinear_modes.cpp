@@ -10,6 +10,7 @@
 #include <numbers>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <gtest/gtest.h>
 
@@ -484,4 +485,95 @@ TEST(NonlinearModes, RefusesBadDirectionsAndStopsTheModeDoesNotMove) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { solvers::NonlinearModes nm(two, {{1, 1e-3}}, {.harmonics = 2, .samples = 8}); },
       {"no stop moves in the first linear mode"});
+}
+
+// Modal energy shares against a closed form: an orbit built from the linear modes φ_j (computed
+// here by a dense generalized eigensolve, mass-normalized), Y = b φ₁ cos 2πτ + a φ₃ sin 4πτ + c
+// (a mean, no kinetic energy), has m̂ = ½ b² + ½ · 4 a², so S(mode 1, h 1) = b²/(b² + 4a²) and
+// S(mode 3, h 2) = 4a²/(b² + 4a²), every other entry zero. On the backbone the shares sum to 1;
+// below contact the mode is the linear first mode (S(1, 1) = 1), above it other components appear.
+TEST(NonlinearModes, ModalEnergySharesSplitTheEnergyOverModesAndHarmonics) {
+  const auto s = ll11_system();
+  const auto nm = modes(1e-3, 4, 64);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(s.stiffness),
+                                                                      Eigen::MatrixXd(s.mass)};
+  const Eigen::MatrixXd phi = eig.eigenvectors();
+  const double a = 2e-4, b = 1e-3;
+  solvers::ModeLevel l;
+  l.coefficients = Eigen::MatrixXd::Zero(20, 9);
+  l.coefficients.col(0).setConstant(3e-4);
+  l.coefficients.col(1) = b * phi.col(0);
+  l.coefficients.col(4) = a * phi.col(2);  // q_4 = sin 4πτ
+  const Eigen::MatrixXd shares = nm.modal_energy_shares(l);
+  ASSERT_EQ(shares.rows(), 20);
+  ASSERT_EQ(shares.cols(), 5);
+  const double total = b * b + 4 * a * a;
+  EXPECT_NEAR(shares(0, 1), b * b / total, 1e-10);
+  EXPECT_NEAR(shares(2, 2), 4 * a * a / total, 1e-10);
+  EXPECT_NEAR(shares.cwiseAbs().sum(), 1.0, 1e-10);
+  EXPECT_NEAR(nm.linear_frequencies_hz()(2), std::sqrt(eig.eigenvalues()(2)) / (2 * std::numbers::pi),
+              1e-9 * nm.linear_frequencies_hz()(2));
+
+  const auto bb = nm.continue_backbone({.energy_min = 0.5, .energy_max = 2.0, .include = {0.8, 2.0}});
+  ASSERT_TRUE(bb.complete) << bb.message;
+  for (const auto& level : bb.levels) {
+    const Eigen::MatrixXd sh = nm.modal_energy_shares(level);
+    EXPECT_NEAR(sh.sum(), 1.0, 1e-12) << "E = " << level.energy;
+    EXPECT_GE(sh.minCoeff(), 0.0);
+  }
+  EXPECT_NEAR(nm.modal_energy_shares(*included(bb, 0.8))(0, 1), 1.0, 1e-12);
+  EXPECT_LT(nm.modal_energy_shares(*included(bb, 2.0))(0, 1), 1.0 - 1e-3);  // in contact: not the linear mode
+  l.coefficients = Eigen::MatrixXd::Zero(20, 9);
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.modal_energy_shares(l); },
+                                                         {"carries no kinetic energy"});
+  l.coefficients = Eigen::MatrixXd::Ones(20, 7);
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.modal_energy_shares(l); },
+                                                         {"coefficients 20 × 7", "need 20 × 9"});
+}
+
+// A backbone started from an orbit (BackboneContinuationOptions::start) at any time shift is the
+// branch from the linear mode: a level at E = 1.5, shifted in time by 0.3 of a period (harmonic k
+// rotated by 0.6πk, an equally valid orbit of the autonomous system), continued up and down,
+// gives the same frequencies and harmonic amplitudes at E = 2.0 and 1.2 as the branch traced from
+// the linear mode. The orbit's energy is invariant under the shift; a start outside the range and
+// a bad direction are refused.
+TEST(NonlinearModes, ABackboneStartedFromAShiftedOrbitIsTheSameBranch) {
+  const auto nm = modes(1e-3, 6, 96);
+  const auto ref = nm.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = {1.2, 1.5, 2.0}});
+  ASSERT_TRUE(ref.complete) << ref.message;
+  const auto* mid = included(ref, 1.5);
+  ASSERT_NE(mid, nullptr);
+  Eigen::MatrixXd shifted = mid->coefficients;
+  const double theta = 2.0 * std::numbers::pi * 0.3;
+  for (int k = 1; k <= 6; ++k) {
+    const Eigen::VectorXd c = shifted.col(2 * k - 1), s = shifted.col(2 * k);
+    shifted.col(2 * k - 1) = c * std::cos(k * theta) + s * std::sin(k * theta);
+    shifted.col(2 * k) = s * std::cos(k * theta) - c * std::sin(k * theta);
+  }
+  EXPECT_GT(std::abs(shifted(tip_dof(), 2)), 1e-2 * std::abs(mid->coefficients(tip_dof(), 1)));  // really shifted
+  EXPECT_NEAR(nm.energy(shifted), 1.5, 1e-10);
+  for (int direction : {+1, -1}) {
+    const double target = direction > 0 ? 2.0 : 1.2;
+    solvers::BackboneContinuationOptions o{.energy_min = 1.0, .energy_max = 2.1, .include = {target}};
+    o.start = solvers::PeriodicOrbit{shifted, mid->frequency_hz};
+    o.direction = direction;
+    const auto b = nm.continue_backbone(o);
+    ASSERT_TRUE(b.complete) << b.message;
+    const auto *got = included(b, target), *want = included(ref, target);
+    ASSERT_NE(got, nullptr) << target;
+    ASSERT_NE(want, nullptr) << target;
+    EXPECT_NEAR(got->frequency_hz, want->frequency_hz, 1e-9 * want->frequency_hz) << "E = " << target;
+    const Eigen::MatrixXd ha = harmonic_amplitudes(want->coefficients), hb = harmonic_amplitudes(got->coefficients);
+    EXPECT_LT((hb - ha).cwiseAbs().maxCoeff(), 1e-7 * ha.maxCoeff()) << "E = " << target;
+    EXPECT_NEAR(b.levels.front().energy, 1.5, 1e-9);  // the start, corrected at its own energy
+    EXPECT_NEAR(b.levels.back().energy, direction > 0 ? 2.1 : 1.0, 1e-9);
+  }
+  solvers::BackboneContinuationOptions outside = range(1.6, 2.1);
+  outside.start = solvers::PeriodicOrbit{shifted, mid->frequency_hz};
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(outside); },
+                                                         {"start", "E = 1.5", "widen the range"});
+  outside.energy_min = 1.0;
+  outside.direction = 0;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(outside); },
+                                                         {"direction = 0", "+1 or -1"});
 }

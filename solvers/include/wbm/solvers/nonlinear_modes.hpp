@@ -132,14 +132,35 @@ struct Backbone {
   StopReason stop = StopReason::InitialPointFailed;  // continuation: why the branch ended
   int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
   int rejected_steps = 0;             // continuation steps retried with half the step
-  bool complete = false;              // energy_max reached
+  bool complete = false;              // energy_max reached (with a start: either end of the range)
   std::string message;
   double wall_time_s = 0.0;
 };
 
 /// Pseudo-arclength continuation in energy of the backbone [Keller 1977; continuation.hpp].
+/// Where a level's energy sits (NonlinearModes::modal_components): mode and harmonic 1-based as
+/// printed (mode 1 = the first linear mode), shares of m̂ in [0, 1].
+struct ModalComponents {
+  double first_mode_share = 0.0;      // S(mode 1, harmonic 1)
+  int mode = 0, harmonic = 0;         // the largest other (mode, harmonic) component
+  double share = 0.0;                 // its share
+};
+
+/// A periodic orbit u(τ) = Σ_k Y(:, k) q_k(τ) at frequency f, to start a backbone from.
+struct PeriodicOrbit {
+  Eigen::MatrixXd coefficients;       // Y, n × F' [m], the layout of ModeLevel::coefficients
+  double frequency_hz = 0.0;          // f [Hz]
+};
+
 struct BackboneContinuationOptions {
   double energy_min = 0.5, energy_max = 10.0;  // E range; energy_min < 1 starts below contact
+  /// Empty: start on the linear mode at energy_min. Given: start from this orbit (e.g. a forced
+  /// response's resonance, harmonic balance's trial coefficients), corrected by Newton at its own
+  /// energy E₀ = NonlinearModes::energy(Y) (which must lie inside the range), and continue in the
+  /// sense of `direction` until the range or a stop reason ends the branch: the way to trace a
+  /// branch that the one from the linear mode does not reach (past an internal-resonance tongue).
+  std::optional<PeriodicOrbit> start = std::nullopt;
+  int direction = +1;                 // with a start: +1 towards higher E, −1 towards lower E
   /// 0: exact (Signorini) contact; > 0: a linear penalty spring k [N/m] at every stop instead,
   /// f = k (u_c − g_c)₊ (the penalty-limit check [issue #7]).
   double penalty_stiffness = 0.0;
@@ -174,6 +195,9 @@ class NonlinearModes {
   NonlinearModes(const MechanicalSystem& system, std::vector<RigidStop> stops, NonlinearModeOptions options = {});
 
   [[nodiscard]] double linear_frequency_hz() const { return omega0_ / (2.0 * 3.14159265358979323846); }
+  /// Every linear natural frequency f_j [Hz] of (K, M), ascending (n entries): with
+  /// modal_energy_shares they name an internal resonance, f_j ≈ h f along a branch.
+  [[nodiscard]] const Eigen::VectorXd& linear_frequencies_hz() const { return frequencies_; }
   /// φ₁ scaled so that the first stop to touch has amplitude |e_cᵀφ₁| equal to its gap (E = 1).
   [[nodiscard]] const Eigen::VectorXd& onset_mode() const { return onset_; }
   /// Index (into the stops given) of the stop that touches first in the linear mode.
@@ -212,6 +236,15 @@ class NonlinearModes {
     [[nodiscard]] SparseLinearization linearize(const Eigen::VectorXd& x, double energy) const;
     /// The state of the linear mode at E ≤ 1 (an exact solution, no contact force).
     [[nodiscard]] Eigen::VectorXd linear_state(double energy) const;
+    /// The state of a periodic orbit u(τ) = Σ_k Y(:, k) q_k(τ) at frequency f [Hz], e.g. a forced
+    /// response's resonance to start a continuation from: Y is n × F' [m] in the layout of
+    /// ModeLevel::coefficients (harmonic balance's trial coefficients with harmonics 0 … H have
+    /// it too); columns beyond F = 2N + 1 are dropped, missing ones are zero. Y is shifted in time,
+    /// harmonic k by k θ₀, so that the phase coefficient (sin 2πτ at the phase DOF) vanishes and
+    /// its cos 2πτ is ≥ 0; ω²/ω₀² = (2πf/ω₀)²; exact contact: the multipliers start at 0. The
+    /// energy of the state is NonlinearModes::energy of the shifted Y (a time shift keeps it).
+    /// Throws std::invalid_argument for a Y without n rows or a non-finite Y, f ≤ 0.
+    [[nodiscard]] Eigen::VectorXd state(const Eigen::MatrixXd& coefficients, double frequency_hz) const;
     /// The level at state x (frequencies, contact forces, diagnostics); its status is
     /// Converged only if the KKT residual ‖R(x, E)‖₂ ≤ tolerance (NonFinite for NaN/inf,
     /// MaxIterations otherwise), with the residual and tolerance reported.
@@ -238,6 +271,25 @@ class NonlinearModes {
   [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy,
                                    const BackboneContinuationOptions& options) const;
 
+  /// How a level's energy m̂(Y) [LL11 Eq. (11)] splits over the linear modes and the harmonics:
+  /// with Y = Φ η (Φ the mass-normalized linear modes, Φᵀ M Φ = I, ascending frequencies),
+  ///   S(j, h) = Σ_(k of harmonic h: cos, sin) w_k h² η_jk² / m̂(Y),   Σ_(j, h) S = 1,
+  /// an n × (N + 1) matrix (row j = mode j + 1, column h = harmonic h; column 0 is zero, the mean
+  /// carries no kinetic energy). S(0, 1) = 1 on the linear first mode; a branch on which another
+  /// (mode j, harmonic h) takes a large share with f_j ≈ h f is in h:1 internal resonance with
+  /// mode j (a tongue of the backbone). Throws std::invalid_argument for a level whose
+  /// coefficients are not n × F or carry no energy.
+  [[nodiscard]] Eigen::MatrixXd modal_energy_shares(const ModeLevel& level) const;
+
+  /// The share of the first linear mode at the fundamental, S(0, 1), and the largest other entry
+  /// of modal_energy_shares with its mode and harmonic. Throws as modal_energy_shares.
+  [[nodiscard]] ModalComponents modal_components(const ModeLevel& level) const;
+
+  /// Normalized energy E = m̂(Y)/m̂_c of a periodic orbit's coefficients Y (n × F [m], the layout of
+  /// ModeLevel::coefficients; columns beyond F are ignored) [LL11 Eq. (12)]: 1 for the onset mode.
+  /// Throws std::invalid_argument for a Y without n rows.
+  [[nodiscard]] double energy(const Eigen::MatrixXd& coefficients) const;
+
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
   [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
   [[nodiscard]] Eigen::MatrixXd velocity(const ModeLevel& level, int samples) const;
@@ -260,6 +312,8 @@ class NonlinearModes {
   Eigen::VectorXd weight_, nu_;    // w_k, ν_k
   Eigen::MatrixXd theta_;          // m × F values at τ_k = k/m
   Eigen::VectorXd onset_;
+  Eigen::MatrixXd modes_;          // Φ, mass-normalized linear modes (columns, ascending)
+  Eigen::VectorXd frequencies_;    // f_j [Hz]
   int phase_index_ = 0;            // index in the stacked y of the fixed coefficient
   int onset_stop_ = 0;             // the stop that touches first in the linear mode
   // u_c(τ_s) − g_c/g_ref at the m samples of every stop (stop-major), Y in units of g_ref.
