@@ -324,7 +324,7 @@ int main(int argc, char** argv) {
                          "Interface: a node set of the deck, or node numbers \"17,18,19\"")->required();
   reduce_cmd->add_option("-m,--modes", reduction.modes, "Fixed-interface normal modes")->capture_default_str();
   reduce_cmd->add_option("--check", reduction.check_modes,
-                         "Compare the first N frequencies with the full model's (sparse Lanczos); 0: no check")
+                         "Compare the first N frequencies with the full model's (sparse Lanczos, and ccx's own *FREQUENCY step); 0: no check")
       ->capture_default_str();
   reduce_cmd->add_flag("--recovery", reduction.recovery, "Also write recovery.mtx (u = T q) and full_dofs.txt");
   reduce_cmd->add_option("--ccx", reduction.ccx, "CalculiX executable")->capture_default_str();

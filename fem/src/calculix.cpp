@@ -30,6 +30,13 @@ std::string trim(std::string_view s) {
   return std::string(s.substr(a, b - a));
 }
 
+std::vector<std::string> split_whitespace(const std::string& line) {
+  std::vector<std::string> out;
+  std::istringstream in(line);
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;
   std::string field;
@@ -261,7 +268,13 @@ AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::
   return m;
 }
 
-AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOptions& options) {
+namespace {
+
+// Runs ccx on the driver deck "model data + `step`" in a scratch folder (or options.work_directory)
+// and returns the named files it wrote, read whole. Throws std::runtime_error naming the deck:
+// ccx not found, ccx failing (its "*ERROR" lines quoted), a file missing.
+std::vector<std::string> run_calculix(const CalculixDeck& deck, const std::string& step, const CalculixOptions& options,
+                                      const std::vector<std::string>& files, const std::string& what) {
   namespace fs = std::filesystem;
   const std::string name = deck.file.string();
   static int counter = 0;
@@ -280,7 +293,7 @@ AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOp
   } cleanup{dir, scratch};
   {
     std::ofstream job(dir / "job.inp");
-    job << deck.model_data << "*STEP\n*FREQUENCY, SOLVER=MATRIXSTORAGE\n*END STEP\n";
+    job << deck.model_data << step;
     if (!job) throw std::runtime_error(name + ": cannot write the driver deck in " + dir.string());
   }
   // ccx -i job, in dir, output to ccx.log (no shell).
@@ -291,15 +304,76 @@ AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOp
                              "): install CalculiX (Debian calculix-ccx) or set CalculixOptions::executable");
   }
   const std::string errors = detail::quote_lines(ccx.log, "*ERROR", 1);  // ccx's own "*ERROR" lines and the next
-  if (!ccx.succeeded() || !errors.empty() || !fs::exists(dir / "job.sti") || !fs::exists(dir / "job.mas") ||
-      !fs::exists(dir / "job.dof")) {
-    throw std::runtime_error(name + ": CalculiX (" + options.executable + ") could not assemble the model" +
+  const bool missing = std::any_of(files.begin(), files.end(), [&](const auto& f) { return !fs::exists(dir / f); });
+  if (!ccx.succeeded() || !errors.empty() || missing) {
+    throw std::runtime_error(name + ": CalculiX (" + options.executable + ") could not " + what +
                              (ccx.exited ? std::string(" (exit ").append(std::to_string(ccx.exit_code)).append(")") : std::string()) +
                              (errors.empty() ? "; no *ERROR line, see its output:\n" + ccx.log.substr(0, 2000)
                                              : "; ccx says:" + errors));
   }
-  return parse_calculix_matrices(read_file(dir / "job.sti"), read_file(dir / "job.mas"), read_file(dir / "job.dof"),
-                                 (dir / "job").string());
+  std::vector<std::string> text;
+  for (const auto& f : files) text.push_back(read_file(dir / f));
+  return text;
+}
+
+}  // namespace
+
+AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOptions& options) {
+  const auto text = run_calculix(deck, "*STEP\n*FREQUENCY, SOLVER=MATRIXSTORAGE\n*END STEP\n", options,
+                                 {"job.sti", "job.mas", "job.dof"}, "assemble the model");
+  return parse_calculix_matrices(text[0], text[1], text[2], deck.file.string() + " (ccx job)");
+}
+
+std::vector<double> parse_calculix_frequencies(const std::string& dat, const std::string& source) {
+  // The table after "E I G E N V A L U E   O U T P U T": "mode eigenvalue ω f imaginary", up to
+  // the participation factors (or the end).
+  std::vector<double> out;
+  std::istringstream in(dat);
+  std::string line;
+  bool table = false;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.find("E I G E N V A L U E   O U T P U T") != std::string::npos) {
+      table = true;
+      continue;
+    }
+    if (!table) continue;
+    if (line.find("P A R T I C I P A T I O N") != std::string::npos) break;
+    const auto f = split_whitespace(line);
+    int mode = 0;
+    if (f.size() != 5 || !parse_number(f[0], mode)) continue;  // headings and blank lines
+    double values[4];
+    for (size_t i = 0; i < 4; ++i) {
+      if (!parse_number(f[i + 1], values[i]) || !std::isfinite(values[i])) {
+        throw std::invalid_argument(source + ":" + std::to_string(number) + ": eigenvalue row of mode " +
+                                    std::to_string(mode) + ": '" + f[i + 1] + "' is not a finite number");
+      }
+    }
+    if (mode != static_cast<int>(out.size()) + 1) {
+      throw std::invalid_argument(source + ":" + std::to_string(number) + ": mode " + std::to_string(mode) +
+                                  " where mode " + std::to_string(out.size() + 1) + " was expected");
+    }
+    out.push_back(values[2]);  // CYCLES/TIME
+  }
+  if (out.empty()) throw std::invalid_argument(source + ": no eigenvalue table (E I G E N V A L U E   O U T P U T)");
+  return out;
+}
+
+std::vector<double> calculix_frequencies(const CalculixDeck& deck, int count, const CalculixOptions& options) {
+  if (count < 1) {
+    throw std::invalid_argument(deck.file.string() + ": calculix_frequencies: count = " + std::to_string(count) +
+                                ": must be >= 1");
+  }
+  const auto text = run_calculix(deck, "*STEP\n*FREQUENCY\n" + std::to_string(count) + "\n*END STEP\n", options,
+                                 {"job.dat"}, "compute the frequencies");
+  auto f = parse_calculix_frequencies(text[0], deck.file.string() + " (ccx job.dat)");
+  if (static_cast<int>(f.size()) < count) {
+    throw std::runtime_error(deck.file.string() + ": CalculiX printed " + std::to_string(f.size()) + " of the " +
+                             std::to_string(count) + " frequencies asked for (see its .dat)");
+  }
+  f.resize(static_cast<size_t>(count));
+  return f;
 }
 
 }  // namespace wbm::fem

@@ -136,13 +136,21 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
     t = std::chrono::steady_clock::now();
     const int count = std::min(request.check_modes, full - 1);
     const fem::CraigBamptonModel whole = fem::craig_bampton(model.stiffness, model.mass, {}, count);
+    // CalculiX's own eigensolver on the same deck: a second, independent reference.
+    const std::vector<double> ccx_hz = fem::calculix_frequencies(deck, count, {.executable = request.ccx});
     check_s = seconds_since(t);
+    std::vector<double> ccx_differences;
+    for (size_t i = 0; i < ccx_hz.size() && static_cast<Eigen::Index>(i) < whole.normal_frequencies_hz.size(); ++i) {
+      ccx_differences.push_back(whole.normal_frequencies_hz(static_cast<Eigen::Index>(i)) / ccx_hz[i] - 1.0);
+    }
     const Eigen::VectorXd ours = frequencies_hz(kr, mr, count);
     std::vector<double> errors;
     for (Eigen::Index i = 0; i < std::min(ours.size(), whole.normal_frequencies_hz.size()); ++i) {
       errors.push_back(ours(i) / whole.normal_frequencies_hz(i) - 1.0);
     }
     check = {{"full_frequencies_hz", as_vector(whole.normal_frequencies_hz)},
+             {"ccx_frequencies_hz", ccx_hz},
+             {"full_vs_ccx_relative", ccx_differences},
              {"reduced_frequencies_hz", as_vector(ours)},
              {"relative_errors", errors},
              {"worst_relative_error", errors.empty() ? 0.0 : *std::max_element(errors.begin(), errors.end(),

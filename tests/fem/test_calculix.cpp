@@ -134,29 +134,50 @@ TEST(Calculix, ClampedBarFrequenciesEqualCalculixsOwnEigenSolver) {
   ASSERT_EQ(assembled.dofs.size(), 48u);  // the 4 root nodes removed
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(assembled.stiffness),
                                                                       Eigen::MatrixXd(assembled.mass));
-  // CalculiX's own frequencies.
-  const fs::path dir = work() / "lanczos";
-  fs::create_directories(dir);
-  std::ofstream(dir / "f.inp") << "*INCLUDE, INPUT=" << (work() / "mesh" / "bar.inp").string() << "\n"
-                               << kMaterial << "*BOUNDARY\nROOT, 1, 3\n*STEP\n*FREQUENCY\n5\n*END STEP\n";
-  const std::string cmd = "cd " + dir.string() + " && ccx -i f > ccx.log 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  std::ifstream dat(dir / "f.dat");
-  std::string line;
-  std::vector<double> reference;
-  const std::regex row(R"(^\s*(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$)");
-  bool table = false;
-  while (std::getline(dat, line)) {
-    if (line.find("E I G E N V A L U E   O U T P U T") != std::string::npos) table = true;
-    if (line.find("P A R T I C I P A T I O N") != std::string::npos) break;
-    std::smatch s;
-    if (table && std::regex_match(line, s, row)) reference.push_back(std::stod(s[4]));  // CYCLES/TIME
-  }
+  // CalculiX's own frequencies (its *FREQUENCY step, read from its .dat).
+  const std::vector<double> reference = wbm::fem::calculix_frequencies(deck, 5);
   ASSERT_EQ(reference.size(), 5u);
   for (size_t i = 0; i < 5; ++i) {
     const double ours = std::sqrt(eig.eigenvalues()(static_cast<Eigen::Index>(i))) / (2.0 * std::numbers::pi);
     EXPECT_NEAR(ours, reference[i], 1e-6 * reference[i]) << "mode " << i + 1;  // .dat prints 7 digits
   }
+}
+
+// The .dat eigenvalue table as ccx (Debian calculix-ccx 2.20) printed it for the clamped bar with
+// "*FREQUENCY / 3" (participation factors cut short), and malformed tables. Identities of the
+// table: ω = 2πf and ω² = the eigenvalue, to the 7 printed digits.
+TEST(Calculix, ParsesTheEigenvalueTableOfADatFile) {
+  const std::string dat =
+      "\n     E I G E N V A L U E   O U T P U T\n\n MODE NO    EIGENVALUE                       FREQUENCY   \n"
+      "                                     REAL PART            IMAGINARY PART\n"
+      "                           (RAD/TIME)      (CYCLES/TIME     (RAD/TIME)\n\n"
+      "      1   0.9754380E+06   0.9876427E+03   0.1571882E+03   0.0000000E+00\n"
+      "      2   0.9754380E+06   0.9876427E+03   0.1571882E+03   0.0000000E+00\n"
+      "      3   0.2588002E+08   0.5087241E+04   0.8096595E+03   0.0000000E+00\n\n"
+      "     P A R T I C I P A T I O N   F A C T O R S\n\n"
+      "MODE NO.   X-COMPONENT     Y-COMPONENT     Z-COMPONENT     X-ROTATION      Y-ROTATION      Z-ROTATION\n\n"
+      "      1   0.5703771E-14  -0.5840893E+00  -0.6899988E+01  -0.3157949E+00   0.5021917E+01  -0.4251091E+00\n";
+  const auto f = wbm::fem::parse_calculix_frequencies(dat, "bar.dat");
+  ASSERT_EQ(f.size(), 3u);
+  EXPECT_EQ(f[0], 157.1882);
+  EXPECT_EQ(f[2], 809.6595);
+  EXPECT_NEAR(2.0 * std::numbers::pi * f[2], 5087.241, 1e-3);
+  EXPECT_NEAR(std::pow(2.0 * std::numbers::pi * f[2], 2), 0.2588002e8, 1e-6 * 0.2588002e8);
+  using wbm::testing::expect_throw_with;
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::parse_calculix_frequencies("no table\n", "x.dat"); },
+                                           {"x.dat: no eigenvalue table"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)wbm::fem::parse_calculix_frequencies(
+            "E I G E N V A L U E   O U T P U T\n 1 0.1E+01 0.1E+01 nan 0.0\n", "y.dat");
+      },
+      {"y.dat:2: eigenvalue row of mode 1: 'nan' is not a finite number"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)wbm::fem::parse_calculix_frequencies(
+            "E I G E N V A L U E   O U T P U T\n 2 0.1E+01 0.1E+01 0.2E+00 0.0\n", "z.dat");
+      },
+      {"z.dat:2: mode 2 where mode 1 was expected"});
 }
 
 TEST(Calculix, ReportsCalculixErrorsWithTheDeckNameAndAMissingExecutable) {

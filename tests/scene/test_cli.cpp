@@ -307,6 +307,7 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
   for (int i = 0; i < 6; ++i) {
     const double reference = check["full_frequencies_hz"][i].get<double>(), reduced = check["reduced_frequencies_hz"][i].get<double>();
     EXPECT_NEAR(reference, f_full(i), 1e-8 * f_full(i)) << "mode " << i + 1;
+    EXPECT_NEAR(check["ccx_frequencies_hz"][i].get<double>(), f_full(i), 1e-6 * f_full(i)) << "mode " << i + 1;  // 7 digits
     EXPECT_GE(reduced, f_full(i) * (1.0 - 1e-10)) << "mode " << i + 1;
     EXPECT_LT(reduced / f_full(i) - 1.0, 1e-2) << "mode " << i + 1;
   }

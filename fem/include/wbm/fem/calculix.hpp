@@ -72,4 +72,18 @@ struct AssembledModel {
 [[nodiscard]] AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::string& mass,
                                                      const std::string& dofs, const std::string& source);
 
+/// The first `count` natural frequencies [cycles per time unit of the deck: Hz in SI or N-mm-t-s]
+/// of the model as CalculiX's own eigensolver computes them (a "*FREQUENCY / count" step; ccx's
+/// Lanczos/ARPACK, not wbm's), read from the eigenvalue table of its .dat file: an independent
+/// reference for reduced models (LL11 Sec. 5.2, issue #15). The .dat prints 7 significant digits.
+/// Throws std::invalid_argument for count < 1, std::runtime_error as assemble_with_calculix, or
+/// when ccx prints fewer frequencies than asked for.
+[[nodiscard]] std::vector<double> calculix_frequencies(const CalculixDeck& deck, int count,
+                                                       const CalculixOptions& options = {});
+
+/// The frequencies column (CYCLES/TIME) of the "E I G E N V A L U E   O U T P U T" table of a ccx
+/// .dat text, mode 1 first. Throws std::invalid_argument ("source:line: ...") for a row whose
+/// numbers do not parse or whose mode numbers are out of sequence, and when there is no table.
+[[nodiscard]] std::vector<double> parse_calculix_frequencies(const std::string& dat, const std::string& source);
+
 }  // namespace wbm::fem

@@ -20,7 +20,9 @@ struct ReductionRequest {
   /// commas or spaces ("17, 18, 19"). Every DOF CalculiX keeps at these nodes is retained.
   std::string interface;
   int modes = 40;           // fixed-interface normal modes m ≥ 0
-  int check_modes = 0;      // > 0: the full model's first check_modes frequencies (Spectra) beside the reduced ones
+  /// > 0: the full model's first check_modes frequencies (Spectra on the sparse matrices, and
+  /// CalculiX's own *FREQUENCY step as a second reference) beside the reduced ones
+  int check_modes = 0;
   bool recovery = false;    // also write recovery.mtx (n × (|b| + m), u = T q) and full_dofs.txt
   std::string ccx = "ccx";  // the CalculiX executable
 };
