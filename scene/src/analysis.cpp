@@ -47,6 +47,7 @@ nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
           {"contact_homotopy", to_json(s.homotopy)},
           {"rounding_floor", finite_or_null(s.rounding_floor)},
           {"relative_residual", finite_or_null(s.relative_residual)},
+          {"residual_tolerance", s.residual_tolerance},
           {"max_penetration_m", finite_or_null(s.max_penetration)},
           {"max_contact_force_N", finite_or_null(s.max_contact_force)},
           {"collocation_penetration_m", finite_or_null(s.collocation_penetration)},

@@ -78,7 +78,7 @@ std::vector<double> as_vector(const Eigen::VectorXd& v) { return {v.data(), v.da
 
 }  // namespace
 
-nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesystem::path& output) {
+ReducedModel reduce_model(const ReductionRequest& request) {
   namespace fs = std::filesystem;
   if (request.modes < 0) {
     throw std::invalid_argument(std::string("modes = ").append(std::to_string(request.modes)) +
@@ -104,6 +104,7 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
   std::vector<int> boundary;
   std::vector<std::string> names;
   nlohmann::json coordinates = nlohmann::json::array();
+  ReducedModel out;
   for (int node : nodes) {
     auto it = rows_of.find(node);
     if (it == rows_of.end()) {
@@ -117,6 +118,7 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
     }
     const Eigen::Vector3d& x = deck.nodes.at(node);
     coordinates.push_back({x(0), x(1), x(2)});
+    out.coordinates[node] = x;
   }
   const int full = static_cast<int>(model.dofs.size());
   const int interior = full - static_cast<int>(boundary.size());
@@ -176,12 +178,36 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
       {"scene", "structure = { stiffness = \"stiffness.mtx\", mass = \"mass.mtx\", dofs = \"dofs.txt\" }"},
       {"build", build_information()}};
   if (request.recovery) summary["files"]["recovery"] = {"recovery.mtx", "full_dofs.txt"};
+  summary["timings_s"]["total"] = seconds_since(start);
+  out.stiffness = std::move(kr);
+  out.mass = std::move(mr);
+  out.names = std::move(names);
+  out.nodes = nodes;
+  out.full_dofs = model.dofs;
+  if (request.recovery) {
+    out.recovery = cb.expand(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(out.names.size()),
+                                                       static_cast<Eigen::Index>(out.names.size())));
+  }
+  out.summary = std::move(summary);
+  out.deck_name = deck.file.filename().string();
+  out.node_sets = deck.node_sets;
+  out.interface_dofs = static_cast<int>(boundary.size());
+  return out;
+}
+
+nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesystem::path& output) {
+  namespace fs = std::filesystem;
+  ReducedModel r = reduce_model(request);
+  const auto start = std::chrono::steady_clock::now();
+  const auto& names = r.names;
+  const Eigen::MatrixXd &kr = r.stiffness, &mr = r.mass;
+  nlohmann::json& summary = r.summary;
 
   // Everything computed: now write.
-  t = std::chrono::steady_clock::now();
+  auto t = std::chrono::steady_clock::now();
   fs::create_directories(output);
-  const std::string origin = "wbm reduce: Craig-Bampton of " + deck.file.filename().string() + ", " +
-                             std::to_string(boundary.size()) + " interface DOFs + " + std::to_string(request.modes) +
+  const std::string origin = "wbm reduce: Craig-Bampton of " + r.deck_name + ", " +
+                             std::to_string(r.interface_dofs) + " interface DOFs + " + std::to_string(request.modes) +
                              " fixed-interface modes; rows and columns named in dofs.txt";
   fem::write_matrix_market_file(output / "stiffness.mtx", kr, true, "K_r [deck units]\n" + origin);
   fem::write_matrix_market_file(output / "mass.mtx", mr, true, "M_r [deck units]\n" + origin);
@@ -191,16 +217,14 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
     if (!d) throw std::runtime_error("cannot write " + (output / "dofs.txt").string());
   }
   if (request.recovery) {
-    const Eigen::MatrixXd recovery = cb.expand(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(names.size()),
-                                                                         static_cast<Eigen::Index>(names.size())));
-    fem::write_matrix_market_file(output / "recovery.mtx", recovery, false,
+    fem::write_matrix_market_file(output / "recovery.mtx", r.recovery, false,
                                   "T: full displacements (rows: full_dofs.txt) = T q (columns: dofs.txt)\n" + origin);
     std::ofstream d(output / "full_dofs.txt");
-    for (const auto& [node, direction] : model.dofs) d << node << "." << direction << "\n";
+    for (const auto& [node, direction] : r.full_dofs) d << node << "." << direction << "\n";
     if (!d) throw std::runtime_error("cannot write " + (output / "full_dofs.txt").string());
   }
   summary["timings_s"]["writing"] = seconds_since(t);
-  summary["timings_s"]["total"] = seconds_since(start);
+  summary["timings_s"]["total"] = summary["timings_s"]["total"].get<double>() + seconds_since(start);
   std::ofstream j(output / "reduction.json");
   j << summary.dump(2) << "\n";
   if (!j) throw std::runtime_error("cannot write " + (output / "reduction.json").string());

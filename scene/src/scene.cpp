@@ -15,7 +15,9 @@
 
 #include <Eigen/SparseCholesky>
 #include <wbm/contact/signorini.hpp>
+#include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
+#include <wbm/scene/reduce.hpp>
 #include <toml++/toml.h>
 
 #include "reader.hpp"
@@ -297,10 +299,15 @@ class Parser {
     if (t == nullptr) return;
     Structure st;
     bool matrices = t->contains("mass") || t->contains("stiffness") || t->contains("damping") || t->contains("dofs");
+    bool deck = t->contains("deck");
     if (t->contains("type")) {
-      matrices = r_.choice(*t, "structure", "type", {"rod", "matrices"}) == "matrices";
+      const std::string type = r_.choice(*t, "structure", "type", {"rod", "matrices", "deck"});
+      matrices = type == "matrices";
+      deck = type == "deck";
     }
-    if (!matrices) {
+    if (deck) {
+      deck_structure(*t, st);
+    } else if (!matrices) {
       r_.only(*t, "structure", {"type", "young_modulus", "density", "area", "length", "elements"});
       st.kind = StructureKind::Rod;
       st.rod.young_modulus = r_.number(*t, "structure", "young_modulus", detail::positive("Pa"));
@@ -325,6 +332,85 @@ class Parser {
       }
     }
     if (r_.error_count() == errors) s_.structure = std::move(st);
+  }
+
+  // [structure] deck = "…" (interface, modes, ccx, axis): the deck assembled by ccx and reduced
+  // by Craig–Bampton now (scene/reduce.hpp); M_r, K_r and the names of wbm reduce's dofs.txt.
+  void deck_structure(const toml::table& t, Structure& st) {
+    r_.only(t, "structure", {"type", "deck", "interface", "modes", "ccx", "axis"});
+    const size_t errors = r_.error_count();
+    DeckStructure d;
+    const toml::node* file = t.get("deck");
+    if (file == nullptr || !file->is_string()) {
+      r_.error(file != nullptr ? file->source() : t.source(), "structure.deck",
+               "expected the file name of a CalculiX/Abaqus deck (.inp), relative to the scene");
+      return;
+    }
+    d.file = std::filesystem::absolute(base_ / file->as_string()->get()).lexically_normal().string();
+    const toml::node* in = t.get("interface");
+    if (in == nullptr) {
+      r_.error(t.source(), "structure.interface", "missing: the contact interface, a node set of the deck (\"TIP\") "
+                                                  "or a list of node numbers");
+      return;
+    }
+    if (in->is_string()) {
+      d.interface = in->as_string()->get();
+    } else if (const toml::array* a = in->as_array(); a != nullptr && !a->empty() && a->is_homogeneous<int64_t>()) {
+      for (const auto& v : *a) d.interface += (d.interface.empty() ? "" : ",") + std::to_string(v.value<int64_t>().value_or(0));
+    } else {
+      r_.error(in->source(), "structure.interface", "expected a node set name or a non-empty list of node numbers");
+      return;
+    }
+    d.modes = static_cast<int>(r_.integer(t, "structure", "modes", 0, 100000, 40));
+    d.ccx = r_.text(t, "structure", "ccx", "ccx");
+    if (const toml::node* a = t.get("axis")) {
+      const toml::table* at = a->as_table();
+      if (at == nullptr) {
+        r_.error(a->source(), "structure.axis", "expected { point = [x, y, z], direction = [x, y, z] }");
+      } else {
+        r_.only(*at, "structure.axis", {"point", "direction"});
+        const auto point = vector3(*at, "structure.axis", "point"), dir = vector3(*at, "structure.axis", "direction");
+        if (point && dir) {
+          if (!(dir->norm() > 0.0)) {
+            r_.error(Reader::source_of(*at, "direction"), "structure.axis.direction", "is zero; give the axis direction");
+          } else {
+            d.axis = std::pair{*point, dir->normalized()};
+          }
+        }
+      }
+    }
+    if (r_.error_count() != errors) return;
+    try {
+      ReductionRequest request;
+      request.deck = d.file;
+      request.interface = d.interface;
+      request.modes = d.modes;
+      request.ccx = d.ccx;
+      ReducedModel reduced = reduce_model(request);
+      d.node_sets = std::move(reduced.node_sets);
+      d.coordinates = reduced.coordinates;
+      d.reduction = std::move(reduced.summary);
+      st.kind = StructureKind::Matrices;
+      st.stiffness = reduced.stiffness.sparseView();
+      st.mass = reduced.mass.sparseView();
+      st.dof_names = std::move(reduced.names);
+      st.deck = std::move(d);
+    } catch (const std::exception& e) {
+      r_.error(file->source(), "structure.deck", e.what());
+    }
+  }
+
+  // A list of three finite numbers.
+  std::optional<Eigen::Vector3d> vector3(const toml::table& t, const std::string& section, const std::string& key) {
+    const toml::node* n = t.get(key);
+    const toml::array* a = n != nullptr ? n->as_array() : nullptr;
+    if (a == nullptr || a->size() != 3) {
+      r_.error(n != nullptr ? n->source() : t.source(), section + "." + key, "expected [x, y, z], three numbers");
+      return std::nullopt;
+    }
+    Eigen::Vector3d v;
+    for (int i = 0; i < 3; ++i) v(i) = r_.number_value((*a)[static_cast<size_t>(i)], section + "." + key, detail::finite(""));
+    return v;
   }
 
   // A number (1 DOF), a list (diagonal), a list of rows, or a Matrix Market file.
@@ -771,13 +857,13 @@ class Parser {
         r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
       }
       if (c.law == ContactLawKind::Rigid) {
-        r_.only(*t, section, {"law", "gap", "node", "dof", "against", "direction"});
+        r_.only(*t, section, {"law", "gap", "node", "dof", "against", "direction", "nodes"});
       } else if (c.law == ContactLawKind::Exponential) {
-        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against", "direction"});
+        r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against", "direction", "nodes"});
         c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
         c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
       } else if (c.law == ContactLawKind::Linear) {
-        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against", "direction"});
+        r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against", "direction", "nodes"});
         c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
         if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
             c.stiffness != s_.contacts.front().stiffness) {
@@ -785,6 +871,10 @@ class Parser {
                    "nnm penalty stops share one stiffness (" + detail::number_text(s_.contacts.front().stiffness) +
                        " N/m in the first [[contact]])");
         }
+      }
+      if (const toml::node* nn = t->get("nodes")) {  // one contact per node of a deck structure
+        node_contacts(*t, *nn, section, c);
+        continue;
       }
       c.dof = location(*t, section, default_location());
       if (const toml::node* a = t->get("against"); a != nullptr && s_.structure) {
@@ -844,6 +934,108 @@ class Parser {
     } catch (const std::invalid_argument& e) {
       r_.error(where->source(), "structure", std::string(e.what()) + " (massless DOFs are condensed statically: "
                                              "docs/scenes.md)");
+    }
+  }
+
+  // [[contact]] nodes = "SET" | [n, …] on a structure read from a deck: one contact per node,
+  // with the law and gap of the table, along direction = "radial" (from structure.axis) or
+  // [x, y, z] (the same unit vector at every node), over the node's x, y, z DOFs; the DOF of
+  // the largest component names the contact.
+  void node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law) {
+    const std::string full = section + ".nodes";
+    if (!s_.structure) return;  // the structure's own errors are reported already
+    if (!s_.structure->deck) {
+      r_.error(nn.source(), full, "nodes are for a structure read from a deck ([structure] deck = …); locate the "
+                                  "contact with dof (matrices) or node (rod)");
+      return;
+    }
+    const DeckStructure& deck = *s_.structure->deck;
+    for (const char* other : {"node", "dof", "against"}) {
+      if (t.contains(other)) {
+        r_.error(Reader::source_of(t, other), section + "." + other, "beside nodes: give the nodes only (one contact each)");
+        return;
+      }
+    }
+    std::vector<int> nodes;
+    if (nn.is_string()) {
+      std::string name = nn.as_string()->get();
+      for (char& ch : name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      const auto it = deck.node_sets.find(name);
+      if (it == deck.node_sets.end()) {
+        std::string sets;
+        for (const auto& [set, members] : deck.node_sets) sets += (sets.empty() ? "" : ", ") + set;
+        r_.error(nn.source(), full, "no node set '" + nn.as_string()->get() + "' in the deck; it defines: " + sets);
+        return;
+      }
+      nodes = it->second;
+    } else if (const toml::array* a = nn.as_array(); a != nullptr && !a->empty() && a->is_homogeneous<int64_t>()) {
+      for (const auto& v : *a) nodes.push_back(static_cast<int>(v.value<int64_t>().value_or(0)));
+    } else {
+      r_.error(nn.source(), full, "expected a node set name of the deck or a non-empty list of node numbers");
+      return;
+    }
+    const toml::node* d = t.get("direction");
+    const bool radial = d != nullptr && d->is_string() && d->as_string()->get() == "radial";
+    std::optional<Eigen::Vector3d> fixed;
+    if (d != nullptr && d->is_array()) fixed = vector3(t, section, "direction");
+    if (!radial && !fixed) {
+      if (d == nullptr || !d->is_array()) {
+        r_.error(d != nullptr ? d->source() : t.source(), section + ".direction",
+                 "with nodes: \"radial\" (from structure.axis) or [x, y, z], the contact normal at every node");
+      }
+      return;
+    }
+    if (radial && !deck.axis) {
+      r_.error(d->source(), section + ".direction",
+               "\"radial\" needs structure.axis = { point = [x, y, z], direction = [x, y, z] } (the rotation axis)");
+      return;
+    }
+    if (fixed && std::abs(fixed->norm() - 1.0) > 1e-6) {
+      r_.warn(d->source(), section + ".direction: |n| = " + detail::number_text(fixed->norm()) +
+                               ", not 1: the gap and the contact force are measured along n as given");
+    }
+    const auto& names = s_.structure->dof_names;
+    static const char* axes[] = {"x", "y", "z"};
+    for (int node : nodes) {
+      const auto at = deck.coordinates.find(node);
+      if (at == deck.coordinates.end()) {
+        r_.error(nn.source(), full, "node " + std::to_string(node) + " is not an interface node (structure.interface): "
+                                    "a contact acts on the reduced model's interface DOFs; add the node to the interface");
+        continue;
+      }
+      Eigen::Vector3d n;
+      if (radial) {
+        const auto& [point, axis] = *deck.axis;
+        const Eigen::Vector3d r = at->second - point;
+        n = r - r.dot(axis) * axis;
+        if (!(n.norm() > 1e-12 * std::max(1.0, r.norm()))) {
+          r_.error(nn.source(), full, "node " + std::to_string(node) + " lies on structure.axis: no radial direction");
+          continue;
+        }
+        n.normalize();
+      } else {
+        n = *fixed;
+      }
+      Contact c = law;
+      double largest = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        if (n(k) == 0.0) continue;
+        const std::string name = std::string("n").append(std::to_string(node)).append("_").append(axes[k]);
+        const auto it = std::find(names.begin(), names.end(), name);
+        if (it == names.end()) {
+          r_.error(nn.source(), full, "node " + std::to_string(node) + " has no DOF " + name + " (fixed by *BOUNDARY?) "
+                                      "but the direction has a component along " + axes[k]);
+          c.along.clear();
+          break;
+        }
+        const int j = static_cast<int>(it - names.begin());
+        c.along.emplace_back(j, n(k));
+        if (std::abs(n(k)) > largest) {
+          largest = std::abs(n(k));
+          c.dof = j;
+        }
+      }
+      if (!c.along.empty()) s_.contacts.push_back(c);
     }
   }
 
@@ -1121,7 +1313,9 @@ class Parser {
       r_.warn(t->source(), "[solver] (Newton) is not used by analysis \"timestep\"; ignored ([timestep] sets the BDF)");
       return;
     }
-    r_.only(*t, "solver", {"tolerance", "max_iterations", "line_search", "linear_solver"});
+    r_.only(*t, "solver", {"tolerance", "max_iterations", "line_search", "linear_solver", "residual_tolerance"});
+    s_.solver.residual_tolerance =
+        r_.number(*t, "solver", "residual_tolerance", detail::positive(""), s_.solver.residual_tolerance);
     solvers::NewtonOptions& n = s_.solver.newton;
     n.tolerance = r_.number(*t, "solver", "tolerance", detail::positive(""), n.tolerance);
     n.max_iterations = static_cast<int>(r_.integer(*t, "solver", "max_iterations", 0, 100000, n.max_iterations));
@@ -1413,6 +1607,7 @@ solvers::WeightedResidualOptions Scene::weighted_residual_options() const {
           .contact_quadrature = basis.contact_quadrature,
           .linear_solver = solver.linear_solver,
           .newton = solver.newton,
+          .residual_tolerance = solver.residual_tolerance,
           .harmonics = basis.selected_harmonics};
 }
 
@@ -1504,6 +1699,14 @@ nlohmann::json to_json(const Scene& s) {
                         {"area", st.rod.area},
                         {"length", st.rod.length},
                         {"elements", st.rod.elements}};
+    } else if (st.deck) {  // the deck again (re-reduced when read back), not the reduced matrices
+      j["structure"] = {{"type", "deck"}, {"deck", st.deck->file}, {"interface", st.deck->interface},
+                        {"modes", st.deck->modes}, {"ccx", st.deck->ccx}};
+      if (st.deck->axis) {
+        const auto& [point, direction] = *st.deck->axis;
+        j["structure"]["axis"] = {{"point", {point(0), point(1), point(2)}},
+                                  {"direction", {direction(0), direction(1), direction(2)}}};
+      }
     } else {
       j["structure"] = {{"type", "matrices"},
                         {"mass", matrix_json(st.mass, st.mass_file)},
@@ -1586,7 +1789,8 @@ nlohmann::json to_json(const Scene& s) {
     j["solver"] = {{"tolerance", s.solver.newton.tolerance},
                    {"max_iterations", s.solver.newton.max_iterations},
                    {"line_search", s.solver.newton.line_search},
-                   {"linear_solver", linear_solver_name(s.solver.linear_solver)}};
+                   {"linear_solver", linear_solver_name(s.solver.linear_solver)},
+                   {"residual_tolerance", s.solver.residual_tolerance}};
   }
   if (s.analysis.kind == AnalysisKind::Timestep) {
     if (s.rigid()) {

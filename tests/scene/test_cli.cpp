@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <iomanip>
 #include <sstream>
 #include <string>
@@ -338,6 +339,99 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
   const Outcome refused = run_wbm("check " + wrong.string());
   EXPECT_EQ(refused.status, 2);
   EXPECT_NE(refused.err.find("names 96 DOFs, but M has 24 rows"), std::string::npos) << refused.err;
+}
+
+// A scene whose structure is the deck itself ([structure] deck = "bar.inp", interface, modes):
+// the scene reduces it when read, and its harmonic tip response equals the full model's
+// (K − ω²M + iωC)⁻¹ f (CalculiX's matrices, dense), as the scene on wbm reduce's files does.
+// [[contact]] nodes = "TIP" with direction = "radial" about structure.axis (the bar's centre
+// line) places one contact per tip node along the closed-form radial unit vector: the corners
+// of the 0.1 m square at ±1/√2 in y and z. The resolved scene (check --json) names the deck, not
+// matrices, and reads back to the same contacts. Refusals name the key and the way out.
+TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
+  const fs::path deck = write_reduce_bar(), dir = deck.parent_path();
+  const auto full = wbm::fem::assemble_with_calculix(wbm::fem::read_calculix_deck(deck));
+  const Eigen::MatrixXd k = Eigen::MatrixXd(full.stiffness), m = Eigen::MatrixXd(full.mass);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k, m, Eigen::EigenvaluesOnly);
+  const double f1 = std::sqrt(eig.eigenvalues()(0)) / (2.0 * 3.14159265358979323846);
+  const double omega = 2.0 * 3.14159265358979323846 * 0.5 * f1, alpha = 5.0;
+  const std::string structure = "[structure]\ndeck = \"bar.inp\"\ninterface = \"tip\"\nmodes = 12\n";
+  const std::string rest = "[damping]\nalpha = " + std::to_string(alpha) + "\n[forcing]\namplitude = 1000.0\n"
+                           "dof = \"n36_y\"\nfrequency_hz = ";
+  std::ostringstream freq;
+  freq << std::setprecision(17) << 0.5 * f1;
+  const fs::path scene = dir / "deck_tip.toml", result = dir / "deck_tip";
+  std::ofstream(scene) << structure << rest << freq.str() << "\n[basis]\ntrial = \"fourier\"\ndimension = 16\n"
+                       << "[output]\nsamples = 64\ndofs = [\"n36_y\"]\nharmonics = 2\n";
+  const Outcome solved = run_wbm("run --no-plots -q " + scene.string() + " -o " + result.string());
+  ASSERT_EQ(solved.status, 0) << solved.err;
+  int row = -1;
+  for (size_t r = 0; r < full.dofs.size(); ++r) {
+    if (full.dofs[r] == std::make_pair(36, 2)) row = static_cast<int>(r);
+  }
+  ASSERT_GE(row, 0);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(k.rows());
+  f(row) = 1e3;
+  const Eigen::MatrixXcd dynamic = k.cast<std::complex<double>>() - omega * omega * m.cast<std::complex<double>>() +
+                                   std::complex<double>(0.0, omega * alpha) * m.cast<std::complex<double>>();
+  const double expected = std::abs(dynamic.partialPivLu().solve(f.cast<std::complex<double>>())(row));
+  const auto amplitude = csv_column(result / "harmonics.csv", "A_n36_y [m]");
+  ASSERT_EQ(amplitude.size(), 3u);
+  EXPECT_NEAR(std::stod(amplitude[1]), expected, 1e-5 * expected);
+
+  // Radial contacts on the node set, about the bar's centre line.
+  const std::string radial = structure + "axis = { point = [0.0, 0.05, 0.05], direction = [2.0, 0.0, 0.0] }\n" + rest +
+                             "[100.0, 200.0]\n[analysis]\ntype = \"continuation\"\n"
+                             "[[contact]]\nlaw = \"linear\"\nstiffness = 1e8\ngap = 1e-5\nnodes = \"TIP\"\n"
+                             "direction = \"radial\"\n";
+  const fs::path radial_scene = dir / "deck_radial.toml";
+  std::ofstream(radial_scene) << radial;
+  const Outcome checked = run_wbm("check --json " + radial_scene.string());
+  ASSERT_EQ(checked.status, 0) << checked.err;
+  const auto resolved = nlohmann::json::parse(checked.out);
+  EXPECT_EQ(resolved["structure"]["type"], "deck");
+  EXPECT_EQ(resolved["structure"]["interface"], "tip");
+  ASSERT_EQ(resolved["contact"].size(), 4u);
+  const double c = 1.0 / std::sqrt(2.0);
+  const std::map<int, std::pair<double, double>> expected_normal = {{33, {-c, -c}}, {34, {-c, c}}, {35, {c, -c}}, {36, {c, c}}};
+  for (const auto& contact : resolved["contact"]) {
+    const auto& d = contact["direction"];
+    ASSERT_EQ(d.size(), 2u) << d.dump();  // no x component: the axis is along x
+    const std::string y = d.begin().key();
+    const int node = std::stoi(y.substr(1, y.find('_') - 1));
+    EXPECT_NEAR(d["n" + std::to_string(node) + "_y"].get<double>(), expected_normal.at(node).first, 1e-15) << node;
+    EXPECT_NEAR(d["n" + std::to_string(node) + "_z"].get<double>(), expected_normal.at(node).second, 1e-15) << node;
+    EXPECT_EQ(contact["gap"].get<double>(), 1e-5);
+  }
+  const fs::path again = dir / "deck_radial.json";
+  std::ofstream(again) << checked.out;
+  const Outcome reread = run_wbm("check --json " + again.string());
+  ASSERT_EQ(reread.status, 0) << reread.err;
+  EXPECT_EQ(nlohmann::json::parse(reread.out)["contact"], resolved["contact"]);
+
+  auto refused = [&](const std::string& text, const std::string& message) {
+    const fs::path bad = dir / "deck_bad.toml";
+    std::ofstream(bad) << text;
+    const Outcome r = run_wbm("check " + bad.string());
+    EXPECT_EQ(r.status, 2) << text;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  };
+  const std::string law = "[[contact]]\nlaw = \"linear\"\nstiffness = 1e8\ngap = 1e-5\n";
+  refused(structure + rest + "100.0\n" + law + "nodes = \"TIP\"\ndirection = \"radial\"\n",
+          "\"radial\" needs structure.axis = { point = [x, y, z], direction = [x, y, z] }");
+  refused(structure + rest + "100.0\n" + law + "nodes = \"CASING\"\ndirection = [0.0, 0.0, 1.0]\n",
+          "no node set 'CASING' in the deck; it defines: ROOT, TIP");
+  refused(structure + rest + "100.0\n" + law + "nodes = [33, 5]\ndirection = [0.0, 0.0, 1.0]\n",
+          "node 5 is not an interface node");
+  refused(structure + rest + "100.0\n" + law + "nodes = [33]\n", "with nodes: \"radial\" (from structure.axis) or [x, y, z]");
+  refused("[structure]\nmass = 1.0\nstiffness = 1.0\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n" + law +
+              "nodes = [1]\ndirection = [1.0, 0.0, 0.0]\n",
+          "nodes are for a structure read from a deck");
+  refused("[structure]\ndeck = \"absent.inp\"\ninterface = \"TIP\"\n[forcing]\namplitude = 1.0\ndof = 0\n"
+          "frequency_hz = 1.0\n",
+          "structure.deck: deck: no file");
+  refused("[structure]\ndeck = \"bar.inp\"\n[forcing]\namplitude = 1.0\ndof = 0\nfrequency_hz = 1.0\n",
+          "structure.interface: missing");
 }
 
 // `wbm reduce` refuses bad input with exit 2, says why and how out, and creates nothing; a deck

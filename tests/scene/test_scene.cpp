@@ -329,6 +329,29 @@ TEST(Scene, OscillatorSolveAndSweepMatchClosedForm) {
   }
 }
 
+// [solver] residual_tolerance is the bound the full residual is verified against, echoed in the
+// resolved scene and per solve: the oscillator against a stop meets the default 1e-8; a bound
+// below what double precision can reach (1e-30) is reported as not converged (never converged
+// by hand), with the residual it reached; 0 is refused naming the key.
+TEST(Scene, TheResidualToleranceIsAnOptionReportedAsUsed) {
+  const std::string head = "structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+                           "forcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                           "contact = { law = \"linear\", stiffness = 4e5, gap = 2e-3 }\n";
+  const auto plain = wbm::scene::run_analysis(parse(head));
+  ASSERT_TRUE(plain.converged);
+  EXPECT_EQ(plain.diagnostics["solution"]["residual_tolerance"].get<double>(), 1e-8);
+  EXPECT_LE(plain.diagnostics["solution"]["relative_residual"].get<double>(), 1e-8);
+  const auto loose = parse(head + "solver = { residual_tolerance = 1e-7 }\n");
+  EXPECT_EQ(wbm::scene::to_json(loose)["solver"]["residual_tolerance"].get<double>(), 1e-7);
+  EXPECT_EQ(wbm::scene::run_analysis(loose).diagnostics["solution"]["residual_tolerance"].get<double>(), 1e-7);
+  const auto tight = wbm::scene::run_analysis(parse(head + "solver = { residual_tolerance = 1e-30 }\n"));
+  EXPECT_FALSE(tight.converged);
+  EXPECT_GT(tight.diagnostics["solution"]["relative_residual"].get<double>(), 1e-30);
+  EXPECT_EQ(tight.diagnostics["solution"]["newton"]["status"], "residual-not-verified") << tight.diagnostics.dump();
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "solver = { residual_tolerance = 0.0 }\n"); }, {"solver.residual_tolerance"});
+}
+
 // Regression (issue #19): a sweep over the resonance of an oscillator against a stop 100 times
 // stiffer than its spring stalls where it continues from the contact branch, restarts from the
 // linear response and lands on the no-contact branch. That switch must be reported: a 1 in the

@@ -8,8 +8,12 @@
 /// N/mm and M in t; frequencies are in Hz for any consistent system).
 
 #include <filesystem>
+#include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 namespace wbm::scene {
@@ -26,6 +30,23 @@ struct ReductionRequest {
   bool recovery = false;    // also write recovery.mtx (n × (|b| + m), u = T q) and full_dofs.txt
   std::string ccx = "ccx";  // the CalculiX executable
 };
+
+/// A reduced model in memory (reduce_model), as reduce_deck writes it.
+struct ReducedModel {
+  Eigen::MatrixXd stiffness, mass;          // K_r, M_r, symmetrized, (|b| + m) square [deck units]
+  std::vector<std::string> names;           // per reduced coordinate, as dofs.txt
+  std::vector<int> nodes;                   // the interface nodes, in the order given
+  std::map<int, Eigen::Vector3d> coordinates;  // of the interface nodes [deck length unit]
+  std::map<std::string, std::vector<int>> node_sets;  // the deck's node sets (upper-case names)
+  std::vector<std::pair<int, int>> full_dofs;  // (node, direction) per full row
+  Eigen::MatrixXd recovery;                 // T (full rows × reduced columns), with request.recovery only
+  nlohmann::json summary;                   // reduction.json
+  std::string deck_name;                    // the deck's file name
+  int interface_dofs = 0;                   // |b|
+};
+
+/// The reduction of reduce_deck, computed without writing anything. Throws as reduce_deck.
+[[nodiscard]] ReducedModel reduce_model(const ReductionRequest& request);
 
 /// The reduction (Craig & Bampton 1968; LL11 Sec. 5.2): u = T q, q = (u_b, η),
 /// T = [I 0; −K_ii⁻¹K_ib Φ], K_ii Φ = M_ii Φ Λ, ΦᵀM_iiΦ = I (the m lowest fixed-interface modes),

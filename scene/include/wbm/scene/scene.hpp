@@ -37,12 +37,14 @@
 /// input); a missing or unreadable file throws std::runtime_error naming the path.
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <nlohmann/json.hpp>
 
@@ -60,6 +62,22 @@ enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation, NonlinearMod
 /// "solve", "timestep", "basis-plot", "continuation", "nnm".
 [[nodiscard]] std::string_view to_string(AnalysisKind kind) noexcept;
 
+/// A structure given as a CalculiX/Abaqus deck ([structure] deck = …, docs/scenes.md): assembled
+/// by ccx and reduced by Craig–Bampton onto the interface nodes when the scene is read
+/// (scene/reduce.hpp), so that Structure::mass/stiffness are M_r, K_r and the DOF names those of
+/// `wbm reduce`'s dofs.txt ("n<node>_x", …, "mode<k>"). Units: the deck's.
+struct DeckStructure {
+  std::string file;                              // absolute path of the deck
+  std::string interface;                         // node set name or node numbers, as given
+  int modes = 40;                                // fixed-interface normal modes
+  std::string ccx = "ccx";                       // the CalculiX executable
+  std::map<int, Eigen::Vector3d> coordinates;    // of the interface nodes
+  std::map<std::string, std::vector<int>> node_sets;  // the deck's node sets (names upper-case)
+  /// structure.axis: a point on the rotation axis and its direction, for radial contacts.
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> axis;
+  nlohmann::json reduction;                      // the reduction's summary (reduction.json)
+};
+
 /// The structure: FE rod [JL14 Sec. 2] or explicit symmetric matrices (n × n, sparse).
 struct Structure {
   StructureKind kind = StructureKind::Rod;
@@ -68,6 +86,7 @@ struct Structure {
   /// Matrices only: "" when given inline, else the absolute path of the Matrix Market file.
   std::string mass_file, stiffness_file, damping_file;
   std::vector<std::string> dof_names;  // Matrices: given or "dof0" … ; Rod: "node1" … "nodeN"
+  std::optional<DeckStructure> deck;   // Matrices reduced from a deck
 
   [[nodiscard]] int dofs() const;
   /// Rod: "node<j>"; matrices: the DOF's name.
@@ -152,6 +171,9 @@ struct Basis {
 struct Solver {
   solvers::NewtonOptions newton{};
   solvers::LinearSolverPath linear_solver = solvers::LinearSolverPath::Automatic;
+  /// [solver] residual_tolerance: a solve is converged only if ‖G a − b + n(a)‖ ≤ this · ‖b‖
+  /// (solvers::WeightedResidualOptions::residual_tolerance), reported as used.
+  double residual_tolerance = solvers::WeightedResidualOptions{}.residual_tolerance;
 };
 
 struct Analysis {
