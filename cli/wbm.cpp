@@ -328,6 +328,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   reduce_cmd->add_flag("--recovery", reduction.recovery, "Also write recovery.mtx (u = T q) and full_dofs.txt");
   reduce_cmd->add_option("--ccx", reduction.ccx, "CalculiX executable")->capture_default_str();
+  reduce_cmd->add_option("--units", reduction.units,
+                         "The deck's unit system, converted to SI (N/m, kg, m, Hz): SI, N-m-kg-s, N-mm-t-s, kN-mm-kg-ms; "
+                         "default: the deck's units, unconverted");
   reduce_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<deck>-reduced)");
   reduce_cmd->add_flag("-q,--quiet", quiet, "No summary");
   auto* bases_cmd = app.add_subcommand("bases", "List the time bases and the formulations each admits");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -76,7 +77,31 @@ Eigen::VectorXd frequencies_hz(const Eigen::MatrixXd& k, const Eigen::MatrixXd& 
 
 std::vector<double> as_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
+const std::vector<DeckUnits>& unit_systems() {
+  static const std::vector<DeckUnits> systems = {{"SI", 1.0, 1.0, 1.0},
+                                                 {"N-m-kg-s", 1.0, 1.0, 1.0},
+                                                 {"N-mm-t-s", 1e-3, 1e3, 1.0},
+                                                 {"kN-mm-kg-ms", 1e-3, 1.0, 1e-3}};
+  return systems;
+}
+
 }  // namespace
+
+std::vector<std::string> deck_unit_names() {
+  std::vector<std::string> names;
+  for (const auto& u : unit_systems()) names.push_back(u.name);
+  return names;
+}
+
+DeckUnits deck_units(const std::string& name) {
+  for (const auto& u : unit_systems()) {
+    if (u.name == name) return u;
+  }
+  std::string known;
+  for (const auto& n : deck_unit_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("units = \"" + name + "\": unknown unit system; known: " + known +
+                              " (the deck's consistent units, converted to SI)");
+}
 
 ReducedModel reduce_model(const ReductionRequest& request) {
   namespace fs = std::filesystem;
@@ -92,12 +117,18 @@ ReducedModel reduce_model(const ReductionRequest& request) {
     throw std::invalid_argument("deck: no file " + request.deck.string() +
                                 " (give the path of a CalculiX/Abaqus .inp deck)");
   }
+  const std::optional<DeckUnits> units = request.units.empty() ? std::nullopt : std::optional(deck_units(request.units));
   const auto start = std::chrono::steady_clock::now();
   const fem::CalculixDeck deck = fem::read_calculix_deck(request.deck);
   const std::vector<int> nodes = interface_nodes(deck, request.interface);
   auto t = std::chrono::steady_clock::now();
-  const fem::AssembledModel model = fem::assemble_with_calculix(deck, {.executable = request.ccx});
+  fem::AssembledModel model = fem::assemble_with_calculix(deck, {.executable = request.ccx});
   const double ccx_s = seconds_since(t);
+  const double length = units ? units->length : 1.0, time = units ? units->time : 1.0;
+  if (units) {  // to SI: K [force/length] × mass/time², M × mass; u then in metres
+    model.stiffness *= units->mass / (time * time);
+    model.mass *= units->mass;
+  }
 
   std::map<int, std::vector<std::pair<int, int>>> rows_of;  // node → (direction, row)
   for (size_t r = 0; r < model.dofs.size(); ++r) rows_of[model.dofs[r].first].emplace_back(model.dofs[r].second, static_cast<int>(r));
@@ -116,7 +147,7 @@ ReducedModel reduce_model(const ReductionRequest& request) {
       boundary.push_back(row);
       names.push_back(std::string("n").append(std::to_string(node)) + "_" + direction_name(direction));
     }
-    const Eigen::Vector3d& x = deck.nodes.at(node);
+    const Eigen::Vector3d x = deck.nodes.at(node) * length;
     coordinates.push_back({x(0), x(1), x(2)});
     out.coordinates[node] = x;
   }
@@ -139,7 +170,8 @@ ReducedModel reduce_model(const ReductionRequest& request) {
     const int count = std::min(request.check_modes, full - 1);
     const fem::CraigBamptonModel whole = fem::craig_bampton(model.stiffness, model.mass, {}, count);
     // CalculiX's own eigensolver on the same deck: a second, independent reference.
-    const std::vector<double> ccx_hz = fem::calculix_frequencies(deck, count, {.executable = request.ccx});
+    std::vector<double> ccx_hz = fem::calculix_frequencies(deck, count, {.executable = request.ccx});
+    for (double& f : ccx_hz) f /= time;  // cycles per deck time unit → Hz
     check_s = seconds_since(t);
     std::vector<double> ccx_differences;
     for (size_t i = 0; i < ccx_hz.size() && static_cast<Eigen::Index>(i) < whole.normal_frequencies_hz.size(); ++i) {
@@ -161,7 +193,9 @@ ReducedModel reduce_model(const ReductionRequest& request) {
 
   nlohmann::json summary = {
       {"deck", deck.file.string()},
-      {"units", "those of the deck, unconverted (K in force/length, M in mass; frequencies in Hz for a consistent system)"},
+      {"units", units ? "SI (N/m, kg, m, Hz), converted from the deck's " + units->name
+                      : std::string("those of the deck, unconverted (K in force/length, M in mass; frequencies in "
+                                    "cycles per deck time unit)")},
       {"full_dofs", full},
       {"interface", {{"given", request.interface}, {"nodes", nodes}, {"coordinates", coordinates},
                      {"dofs", static_cast<int>(boundary.size())}}},
@@ -209,8 +243,8 @@ nlohmann::json reduce_deck(const ReductionRequest& request, const std::filesyste
   const std::string origin = "wbm reduce: Craig-Bampton of " + r.deck_name + ", " +
                              std::to_string(r.interface_dofs) + " interface DOFs + " + std::to_string(request.modes) +
                              " fixed-interface modes; rows and columns named in dofs.txt";
-  fem::write_matrix_market_file(output / "stiffness.mtx", kr, true, "K_r [deck units]\n" + origin);
-  fem::write_matrix_market_file(output / "mass.mtx", mr, true, "M_r [deck units]\n" + origin);
+  fem::write_matrix_market_file(output / "stiffness.mtx", kr, true, (!request.units.empty() ? std::string("K_r [N/m, SI]\n") : std::string("K_r [deck units]\n")) + origin);
+  fem::write_matrix_market_file(output / "mass.mtx", mr, true, (!request.units.empty() ? std::string("M_r [kg, SI]\n") : std::string("M_r [deck units]\n")) + origin);
   {
     std::ofstream d(output / "dofs.txt");
     for (const auto& n : names) d << n << "\n";

@@ -337,7 +337,7 @@ class Parser {
   // [structure] deck = "…" (interface, modes, ccx, axis): the deck assembled by ccx and reduced
   // by Craig–Bampton now (scene/reduce.hpp); M_r, K_r and the names of wbm reduce's dofs.txt.
   void deck_structure(const toml::table& t, Structure& st) {
-    r_.only(t, "structure", {"type", "deck", "interface", "modes", "ccx", "axis"});
+    r_.only(t, "structure", {"type", "deck", "interface", "modes", "ccx", "axis", "units"});
     const size_t errors = r_.error_count();
     DeckStructure d;
     const toml::node* file = t.get("deck");
@@ -363,6 +363,7 @@ class Parser {
     }
     d.modes = static_cast<int>(r_.integer(t, "structure", "modes", 0, 100000, 40));
     d.ccx = r_.text(t, "structure", "ccx", "ccx");
+    d.units = r_.choice(t, "structure", "units", deck_unit_names(), "SI");
     if (const toml::node* a = t.get("axis")) {
       const toml::table* at = a->as_table();
       if (at == nullptr) {
@@ -386,6 +387,7 @@ class Parser {
       request.interface = d.interface;
       request.modes = d.modes;
       request.ccx = d.ccx;
+      request.units = d.units;
       ReducedModel reduced = reduce_model(request);
       d.node_sets = std::move(reduced.node_sets);
       d.coordinates = reduced.coordinates;
@@ -1701,7 +1703,7 @@ nlohmann::json to_json(const Scene& s) {
                         {"elements", st.rod.elements}};
     } else if (st.deck) {  // the deck again (re-reduced when read back), not the reduced matrices
       j["structure"] = {{"type", "deck"}, {"deck", st.deck->file}, {"interface", st.deck->interface},
-                        {"modes", st.deck->modes}, {"ccx", st.deck->ccx}};
+                        {"modes", st.deck->modes}, {"ccx", st.deck->ccx}, {"units", st.deck->units}};
       if (st.deck->axis) {
         const auto& [point, direction] = *st.deck->axis;
         j["structure"]["axis"] = {{"point", {point(0), point(1), point(2)}},

@@ -204,25 +204,31 @@ namespace {
 
 // A 1 m × 0.1 m × 0.1 m steel bar along x of 8 C3D8 bricks, clamped at x = 0 (set ROOT, nodes
 // 1–4), its tip face the set TIP (nodes 33–36): 96 free DOFs.
-fs::path write_reduce_bar() {
+// The clamped bar, 1 m × 0.1 m × 0.1 m steel, 8 C3D8 bricks, sets ROOT and TIP (nodes 33–36);
+// with `millimetres` the same bar in N-mm-t-s (mm, N/mm², t/mm³) as bar_mm.inp.
+fs::path write_reduce_bar(bool millimetres = false) {
   const fs::path dir = work() / "reduce";
   fs::create_directories(dir);
   std::ostringstream m;
+  m << std::setprecision(17);
   auto id = [](int i, int j, int k) { return 1 + 4 * i + 2 * j + k; };
+  const double l = millimetres ? 1e3 : 1.0;
   m << "*NODE\n";
   for (int i = 0; i <= 8; ++i)
     for (int j = 0; j <= 1; ++j)
-      for (int k = 0; k <= 1; ++k) m << id(i, j, k) << ", " << 0.125 * i << ", " << 0.1 * j << ", " << 0.1 * k << "\n";
+      for (int k = 0; k <= 1; ++k) m << id(i, j, k) << ", " << 0.125 * i * l << ", " << 0.1 * j * l << ", " << 0.1 * k * l << "\n";
   m << "*ELEMENT, TYPE=C3D8, ELSET=EALL\n";
   for (int i = 0; i < 8; ++i) {
     m << i + 1 << ", " << id(i, 0, 0) << ", " << id(i + 1, 0, 0) << ", " << id(i + 1, 1, 0) << ", " << id(i, 1, 0) << ", "
       << id(i, 0, 1) << ", " << id(i + 1, 0, 1) << ", " << id(i + 1, 1, 1) << ", " << id(i, 1, 1) << "\n";
   }
   m << "*NSET, NSET=ROOT, GENERATE\n1, 4\n*NSET, NSET=TIP, GENERATE\n33, 36\n"
-    << "*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7800.\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
+    << "*MATERIAL, NAME=STEEL\n*ELASTIC\n" << (millimetres ? "210e3" : "210e9") << ", 0.3\n*DENSITY\n"
+    << (millimetres ? "7.8e-9" : "7800.") << "\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
     << "*BOUNDARY\nROOT, 1, 3\n*STEP\n*STATIC\n*END STEP\n";
-  std::ofstream(dir / "bar.inp") << m.str();
-  return dir / "bar.inp";
+  const fs::path p = dir / (millimetres ? "bar_mm.inp" : "bar.inp");
+  std::ofstream(p) << m.str();
+  return p;
 }
 
 std::vector<std::string> lines_of(const fs::path& p) {
@@ -343,7 +349,8 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
 
 // A scene whose structure is the deck itself ([structure] deck = "bar.inp", interface, modes):
 // the scene reduces it when read, and its harmonic tip response equals the full model's
-// (K − ω²M + iωC)⁻¹ f (CalculiX's matrices, dense), as the scene on wbm reduce's files does.
+// (K − ω²M + iωC)⁻¹ f (CalculiX's matrices, dense), as the scene on wbm reduce's files does; the
+// same bar written in N-mm-t-s with units = "N-mm-t-s" gives the same response in metres (1e-9).
 // [[contact]] nodes = "TIP" with direction = "radial" about structure.axis (the bar's centre
 // line) places one contact per tip node along the closed-form radial unit vector: the corners
 // of the 0.1 m square at ±1/√2 in y and z. The resolved scene (check --json) names the deck, not
@@ -378,6 +385,18 @@ TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
   const auto amplitude = csv_column(result / "harmonics.csv", "A_n36_y [m]");
   ASSERT_EQ(amplitude.size(), 3u);
   EXPECT_NEAR(std::stod(amplitude[1]), expected, 1e-5 * expected);
+
+  // The same bar written in N-mm-t-s, with units = "N-mm-t-s": converted to SI, the same response.
+  write_reduce_bar(true);
+  const fs::path mm_scene = dir / "deck_tip_mm.toml", mm_result = dir / "deck_tip_mm";
+  std::ofstream(mm_scene) << "[structure]\ndeck = \"bar_mm.inp\"\ninterface = \"tip\"\nmodes = 12\nunits = \"N-mm-t-s\"\n"
+                          << rest << freq.str() << "\n[basis]\ntrial = \"fourier\"\ndimension = 16\n"
+                          << "[output]\nsamples = 64\ndofs = [\"n36_y\"]\nharmonics = 2\n";
+  const Outcome mm = run_wbm("run --no-plots -q " + mm_scene.string() + " -o " + mm_result.string());
+  ASSERT_EQ(mm.status, 0) << mm.err;
+  const auto mm_amplitude = csv_column(mm_result / "harmonics.csv", "A_n36_y [m]");
+  ASSERT_EQ(mm_amplitude.size(), 3u);
+  EXPECT_NEAR(std::stod(mm_amplitude[1]), std::stod(amplitude[1]), 1e-9 * expected);
 
   // Radial contacts on the node set, about the bar's centre line.
   const std::string radial = structure + "axis = { point = [0.0, 0.05, 0.05], direction = [2.0, 0.0, 0.0] }\n" + rest +
@@ -432,6 +451,7 @@ TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
           "structure.deck: deck: no file");
   refused("[structure]\ndeck = \"bar.inp\"\n[forcing]\namplitude = 1.0\ndof = 0\nfrequency_hz = 1.0\n",
           "structure.interface: missing");
+  refused(structure + "units = \"mm\"\n" + rest + "100.0\n", "structure.units");
 }
 
 // `wbm reduce` refuses bad input with exit 2, says why and how out, and creates nothing; a deck

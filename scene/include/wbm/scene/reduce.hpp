@@ -29,7 +29,22 @@ struct ReductionRequest {
   int check_modes = 0;
   bool recovery = false;    // also write recovery.mtx (n × (|b| + m), u = T q) and full_dofs.txt
   std::string ccx = "ccx";  // the CalculiX executable
+  /// The deck's consistent unit system, converted to SI before the reduction (deck_units()):
+  /// "" keeps the deck's units unconverted (wbm reduce's default); "SI" (N-m-kg-s, no change),
+  /// "N-mm-t-s" or "kN-mm-kg-ms" convert K, M, coordinates and frequencies to N/m, kg, m, Hz.
+  std::string units = "";
 };
+
+/// A consistent unit system of a deck: SI per deck unit of length [m], mass [kg] and time [s];
+/// force = mass·length/time², so K [force/length] scales by mass/time² and M by mass.
+struct DeckUnits {
+  std::string name;
+  double length = 1.0, mass = 1.0, time = 1.0;
+};
+/// The known systems ("SI", "N-m-kg-s", "N-mm-t-s", "kN-mm-kg-ms"). Throws std::invalid_argument
+/// naming the value and the known names.
+[[nodiscard]] DeckUnits deck_units(const std::string& name);
+[[nodiscard]] std::vector<std::string> deck_unit_names();
 
 /// A reduced model in memory (reduce_model), as reduce_deck writes it.
 struct ReducedModel {

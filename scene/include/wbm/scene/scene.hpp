@@ -65,12 +65,14 @@ enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation, NonlinearMod
 /// A structure given as a CalculiX/Abaqus deck ([structure] deck = …, docs/scenes.md): assembled
 /// by ccx and reduced by Craig–Bampton onto the interface nodes when the scene is read
 /// (scene/reduce.hpp), so that Structure::mass/stiffness are M_r, K_r and the DOF names those of
-/// `wbm reduce`'s dofs.txt ("n<node>_x", …, "mode<k>"). Units: the deck's.
+/// `wbm reduce`'s dofs.txt ("n<node>_x", …, "mode<k>"). Units: SI, converted from the deck's
+/// `units` (coordinates in m).
 struct DeckStructure {
   std::string file;                              // absolute path of the deck
   std::string interface;                         // node set name or node numbers, as given
   int modes = 40;                                // fixed-interface normal modes
   std::string ccx = "ccx";                       // the CalculiX executable
+  std::string units = "SI";                      // the deck's unit system, converted to SI (scene::deck_units)
   std::map<int, Eigen::Vector3d> coordinates;    // of the interface nodes
   std::map<std::string, std::vector<int>> node_sets;  // the deck's node sets (names upper-case)
   /// structure.axis: a point on the rotation axis and its direction, for radial contacts.
