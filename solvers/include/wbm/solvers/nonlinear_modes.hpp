@@ -137,7 +137,6 @@ struct Backbone {
   double wall_time_s = 0.0;
 };
 
-/// Pseudo-arclength continuation in energy of the backbone [Keller 1977; continuation.hpp].
 /// Where a level's energy sits (NonlinearModes::modal_components): mode and harmonic 1-based as
 /// printed (mode 1 = the first linear mode), shares of m̂ in [0, 1].
 struct ModalComponents {
@@ -152,6 +151,7 @@ struct PeriodicOrbit {
   double frequency_hz = 0.0;          // f [Hz]
 };
 
+/// Pseudo-arclength continuation in energy of the backbone [Keller 1977; continuation.hpp].
 struct BackboneContinuationOptions {
   double energy_min = 0.5, energy_max = 10.0;  // E range; energy_min < 1 starts below contact
   /// Empty: start on the linear mode at energy_min. Given: start from this orbit (e.g. a forced
