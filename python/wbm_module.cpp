@@ -354,7 +354,8 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
         o.max_energy_step = max_energy_step;
         const auto b = modes.continue_backbone(o);
         const auto n = static_cast<Eigen::Index>(b.levels.size());
-        Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n);
+        Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n), first(n), other_share(n);
+        Eigen::VectorXi other_mode(n), other_harmonic(n);
         for (Eigen::Index i = 0; i < n; ++i) {
           const auto& l = b.levels[static_cast<size_t>(i)];
           e(i) = l.energy;
@@ -362,6 +363,11 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
           fr(i) = l.rayleigh_frequency_hz;
           pen(i) = l.max_penetration;
           comp(i) = l.complementarity;
+          const auto c = modes.modal_components(l);
+          first(i) = c.first_mode_share;
+          other_mode(i) = c.mode;
+          other_harmonic(i) = c.harmonic;
+          other_share(i) = c.share;
         }
         py::dict out;
         out["converged"] = b.complete;
@@ -372,6 +378,10 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
         out["rayleigh_frequency_hz"] = py::cast(fr);
         out["max_penetration"] = py::cast(pen);
         out["complementarity"] = py::cast(comp);
+        out["first_mode_share"] = py::cast(first);
+        out["other_mode"] = py::cast(other_mode);
+        out["other_harmonic"] = py::cast(other_harmonic);
+        out["other_share"] = py::cast(other_share);
         out["folds"] = b.folds;
         out["wall_time_s"] = b.wall_time_s;
         return out;
@@ -383,7 +393,10 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
 contact onset). stops: list of (dof, gap [m] > 0). harmonics N, samples m > 2N of the contact
 conditions; penalty_stiffness > 0 replaces exact contact by a linear spring [N/m].
 Returns a dict of arrays per backbone level: energy, frequency_hz (of the periodic orbit),
-rayleigh_frequency_hz, max_penetration and complementarity [gap]; and linear_frequency_hz, folds
+rayleigh_frequency_hz, max_penetration and complementarity [gap], first_mode_share (of the energy m̂
+held by linear mode 1 at the fundamental) and the largest other component other_mode, other_harmonic
+(1-based), other_share (NonlinearModes::modal_components: an internal resonance shows as a large
+other_share with f_j ≈ h f); and linear_frequency_hz, folds
 (energies where the branch turns back), converged (energy max reached), message, wall_time_s.)");
   m.def(
       "evaluate",

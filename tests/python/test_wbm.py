@@ -149,6 +149,11 @@ def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
     table = scene["tables"]["backbone.csv"]
     np.testing.assert_array_equal(table["energy [-]"], mode["energy"])
     np.testing.assert_array_equal(table["frequency [Hz]"], mode["frequency_hz"])
+    np.testing.assert_array_equal(table["first_mode_share [-]"], mode["first_mode_share"])
+    # Below contact the linear first mode holds all the energy; shares never exceed 1 together.
+    np.testing.assert_allclose(mode["first_mode_share"][before], 1.0, rtol=0, atol=1e-12)
+    assert (mode["first_mode_share"] + mode["other_share"] <= 1.0 + 1e-12).all()
+    assert mode["first_mode_share"][-1] < 1.0 - 1e-3
 
 
 def test_solve_with_several_loads_superposes_closed_forms():
