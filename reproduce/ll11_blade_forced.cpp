@@ -13,9 +13,10 @@
 // curves and the backbone alike: (max − min)/2 over the period of the circumferential (y)
 // displacement of the first tip node to touch, in gaps. Not computed here: stability (a
 // monodromy matrix of the 224-state blade costs about a second per point) and rigid stops (the
-// rigid-stop continuation stalls at grazing contact on this blade; see the note of issue #15).
+// rigid-stop continuation stalls on this blade: at grazing contact from below, at 1.044 f1 from
+// inside the contact region; see the notes of issue #15).
 // Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
-// About 60 s on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
+// About 100 s on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -422,7 +423,7 @@ int main(int argc, char** argv) {
        << "). Linear equations verified to ‖R‖ ≤ " << format("%g", residual_tolerance)
        << " ‖b‖ (the default " << format("%g", solvers::WeightedResidualOptions{}.residual_tolerance)
        << " is below the rounding of this G). Figure: `forced_response.png`. Not computed: "
-          "stability (cost) and rigid stops (the continuation stalls at grazing contact).\n\n"
+          "stability (cost) and rigid stops (the continuation stalls on this blade; notes of issue #15).\n\n"
        << "Two backbone branches of the same stops (undamped, unforced; KKT continuation, N = " << mode_harmonics
        << ", m = " << mode_samples << "): (0) from the linear first mode, E = 0.5 to " << format("%g", co.energy_max)
        << " (" << nl << " levels); (1) through harmonic balance's resonance peak: the peak's orbit (every DOF's "
