@@ -315,11 +315,14 @@ int main(int argc, char** argv) {
                                  {"first_mode_share", first_share(nl - 1)}, {"detuning", end_detuning},
                                  {"internal_resonance", end_resonant}}}});
 
+    const reproduce::BladeGeometry geometry = reproduce::read_blade_geometry();
     std::ostringstream md;
     md << "## LL11 Figs. 6–8 — compressor blade against a rigid casing (`ll11_blade`)\n\n"
        << "The paper's industrial blade is not public; this is a representative compressor rotor blade built "
-          "in the project (`reproduce/blade/blade.geo`, `reproduce/blade/README.md`): span 100 mm, chord 60 → 45 mm, "
-          "25° of twist, Ti-6Al-4V, clamped root. gmsh mesh of "
+          "in the project (`reproduce/blade/blade.geo`, `reproduce/blade/README.md`): span "
+       << format("%g", 1e3 * geometry.span) << " mm, chord " << format("%g", 1e3 * geometry.chord_root) << " → "
+       << format("%g", 1e3 * geometry.chord_tip) << " mm, " << format("%g", geometry.stagger_tip_deg - geometry.stagger_root_deg)
+       << "° of twist (blade.geo's inputs), Ti-6Al-4V, clamped root. gmsh mesh of "
        << written << " nodes, " << c3d10 << " quadratic tetrahedra (C3D10), " << n_full
        << " free DOFs; K and M assembled by CalculiX. Interface: 24 tip nodes on the camber line, leading to "
           "trailing edge (" << nb << " DOFs), + " << modes << " fixed-interface modes = " << nb + modes

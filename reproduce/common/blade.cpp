@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <map>
+#include <regex>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +16,23 @@
 #include <wbm/fem/gmsh.hpp>
 
 namespace wbm::reproduce {
+
+BladeGeometry read_blade_geometry() {
+  const std::filesystem::path geo = std::filesystem::path(WBM_BLADE_DIR) / "blade.geo";
+  std::ifstream in(geo);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // "name = number;" or "name = number*Pi/180;" (degrees, returned in degrees).
+  auto value = [&](const std::string& name, bool degrees) {
+    const std::regex assignment("(^|[;\\s])" + name + "\\s*=\\s*([0-9.eE+-]+)" + (degrees ? "\\s*\\*\\s*Pi\\s*/\\s*180" : "") + "\\s*;");
+    std::smatch m;
+    if (!std::regex_search(text, m, assignment)) {
+      throw std::runtime_error(geo.string() + ": no assignment '" + name + " = …;' (blade geometry parameter)");
+    }
+    return std::stod(m[2].str());
+  };
+  return {value("span", false), value("c_root", false), value("c_tip", false), value("stag_root", true),
+          value("stag_tip", true)};
+}
 
 Blade build_blade(const std::filesystem::path& work, double mesh_size, int tip_points) {
   namespace fs = std::filesystem;

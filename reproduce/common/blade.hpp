@@ -32,6 +32,15 @@ struct Blade {
 /// gmsh or ccx (their messages), or if the node set TIP does not have `tip_points` nodes.
 [[nodiscard]] Blade build_blade(const std::filesystem::path& work, double mesh_size, int tip_points);
 
+/// The design inputs of blade.geo, read from its assignments (span, c_root, c_tip, stag_root,
+/// stag_tip; a value is a number, or a number times Pi/180 for degrees): labels of the model for
+/// reports, never typed a second time. Throws std::runtime_error naming a missing parameter.
+struct BladeGeometry {
+  double span = 0.0, chord_root = 0.0, chord_tip = 0.0;  // m
+  double stagger_root_deg = 0.0, stagger_tip_deg = 0.0;  // from the engine axis
+};
+[[nodiscard]] BladeGeometry read_blade_geometry();
+
 /// A scratch folder `<temp>/<prefix>_<pid>` for the mesh and ccx, created at construction and
 /// removed on every exit path.
 struct ScratchFolder {

@@ -61,7 +61,7 @@ NonlinearModes::NonlinearModes(const MechanicalSystem& system, std::vector<Rigid
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k_, m_);
   if (eig.info() != Eigen::Success) throw std::invalid_argument("NonlinearModes: K φ = M φ ω² failed (is M SPD?)");
   omega0_ = std::sqrt(eig.eigenvalues()(0));
-  modes_ = eig.eigenvectors();
+  modal_projection_ = eig.eigenvectors().transpose() * m_;  // η = ΦᵀM y
   frequencies_ = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() / (2.0 * std::numbers::pi);
   // Contact onset: the linear mode scaled so that the stop with the largest |e_cᵀφ|/g_c touches.
   const Eigen::VectorXd phi = eig.eigenvectors().col(0);
@@ -142,7 +142,7 @@ Eigen::MatrixXd NonlinearModes::modal_energy_shares(const ModeLevel& level) cons
     throw std::invalid_argument("NonlinearModes::modal_energy_shares: coefficients " + std::to_string(y.rows()) + " × " +
                                 std::to_string(y.cols()) + ": need " + std::to_string(n_) + " × " + std::to_string(f_));
   }
-  const Eigen::MatrixXd eta = modes_.transpose() * (m_ * y);  // modal coordinates, n × F
+  const Eigen::MatrixXd eta = modal_projection_ * y;  // modal coordinates, n × F
   Eigen::MatrixXd shares = Eigen::MatrixXd::Zero(n_, n_harm_ + 1);
   for (int k = 1; k < f_; ++k) shares.col((k + 1) / 2) += weight_(k) * nu_(k) * nu_(k) * eta.col(k).cwiseAbs2();
   const double total = shares.sum();

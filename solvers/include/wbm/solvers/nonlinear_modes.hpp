@@ -312,7 +312,7 @@ class NonlinearModes {
   Eigen::VectorXd weight_, nu_;    // w_k, ν_k
   Eigen::MatrixXd theta_;          // m × F values at τ_k = k/m
   Eigen::VectorXd onset_;
-  Eigen::MatrixXd modes_;          // Φ, mass-normalized linear modes (columns, ascending)
+  Eigen::MatrixXd modal_projection_;  // ΦᵀM (Φ the mass-normalized linear modes, ascending): η = ΦᵀM y
   Eigen::VectorXd frequencies_;    // f_j [Hz]
   int phase_index_ = 0;            // index in the stacked y of the fixed coefficient
   int onset_stop_ = 0;             // the stop that touches first in the linear mode
