@@ -34,7 +34,39 @@ void BackboneContinuationOptions::validate() const {
   if (start && (!(start->frequency_hz > 0.0) || !std::isfinite(start->frequency_hz))) {
     fail("start.frequency_hz = " + format_number(start->frequency_hz) + ": must be > 0 [Hz]");
   }
+  if (!(start_penalty_stiffness >= 0.0) || !std::isfinite(start_penalty_stiffness)) {
+    fail("start_penalty_stiffness = " + format_number(start_penalty_stiffness) +
+         ": must be >= 0 [N/m] (0: no homotopy)");
+  }
+  if (start_penalty_stiffness > 0.0 && (!start || penalty_stiffness > 0.0)) {
+    fail("start_penalty_stiffness = " + format_number(start_penalty_stiffness) +
+         ": a homotopy to exact contact needs a start orbit and exact contact (penalty_stiffness = 0, here " +
+         format_number(penalty_stiffness) + "); set it to 0 or give a start");
+  }
 }
+
+namespace {
+
+// The backbone system at fixed E as a square system for the Newton core.
+struct FixedEnergy {
+  const NonlinearModes::BackboneSystem* s;
+  double energy;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, energy); }
+  [[nodiscard]] Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+    return s->linearize(x, energy).jacobian;
+  }
+};
+
+// Semismooth Newton at fixed E (sparse LU), without line search unless asked (a start far
+// from the branch).
+NewtonResult solve_at(const NonlinearModes::BackboneSystem& system, Eigen::VectorXd x, double energy,
+                      const BackboneContinuationOptions& o, bool line_search = false, double tolerance = 0.0) {
+  return newton(FixedEnergy{&system, energy}, std::move(x),
+                {.tolerance = tolerance > 0.0 ? tolerance : o.tolerance, .max_iterations = o.max_newton_iterations,
+                 .line_search = line_search});
+}
+
+}  // namespace
 
 NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
   if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
@@ -259,17 +291,7 @@ ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd
   const auto t0 = std::chrono::steady_clock::now();
   // Semismooth Newton at fixed E (no line search: x is a converged point of the branch less
   // than one step away), through the Newton core with sparse LU.
-  struct Fixed {
-    const BackboneSystem* s;
-    double energy;
-    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, energy); }
-    [[nodiscard]] Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
-      return s->linearize(x, energy).jacobian;
-    }
-  };
-  const NewtonResult r = newton(Fixed{&system, energy}, std::move(x),
-                                {.tolerance = options.tolerance, .max_iterations = options.max_newton_iterations,
-                                 .line_search = false});
+  const NewtonResult r = solve_at(system, std::move(x), energy, options);
   ModeLevel l = system.level(r.x, energy, options.tolerance);
   l.newton_iterations = r.report.iterations;
   if (!r.report.converged()) {
@@ -278,6 +300,59 @@ ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd
   }
   l.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return l;
+}
+
+std::optional<Eigen::VectorXd> NonlinearModes::homotopy_start(const BackboneSystem& exact, double energy,
+                                                              const BackboneContinuationOptions& o, Backbone& b) const {
+  const double k0 = o.start_penalty_stiffness;
+  const Eigen::Index ny = exact.size() - static_cast<Eigen::Index>(stops_.size()) * options_.samples;  // Y and ω²
+  const double to_lambda = 1.0 / (options_.samples * omega0_ * omega0_ * m_ref_);  // k [N/m] → κ of λ = κ g₊
+  double k = k0, factor = 10.0;
+  Eigen::VectorXd xp = BackboneSystem(*this, k0).state(o.start->coefficients, o.start->frequency_hz);
+  bool first = true;
+  std::string last_exact;
+  while (k <= 1e12 * k0) {
+    const BackboneSystem penalty(*this, k);
+    // An intermediate orbit: corrected to √tolerance (only the Signorini point is verified at
+    // `tolerance`); the start orbit with a line search (it may be far from the branch: without
+    // one, Newton can land on another mode's branch), the next stages without.
+    const double stage_tolerance = std::sqrt(o.tolerance);
+    const NewtonResult rp = solve_at(penalty, xp, energy, o, first, stage_tolerance);
+    const bool reached = rp.report.converged() ||
+                         (!rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance);
+    if (!reached) {
+      if (first || factor < 1.2) {
+        b.message = "penalty homotopy: the penalty orbit at k = " + format_number(k) + " N/m, E = " +
+                    format_number(energy) + " did not converge (" + rp.report.brief() + ")" +
+                    (last_exact.empty() ? std::string() : "; last Signorini attempt: " + last_exact);
+        return std::nullopt;
+      }
+      k /= factor;  // back to the last converged stage, with a smaller step
+      factor = std::sqrt(factor);
+      k *= factor;
+      continue;
+    }
+    first = false;
+    xp = rp.x;
+    ++b.homotopy_stages;
+    // Signorini from this orbit, the multipliers at its penalty forces λ_s = κ (g_s)₊.
+    const Eigen::VectorXd y = with_phase(xp.head(ny - 1));
+    const Eigen::Map<const Eigen::MatrixXd> ym(y.data(), n_, f_);
+    Eigen::VectorXd xe(exact.size());
+    xe.head(ny) = xp;
+    xe.tail(xe.size() - ny) = (k * to_lambda) * gaps(ym).cwiseMax(0.0);
+    const NewtonResult re = solve_at(exact, std::move(xe), energy, o);
+    if (re.report.converged()) {
+      b.homotopy_stiffness = k;
+      return re.x;
+    }
+    last_exact = "from k = " + format_number(k) + " N/m: " + re.report.brief();
+    k *= factor;
+  }
+  b.message = "penalty homotopy: Signorini did not converge from any penalty orbit up to k = " +
+              format_number(k / factor) + " N/m (" + std::to_string(b.homotopy_stages) + " stages from " +
+              format_number(k0) + " N/m); last: " + last_exact;
+  return std::nullopt;
 }
 
 Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o) const {
@@ -293,8 +368,19 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
                                 " lies outside [energy_min, energy_max] = [" + format_number(o.energy_min) + ", " +
                                 format_number(o.energy_max) + "]; widen the range to include it");
   }
-  const Eigen::VectorXd x0 = o.start ? system.state(o.start->coefficients, o.start->frequency_hz)
-                                     : system.linear_state(std::min(e0, 1.0));
+  Eigen::VectorXd x0;
+  if (o.start_penalty_stiffness > 0.0) {
+    auto reached = homotopy_start(system, e0, o, b);
+    if (!reached) {
+      b.stop = StopReason::InitialPointFailed;
+      b.message = std::string(to_string(b.stop)) + ": " + b.message;
+      b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return b;
+    }
+    x0 = std::move(*reached);
+  } else {
+    x0 = o.start ? system.state(o.start->coefficients, o.start->frequency_hz) : system.linear_state(std::min(e0, 1.0));
+  }
   PseudoArclengthOptions pa;
   pa.direction = o.start ? o.direction : +1;
   pa.parameter_min = o.start ? o.energy_min : 0.5 * e0;
@@ -363,6 +449,10 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
                (b.levels.back().energy >= o.energy_max * (1.0 - 1e-12) ||
                 (o.start && b.levels.back().energy <= o.energy_min * (1.0 + 1e-12)));
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
+  if (b.homotopy_stages > 0) {
+    b.message += "; started by a penalty homotopy (" + std::to_string(b.homotopy_stages) +
+                 " penalty orbits, Signorini converged from k = " + format_number(b.homotopy_stiffness) + " N/m)";
+  }
   b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return b;
 }

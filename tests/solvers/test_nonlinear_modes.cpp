@@ -577,3 +577,51 @@ TEST(NonlinearModes, ABackboneStartedFromAShiftedOrbitIsTheSameBranch) {
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(outside); },
                                                          {"direction = 0", "+1 or -1"});
 }
+
+// The penalty homotopy to exact contact (BackboneContinuationOptions::start_penalty_stiffness):
+// started from an orbit of soft penalty stops (k = 3e8 N/m, about 1.6 × the rod's static tip
+// stiffness EA/L = 1.9e8 N/m, so the orbit penetrates the stop), at E = 4, the
+// branch's first point is the exact-contact level at the orbit's energy that the continuation
+// from the linear mode reaches independently: same frequency to 1e-9, same harmonic amplitudes
+// to 1e-7, and the Signorini conditions hold at it. Refused: a homotopy without a start, with
+// penalty stops, or with a negative stiffness.
+TEST(NonlinearModes, APenaltyHomotopyFromASoftStopsOrbitReachesTheExactBranch) {
+  const auto nm = modes(1e-3, 6, 96);
+  const auto exact = nm.continue_backbone({.energy_min = 0.5, .energy_max = 4.5, .include = {4.0}});
+  const auto soft = nm.continue_backbone({.energy_min = 0.5, .energy_max = 4.5, .penalty_stiffness = 3e8, .include = {4.0}});
+  const auto *want = included(exact, 4.0), *orbit = included(soft, 4.0);
+  ASSERT_NE(want, nullptr) << exact.message;
+  ASSERT_NE(orbit, nullptr) << soft.message;
+  EXPECT_GT(orbit->max_penetration, 1e-2);  // really a different orbit: it penetrates by 1 % of the gap or more
+  EXPECT_GT(std::abs(orbit->frequency_hz / want->frequency_hz - 1.0), 1e-5);
+  solvers::BackboneContinuationOptions o = range(3.0, 4.5);
+  o.start = solvers::PeriodicOrbit{orbit->coefficients, orbit->frequency_hz};
+  o.start_penalty_stiffness = 3e8;
+  o.max_points = 3;  // the first point is the test
+  const auto b = nm.continue_backbone(o);
+  ASSERT_FALSE(b.levels.empty()) << b.message;
+  const auto& got = b.levels.front();
+  EXPECT_GE(b.homotopy_stages, 1);
+  EXPECT_GE(b.homotopy_stiffness, 3e8);
+  EXPECT_NE(b.message.find("penalty homotopy"), std::string::npos) << b.message;
+  EXPECT_NEAR(got.energy, 4.0, 1e-9);
+  EXPECT_NEAR(got.frequency_hz, want->frequency_hz, 1e-9 * want->frequency_hz);
+  const Eigen::MatrixXd ha = harmonic_amplitudes(want->coefficients), hb = harmonic_amplitudes(got.coefficients);
+  EXPECT_LT((hb - ha).cwiseAbs().maxCoeff(), 1e-7 * ha.maxCoeff());
+  EXPECT_LT(got.max_penetration, 1e-10);
+  EXPECT_LT(got.complementarity, 1e-10);
+  EXPECT_GT(got.contact_force.maxCoeff(), 0.0);
+
+  solvers::BackboneContinuationOptions bad = range(3.0, 4.5);
+  bad.start_penalty_stiffness = 1e9;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(bad); },
+                                                         {"start_penalty_stiffness = 1e+09", "needs a start orbit"});
+  bad.start = o.start;
+  bad.penalty_stiffness = 1e10;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(bad); },
+                                                         {"exact contact", "penalty_stiffness = 0, here 1e+10"});
+  bad.penalty_stiffness = 0.0;
+  bad.start_penalty_stiffness = -1.0;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(bad); },
+                                                         {"start_penalty_stiffness = -1", ">= 0 [N/m]"});
+}

@@ -133,6 +133,10 @@ struct Backbone {
   int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
   int rejected_steps = 0;             // continuation steps retried with half the step
   bool complete = false;              // energy_max reached (with a start: either end of the range)
+  /// With BackboneContinuationOptions::start_penalty_stiffness: penalty orbits corrected, and the
+  /// penalty stiffness [N/m] whose orbit started the Signorini Newton that converged (0 if none).
+  int homotopy_stages = 0;
+  double homotopy_stiffness = 0.0;
   std::string message;
   double wall_time_s = 0.0;
 };
@@ -164,6 +168,17 @@ struct BackboneContinuationOptions {
   /// 0: exact (Signorini) contact; > 0: a linear penalty spring k [N/m] at every stop instead,
   /// f = k (u_c − g_c)₊ (the penalty-limit check [issue #7]).
   double penalty_stiffness = 0.0;
+  /// Exact contact from a start only: 0 (default) corrects the start directly by semismooth
+  /// Newton from zero multipliers. > 0: a homotopy in the penalty stiffness instead, for starts
+  /// far from the exact branch (e.g. a penalty forced response's resonance): the start is first
+  /// corrected at its own E₀ on penalty stops of this stiffness k₀ [N/m]; k is then raised by
+  /// ×10 per stage (the factor is square-rooted after a stage that fails, down to ×1.2), each
+  /// stage's penalty orbit corrected from the previous one at the same E₀, and after every stage
+  /// semismooth Newton on the Signorini conditions starts from that orbit with the multipliers
+  /// set to its penalty forces, λ_s = k (u_c(τ_s) − g_c)₊; the first one that converges is the
+  /// branch's first point. Gives up (InitialPointFailed, with the stiffness reached) once k
+  /// exceeds 10¹² k₀. Backbone::homotopy_stages and homotopy_stiffness report what it took.
+  double start_penalty_stiffness = 0.0;
   double initial_step = 1e-2, min_step = 1e-7, max_step = 5e-2;  // scaled arclength (continuation.hpp)
   double max_energy_step = 0.05;      // |ΔE| per step, for a dense curve
   int max_points = 5000;
@@ -302,6 +317,11 @@ class NonlinearModes {
   [[nodiscard]] Eigen::MatrixXd basis_values(int samples, int derivative) const;
   // The stacked Y with the fixed phase coefficient (0) inserted back at phase_index_.
   [[nodiscard]] Eigen::VectorXd with_phase(const Eigen::VectorXd& x) const;
+  // The exact-contact state at E₀ reached from a start orbit by the penalty homotopy of
+  // BackboneContinuationOptions::start_penalty_stiffness; empty (and b.message set) if it fails.
+  [[nodiscard]] std::optional<Eigen::VectorXd> homotopy_start(const BackboneSystem& exact, double energy,
+                                                              const BackboneContinuationOptions& options,
+                                                              Backbone& b) const;
 
   MechanicalSystem system_;
   std::vector<RigidStop> stops_;
