@@ -171,13 +171,16 @@ struct BackboneContinuationOptions {
   /// Exact contact from a start only: 0 (default) corrects the start directly by semismooth
   /// Newton from zero multipliers. > 0: a homotopy in the penalty stiffness instead, for starts
   /// far from the exact branch (e.g. a penalty forced response's resonance): the start is first
-  /// corrected at its own E₀ on penalty stops of this stiffness k₀ [N/m]; k is then raised by
-  /// ×10 per stage (the factor is square-rooted after a stage that fails, down to ×1.2), each
-  /// stage's penalty orbit corrected from the previous one at the same E₀, and after every stage
-  /// semismooth Newton on the Signorini conditions starts from that orbit with the multipliers
-  /// set to its penalty forces, λ_s = k (u_c(τ_s) − g_c)₊; the first one that converges is the
-  /// branch's first point. Gives up (InitialPointFailed, with the stiffness reached) once k
-  /// exceeds 10¹² k₀. Backbone::homotopy_stages and homotopy_stiffness report what it took.
+  /// corrected at its own E₀ on penalty stops of this stiffness k₀ [N/m] (Newton with a line
+  /// search); k is then raised by ×10 per stage (the factor is square-rooted after a stage that
+  /// fails, down to ×1.2), each stage's penalty orbit corrected from the previous one at the same
+  /// E₀ (without line search). These intermediate orbits are corrected to ‖R‖₂ ≤ √tolerance only.
+  /// After every stage semismooth Newton on the Signorini conditions starts from that orbit with
+  /// the multipliers set to its penalty forces, λ_s = k (u_c(τ_s) − g_c)₊; the first one that
+  /// reaches `tolerance` is the branch's first point. Gives up (InitialPointFailed, with the
+  /// stiffness reached) once k exceeds 10¹² k₀. Backbone::homotopy_stages and homotopy_stiffness
+  /// report what it took. At fixed E the penalty orbit moves with k and may cross another mode's
+  /// internal-resonance tongue: check where the first point landed (modal_energy_shares).
   double start_penalty_stiffness = 0.0;
   double initial_step = 1e-2, min_step = 1e-7, max_step = 5e-2;  // scaled arclength (continuation.hpp)
   double max_energy_step = 0.05;      // |ΔE| per step, for a dense curve
