@@ -309,14 +309,14 @@ std::optional<Eigen::VectorXd> NonlinearModes::homotopy_start(const BackboneSyst
   const double to_lambda = 1.0 / (options_.samples * omega0_ * omega0_ * m_ref_);  // k [N/m] → κ of λ = κ g₊
   double k = k0, factor = 10.0;
   Eigen::VectorXd xp = BackboneSystem(*this, k0).state(o.start->coefficients, o.start->frequency_hz);
+  // Intermediate orbits are corrected to √tolerance only (the Signorini point is verified at
+  // `tolerance`); the start orbit with a line search (it may be far from the branch: without
+  // one, Newton can land on another mode's branch), the next stages without.
+  const double stage_tolerance = std::sqrt(o.tolerance);
   bool first = true;
   std::string last_exact;
   while (k <= 1e12 * k0) {
     const BackboneSystem penalty(*this, k);
-    // An intermediate orbit: corrected to √tolerance (only the Signorini point is verified at
-    // `tolerance`); the start orbit with a line search (it may be far from the branch: without
-    // one, Newton can land on another mode's branch), the next stages without.
-    const double stage_tolerance = std::sqrt(o.tolerance);
     const NewtonResult rp = solve_at(penalty, xp, energy, o, first, stage_tolerance);
     const bool reached = rp.report.converged() ||
                          (!rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance);

@@ -612,6 +612,11 @@ TEST(NonlinearModes, APenaltyHomotopyFromASoftStopsOrbitReachesTheExactBranch) {
   EXPECT_LT(got.complementarity, 1e-10);
   EXPECT_GT(got.contact_force.maxCoeff(), 0.0);
 
+  // Without the homotopy, semismooth Newton from the same orbit (zero multipliers) does not
+  // converge: the case the option exists for.
+  solvers::BackboneContinuationOptions direct = o;
+  direct.start_penalty_stiffness = 0.0;
+  EXPECT_EQ(nm.continue_backbone(direct).stop, solvers::StopReason::InitialPointFailed);
   solvers::BackboneContinuationOptions bad = range(3.0, 4.5);
   bad.start_penalty_stiffness = 1e9;
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.continue_backbone(bad); },
