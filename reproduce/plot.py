@@ -481,23 +481,30 @@ def blade(folder):
     save(fig, folder, "mesh")
 
     fig, ax = plt.subplots()
-    e = column(folder, "backbone.csv", "energy [-]")
-    r = column(folder, "backbone.csv", "frequency_over_f1 [-]")
-    ax.plot(e, r, "C0-", lw=1.2, label=f"first nonlinear mode, N = {meta['harmonics']}, m = {meta['samples']}")
-    share = column(folder, "backbone.csv", "first_mode_share [-]")
-    low = [(a, b) for a, b, s in zip(e, r, share) if s < 0.5]
+    branch = column(folder, "backbone.csv", "branch [-]")
+    e_all = column(folder, "backbone.csv", "energy [-]")
+    r_all = column(folder, "backbone.csv", "frequency_over_f1 [-]")
+    share_all = column(folder, "backbone.csv", "first_mode_share [-]")
+    pick = lambda values, which: [v for v, b in zip(values, branch) if b == which]
+    e, r, share = pick(e_all, 0), pick(r_all, 0), pick(share_all, 0)
+    ax.plot(e, r, "C0-", lw=1.2, label=f"branch 0, from the linear mode, N = {meta['harmonics']}, m = {meta['samples']}")
+    first = meta.get("first_mode_branch")
+    if first:
+        ax.plot(pick(e_all, 1), pick(r_all, 1), "C2-", lw=1.2,
+                label=f"branch 1, first bending mode (start: N = 3 level at E = {first['start_energy']:g}, penalty homotopy)")
+    low = [(a, b) for a, b, s in zip(e_all, r_all, share_all) if s < 0.5]
     if low:
         end = meta["end_component"]
         ax.plot([a for a, _ in low], [b for _, b in low], ".", color="0.45", ms=2.5,
-                label=f"mode 1 at h = 1 holds < 1/2 of the energy (mode {end['mode']} at h = {end['harmonic']} "
-                      f"holds {end['share']:.2f} at the end)")
+                label=f"mode 1 at h = 1 holds < 1/2 of the energy (branch 0 ends with mode {end['mode']} "
+                      f"at h = {end['harmonic']}: {end['share']:.2f})")
     for level in meta["levels"]:
         ax.plot(level["energy"], level["frequency_over_f1"], "ko", mfc="none", ms=5)
     ax.axvline(1.0, color="0.5", lw=0.6, ls=":")
     ax.set_xlabel("normalized modal energy E [-] (1: contact onset)")
     ax.set_ylabel("frequency / first linear frequency [-]")
     ax.set_title(f"LL11 Fig. 7 (our blade): f1 = {meta['linear_frequency_hz']:.1f} Hz", fontsize=9)
-    ax.legend(loc="upper left")
+    ax.legend(loc="center right", fontsize=7)
     save(fig, folder, "frequency_energy")
 
     levels = [lv["energy"] for lv in meta["levels"]]
@@ -512,7 +519,8 @@ def blade(folder):
                        [1e3 * (b + scale * u) for b, u in zip(y, d[offset + 1])],
                        [1e3 * (c + scale * u) for c, u in zip(z, d[offset + 2])], s=0.2, c=colour, alpha=0.3, label=name)
         ax.set_box_aspect((1, 1, 1.6))
-        ax.set_title(f"E = {energy:g}: f/f1 = {meta['levels'][i]['frequency_over_f1']:.4f}\n"
+        ax.set_title(f"E = {energy:g} (branch {meta['levels'][i].get('branch', 0)}): "
+                     f"f/f1 = {meta['levels'][i]['frequency_over_f1']:.4f}\n"
                      f"max |u| = {umax:.1f} g0 drawn at 10 % of the span", fontsize=8)
         ax.legend(loc="upper left", markerscale=10)
         th, t = read_csv(folder / f"tip_E{energy:g}.csv")

@@ -396,6 +396,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   pa.max_corrector_iterations = 12;
   pa.kink_step = 1e-5;
   pa.corner_restart = true;
+  pa.corner_bisection = true;  // corners that turn back: stop a cycling corrector, bisect toward it
   pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
   pa.on_point = o.on_point;
   Branch branch = pseudo_arclength(system, x0, e0, pa);

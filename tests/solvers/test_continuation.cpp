@@ -354,6 +354,25 @@ TEST(Continuation, CornerRestartFollowsAComplementarityBranchThatTurnsBack) {
     }
   }
   EXPECT_TRUE(reached);
+  // corner_bisection: the corrector beyond the corner cycles between the two pieces (|·| + 1 in
+  // disguise); stopping it and bisecting toward its hyperplane reaches the same corner and the
+  // same new piece with fewer rejected steps (one attempt per halving).
+  o.corner_bisection = true;
+  const auto bisected = solvers::pseudo_arclength(Stop{}, Eigen::Vector2d(0.5, 0.0), 0.5, o);
+  EXPECT_EQ(bisected.kinks, 1);
+  ASSERT_EQ(bisected.folds.size(), 1u);
+  EXPECT_NEAR(bisected.folds[0].parameter, 1.0, 1e-2);
+  EXPECT_LT(bisected.rejected_steps, turned.rejected_steps);
+  bool new_piece = false;
+  for (const auto& p : bisected.points) {
+    EXPECT_LE(Stop{}.residual(p.x, p.parameter).norm(), 1e-12);
+    EXPECT_LE(p.parameter, 1.0 + 1e-12);
+    if (p.x(1) >= 1.0) {
+      new_piece = true;
+      EXPECT_NEAR(p.parameter, 1.0 + (-0.1) * p.x(1), 1e-12);
+    }
+  }
+  EXPECT_TRUE(new_piece);
 }
 
 // Linear system: Φ = e^{A₀T} exactly, so the multipliers are e^{sT} with the modal eigenvalues

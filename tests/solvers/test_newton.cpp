@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
@@ -155,6 +156,54 @@ TEST(Newton, LevenbergMarquardtRescuesAStalledLineSearch) {
   ASSERT_TRUE(lm.report.converged()) << lm.report.message;
   EXPECT_NEAR(lm.x(0), 0.0, 1e-10);
   EXPECT_GT(lm.report.levenberg_marquardt_steps, 0);
+}
+
+namespace {
+// x³ − 2x + 2 = 0: from x0 = 0 Newton's iterates cycle exactly, 0 → 1 → 0 → … (the classic
+// example of a Newton cycle; its one real root, −1.7693, is never reached), ‖R‖ = 2, 1, 2, 1, …
+struct CyclingCubic {
+  Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return x.array().cube() - 2.0 * x.array() + 2.0; }
+  Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
+    return (3.0 * x.array().square() - 2.0).matrix().asDiagonal();
+  }
+};
+// |x| + 1 = 0 has no root, and its semismooth Newton alternates between the two pieces:
+// 1 → −1 → 1 (a continuation corrector whose hyperplane misses the branch beyond a corner).
+struct Vee {
+  Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return x.array().abs() + 1.0; }
+  Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return x.array().sign().matrix().asDiagonal(); }
+};
+}  // namespace
+
+// stop_on_cycle ends a cycling Newton (smooth or semismooth) as Stagnated after 3 iterations,
+// when the norms have repeated twice with period 2, instead of running to max_iterations; it
+// does not stop a converging solve, even one whose active set changes (Switching).
+TEST(Newton, StopOnCycleEndsACyclingNewtonAndNotAConvergingOne) {
+  const NewtonOptions plain{.max_iterations = 30, .line_search = false};
+  NewtonOptions cycle = plain;
+  cycle.stop_on_cycle = true;
+  const auto endless = newton(CyclingCubic{}, Eigen::VectorXd::Zero(1), plain);
+  EXPECT_EQ(endless.report.status, SolveStatus::MaxIterations);
+  EXPECT_EQ(endless.report.iterations, 30);
+  EXPECT_NEAR(endless.x(0), 0.0, 1e-12);  // 30 iterations: back at 0
+  const auto stopped = newton(CyclingCubic{}, Eigen::VectorXd::Zero(1), cycle);
+  EXPECT_EQ(stopped.report.status, SolveStatus::Stagnated);
+  EXPECT_EQ(stopped.report.iterations, 3);
+  EXPECT_NE(stopped.report.message.find("period 2"), std::string::npos) << stopped.report.message;
+  const std::vector<double> expected = {2.0, 1.0, 2.0, 1.0};
+  ASSERT_EQ(stopped.report.residual_norms.size(), expected.size());
+  for (size_t k = 0; k < expected.size(); ++k) EXPECT_NEAR(stopped.report.residual_norms[k], expected[k], 1e-12);
+  const auto vee = newton(Vee{}, Eigen::VectorXd::Constant(1, 1.0), cycle);
+  EXPECT_EQ(vee.report.status, SolveStatus::Stagnated);
+  EXPECT_EQ(vee.report.iterations, 3);
+  // Converging solves are not stopped: the same root as without the check.
+  const auto cubic = newton(Cubic{}, Eigen::VectorXd::Constant(2, 3.0), cycle);
+  ASSERT_TRUE(cubic.report.converged()) << cubic.report.message;
+  EXPECT_NEAR(cubic.x(0), 2.0, 1e-10);
+  const auto switching = newton(Switching{}, Eigen::Vector2d(-1.0, 1.0), cycle);
+  ASSERT_TRUE(switching.report.converged()) << switching.report.message;
+  EXPECT_NEAR(switching.x(0), 2.0, 1e-12);
+  EXPECT_NEAR(switching.x(1), 0.0, 1e-12);
 }
 
 // The convergence test uses the norm asked for: for R = x³ − 8 on two components from (3, 2.5),

@@ -93,6 +93,15 @@ struct NewtonOptions {
   bool levenberg_marquardt = false;
   int max_lm_trials = 20;
   ResidualNorm norm = ResidualNorm::Euclidean;
+  /// Stop (Stagnated) once the residual norms repeat with period p = 2 or 3: ‖R_k‖ and ‖R_(k−1)‖
+  /// both equal ‖R_(k−p)‖ and ‖R_(k−1−p)‖ to a relative cycle_tolerance. Without line search a
+  /// semismooth Newton whose steps alternate between active sets (a continuation corrector whose
+  /// hyperplane misses the branch beyond a corner of a complementarity branch) repeats its
+  /// iterates and never leaves the cycle; so does smooth Newton on x³ − 2x + 2 from x = 0
+  /// (0 → 1 → 0). With the check a corrector gives up after 3–4 iterations instead of
+  /// max_iterations. Off by default.
+  bool stop_on_cycle = false;
+  double cycle_tolerance = 1e-3;
 };
 
 struct NewtonReport {
@@ -205,6 +214,16 @@ inline constexpr bool sparse_jacobian_v = std::is_base_of_v<Eigen::SparseMatrixB
 
 inline double residual_norm(const Eigen::VectorXd& r, ResidualNorm norm) {
   return norm == ResidualNorm::Max ? r.lpNorm<Eigen::Infinity>() : r.norm();
+}
+// The period p (2 or 3) with which the last norms repeat: r_k ≈ r_(k−p) and r_(k−1) ≈ r_(k−1−p)
+// to a relative `tolerance`; 0 if none.
+inline int residual_cycle(const std::vector<double>& r, double tolerance) {
+  const auto k = r.size();
+  auto same = [&](size_t a, size_t b) { return std::abs(r[a] - r[b]) <= tolerance * std::max(r[a], r[b]); };
+  for (size_t p : {2u, 3u}) {
+    if (k >= p + 2 && same(k - 1, k - 1 - p) && same(k - 2, k - 2 - p)) return static_cast<int>(p);
+  }
+  return 0;
 }
 template <class J>
 Eigen::MatrixXd as_dense(const J& j) {
@@ -319,6 +338,11 @@ NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& opt
     norm = detail::residual_norm(r, options.norm);
     ++report.iterations;
     report.residual_norms.push_back(norm);
+    if (options.stop_on_cycle && norm > options.tolerance) {
+      if (const int p = detail::residual_cycle(report.residual_norms, options.cycle_tolerance); p > 0) {
+        return finish(SolveStatus::Stagnated, "cycling (the residual norms repeat with period " + std::to_string(p) + ")");
+      }
+    }
   }
 }
 

@@ -11,7 +11,8 @@
 namespace wbm::solvers {
 
 /// Converged: the residual was verified below the tolerance in force.
-/// MaxIterations: the iteration limit came first. Stagnated: no step reduced the residual.
+/// MaxIterations: the iteration limit came first. Stagnated: no step reduced the residual,
+/// or the iterates cycle (NewtonOptions::stop_on_cycle).
 /// SingularJacobian: the linear solver could not factorize (or its reciprocal condition
 /// estimate was below the limit). NonFinite: NaN or inf in a residual, a Jacobian or a step.
 /// ResidualNotVerified: the reduced problem converged, but the residual of the full problem,

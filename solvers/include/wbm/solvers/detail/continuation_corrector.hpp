@@ -110,6 +110,7 @@ struct Attempt {
   bool converged = false;
   int iterations = 0;
   double rnorm = 0.0;
+  bool cycled = false;   // the corrector stopped cycling (NewtonOptions::stop_on_cycle)
   Eigen::VectorXd z, tangent;
 };
 
@@ -122,6 +123,7 @@ Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, con
   const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
   NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
   a.converged = r.report.converged();
+  a.cycled = r.report.status == SolveStatus::Stagnated;  // without line search only a cycle stagnates
   a.iterations = r.report.iterations;
   a.rnorm = r.report.residual_norms.back();
   a.z = std::move(r.x);
