@@ -110,7 +110,7 @@ struct Attempt {
   bool converged = false;
   int iterations = 0;
   double rnorm = 0.0;
-  bool cycled = false;   // the corrector stopped cycling (NewtonOptions::stop_on_cycle)
+  bool cycled = false;   // the corrector was stopped because its iterates cycled (stop_on_cycle)
   Eigen::VectorXd z, tangent;
 };
 
