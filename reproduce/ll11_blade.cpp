@@ -212,49 +212,40 @@ int main(int argc, char** argv) {
       for (const auto& l : up->levels) branch1.push_back(&l);
     }
 
-    // Backbone table and, per tip node, the first energy where it carries a contact force.
-    const auto nl = static_cast<Eigen::Index>(b.levels.size());
-    Eigen::VectorXd e(nl), ratio(nl), fhz(nl), pen(nl), comp(nl), fmax(nl), touching(nl);
-    Eigen::VectorXd first_share(nl), other_mode(nl), other_harmonic(nl), other_share(nl);  // modal_components
+    // Backbone table, one row per level, for both branches: E, f/f1, f, worst penetration,
+    // complementarity, largest contact force, tip nodes in contact, and modal_components.
+    auto columns = [&](const std::vector<const solvers::ModeLevel*>& branch) {
+      const auto n = static_cast<Eigen::Index>(branch.size());
+      std::vector<Eigen::VectorXd> cols(11, Eigen::VectorXd(n));
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const auto& l = *branch[static_cast<size_t>(k)];
+        const auto mc = nnm.modal_components(l);
+        int count = 0;
+        for (Eigen::Index c = 0; c < 24; ++c) count += l.contact_force.segment(c * samples, samples).maxCoeff() > 0.0 ? 1 : 0;
+        const double values[] = {l.energy, l.frequency_hz / f1, l.frequency_hz, l.max_penetration, l.complementarity,
+                                 l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0, static_cast<double>(count),
+                                 mc.first_mode_share, static_cast<double>(mc.mode), static_cast<double>(mc.harmonic), mc.share};
+        for (size_t i = 0; i < 11; ++i) cols[i](k) = values[i];
+      }
+      return cols;
+    };
+    std::vector<const solvers::ModeLevel*> branch0;
+    for (const auto& l : b.levels) branch0.push_back(&l);
+    const std::vector<Eigen::VectorXd> cols0 = columns(branch0), cols1 = columns(branch1);
+    const auto nl = static_cast<Eigen::Index>(branch0.size()), n1 = static_cast<Eigen::Index>(branch1.size());
+    const Eigen::VectorXd &e = cols0[0], &ratio = cols0[1], &fhz = cols0[2], &pen = cols0[3], &comp = cols0[4];
+    const Eigen::VectorXd &first_share = cols0[7], &other_mode = cols0[8], &other_harmonic = cols0[9],
+                          &other_share = cols0[10];
+    // Per tip node, the first energy of branch 0 where it carries a contact force.
     Eigen::VectorXd first_contact = Eigen::VectorXd::Constant(24, std::nan(""));
-    for (Eigen::Index k = 0; k < nl; ++k) {
-      const auto& l = b.levels[static_cast<size_t>(k)];
-      e(k) = l.energy;
-      fhz(k) = l.frequency_hz;
-      ratio(k) = l.frequency_hz / f1;
-      pen(k) = l.max_penetration;
-      comp(k) = l.complementarity;
-      fmax(k) = l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0;
-      const auto mc = nnm.modal_components(l);
-      first_share(k) = mc.first_mode_share;
-      other_mode(k) = mc.mode;
-      other_harmonic(k) = mc.harmonic;
-      other_share(k) = mc.share;
-      int count = 0;
+    for (const auto& l : b.levels) {
       for (Eigen::Index c = 0; c < 24; ++c) {
-        if (l.contact_force.segment(c * samples, samples).maxCoeff() > 0.0) {
-          ++count;
-          if (std::isnan(first_contact(c))) first_contact(c) = l.energy;
+        if (std::isnan(first_contact(c)) && l.contact_force.segment(c * samples, samples).maxCoeff() > 0.0) {
+          first_contact(c) = l.energy;
         }
       }
-      touching(k) = count;
-    }
-    // Branch 1's columns (the same quantities), then both branches in one table.
-    const auto n1 = static_cast<Eigen::Index>(branch1.size());
-    std::vector<Eigen::VectorXd> cols1(11, Eigen::VectorXd(n1));
-    for (Eigen::Index k = 0; k < n1; ++k) {
-      const auto& l = *branch1[static_cast<size_t>(k)];
-      const auto mc = nnm.modal_components(l);
-      int count = 0;
-      for (Eigen::Index c = 0; c < 24; ++c) count += l.contact_force.segment(c * samples, samples).maxCoeff() > 0.0 ? 1 : 0;
-      const double values[] = {l.energy, l.frequency_hz / f1, l.frequency_hz, l.max_penetration, l.complementarity,
-                               l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0, static_cast<double>(count),
-                               mc.first_mode_share, static_cast<double>(mc.mode), static_cast<double>(mc.harmonic), mc.share};
-      for (size_t i = 0; i < 11; ++i) cols1[i](k) = values[i];
     }
     {
-      const std::vector<Eigen::VectorXd> cols0 = {e, ratio, fhz, pen, comp, fmax, touching, first_share, other_mode,
-                                                  other_harmonic, other_share};
       std::vector<Eigen::VectorXd> both;
       both.emplace_back((Eigen::VectorXd(nl + n1) << Eigen::VectorXd::Zero(nl), Eigen::VectorXd::Ones(n1)).finished());
       for (size_t i = 0; i < 11; ++i) both.emplace_back((Eigen::VectorXd(nl + n1) << cols0[i], cols1[i]).finished());
@@ -419,21 +410,16 @@ int main(int argc, char** argv) {
     bool b1_first_mode = false, b1_hardening = false;
     if (up && down && !up->levels.empty() && !down->levels.empty()) {
       const auto& ul = up->levels;
-      double min_share = 2.0, min_share_energy = std::nan("");
-      b1_hardening = true;
-      for (size_t k = 0; k < ul.size(); ++k) {
-        const double share = nnm.modal_components(ul[k]).first_mode_share;
-        if (share < min_share) {
-          min_share = share;
-          min_share_energy = ul[k].energy;
-        }
-        if (k > 0 && ul[k].frequency_hz < ul[k - 1].frequency_hz - 1e-8 * f1) b1_hardening = false;
-      }
+      // The upward part is the tail of branch 1's columns.
+      const auto nu = static_cast<Eigen::Index>(ul.size());
+      const Eigen::VectorXd up_share = cols1[7].tail(nu), up_ratio = cols1[1].tail(nu);
+      Eigen::Index weakest = 0;
+      const double min_share = up_share.minCoeff(&weakest), min_share_energy = ul[static_cast<size_t>(weakest)].energy;
       b1_first_mode = min_share >= 0.5;
+      b1_hardening = nu < 2 || ((up_ratio.tail(nu - 1) - up_ratio.head(nu - 1)).array() >= -1e-8).all();
       const auto lowest = std::min_element(down->levels.begin(), down->levels.end(),
                                            [](const auto& a, const auto& c) { return a.energy < c.energy; });
       const auto down_end = nnm.modal_components(down->levels.back());
-      const auto start_mc = nnm.modal_components(ul.front());
       const double pen1 = n1 > 0 ? cols1[3].maxCoeff() : std::nan(""), comp1 = n1 > 0 ? cols1[4].maxCoeff() : std::nan("");
       first_mode_text
           << "**Branch 1: the first bending mode past the tongues.** With N = 3 there is no 4th harmonic and so no 4:1 "
@@ -443,7 +429,7 @@ int main(int argc, char** argv) {
           << format("%g", homotopy_factor) << " × the radial static stiffness of node #" << onset + 1 << " ("
           << format("%.3g", k_radial) << " N/m); Signorini converged from k = " << format("%.3g", up->homotopy_stiffness)
           << " N/m after " << up->homotopy_stages << " penalty orbits, at f/f1 = " << format("%.5f", ul.front().frequency_hz / f1)
-          << " with mode 1 holding " << format("%.3f", start_mc.first_mode_share) << ". Upward to E = "
+          << " with mode 1 holding " << format("%.3f", up_share(0)) << ". Upward to E = "
           << format("%.2f", ul.back().energy) << ": " << ul.size() << " levels, " << up->folds.size() << " folds in E, "
           << up->kinks << " corners, " << up->rejected_steps << " rejected steps, "
           << format("%.1f", up->wall_time_s) << " s; worst penetration " << format("%.1e", pen1)
