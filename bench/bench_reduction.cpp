@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <string>
 
@@ -15,6 +16,7 @@
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/craig_bampton.hpp>
+#include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
 #include "blade.hpp"
@@ -92,25 +94,38 @@ BENCHMARK(BM_CraigBampton_FromCalculixDeck)
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
-// Cost of the first nonlinear mode against the number of contact nodes (issue #15): the LL11
-// blade (reproduce/blade/, mesh size 5 mm, ~12 000 DOFs) with 6, 12, 24 or 48 tip nodes as the
-// interface (3 DOFs each) + 20 fixed-interface modes, one exact radial stop per tip node, and the
-// KKT backbone from E = 0.5 to 3 at fixed N = 4, m = 64 (max energy step 0.1). Timed: the
-// backbone only (mesh, ccx and the reduction are set-up). Counters: reduced DOFs, KKT unknowns,
-// levels, time per level, and whether the branch completed.
-void BM_NonlinearMode_ContactNodes(benchmark::State& state) {
-  const int tip = static_cast<int>(state.range(0));
+// The LL11 blade (reproduce/blade/, mesh size 5 mm, ~12 000 DOFs) with `tip` tip nodes as the
+// interface (3 DOFs each) + 20 fixed-interface modes, and one exact radial stop at gap 0.1 mm per
+// tip node. Built once per tip count (mesh, ccx and the reduction are set-up, not timed).
+struct ReducedBlade {
+  wbm::solvers::MechanicalSystem system;
+  std::vector<wbm::solvers::RigidStop> stops;
+};
+const ReducedBlade& reduced_blade(int tip) {
+  static std::map<int, ReducedBlade> cache;
+  if (auto it = cache.find(tip); it != cache.end()) return it->second;
   const fs::path dir = fs::temp_directory_path() / ("wbm_bench_contacts_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const auto blade = wbm::reproduce::build_blade(dir, 0.005, tip);
   const auto cb = wbm::fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, 20);
   fs::remove_all(dir);
-  wbm::solvers::MechanicalSystem reduced;
-  reduced.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
-  reduced.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
-  reduced.damping.resize(reduced.mass.rows(), reduced.mass.cols());
+  ReducedBlade r;
+  r.system.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
+  r.system.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
+  r.system.damping.resize(r.system.mass.rows(), r.system.mass.cols());
+  r.stops = wbm::reproduce::radial_stops(blade, 1e-4);
+  return cache.emplace(tip, std::move(r)).first->second;
+}
+
+// Cost of the first nonlinear mode against the number of contact nodes (issue #15): the reduced
+// blade above with 6, 12, 24 or 48 tip nodes, and the KKT backbone from E = 0.5 to 3 at fixed
+// N = 4, m = 64 (max energy step 0.1). Timed: the backbone only. Counters: reduced DOFs, KKT
+// unknowns, levels, time per level, and whether the branch completed.
+void BM_NonlinearMode_ContactNodes(benchmark::State& state) {
+  const int tip = static_cast<int>(state.range(0));
+  const auto& blade = reduced_blade(tip);
   const int n = 4, m = 64;
-  const wbm::solvers::NonlinearModes nnm(reduced, wbm::reproduce::radial_stops(blade, 1e-4), {.harmonics = n, .samples = m});
+  const wbm::solvers::NonlinearModes nnm(blade.system, blade.stops, {.harmonics = n, .samples = m});
   wbm::solvers::BackboneContinuationOptions options;
   options.energy_min = 0.5;
   options.energy_max = 3.0;
@@ -122,13 +137,60 @@ void BM_NonlinearMode_ContactNodes(benchmark::State& state) {
     complete = b.complete ? 1.0 : 0.0;
   }
   state.counters["contact_nodes"] = tip;
-  state.counters["reduced_dofs"] = static_cast<double>(reduced.dofs());
-  state.counters["kkt_unknowns"] = static_cast<double>(reduced.dofs() * (2 * n + 1) + tip * m);
+  state.counters["reduced_dofs"] = static_cast<double>(blade.system.dofs());
+  state.counters["kkt_unknowns"] = static_cast<double>(blade.system.dofs() * (2 * n + 1) + tip * m);
   state.counters["levels"] = levels;
   state.counters["complete"] = complete;
   state.counters["s_per_level"] = benchmark::Counter(levels, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_NonlinearMode_ContactNodes)->Arg(6)->Arg(12)->Arg(24)->Arg(48)->Iterations(1)->Unit(benchmark::kSecond);
+
+// One factorization of the continuation's bordered KKT Jacobian (issue #15) on the reduced blade
+// above with 6 … 48 contact nodes, N = 8, m = 96 (LL11's blade settings), at a converged level
+// in contact (the last point of the backbone from the linear mode to E = 1.5): Arg 1 = 0, SparseLu (KLU; the symbolic analysis
+// reused, as between corrector iterations with an unchanged active set); 1,
+// BackboneSystem::KktSolver (block-diagonal harmonic balance and a Schur complement on the
+// active samples). Counters: KKT unknowns, active samples, the path KktSolver took.
+void BM_KktFactorization(benchmark::State& state) {
+  const int tip = static_cast<int>(state.range(0));
+  const bool structured = state.range(1) == 1;
+  const auto& blade = reduced_blade(tip);
+  const wbm::solvers::NonlinearModes nnm(blade.system, blade.stops, {.harmonics = 8, .samples = 96});
+  const wbm::solvers::NonlinearModes::BackboneSystem system(nnm, 0.0);
+  wbm::solvers::BackboneContinuationOptions options;
+  options.energy_min = 0.5;
+  options.energy_max = 1.5;
+  wbm::solvers::BranchPoint last;
+  options.on_point = [&](size_t, const wbm::solvers::BranchPoint& p) { last = p; };
+  const auto b = nnm.continue_backbone(options);
+  if (!b.complete || last.parameter <= 1.0) {
+    state.SkipWithError(("backbone to E = 1.5: " + b.message).c_str());
+    return;
+  }
+  const auto lin = system.linearize(last.x, last.parameter);
+  Eigen::VectorXd tangent = Eigen::VectorXd::Zero(system.size() + 1);
+  tangent.head(system.size()) = last.x.normalized();
+  tangent(system.size()) = 1.0;
+  const Eigen::SparseMatrix<double> j = wbm::solvers::detail::bordered(lin, tangent, 1.0, 1.0);
+  wbm::solvers::SparseLu sparse;
+  auto kkt = system.linear_solver();
+  for (auto _ : state) {
+    const bool ok = structured ? kkt.factorize(j) : sparse.factorize(j);
+    if (!ok) state.SkipWithError("factorization failed");
+  }
+  state.counters["contact_nodes"] = tip;
+  state.counters["kkt_unknowns"] = static_cast<double>(j.rows());
+  state.counters["nonzeros"] = static_cast<double>(j.nonZeros());
+  if (structured) {
+    const auto c = kkt.counts();
+    state.counters["active_samples"] = c.max_active;
+    state.counters["structured"] = c.structured > 0 && c.sparse_lu == 0 ? 1.0 : 0.0;
+  }
+}
+BENCHMARK(BM_KktFactorization)
+    ->ArgsProduct({{6, 12, 24, 48}, {0, 1}})
+    ->ArgNames({"contact_nodes", "structured"})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -236,6 +236,8 @@ int main(int argc, char** argv) {
     std::vector<solvers::ModeLevel> through;
     std::string through_stop;
     bool through_complete = true;
+    double down_lowest = std::nan("");  // the lowest energy the continuation started downward reached
+    size_t down_folds = 0;
     for (int direction : {-1, +1}) {
       cp.direction = direction;
       const auto part = nnm.continue_backbone(cp);
@@ -243,6 +245,8 @@ int main(int argc, char** argv) {
       through_stop += std::string(direction < 0 ? "down: " : "; up: ") + part.message;
       if (direction < 0) {
         through.assign(part.levels.rbegin(), part.levels.rend());
+        down_folds = part.folds.size();
+        for (const auto& l : part.levels) down_lowest = std::isnan(down_lowest) ? l.energy : std::min(down_lowest, l.energy);
       } else if (!part.levels.empty()) {
         through.insert(through.end(), part.levels.begin() + 1, part.levels.end());  // the start is already in
       }
@@ -380,12 +384,16 @@ int main(int argc, char** argv) {
         start_level = k;
       }
     }
-    Eigen::Index first_mode_from = np, first_mode_to = -1;  // first and last level (branch order) where mode 1 holds at least half
+    // The levels where mode 1 holds at least half of m̂, and their energy range (the branch
+    // passes some energies more than once, so a range in branch order would say little).
+    Eigen::Index first_mode_levels = 0;
+    double first_mode_lowest = std::nan(""), first_mode_highest = std::nan("");
     for (Eigen::Index k = 0; k < np; ++k) {
-      if (peak_branch.first_share(k) >= 0.5) {
-        first_mode_from = std::min(first_mode_from, k);
-        first_mode_to = k;
-      }
+      if (peak_branch.first_share(k) < 0.5) continue;
+      ++first_mode_levels;
+      const double e = peak_branch.energy(k);
+      first_mode_lowest = first_mode_levels == 1 ? e : std::min(first_mode_lowest, e);
+      first_mode_highest = first_mode_levels == 1 ? e : std::max(first_mode_highest, e);
     }
 
     timing["backbone_s"] = backbone.time_s;
@@ -448,12 +456,13 @@ int main(int argc, char** argv) {
           "end is an h:1 internal resonance (the other component holds more than half and h f within 1 % of f_j): "
        << (linear_branch_resonant ? "**agrees**" : "**disagrees**") << " (h f/f_j − 1 = " << format("%+.1e", end_detuning)
        << "). The branch through the peak: at its start, " << describe(peak_branch, start_level) << "; mode 1 holds "
-       << "at least half of the energy "
-       << (first_mode_to >= 0 ? std::string("from E = ").append(format("%.2f", peak_branch.energy(first_mode_from)))
-                                    .append(" to E = ").append(format("%.2f", peak_branch.energy(first_mode_to)))
-                              : std::string("nowhere"))
-       << " (branch order) along it; where the downward continuation ended, " << describe(peak_branch, 0)
-       << ", and where the upward one ended, " << describe(peak_branch, np - 1) << ".\n\n"
+       << "at least half of the energy on " << first_mode_levels << " of its " << np << " levels"
+       << (first_mode_levels > 0 ? std::string(" (E from ").append(format("%.2f", first_mode_lowest))
+                                       .append(" to ").append(format("%.2f", first_mode_highest)).append(")")
+                                 : std::string())
+       << ". The continuation started downward went down to E = " << format("%.2f", down_lowest) << " and, after "
+       << down_folds << " folds in E, ended at " << describe(peak_branch, 0)
+       << "; the one started upward ended at " << describe(peak_branch, np - 1) << ".\n\n"
        << "Claim: B-spline:B-spline (M = " << wavelet_m << ") gives harmonic balance's resonance (peak frequency within "
           "1e-3 f1 and amplitude within 1 %): "
        << (wavelet_ok ? "**agrees**" : "**disagrees**") << " (Δf = " << format("%+.1e", wavelet_df) << " f1, Δa/a = "

@@ -57,13 +57,15 @@ struct FixedEnergy {
   }
 };
 
-// Semismooth Newton at fixed E (sparse LU), without line search unless asked (a start far
-// from the branch).
+// Semismooth Newton at fixed E (the system's KktSolver), without line search unless asked (a
+// start far from the branch).
 NewtonResult solve_at(const NonlinearModes::BackboneSystem& system, Eigen::VectorXd x, double energy,
                       const BackboneContinuationOptions& o, bool line_search = false, double tolerance = 0.0) {
+  auto solver = system.linear_solver();
   return newton(FixedEnergy{&system, energy}, std::move(x),
                 {.tolerance = tolerance > 0.0 ? tolerance : o.tolerance, .max_iterations = o.max_newton_iterations,
-                 .line_search = line_search});
+                 .line_search = line_search},
+                solver);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <Eigen/QR>
 #include <gtest/gtest.h>
 
@@ -129,6 +130,61 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
     EXPECT_LT((j - fd).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "penalty " << k;
     Eigen::VectorXd dE = (system.residual(x, energy + h) - system.residual(x, energy - h)) / (2 * h);
     EXPECT_LT((system.linearize(x, energy).parameter_derivative - dE).norm(), 1e-8);
+  }
+}
+
+// The structured KKT solver (block-diagonal harmonic balance + Schur complement on the active
+// samples) against a slow reference path, full-pivoting LU of the dense J: three stops (the tip,
+// and two along directions over two DOFs each, one of them through the phase DOF), samples on
+// both sides of the Signorini switch, the plain and the continuation-bordered J. The linear mode
+// (A_1 = K̂ − M̂ singular at ω = ω₀) and the penalty system (harmonics coupled) have no usable
+// structure: they must go to SparseLu and still solve.
+TEST(NonlinearModes, KktSolverSolvesLikeADenseLuAndFallsBackWithoutStructure) {
+  const std::vector<solvers::RigidStop> stops{{tip_dof(), 1e-3},
+                                              {10, 2e-3, {{10, 0.6}, {11, 0.8}}},
+                                              {19, 1.5e-3, {{18, -0.8}, {19, 0.6}}}};
+  const solvers::NonlinearModes nm(ll11_system(), stops, {.harmonics = 4, .samples = 32});
+  const solvers::NonlinearModes::BackboneSystem system(nm, 0.0);
+  // Below every gap, with λ = 0 (the min picks λ: an identity row) except on three samples per
+  // stop (λ = 5 > −g: the min picks −g). More active samples than F = 2N + 1 per stop would make
+  // J singular (their rows −θ_s e_cᵀ span at most F dimensions).
+  Eigen::VectorXd x = system.linear_state(1.0) * 0.5;
+  const Eigen::Index ny = system.size() - 3 * 32 - 1;
+  x(ny) = 1.3;  // ω²/ω₀², away from every k² ω² = ω_j²
+  x.head(ny) += 1e-3 * Eigen::VectorXd::LinSpaced(ny, -1.0, 1.0);
+  for (int c = 0; c < 3; ++c) {
+    for (int smp : {2, 9, 20 + c}) x(ny + 1 + 32 * c + smp) = 5.0;
+  }
+  const auto lin = system.linearize(x, 1.4);
+  Eigen::VectorXd tangent = Eigen::VectorXd::LinSpaced(system.size() + 1, 0.5, -0.3);
+  const Eigen::SparseMatrix<double> bordered = solvers::detail::bordered(lin, tangent, 1.0, 1.0);
+  auto solver = system.linear_solver();
+  int expected_structured = 0;
+  for (const Eigen::SparseMatrix<double>* j : {&lin.jacobian, &bordered}) {
+    const Eigen::MatrixXd dense(*j);
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0).array().sin();
+    const Eigen::VectorXd reference = dense.fullPivLu().solve(rhs);
+    ASSERT_TRUE(solver.factorize(*j));
+    EXPECT_EQ(solver.counts().structured, ++expected_structured) << "rows " << j->rows();
+    EXPECT_LT((solver.solve(rhs) - reference).norm(), 1e-10 * reference.norm()) << "rows " << j->rows();
+  }
+  const auto c = solver.counts();
+  EXPECT_EQ(c.sparse_lu, 0);
+  EXPECT_EQ(c.fallback_solves, 0);
+  EXPECT_EQ(c.max_active, 9);  // the Schur complement held the active samples only
+
+  const Eigen::SparseMatrix<double> linear = system.linearize(system.linear_state(0.8), 0.8).jacobian;
+  const solvers::NonlinearModes::BackboneSystem penalty(nm, 3e9);
+  Eigen::VectorXd xp = x.head(penalty.size());
+  const Eigen::SparseMatrix<double> soft = penalty.linearize(xp, 1.4).jacobian;
+  for (const auto& [j, sys] : {std::pair{&linear, &system}, std::pair{&soft, &penalty}}) {
+    auto s = sys->linear_solver();
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0);
+    const Eigen::VectorXd reference = Eigen::MatrixXd(*j).fullPivLu().solve(rhs);
+    ASSERT_TRUE(s.factorize(*j));
+    EXPECT_EQ(s.counts().sparse_lu, 1);
+    EXPECT_EQ(s.counts().structured, 0);
+    EXPECT_LT((s.solve(rhs) - reference).norm(), 1e-10 * reference.norm());
   }
 }
 

@@ -8,8 +8,10 @@
 ///   predictor  ẑ⁰ = ẑ_k + h t_k (tangent t_k, ⟨t_k, t_k⟩ = 1);
 ///   corrector  Newton on [R(x, λ); ⟨t_k, ẑ − ẑ_k⟩ − h] = 0 with the bordered Jacobian
 ///              [[∂R/∂x̂, ∂R/∂λ̂]; [t_kᵀ W]] — one extra row and column; this is newton()
-///              without line search, with dense LU (Linearization) or sparse LU (SparseLinearization,
-///              one SparseLu per branch, its symbolic analysis reused while the pattern holds);
+///              without line search, with the system's own linear-solver policy when it has
+///              one (S::linear_solver(), e.g. NonlinearModes::BackboneSystem::KktSolver), else
+///              dense LU (Linearization) or sparse LU (SparseLinearization, one SparseLu per
+///              branch, its symbolic analysis reused while the pattern holds);
 ///   tangent    t_{k+1} from the same bordered matrix with right-hand side (0, 1), normalized, so
 ///              ⟨t_k, t_{k+1}⟩ > 0 and the branch never turns back on itself;
 ///   step       h ← h · clamp(target/iterations, ½, 2) after a success, h ← h/2 and retry after a
@@ -196,8 +198,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     [[nodiscard]] auto jacobian(const Eigen::VectorXd& x) const { return s->linearize(x, lambda).jacobian; }
   };
   using Lin = decltype(system.linearize(x0, lambda0));
-  // One linear solver for the whole branch (SparseLu keeps its symbolic analysis across steps).
-  std::conditional_t<std::is_same_v<Lin, SparseLinearization>, SparseLu, DenseLu> solver;
+  // One linear solver for the whole branch (the system's own, or SparseLu, which keeps its symbolic
+  // analysis across steps, or DenseLu).
+  auto solver = detail::branch_linear_solver<Lin>(system);
   NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton, solver);
   if (!first.report.converged()) return finish(StopReason::InitialPointFailed, first.report.message);
 

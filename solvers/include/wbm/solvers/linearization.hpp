@@ -26,7 +26,9 @@ struct SparseLinearization {
 };
 
 /// A square system along one parameter: residual(x, λ) and linearize(x, λ), the latter
-/// returning a Linearization (dense) or a SparseLinearization.
+/// returning a Linearization (dense) or a SparseLinearization. A system may also provide
+/// linear_solver(), a linear-solver policy (newton.hpp) for its Jacobians and for their forms
+/// bordered by the continuation (one more row and column); pseudo_arclength then uses it.
 template <class S>
 concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, double p) {
   { s.residual(x, p) } -> std::convertible_to<Eigen::VectorXd>;

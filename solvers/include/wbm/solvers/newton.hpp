@@ -2,7 +2,8 @@
 /// The one Newton core of the project: damped Newton–Raphson for R(x) = 0 with a backtracking
 /// (Armijo) line search, an optional Levenberg–Marquardt fallback, and a linear-solver policy
 /// (dense LU; sparse LU (KLU) that keeps its symbolic analysis while the sparsity pattern is
-/// unchanged; or Woodbury for identity plus low rank, the condensed contact systems). The
+/// unchanged; Woodbury for identity plus low rank, the condensed contact systems; or a
+/// system's own, e.g. NonlinearModes::BackboneSystem::KktSolver for the KKT backbone). The
 /// forced response (weighted residuals), the continuation corrector, the nonlinear-mode
 /// stationarity solves and the fixed-energy KKT solves all run through newton().
 

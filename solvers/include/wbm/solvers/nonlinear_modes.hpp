@@ -45,6 +45,7 @@
 /// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -236,7 +237,7 @@ class NonlinearModes {
   ///   min(f_s/f_ref, −g_s) = 0                                 (Signorini at every sample s)
   ///   m̂(Y)/m̂_c − E = 0                                        (normalization, Eq. 12)
   /// with unknowns Y (phase coefficient fixed), ω² and f (exact contact), solved by semismooth
-  /// Newton inside the continuation (sparse LU); or with f_s = k (u_c(τ_s) − g_c)₊ and no f
+  /// Newton inside the continuation (BackboneSystem::KktSolver); or with f_s = k (u_c(τ_s) − g_c)₊ and no f
   /// unknowns (penalty). These are the stationarity conditions of L = r + λᵀg + μ h with
   /// ω² = r − μ ω₀² E (BackboneSystem below), so both methods find the same modes; unlike
   /// energy stepping with solve(), the continuation passes turning points in E.
@@ -268,6 +269,11 @@ class NonlinearModes {
     /// MaxIterations otherwise), with the residual and tolerance reported.
     [[nodiscard]] ModeLevel level(const Eigen::VectorXd& x, double energy, double tolerance) const;
     [[nodiscard]] Eigen::Index size() const { return size_; }
+    class KktSolver;
+    /// The linear-solver policy for this system's Jacobians, plain (size() rows) and bordered by
+    /// a continuation (size() + 1): KktSolver below. continue_backbone, level_at and
+    /// pseudo_arclength use it.
+    [[nodiscard]] KktSolver linear_solver() const;
 
    private:
     // A state unpacked: full stacked Y (phase coefficient 0, units of g_ref), the constraint
@@ -284,7 +290,7 @@ class NonlinearModes {
     Eigen::Index ny_ = 0, size_ = 0;
   };
   /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
-  /// (newton() without line search, SparseLu) to ‖R‖₂ ≤ options.tolerance in at most
+  /// (newton() without line search, BackboneSystem::KktSolver) to ‖R‖₂ ≤ options.tolerance in at most
   /// options.max_newton_iterations; otherwise the level carries Newton's status and message.
   [[nodiscard]] ModeLevel level_at(const BackboneSystem& system, Eigen::VectorXd x, double energy,
                                    const BackboneContinuationOptions& options) const;
@@ -348,6 +354,58 @@ class NonlinearModes {
   [[nodiscard]] std::vector<Eigen::Triplet<double>> contact_curvature(const Eigen::VectorXd& curvature) const;
   Eigen::SparseMatrix<double> ks_, ms_;  // K/(ω₀² m_ref), M/m_ref (continue_backbone)
   double m_ref_ = 1.0;             // 2 m̂_c g_ref² [kg]
+};
+
+/// Linear-solver policy (newton.hpp) for the exact-contact KKT Jacobian J of a BackboneSystem and
+/// for J bordered by pseudo-arclength continuation (one more row and column, the parameter E).
+/// It exploits the structure the issue #15 blade makes dominant: with unknowns ordered
+///   [Y_0 … Y_(F−1) (harmonic balance, n per Fourier coefficient, phase row and column removed);
+///    ω²/ω₀²; f_s (m per stop); E (bordered only)],
+/// the harmonic-balance block A = diag(A_k), A_k = w_k (K̂ − ν_k² s M̂) (n × n, one coefficient
+/// each: the undamped harmonic balance does not couple harmonics), is block diagonal; a
+/// multiplier column couples to A_k only along its stop's direction, β_k N_c, and so does an
+/// active Signorini row, γ_k N_cᵀ; an inactive row is the identity (the min picks f_s). So
+///  1. inactive multipliers are read off their rows and moved to the right-hand side;
+///  2. each A_k is factorized (dense LU, n × n) and its receptances at the stop directions,
+///     V_k = A_k⁻¹ N (n × c, c stops) and G_k = Nᵀ V_k (c × c), are formed: F (n³ + 2n²c) flops;
+///  3. the Schur complement on the r = a + 2 remaining unknowns (a active samples, ω² and, when
+///     bordered, E), S = D − C A⁻¹ B, is formed from G_k (S_ij = −Σ_k γ_ik β_jk G_k(c_i, c_j) for
+///     two active samples: F a² flops) and factorized (dense LU, r³);
+///  4. a solve is F block solves, one r × r solve and the back substitution.
+/// The cost scales with the active contact unknowns a, not with the F n + m c unknowns of the
+/// sparse LU (SparseLu, KLU) that it replaces (bench_reduction: BM_KktFactorization).
+/// Every solve is verified: its normwise backward error ‖b − J x‖∞ / (‖J‖∞ ‖x‖∞ + ‖b‖∞) must be
+/// ≤ 1e-11 after at most one step of iterative refinement; otherwise (and whenever the structure
+/// is absent: penalty stops, other sizes, entries outside the blocks; or an A_k or S with a
+/// reciprocal condition estimate below 1e-13, e.g. the linear mode, where A_1 is singular) the
+/// solve falls back to SparseLu on the same J. Since det J = Π det A_k · det S (inactive rows
+/// are the identity), an S whose condition estimate is below machine epsilon while every A_k is
+/// well conditioned means J is singular: factorize() then returns false (newton() reports
+/// SingularJacobian). counts() reports how often each path ran.
+class NonlinearModes::BackboneSystem::KktSolver {
+ public:
+  explicit KktSolver(const BackboneSystem& system);
+  ~KktSolver();
+  KktSolver(KktSolver&&) noexcept;
+  KktSolver& operator=(KktSolver&&) noexcept;
+  /// Factorizes J (size() or size() + 1 rows); false if J is singular or not finite.
+  bool factorize(const Eigen::SparseMatrix<double>& jacobian);
+  /// x with J x = rhs (J the last factorized matrix).
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] static std::optional<double> rcond() { return std::nullopt; }
+  struct Counts {
+    int structured = 0;        // factorizations by the Schur complement on the active samples
+    int sparse_lu = 0;         // factorizations by SparseLu (no structure, or ill-conditioned blocks)
+    int refined = 0;           // structured solves that needed the refinement step
+    int fallback_solves = 0;   // structured solves whose backward error stayed too large: SparseLu
+    int singular = 0;          // factorizations refused: S singular to working precision, so J is
+    int max_active = 0;        // the largest number of active samples a Schur complement held
+  };
+  [[nodiscard]] Counts counts() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace wbm::solvers

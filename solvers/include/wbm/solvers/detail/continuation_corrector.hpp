@@ -4,6 +4,8 @@
 /// newton(), the tangent, and one predictor–corrector attempt.
 
 #include <cmath>
+#include <concepts>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -46,6 +48,24 @@ inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const 
   Eigen::SparseMatrix<double> b(n + 1, n + 1);
   b.setFromTriplets(entries.begin(), entries.end());
   return b;
+}
+
+// The linear-solver policy of a branch: the system's own (linear_solver(), for its Jacobians
+// and their bordered forms, e.g. NonlinearModes::BackboneSystem::KktSolver), else SparseLu for
+// sparse linearizations and DenseLu for dense ones.
+template <class S>
+concept ProvidesLinearSolver = requires(const S& s, const Eigen::VectorXd& r) {
+  { s.linear_solver().solve(r) } -> std::convertible_to<Eigen::VectorXd>;
+};
+template <class Lin, class S>
+auto branch_linear_solver(const S& system) {
+  if constexpr (ProvidesLinearSolver<S>) {
+    return system.linear_solver();
+  } else if constexpr (std::is_same_v<Lin, SparseLinearization>) {
+    return SparseLu{};
+  } else {
+    return DenseLu{};
+  }
 }
 
 inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }

@@ -1,0 +1,344 @@
+// NonlinearModes::BackboneSystem::KktSolver (nonlinear_modes.hpp): the KKT Jacobian of the
+// exact-contact backbone solved through its block-diagonal harmonic balance and a Schur
+// complement on the active contact samples, verified against J and backed by SparseLu.
+#include <wbm/solvers/nonlinear_modes.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/LU>
+
+namespace wbm::solvers {
+
+namespace {
+constexpr double kMinRcond = 1e-13;          // A_k or S less well conditioned: SparseLu instead
+constexpr double kMaxBackwardError = 1e-11;  // normwise backward error a structured solve must reach
+}  // namespace
+
+struct NonlinearModes::BackboneSystem::KktSolver::Impl {
+  // The structure of the system (fixed).
+  bool exact = false;
+  Eigen::Index ny = 0, size = 0, nl = 0;  // harmonic-balance unknowns, system size, multipliers
+  int f = 0, ms = 0, nc = 0;              // Fourier coefficients, samples per stop, stops
+  std::vector<Eigen::Index> start, length;  // block k: indices [start_k, start_k + length_k)
+  std::vector<int> block_of;                // per harmonic-balance index: its block
+  std::vector<Eigen::Index> local_of;       // … and its index inside the block
+  std::vector<Eigen::MatrixXd> dirs;        // N_k (length_k × nc): the stop directions in block k
+  Eigen::MatrixXd dir_norm2;                // nc × f: ‖N_k(:, c)‖²
+
+  // The last factorization.
+  bool structured = false;
+  Eigen::SparseMatrix<double> j;  // J (structured path: residuals and the fallback)
+  Eigen::Index rows = 0, border = -1, nd = 1;  // nd dense unknowns: ω² and, bordered, E
+  std::vector<Eigen::MatrixXd> a;              // A_k
+  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> lu;
+  std::vector<Eigen::MatrixXd> v, g;           // V_k = A_k⁻¹ N_k, G_k = N_kᵀ V_k
+  Eigen::MatrixXd beta, gamma;                 // nl × f: multiplier columns β_k N_c, active rows γ_k N_cᵀ
+  Eigen::VectorXd diag;                        // nl: J(f_s, f_s)
+  std::vector<Eigen::Index> inactive, active;  // multiplier indices (0 … nl − 1)
+  Eigen::MatrixXd beta_a, gamma_a;             // active rows of beta, gamma
+  Eigen::MatrixXd bd, cd, xd;                  // ny × nd: dense columns (ω², E), dense rows (normalization, border), A⁻¹ bd
+  Eigen::PartialPivLU<Eigen::MatrixXd> schur;
+  double norm_inf = 0.0;
+  SparseLu sparse;
+  bool sparse_ready = false;
+  Counts counts;
+
+  [[nodiscard]] Eigen::VectorXd block_solve(const Eigen::VectorXd& r) const {
+    Eigen::VectorXd y(ny);
+    for (int k = 0; k < f; ++k) y.segment(start[k], length[k]) = lu[k].solve(r.segment(start[k], length[k]));
+    return y;
+  }
+  [[nodiscard]] Eigen::MatrixXd block_solve(const Eigen::MatrixXd& r) const {
+    Eigen::MatrixXd y(ny, r.cols());
+    for (int k = 0; k < f; ++k) y.middleRows(start[k], length[k]) = lu[k].solve(r.middleRows(start[k], length[k]));
+    return y;
+  }
+  [[nodiscard]] Eigen::Index stop_of(Eigen::Index l) const { return l / ms; }
+
+  bool factorize_sparse(const Eigen::SparseMatrix<double>& jac) {
+    structured = false;
+    ++counts.sparse_lu;
+    sparse_ready = sparse.factorize(jac);
+    return sparse_ready;
+  }
+  bool factorize(const Eigen::SparseMatrix<double>& jac);
+  [[nodiscard]] Eigen::VectorXd core_solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] double backward_error(const Eigen::VectorXd& rhs, const Eigen::VectorXd& x) const {
+    const double denominator = norm_inf * x.lpNorm<Eigen::Infinity>() + rhs.lpNorm<Eigen::Infinity>();
+    const double r = (rhs - j * x).lpNorm<Eigen::Infinity>();
+    if (!std::isfinite(r)) return std::numeric_limits<double>::infinity();
+    return denominator > 0.0 ? r / denominator : r;
+  }
+};
+
+NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& system) : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  const NonlinearModes& nm = *system.nm_;
+  const Eigen::Index n = nm.n_, p = nm.phase_index_;
+  s.exact = system.penalty_ == 0.0;
+  s.ny = system.ny_;
+  s.size = system.size_;
+  s.f = nm.f_;
+  s.ms = nm.options_.samples;
+  s.nc = static_cast<int>(nm.stops_.size());
+  s.nl = static_cast<Eigen::Index>(s.nc) * s.ms;
+  auto reduced = [p](Eigen::Index i) { return i < p ? i : i - 1; };  // full stacked index (≠ p) → state index
+  s.block_of.assign(static_cast<size_t>(s.ny), 0);
+  s.local_of.assign(static_cast<size_t>(s.ny), 0);
+  s.dir_norm2 = Eigen::MatrixXd::Zero(s.nc, s.f);
+  for (int k = 0; k < s.f; ++k) {
+    const Eigen::Index first = k * n;
+    const bool holds_phase = p >= first && p < first + n;
+    s.start.push_back(first <= p ? first : first - 1);
+    s.length.push_back(n - (holds_phase ? 1 : 0));
+    for (Eigen::Index i = first; i < first + n; ++i) {
+      if (i == p) continue;
+      s.block_of[static_cast<size_t>(reduced(i))] = k;
+      s.local_of[static_cast<size_t>(reduced(i))] = reduced(i) - s.start.back();
+    }
+    Eigen::MatrixXd dk = Eigen::MatrixXd::Zero(s.length.back(), s.nc);
+    for (int c = 0; c < s.nc; ++c) {
+      for (const auto& [d, w] : nm.stops_[static_cast<size_t>(c)].terms()) {
+        if (first + d == p) continue;
+        dk(reduced(first + d) - s.start.back(), c) += w;
+      }
+      s.dir_norm2(c, k) = dk.col(c).squaredNorm();
+    }
+    s.dirs.push_back(std::move(dk));
+  }
+}
+
+NonlinearModes::BackboneSystem::KktSolver::~KktSolver() = default;
+NonlinearModes::BackboneSystem::KktSolver::KktSolver(KktSolver&&) noexcept = default;
+NonlinearModes::BackboneSystem::KktSolver& NonlinearModes::BackboneSystem::KktSolver::operator=(KktSolver&&) noexcept =
+    default;
+
+NonlinearModes::BackboneSystem::KktSolver NonlinearModes::BackboneSystem::linear_solver() const {
+  return KktSolver(*this);
+}
+
+bool NonlinearModes::BackboneSystem::KktSolver::factorize(const Eigen::SparseMatrix<double>& jacobian) {
+  return impl_->factorize(jacobian);
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::solve(const Eigen::VectorXd& rhs) const {
+  Impl& s = *impl_;
+  if (!s.structured) {
+    return s.sparse_ready ? s.sparse.solve(rhs) : Eigen::VectorXd::Constant(rhs.size(), NAN);
+  }
+  Eigen::VectorXd x = s.core_solve(rhs);
+  if (s.backward_error(rhs, x) <= kMaxBackwardError) return x;
+  ++s.counts.refined;  // one step of iterative refinement on J's own residual
+  x += s.core_solve(rhs - s.j * x);
+  if (s.backward_error(rhs, x) <= kMaxBackwardError) return x;
+  ++s.counts.fallback_solves;
+  if (!s.sparse_ready) s.sparse_ready = s.sparse.factorize(s.j);
+  return s.sparse_ready ? s.sparse.solve(rhs) : Eigen::VectorXd::Constant(rhs.size(), NAN);
+}
+
+NonlinearModes::BackboneSystem::KktSolver::Counts NonlinearModes::BackboneSystem::KktSolver::counts() const {
+  return impl_->counts;
+}
+
+bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::SparseMatrix<double>& jac) {
+  rows = jac.rows();
+  structured = false;  // until this J is factorized (a failed factorize() leaves nothing to solve with)
+  sparse_ready = false;
+  if (!exact || jac.cols() != rows || (rows != size && rows != size + 1)) return factorize_sparse(jac);
+  border = rows == size + 1 ? rows - 1 : -1;
+  nd = border >= 0 ? 2 : 1;
+  a.resize(static_cast<size_t>(f));
+  for (int k = 0; k < f; ++k) a[static_cast<size_t>(k)].setZero(length[k], length[k]);
+  bd.setZero(ny, nd);
+  cd.setZero(ny, nd);
+  beta.setZero(nl, f);
+  gamma.setZero(nl, f);
+  diag.setZero(nl);
+  std::vector<char> has_hb(static_cast<size_t>(nl), 0), off_diagonal(static_cast<size_t>(nl), 0);
+  std::vector<Eigen::Triplet<double>> tail;  // entries with row and column outside the harmonic balance
+  Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(rows);
+  auto multiplier = [&](Eigen::Index i) { return i > ny && i != border; };
+  for (Eigen::Index c = 0; c < jac.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(jac, c); it; ++it) {
+      const Eigen::Index i = it.row();
+      const double val = it.value();
+      if (!std::isfinite(val)) return false;
+      if (val == 0.0) continue;  // stored zeros (the border's column is stored in full)
+      row_sum(i) += std::abs(val);
+      if (c < ny) {
+        const int kc = block_of[static_cast<size_t>(c)];
+        const Eigen::Index lc = local_of[static_cast<size_t>(c)];
+        if (i < ny) {
+          if (block_of[static_cast<size_t>(i)] != kc) return factorize_sparse(jac);  // harmonics coupled
+          a[static_cast<size_t>(kc)](local_of[static_cast<size_t>(i)], lc) = val;
+        } else if (i == ny) {
+          cd(c, 0) = val;
+        } else if (i == border) {
+          cd(c, 1) = val;
+        } else {
+          const Eigen::Index l = i - ny - 1;
+          gamma(l, kc) += dirs[static_cast<size_t>(kc)](lc, stop_of(l)) * val;
+          has_hb[static_cast<size_t>(l)] = 1;
+        }
+      } else if (i < ny) {
+        if (c == ny) {
+          bd(i, 0) = val;
+        } else if (c == border) {
+          bd(i, 1) = val;
+        } else {
+          const Eigen::Index l = c - ny - 1;
+          const int k = block_of[static_cast<size_t>(i)];
+          beta(l, k) += dirs[static_cast<size_t>(k)](local_of[static_cast<size_t>(i)], stop_of(l)) * val;
+        }
+      } else {
+        tail.emplace_back(i, c, val);
+        if (multiplier(i)) {
+          if (c == i) {
+            diag(i - ny - 1) = val;
+          } else {
+            off_diagonal[static_cast<size_t>(i - ny - 1)] = 1;
+          }
+        }
+      }
+    }
+  }
+  norm_inf = row_sum.maxCoeff();
+  // β_k, γ_k: the least-squares multiples of N_c (a column or row of another shape leaves a
+  // residual that the verified solves catch).
+  for (Eigen::Index l = 0; l < nl; ++l) {
+    for (int k = 0; k < f; ++k) {
+      const double d2 = dir_norm2(stop_of(l), k);
+      beta(l, k) = d2 > 0.0 ? beta(l, k) / d2 : 0.0;
+      gamma(l, k) = d2 > 0.0 ? gamma(l, k) / d2 : 0.0;
+    }
+  }
+  inactive.clear();
+  active.clear();
+  std::vector<Eigen::Index> position(static_cast<size_t>(nl), -1);  // in the Schur complement
+  for (Eigen::Index l = 0; l < nl; ++l) {
+    if (!has_hb[static_cast<size_t>(l)] && !off_diagonal[static_cast<size_t>(l)]) {
+      if (diag(l) == 0.0) return factorize_sparse(jac);  // an empty row: let SparseLu report it
+      inactive.push_back(l);
+    } else {
+      position[static_cast<size_t>(l)] = nd + static_cast<Eigen::Index>(active.size());
+      active.push_back(l);
+    }
+  }
+  const auto na = static_cast<Eigen::Index>(active.size());
+  // Blocks, receptances at the stop directions, dense columns.
+  lu.resize(static_cast<size_t>(f));
+  v.resize(static_cast<size_t>(f));
+  g.resize(static_cast<size_t>(f));
+  for (int k = 0; k < f; ++k) {
+    const auto kk = static_cast<size_t>(k);
+    lu[kk].compute(a[kk]);
+    if (!(lu[kk].rcond() >= kMinRcond)) return factorize_sparse(jac);
+    v[kk] = lu[kk].solve(dirs[kk]);
+    g[kk] = dirs[kk].transpose() * v[kk];
+  }
+  xd = block_solve(bd);
+  // S = D − C A⁻¹ B on [ω², (E), active samples] × [normalization row, (border row), active rows].
+  const Eigen::Index m = nd + na;
+  Eigen::MatrixXd schur_matrix = Eigen::MatrixXd::Zero(m, m);
+  auto unknown = [&](Eigen::Index c) -> Eigen::Index {
+    if (c == ny) return 0;
+    if (c == border) return 1;
+    return position[static_cast<size_t>(c - ny - 1)];
+  };
+  for (const auto& t : tail) {
+    const Eigen::Index e = unknown(t.row()), u = unknown(t.col());
+    if (e >= 0 && u >= 0) schur_matrix(e, u) += t.value();
+  }
+  schur_matrix.topLeftCorner(nd, nd) -= cd.transpose() * xd;
+  beta_a.resize(na, f);
+  gamma_a.resize(na, f);
+  for (Eigen::Index q = 0; q < na; ++q) {
+    beta_a.row(q) = beta.row(active[static_cast<size_t>(q)]);
+    gamma_a.row(q) = gamma.row(active[static_cast<size_t>(q)]);
+  }
+  for (int k = 0; k < f; ++k) {
+    const auto kk = static_cast<size_t>(k);
+    const Eigen::MatrixXd q = v[kk].transpose() * cd.middleRows(start[k], length[k]);    // nc × nd: V_kᵀ c_e
+    const Eigen::MatrixXd pd = dirs[kk].transpose() * xd.middleRows(start[k], length[k]);  // nc × nd: N_kᵀ A_k⁻¹ b_u
+    for (Eigen::Index r = 0; r < na; ++r) {
+      const Eigen::Index st = stop_of(active[static_cast<size_t>(r)]);
+      for (Eigen::Index e = 0; e < nd; ++e) {
+        schur_matrix(e, nd + r) -= beta_a(r, k) * q(st, e);
+        schur_matrix(nd + r, e) -= gamma_a(r, k) * pd(st, e);
+      }
+    }
+  }
+  // Active × active by stop pairs: S(c₁ rows, c₂ columns) −= Γ_c₁ diag(G_k(c₁, c₂))_k B_c₂ᵀ.
+  std::vector<Eigen::Index> first(static_cast<size_t>(nc) + 1, na);
+  for (Eigen::Index r = na - 1; r >= 0; --r) first[static_cast<size_t>(stop_of(active[static_cast<size_t>(r)]))] = r;
+  for (int c = nc - 1; c >= 0; --c) first[static_cast<size_t>(c)] = std::min(first[static_cast<size_t>(c)], first[static_cast<size_t>(c) + 1]);
+  Eigen::RowVectorXd gk(f);
+  for (int c1 = 0; c1 < nc; ++c1) {
+    const Eigen::Index r0 = first[static_cast<size_t>(c1)], r1 = first[static_cast<size_t>(c1) + 1];
+    if (r1 == r0) continue;
+    for (int c2 = 0; c2 < nc; ++c2) {
+      const Eigen::Index q0 = first[static_cast<size_t>(c2)], q1 = first[static_cast<size_t>(c2) + 1];
+      if (q1 == q0) continue;
+      for (int k = 0; k < f; ++k) gk(k) = g[static_cast<size_t>(k)](c1, c2);
+      schur_matrix.block(nd + r0, nd + q0, r1 - r0, q1 - q0).noalias() -=
+          (gamma_a.middleRows(r0, r1 - r0).array().rowwise() * gk.array()).matrix() *
+          beta_a.middleRows(q0, q1 - q0).transpose();
+    }
+  }
+  schur.compute(schur_matrix);
+  // det J = Π_k det A_k · det S · Π (inactive J_ss): with every A_k well conditioned, an S
+  // singular to working precision is a singular J (e.g. more active samples on a stop than its F
+  // coefficients can meet, in a corrector far from the branch); an S merely ill conditioned
+  // goes to SparseLu.
+  const double schur_rcond = schur.rcond();
+  if (!(schur_rcond >= std::numeric_limits<double>::epsilon())) {
+    ++counts.singular;
+    return false;
+  }
+  if (!(schur_rcond >= kMinRcond)) return factorize_sparse(jac);
+  j = jac;
+  structured = true;
+  ++counts.structured;
+  counts.max_active = std::max(counts.max_active, static_cast<int>(na));
+  return true;
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::Impl::core_solve(const Eigen::VectorXd& rhs) const {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(rows);
+  Eigen::VectorXd r = rhs;
+  // 1. Inactive samples: their rows are f_s = rhs_s / J_ss; move their columns to the right.
+  for (const Eigen::Index l : inactive) {
+    const Eigen::Index col = ny + 1 + l;
+    const double xv = rhs(col) / diag(l);
+    x(col) = xv;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j, col); it; ++it) r(it.row()) -= it.value() * xv;
+  }
+  // 2. Harmonic balance with the Schur unknowns at zero, then the Schur right-hand side.
+  const Eigen::VectorXd y0 = block_solve(Eigen::VectorXd(r.head(ny)));
+  const auto na = static_cast<Eigen::Index>(active.size());
+  Eigen::VectorXd rs(nd + na);
+  rs(0) = r(ny) - cd.col(0).dot(y0);
+  if (border >= 0) rs(1) = r(border) - cd.col(1).dot(y0);
+  Eigen::MatrixXd w(nc, f);  // N_kᵀ y0_k
+  for (int k = 0; k < f; ++k) w.col(k) = dirs[static_cast<size_t>(k)].transpose() * y0.segment(start[k], length[k]);
+  for (Eigen::Index q = 0; q < na; ++q) {
+    const Eigen::Index l = active[static_cast<size_t>(q)];
+    rs(nd + q) = r(ny + 1 + l) - gamma_a.row(q).dot(w.row(stop_of(l)));
+  }
+  // 3. The Schur unknowns, then the harmonic balance by back substitution.
+  const Eigen::VectorXd u = schur.solve(rs);
+  Eigen::VectorXd y = y0 - xd * u.head(nd);
+  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(nc, f);  // Σ over active samples of stop c: β_k u
+  for (Eigen::Index q = 0; q < na; ++q) z.row(stop_of(active[static_cast<size_t>(q)])) += u(nd + q) * beta_a.row(q);
+  for (int k = 0; k < f; ++k) y.segment(start[k], length[k]) -= v[static_cast<size_t>(k)] * z.col(k);
+  x.head(ny) = y;
+  x(ny) = u(0);
+  if (border >= 0) x(border) = u(1);
+  for (Eigen::Index q = 0; q < na; ++q) x(ny + 1 + active[static_cast<size_t>(q)]) = u(nd + q);
+  return x;
+}
+
+}  // namespace wbm::solvers
