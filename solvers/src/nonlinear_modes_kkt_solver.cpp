@@ -46,11 +46,7 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   bool sparse_ready = false;
   Counts counts;
 
-  [[nodiscard]] Eigen::VectorXd block_solve(const Eigen::VectorXd& r) const {
-    Eigen::VectorXd y(ny);
-    for (int k = 0; k < f; ++k) y.segment(start[k], length[k]) = lu[k].solve(r.segment(start[k], length[k]));
-    return y;
-  }
+  // A⁻¹ r, block by block (r: ny × any number of columns).
   [[nodiscard]] Eigen::MatrixXd block_solve(const Eigen::MatrixXd& r) const {
     Eigen::MatrixXd y(ny, r.cols());
     for (int k = 0; k < f; ++k) y.middleRows(start[k], length[k]) = lu[k].solve(r.middleRows(start[k], length[k]));
@@ -317,7 +313,7 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::Impl::core_solve(cons
     for (Eigen::SparseMatrix<double>::InnerIterator it(j, col); it; ++it) r(it.row()) -= it.value() * xv;
   }
   // 2. Harmonic balance with the Schur unknowns at zero, then the Schur right-hand side.
-  const Eigen::VectorXd y0 = block_solve(Eigen::VectorXd(r.head(ny)));
+  const Eigen::VectorXd y0 = block_solve(r.head(ny));
   const auto na = static_cast<Eigen::Index>(active.size());
   Eigen::VectorXd rs(nd + na);
   rs(0) = r(ny) - cd.col(0).dot(y0);
