@@ -11,6 +11,8 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -55,22 +57,13 @@ int main(int argc, char** argv) {
     for (int i = 0; alg_min + alg_step * i <= alg_max + 1e-9; ++i) alg_energies.push_back(alg_min + alg_step * i);
     const auto p8 = scene::mode_problem(s8);
     const solvers::NonlinearModes modes8(p8.system, p8.stops, p8.options);
-    solvers::BackboneContinuationOptions co;
-    co.energy_min = s8.analysis.energy_min;
-    co.energy_max = alg_max + alg_step;
-    co.max_energy_step = s8.analysis.max_energy_step;
-    co.include = alg_energies;
-    const auto reference = modes8.continue_backbone(co);
-    auto continued = [&](double energy) {
-      for (const auto& l : reference.included) {
-        if (std::abs(l.energy - energy) < 1e-9 && l.converged()) return l.frequency_hz;
-      }
-      return std::nan("");
-    };
     std::ostringstream alg_rows;
     nlohmann::json alg_meta = nlohmann::json::array();
     double worst_alg_gap = 0.0;
     int alg_levels = 0, alg_missing = 0;  // levels compared; levels with no continuation counterpart
+    // The algorithms first; then the continuation, landed on every energy they reached (their
+    // step control may add energies between the grid's).
+    std::vector<std::pair<scene::NnmAlgorithm, scene::AnalysisResult>> alg_results;
     for (const scene::NnmAlgorithm algorithm : {scene::NnmAlgorithm::Simultaneous, scene::NnmAlgorithm::Sequential}) {
       if (run.quick() && algorithm == scene::NnmAlgorithm::Sequential) continue;
       scene::Scene sa = s8;
@@ -79,7 +72,26 @@ int main(int argc, char** argv) {
       sa.analysis.energy_max = alg_max;
       sa.analysis.max_energy_step = alg_step;
       const std::string prefix = algorithm == scene::NnmAlgorithm::Simultaneous ? "alg1_" : "alg2_";
-      const auto ra = reproduce::run_modes(run, sa, prefix);
+      alg_results.emplace_back(algorithm, reproduce::run_modes(run, sa, prefix));
+    }
+    solvers::BackboneContinuationOptions co;
+    co.energy_min = s8.analysis.energy_min;
+    co.energy_max = alg_max + alg_step;
+    co.max_energy_step = s8.analysis.max_energy_step;
+    co.include = alg_energies;
+    for (const auto& [algorithm, ra] : alg_results) {
+      for (double energy : reproduce::result_column(ra, "backbone.csv", "energy [-]")) co.include.push_back(energy);
+    }
+    std::sort(co.include.begin(), co.include.end());
+    co.include.erase(std::unique(co.include.begin(), co.include.end()), co.include.end());
+    const auto reference = modes8.continue_backbone(co);
+    auto continued = [&](double energy) {
+      for (const auto& l : reference.included) {
+        if (std::abs(l.energy - energy) < 1e-9 && l.converged()) return l.frequency_hz;
+      }
+      return std::nan("");
+    };
+    for (const auto& [algorithm, ra] : alg_results) {
       const Eigen::VectorXd& ea = reproduce::result_column(ra, "backbone.csv", "energy [-]");
       const Eigen::VectorXd& fa = reproduce::result_column(ra, "backbone.csv", "frequency [Hz]");
       const Eigen::VectorXd& pa = reproduce::result_column(ra, "backbone.csv", "powell_iterations [-]");

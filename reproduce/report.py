@@ -2,7 +2,12 @@
 """Assembles out/REPORT.md from the report.md fragment of every reproduce run, in id order.
 
 Usage: report.py OUT_DIR. Written to a temporary name and renamed, like every result file.
+
+With the outcomes that run_one.py recorded in OUT_DIR/.runs/ (make reproduce), a run that failed
+is listed in a "Failed" section with its message, its section is left out (a folder out/<id>/
+that an earlier run left holds no result of this one), and report.py exits 1 after writing.
 """
+import json
 import os
 import sys
 from pathlib import Path
@@ -10,7 +15,7 @@ from pathlib import Path
 ORDER = ["jl14_table1", "jl14_fig02", "jl14_fig03", "jl14_fig04", "jl14_fig05", "jl14_connection_coefficients",
          "jl14_fig06", "jl14_fig07", "jl14_fig08", "jl14_fig09", "jl14_fig10", "jl14_fig11", "jl14_fig12", "jl14_table2",
          "jl14_speed_accuracy", "jl14_extremes", "jl14_rigid_stop", "ll11_fig03", "ll11_fig04", "ll11_fig05", "ll11_penalty_limit",
-         "ll11_free_vibration", "ll11_extremes", "ll11_blade", "ll11_blade_forced"]
+         "ll11_free_vibration", "ll11_extremes", "ll11_robustness", "ll11_blade", "ll11_blade_forced"]
 
 HEADER = """# wbm reproduction report
 
@@ -21,17 +26,45 @@ differ from the paper's, the section says so.
 """
 
 
+def report_id(executable):
+    """The id (out/<id>/) of an executable: the longest id of ORDER that starts its name."""
+    ids = [fid for fid in ORDER if executable == fid or executable.startswith(fid + "_")]
+    return max(ids, key=len) if ids else executable
+
+
+def failed_runs(out):
+    """(executable, id, message, seconds) of every run recorded as failed, in ORDER."""
+    runs = out / ".runs"
+    failed = []
+    for f in sorted(runs.glob("*.json")) if runs.is_dir() else []:
+        r = json.loads(f.read_text())
+        if r.get("exit_code", 0) != 0:
+            failed.append((r["executable"], report_id(r["executable"]), r.get("message", ""), r.get("seconds", 0.0)))
+    rank = {fid: i for i, fid in enumerate(ORDER)}
+    return sorted(failed, key=lambda x: (rank.get(x[1], len(ORDER)), x[0]))
+
+
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "out")
     parts, missing = [HEADER], []
+    failed = failed_runs(out)
+    failed_ids = {fid for _, fid, _, _ in failed}
     known = ORDER + sorted(p.name for p in out.iterdir() if p.is_dir() and p.name not in ORDER
                            and (p / "report.md").exists())
     for fid in known:
         frag = out / fid / "report.md"
+        if fid in failed_ids:
+            continue
         if frag.exists():
             parts.append(frag.read_text().rstrip() + "\n\n")
         else:
             missing.append(fid)
+    if failed:
+        parts.append("## Failed\n\n" + str(len(failed)) + " run(s) failed; their sections are left out, and "
+                     "`make reproduce` exits non-zero.\n\n| executable | section | after | message |\n|---|---|---|---|\n")
+        for exe, fid, message, seconds in failed:
+            parts.append(f"| `{exe}` | {fid} | {seconds:.1f} s | {message.replace('|', '/')} |\n")
+        parts.append("\n")
     if missing:
         parts.append("## Missing\n\nNo results (the run failed or was not made): "
                      + ", ".join(missing) + "\n")
@@ -39,6 +72,10 @@ def main():
     tmp.write_text("".join(parts))
     os.replace(tmp, out / "REPORT.md")
     print(f"report.py: wrote {out / 'REPORT.md'}")
+    if failed:
+        for exe, _, message, _ in failed:
+            print(f"report.py: {exe} failed: {message}", file=sys.stderr)
+        sys.exit(1)
 
 
 if __name__ == "__main__":

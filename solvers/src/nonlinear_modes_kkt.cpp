@@ -124,7 +124,8 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::state(const Eigen::MatrixXd& coe
   return x;
 }
 
-NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(const Eigen::VectorXd& x) const {
+NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(const Eigen::VectorXd& x,
+                                                                              const ActiveSet* active) const {
   const auto& nm = *nm_;
   if (x.size() != size_) {
     throw std::invalid_argument("BackboneSystem: state of length " + std::to_string(x.size()) + ", expected " +
@@ -142,6 +143,13 @@ NonlinearModes::BackboneSystem::Unpacked NonlinearModes::BackboneSystem::unpack(
     u.lambda.resize(u.g.size());
     u.penalty_stiffness.resize(u.g.size());
     penalty_law_->evaluate(u.g, u.lambda, u.penalty_stiffness);
+    if (active != nullptr) {  // the piece's branch of the law, whatever the sign of g
+      for (Eigen::Index i = 0; i < u.g.size(); ++i) {
+        const bool on = (*active)[static_cast<size_t>(i)] != 0;
+        u.penalty_stiffness(i) = on ? penalty_ : 0.0;
+        u.lambda(i) = on ? penalty_ * u.g(i) : 0.0;
+      }
+    }
   }
   return u;
 }
@@ -154,14 +162,61 @@ SparseLinearization NonlinearModes::BackboneSystem::linearize(const Eigen::Vecto
   return evaluate(x, energy, true);
 }
 
+void NonlinearModes::BackboneSystem::check(const ActiveSet& active) const {
+  const auto expected = nm_->stops_.size() * static_cast<size_t>(nm_->options_.samples);
+  if (active.size() != expected) {
+    throw std::invalid_argument("BackboneSystem: active set of length " + std::to_string(active.size()) +
+                                ", expected " + std::to_string(expected) + " (stops × samples)");
+  }
+}
+
+ActiveSet NonlinearModes::BackboneSystem::active_set(const Eigen::VectorXd& x, double /*energy*/) const {
+  const Unpacked u = unpack(x);
+  ActiveSet a(static_cast<size_t>(u.g.size()));
+  for (Eigen::Index i = 0; i < u.g.size(); ++i) {
+    // The branch the nonsmooth residual picks (evaluate: λ <= −g picks λ, i.e. inactive).
+    a[static_cast<size_t>(i)] = penalty_ > 0.0 ? static_cast<std::uint8_t>(u.g(i) > 0.0)
+                                               : static_cast<std::uint8_t>(!(u.lambda(i) <= -u.g(i)));
+  }
+  return a;
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::residual(const Eigen::VectorXd& x, double energy,
+                                                         const ActiveSet& active) const {
+  check(active);
+  return evaluate(x, energy, false, &active).residual;
+}
+
+SparseLinearization NonlinearModes::BackboneSystem::linearize(const Eigen::VectorXd& x, double energy,
+                                                              const ActiveSet& active) const {
+  check(active);
+  return evaluate(x, energy, true, &active);
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::events(const Eigen::VectorXd& x, double /*energy*/,
+                                                       const ActiveSet& active) const {
+  check(active);
+  const Unpacked u = unpack(x, &active);
+  Eigen::VectorXd e(u.g.size());
+  for (Eigen::Index i = 0; i < u.g.size(); ++i) {
+    const bool on = active[static_cast<size_t>(i)] != 0;
+    e(i) = penalty_ > 0.0 ? (on ? u.g(i) : -u.g(i)) : (on ? u.lambda(i) : -u.g(i));
+  }
+  return e;
+}
+
 SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::VectorXd& x, double energy,
-                                                             bool jacobian) const {
+                                                             bool jacobian, const ActiveSet* active) const {
   const auto& nm = *nm_;
   const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
   const Eigen::Index p = nm.phase_index_;
-  const Unpacked state = unpack(x);
+  const Unpacked state = unpack(x, active);
   const Eigen::VectorXd& g = state.g;
   const Eigen::VectorXd& lambda = state.lambda;
+  // Whether sample i's Signorini row is −g_s (active) or f_s (inactive): the piece's, or the min's.
+  auto picks_gap = [&](Eigen::Index i) {
+    return active != nullptr ? (*active)[static_cast<size_t>(i)] != 0 : !(lambda(i) <= -g(i));
+  };
   // The map full stacked index -> reduced index (−1: the phase coefficient, removed).
   auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
   const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
@@ -184,7 +239,9 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   out.residual(ny_) = mh / nm.m_c_ - energy;
   // Signorini at every sample: min(λ_s, −g_s) = 0 (λ in units of f_ref).
   if (exact) {
-    for (Eigen::Index i = 0; i < n_stops * ms; ++i) out.residual(ny_ + 1 + i) = std::min(lambda(i), -g(i));
+    for (Eigen::Index i = 0; i < n_stops * ms; ++i) {
+      out.residual(ny_ + 1 + i) = active != nullptr ? (picks_gap(i) ? -g(i) : lambda(i)) : std::min(lambda(i), -g(i));
+    }
   }
   out.parameter_derivative = Eigen::VectorXd::Zero(size_);
   out.parameter_derivative(ny_) = -1.0;
@@ -227,7 +284,7 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
         for (const auto& [d, w] : terms) {  // ∂HB/∂λ: w θ_sk in row (k, d)
           for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, w * nm.theta_(smp, k));
         }
-        if (lambda(i) <= -g(i)) {
+        if (!picks_gap(i)) {
           t.emplace_back(col, col, 1.0);  // the min picks λ_s
         } else {
           for (const auto& [d, w] : terms) {  // the min picks −g_s = −Σ_d w θ_s Y_d + g_c
@@ -396,12 +453,22 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   pa.max_points = o.max_points;
   pa.corrector_tolerance = o.tolerance;
   pa.max_corrector_iterations = 12;
-  pa.kink_step = 1e-5;
-  pa.corner_restart = true;
-  pa.corner_bisection = true;  // corners that turn back: stop a cycling corrector, bisect toward it
+  // BackboneSystem is a PiecewiseSmoothSystem: pseudo_arclength corrects on one piece (active
+  // set) at a time and locates and crosses the events where samples switch (continuation.hpp).
   pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
   pa.on_point = o.on_point;
+  // The range's end and the energies asked for are landed on by the continuation itself (on the
+  // piece of the step that passes them).
+  pa.land_on = o.include;
+  pa.land_on.push_back(o.energy_max);
+  if (o.start) pa.land_on.push_back(o.energy_min);
   Branch branch = pseudo_arclength(system, x0, e0, pa);
+  auto landing = [&](double energy) -> const BranchPoint* {
+    for (const auto& l : branch.landings) {
+      if (l.parameter == energy) return &l;
+    }
+    return nullptr;
+  };
   // A branch that comes back below contact onset after contact has retraced the backbone (the
   // linear mode is the only solution there): keep it up to where it turned back, and say so.
   bool retraced = false;
@@ -415,6 +482,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
       }
       branch.points.resize(top + 1);
       std::erase_if(branch.folds, [&](const Fold& f) { return f.after >= top; });
+      std::erase_if(branch.landings, [&](const BranchPoint& l) { return l.arclength > branch.points[top].arclength; });
       branch.stop = StopReason::Retraced;
       branch.message = "the branch turned back at a corner near E = " + format_number(branch.points[top].parameter) +
                        " and retraced the backbone down to the linear mode; kept up to that energy";
@@ -425,27 +493,29 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   }
   for (const auto& pt : branch.points) {
     if (pt.parameter > o.energy_max || (o.start && pt.parameter < o.energy_min)) {
-      // The last point overshoots the range: land on its end.
+      // The last point overshoots the range: its end, as landed on.
       const double end = pt.parameter > o.energy_max ? o.energy_max : o.energy_min;
-      ModeLevel last = level_at(system, pt.x, end, o);
-      if (last.converged()) b.levels.push_back(std::move(last));
+      if (const BranchPoint* l = landing(end)) {
+        ModeLevel last = system.level(l->x, end, o.tolerance);
+        last.newton_iterations = l->corrector_iterations;
+        b.levels.push_back(std::move(last));
+      }
       break;
     }
     ModeLevel l = system.level(pt.x, pt.parameter, o.tolerance);
     l.newton_iterations = pt.corrector_iterations;
     b.levels.push_back(std::move(l));
   }
-  for (double e : o.include) {  // first passage of the branch through e, then Newton at fixed e
-    for (size_t k = 0; k + 1 < branch.points.size(); ++k) {
-      const auto &p0 = branch.points[k], &p1 = branch.points[k + 1];
-      if ((p0.parameter - e) * (p1.parameter - e) > 0.0) continue;
-      const double t = p1.parameter == p0.parameter ? 0.0 : (e - p0.parameter) / (p1.parameter - p0.parameter);
-      b.included.push_back(level_at(system, p0.x + t * (p1.x - p0.x), e, o));
-      break;
+  for (double e : o.include) {  // first passage of the branch through e, landed on by the continuation
+    if (const BranchPoint* l = landing(e)) {
+      ModeLevel level = system.level(l->x, e, o.tolerance);
+      level.newton_iterations = l->corrector_iterations;
+      b.included.push_back(std::move(level));
     }
   }
   for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
-  b.kinks = branch.kinks;
+  b.kinks = branch.events;
+  b.switches = branch.switches;
   b.rejected_steps = branch.rejected_steps;
   b.stop = branch.stop;
   b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&

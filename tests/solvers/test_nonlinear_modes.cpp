@@ -133,6 +133,87 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The pieces of the backbone system (PiecewiseSmoothSystem): on a fixed active set the residual
+// is smooth, so its Jacobian matches central differences everywhere, also at samples where the
+// nonsmooth min would pick the other branch; where the piece is the min's own, it is the nonsmooth
+// system; the events are the piece's other quantity (λ where active, −g where inactive; ±g for a
+// penalty), ≥ 0 on the piece the min picks.
+TEST(NonlinearModes, BackbonePiecesAreSmoothAndTheirEventsMatchTheMin) {
+  const auto nm = modes(1e-3, 4, 32);
+  for (double k : {0.0, 3e9}) {
+    const solvers::NonlinearModes::BackboneSystem system(nm, k);
+    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
+    x(x.size() - 1) = 1.01;
+    if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+    x.head(20) += 1e-2 * Eigen::VectorXd::LinSpaced(20, -1.0, 1.0);
+    const double energy = 1.4;
+    const solvers::ActiveSet own = system.active_set(x, energy);
+    ASSERT_EQ(own.size(), 32U);
+    EXPECT_LT((system.residual(x, energy, own) - system.residual(x, energy)).norm(), 1e-15) << "penalty " << k;
+    int active = 0;
+    for (auto a : own) active += a;
+    EXPECT_GT(active, 0);
+    EXPECT_LT(active, 32);
+    // The min's own piece has every event ≥ 0 (λ ≥ 0 in this trial state).
+    const Eigen::VectorXd e = system.events(x, energy, own);
+    EXPECT_GE(e.minCoeff(), 0.0) << "penalty " << k;
+    solvers::ActiveSet flipped = own;
+    for (size_t i = 0; i < flipped.size(); i += 3) flipped[i] ^= 1U;  // a piece the min does not pick
+    const Eigen::MatrixXd j(system.linearize(x, energy, flipped).jacobian);
+    Eigen::MatrixXd fd(j.rows(), j.cols());
+    const double h = 1e-7;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      Eigen::VectorXd p = x, m = x;
+      p(i) += h;
+      m(i) -= h;
+      fd.col(i) = (system.residual(p, energy, flipped) - system.residual(m, energy, flipped)) / (2 * h);
+    }
+    EXPECT_LT((j - fd).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "penalty " << k;
+    // Flipped samples trade their event for the other quantity: λ_s or −g_s (exact), −(±g_s) (penalty).
+    const Eigen::VectorXd ef = system.events(x, energy, flipped);
+    const Eigen::VectorXd lambda = x.tail(32);
+    for (Eigen::Index i = 0; i < ef.size(); ++i) {
+      const bool was_active = own[static_cast<size_t>(i)] != 0;
+      if (i % 3 != 0) {
+        EXPECT_EQ(ef(i), e(i)) << "sample " << i;
+      } else if (k > 0.0) {
+        EXPECT_EQ(ef(i), -e(i)) << "sample " << i;
+      } else {
+        EXPECT_EQ(was_active ? e(i) : ef(i), lambda(i)) << "sample " << i;
+      }
+    }
+    EXPECT_THROW((void)system.events(x, energy, solvers::ActiveSet(31)), std::invalid_argument);
+  }
+}
+
+// Independence from rounding (issue #35): the backbone of the LL11 rod with N = 12, m = 256 (it
+// stopped at E = 2.48 on 18ad35a, whose corners were crossed by step halving), again with K
+// scaled by (1 + k 1e-12), k = 1 … 3. Every run reaches E = 10, and the frequencies at the landed
+// energies 1.8 and 10 agree to 1e-9 relative.
+TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
+  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  std::vector<double> f18, f10;
+  for (int k = 0; k <= 3; ++k) {
+    solvers::MechanicalSystem system = problem.system;
+    system.stiffness *= 1.0 + k * 1e-12;
+    const solvers::NonlinearModes nm(system, problem.stops, {.harmonics = 12, .samples = 256});
+    auto o = range(0.5, 10.0);
+    o.include = {1.8};
+    const auto b = nm.continue_backbone(o);
+    ASSERT_TRUE(b.complete) << "k = " << k << ": " << b.message;
+    ASSERT_EQ(b.included.size(), 1U);
+    EXPECT_TRUE(b.included[0].converged());
+    EXPECT_GT(b.kinks, 50);  // corners crossed as events, not by halving
+    f18.push_back(b.included[0].frequency_hz);
+    f10.push_back(b.levels.back().frequency_hz);
+    EXPECT_NEAR(b.levels.back().energy, 10.0, 1e-12);
+  }
+  for (int k = 1; k <= 3; ++k) {
+    EXPECT_NEAR(f18[k], f18[0], 1e-9 * f18[0]) << "k = " << k;
+    EXPECT_NEAR(f10[k], f10[0], 1e-9 * f10[0]) << "k = " << k;
+  }
+}
+
 // The structured KKT solver (block-diagonal harmonic balance + Schur complement on the active
 // samples) against a slow reference path, full-pivoting LU of the dense J: three stops (the tip,
 // and two along directions over two DOFs each, one of them through the phase DOF), samples on

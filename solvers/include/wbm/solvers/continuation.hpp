@@ -31,8 +31,20 @@
 ///              and the time from 127 s to 70 s, with the same levels. Off by
 ///              default: it changes the path, and so the last digits, of every other solver's
 ///              continuation; continue_backbone (exact contact) turns it on.
+/// Piecewise-smooth systems (PiecewiseSmoothSystem, linearization.hpp: complementarity or penalty
+/// contact at samples) are continued by events instead (detail/continuation_events.hpp): the
+/// corrector works on one piece (a fixed active set, a smooth residual), a step that ends with
+/// an event function below 0 has crossed a switching surface, the crossing is located by regula
+/// falsi on the step length and kept as a point (BranchPoint::event), every entry crossing there
+/// is flipped, and the branch goes on along the new piece's tangent, oriented so that the flipped
+/// entries' new event functions grow (it may turn back by more than 90°). Step halving is left
+/// for a corrector that fails on a smooth piece; the corner options (kink_step, corner_restart,
+/// corner_bisection) are not used, and every accepted point is verified on the nonsmooth residual.
+/// Branch::events and switches count the events and the entries flipped; a switching point where
+/// no piece continues the branch ends it with StopReason::DegenerateEvent and the reason.
 /// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
-/// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step.
+/// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step, or, at a
+/// switching point where the new piece turns back in λ, the switching point's λ.
 /// The branch stops on a StopReason; every point it holds converged (‖R‖ ≤ corrector_tolerance);
 /// with RangeReached the last point lies beyond the range by less than one step.
 /// Non-convergence is never thrown.
@@ -56,6 +68,7 @@
 
 #include <wbm/solvers/detail/continuation_corner.hpp>
 #include <wbm/solvers/detail/continuation_corrector.hpp>
+#include <wbm/solvers/detail/continuation_events.hpp>
 #include <wbm/solvers/detail/continuation_fold.hpp>
 #include <wbm/solvers/linearization.hpp>
 #include <wbm/solvers/newton.hpp>
@@ -74,7 +87,8 @@ enum class StopReason {
   InitialPointFailed,
   StateBound,
   Retraced,
-  UndampedResonance
+  UndampedResonance,
+  DegenerateEvent
 };
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
@@ -86,6 +100,7 @@ enum class StopReason {
     case StopReason::StateBound: return "state bound exceeded";
     case StopReason::Retraced: return "branch retraced itself";
     case StopReason::UndampedResonance: return "undamped resonance of the top Fourier function";
+    case StopReason::DegenerateEvent: return "degenerate switching point";
   }
   return "?";
 }
@@ -96,6 +111,7 @@ struct BranchPoint {
   Eigen::VectorXd tangent;      // scaled tangent (x̂ part then λ̂), ⟨t, t⟩ = 1
   double arclength = 0.0;       // scaled arclength from the first point
   double step = 0.0;            // h that reached this point
+  bool event = false;           // a switching point (piecewise-smooth systems): tangent is the new piece's
   int corrector_iterations = 0;
   double residual_norm = 0.0;   // ‖R‖₂ at the point
   [[nodiscard]] double parameter_tangent() const { return tangent(tangent.size() - 1); }
@@ -122,6 +138,11 @@ struct PseudoArclengthOptions {
   bool corner_bisection = false;      // a corrector that cycles is stopped and the next steps
                                       // bisect toward its hyperplane (corners, see below)
   NewtonOptions initial_newton{};     // for the first point, at fixed λ
+  /// Parameter values to land on exactly (Branch::landings): at the first step whose ends
+  /// bracket a value, Newton at that fixed λ (on the step's piece for a PiecewiseSmoothSystem)
+  /// from the linear interpolation of the ends, to corrector_tolerance, verified on the
+  /// (nonsmooth) residual. Include parameter_min/max to land on the range's ends.
+  std::vector<double> land_on = {};
   /// Called after each accepted point with its index (0 = the first) and the point, e.g. for a
   /// progress display (λ, step h); may be empty. It must not throw.
   std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
@@ -137,11 +158,16 @@ struct Fold {
 
 struct Branch {
   std::vector<BranchPoint> points;
+  /// One point per value of PseudoArclengthOptions::land_on that the branch passed and Newton
+  /// reached (first passage, in the order passed; `step` is 0, the tangent that of the step).
+  std::vector<BranchPoint> landings;
   std::vector<Fold> folds;
   StopReason stop = StopReason::InitialPointFailed;
   std::string message;      // why it stopped, with the last λ and step
   int rejected_steps = 0;   // corrector failures and over-sharp turns, each retried with h/2
   int kinks = 0;            // corners met at h <= kink_step (nonsmooth branch), jumped or kept
+  int events = 0;           // piecewise-smooth systems: switching points located and crossed
+  int switches = 0;         // entries flipped at them (simultaneous crossings count each entry)
   long corrector_iterations = 0;
   double wall_time_s = 0.0;
 };
@@ -197,10 +223,12 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, lambda); }
     [[nodiscard]] auto jacobian(const Eigen::VectorXd& x) const { return s->linearize(x, lambda).jacobian; }
   };
+
   using Lin = decltype(system.linearize(x0, lambda0));
   // One linear solver for the whole branch (the system's own, or SparseLu, which keeps its symbolic
   // analysis across steps, or DenseLu).
   auto solver = detail::branch_linear_solver<Lin>(system);
+  constexpr bool kPiecewise = PiecewiseSmoothSystem<S>;
   NewtonResult first = newton(Fixed{&system, lambda0}, std::move(x0), o.initial_newton, solver);
   if (!first.report.converged()) return finish(StopReason::InitialPointFailed, first.report.message);
 
@@ -216,6 +244,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   branch.points.push_back(p0);
   if (o.on_point) o.on_point(0, branch.points.back());
 
+  std::vector<bool> landed(o.land_on.size(), false);
+  const NewtonOptions landing_options{.tolerance = 0.5 * o.corrector_tolerance,
+                                      .max_iterations = std::max(8, o.max_corrector_iterations),
+                                      .line_search = false};
   const double cos_turn = std::cos(o.max_turn_degrees * 3.14159265358979323846 / 180.0);
   double h = o.initial_step;
   double h_accepted = h;  // the step of the last accepted point, for jumps over kinks
@@ -233,18 +265,83 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   auto attempt_along = [&](const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
     return detail::attempt_along<S, Lin>(system, solver, xs, ls, corrector_options, direction, z_last, step);
   };
+  // Piecewise-smooth systems: the piece of the current point, and the events crossed in a row
+  // without moving (each flips at least one entry, so more than the entries means a cycle).
+  ActiveSet piece;
+  if constexpr (kPiecewise) piece = system.active_set(p0.x, lambda0);
+  size_t standing_events = 0;
+  // On a piece the corrector aims at half the tolerance, and an event function counts as crossed
+  // below −tolerance/4 (the nonsmooth residual of every point accepted is verified against the
+  // tolerance). Event functions within the tolerance of 0 are at their surface (zero band): the
+  // multipliers and gaps of a converged point are not known any better.
+  const double event_tolerance = 0.25 * o.corrector_tolerance, zero_band = o.corrector_tolerance;
+  NewtonOptions piece_options = corrector_options;
+  piece_options.tolerance = 0.5 * o.corrector_tolerance;
+  piece_options.stop_on_cycle = false;
   while (static_cast<int>(branch.points.size()) < o.max_points) {
     const BranchPoint& last = branch.points.back();
     const Eigen::VectorXd z_last = scaled(last.x, last.parameter);
+    detail::Attempt a;
+    bool sharp = false;
+    double h_taken = h;                // the step from the last point to a's
+    Eigen::VectorXd incoming;          // at a switching point: the old piece's tangent there
+    ActiveSet step_piece;              // the piece the step was taken on
+    if constexpr (kPiecewise) {
+      step_piece = piece;
+      detail::PieceStep ps = detail::piece_step<S, Lin>(system, solver, xs, ls, piece_options, piece, last.tangent,
+                                                        z_last, h, event_tolerance, zero_band);
+      branch.corrector_iterations += ps.iterations;
+      if (!ps.failure.empty()) {
+        return finish(StopReason::DegenerateEvent, ps.failure + "; at λ = " + format_number(ps.a.z(n) * ls) +
+                                                       " after " + std::to_string(branch.events) + " events");
+      }
+      if (ps.event) {
+        ++branch.events;
+        branch.switches += ps.switched;
+        piece = std::move(ps.next);
+        if (ps.step == 0.0) {  // the event lies at the last point: continue from it on the new piece
+          branch.points.back().tangent = std::move(ps.a.tangent);
+          if (++standing_events > piece.size()) {
+            return finish(StopReason::DegenerateEvent,
+                          "the pieces cycle at λ = " + format_number(last.parameter) + ": " +
+                              std::to_string(standing_events) + " events without moving (a degenerate switching point)");
+          }
+          continue;
+        }
+        h_taken = ps.step;
+        incoming = std::move(ps.incoming);
+      } else {
+        sharp = ps.a.converged && detail::inner(ps.a.tangent, last.tangent) < cos_turn;
+      }
+      a = std::move(ps.a);
+      // Every accepted point is verified on the nonsmooth residual.
+      if (a.converged) {
+        a.rnorm = system.residual(a.z.head(n) * xs, a.z(n) * ls).norm();
+        if (!(a.rnorm <= o.corrector_tolerance)) a.converged = false;
+      }
+      if (!a.converged || sharp) {
+        ++branch.rejected_steps;
+        h *= 0.5;
+        if (h < o.min_step) {
+          return finish(StopReason::StepBelowMinimum,
+                        "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + " (h = " +
+                            format_number(h) +
+                            (a.converged ? ", tangent turning too fast" : ", corrector failed, ‖R‖ = " + format_number(a.rnorm)) +
+                            "): a singular point of the piece (a bifurcation or an unbounded branch), not a switch");
+        }
+        continue;
+      }
+      standing_events = 0;
+    } else {
     if (o.corner_bisection && corner_ahead < kNoCorner) h = std::min(h, corner_ahead <= o.kink_step ? o.kink_step : 0.5 * corner_ahead);
-    detail::Attempt a = attempt_along(last.tangent, z_last, h);
+    a = attempt_along(last.tangent, z_last, h);
     branch.corrector_iterations += a.iterations;
     // A sharp turn halves h, down to kink_step: below it the turn is a corner of a nonsmooth
     // branch (a contact sample changing state). The corner is then jumped: one step of the last
     // accepted length along the old tangent; if that lands on a branch that continues in the old
     // direction it is taken (a secondary branch that starts at the corner is not followed),
     // otherwise the corner point itself is kept.
-    bool sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
+    sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
     if (sharp && h <= o.kink_step) {
       ++branch.kinks;
       detail::Attempt jump = attempt_along(last.tangent, z_last, h_accepted);
@@ -265,24 +362,24 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         sharp = false;
       }
     }
-    const bool converged = a.converged;
-    const int iterations = a.iterations;
-    const double rnorm = a.rnorm;
-    const Eigen::VectorXd& z = a.z;
-    const Eigen::VectorXd& t_new = a.tangent;
-    if (!converged || (sharp && h > o.kink_step)) {
+    if (!a.converged || (sharp && h > o.kink_step)) {
       ++branch.rejected_steps;
       if (a.cycled) corner_ahead = std::min(corner_ahead, h);
       h *= 0.5;
       if (h < o.min_step) {
         return finish(StopReason::StepBelowMinimum,
                       "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
-                          (converged ? ", tangent turning too fast)"
-                                     : ", corrector failed, ‖R‖ = " + format_number(rnorm) + ", tolerance " +
-                                           format_number(o.corrector_tolerance) + ")"));
+                          (a.converged ? ", tangent turning too fast)"
+                                       : ", corrector failed, ‖R‖ = " + format_number(a.rnorm) + ", tolerance " +
+                                             format_number(o.corrector_tolerance) + ")"));
       }
       continue;
     }
+    }
+    const int iterations = a.iterations;
+    const double rnorm = a.rnorm;
+    const Eigen::VectorXd& z = a.z;
+    const Eigen::VectorXd& t_new = a.tangent;
     BranchPoint p;
     p.parameter = z(n) * ls;
     p.x = z.head(n) * xs;
@@ -290,14 +387,43 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     const Eigen::VectorXd dz = z - z_last;
     const double ds = std::sqrt(detail::inner(dz, dz));
     p.arclength = last.arclength + ds;
-    p.step = h;
+    p.step = h_taken;
     p.corrector_iterations = iterations;
     p.residual_norm = rnorm;
-    // Fold: the λ-component of the tangent changes sign; Hermite cubic λ̂(s) on [0, ds].
-    const double d0 = last.parameter_tangent(), d1 = p.parameter_tangent();
+    p.event = incoming.size() > 0;
+    // Fold: the λ-component of the tangent changes sign; Hermite cubic λ̂(s) on [0, ds] on the
+    // smooth piece (to the old piece's tangent at a switching point), and at a switching point
+    // whose new piece turns back in λ, the point itself.
+    const double d0 = last.parameter_tangent(), d1 = p.event ? incoming(n) : p.parameter_tangent();
     if (d0 * d1 < 0.0) {
       const double lambda_fold = detail::fold_parameter(z_last(n), z(n), d0, d1, ds);
       branch.folds.push_back({lambda_fold * ls, branch.points.size() - 1});
+    }
+    if (p.event && d1 * p.parameter_tangent() < 0.0) branch.folds.push_back({p.parameter, branch.points.size() - 1});
+    // Landings on the listed values this step passed (Newton at fixed λ from the interpolation).
+    for (size_t k = 0; k < o.land_on.size(); ++k) {
+      const double target = o.land_on[k];
+      if (landed[k] || (last.parameter - target) * (p.parameter - target) > 0.0) continue;
+      landed[k] = true;
+      const double w = p.parameter == last.parameter ? 0.0 : (target - last.parameter) / (p.parameter - last.parameter);
+      Eigen::VectorXd guess = last.x + w * (p.x - last.x);
+      NewtonResult r = [&] {
+        if constexpr (kPiecewise) {
+          return newton(detail::FixedOnPiece<S>{&system, target, &step_piece}, std::move(guess), landing_options, solver);
+        } else {
+          return newton(Fixed{&system, target}, std::move(guess), landing_options, solver);
+        }
+      }();
+      const double rn = system.residual(r.x, target).norm();
+      if (!(rn <= o.corrector_tolerance)) continue;  // not reached: absent from landings
+      BranchPoint l;
+      l.parameter = target;
+      l.x = std::move(r.x);
+      l.tangent = p.event ? incoming : t_new;
+      l.arclength = last.arclength + std::clamp(w, 0.0, 1.0) * ds;
+      l.corrector_iterations = r.report.iterations;
+      l.residual_norm = rn;
+      branch.landings.push_back(std::move(l));
     }
     branch.points.push_back(std::move(p));
     if (o.on_point) o.on_point(branch.points.size() - 1, branch.points.back());
@@ -311,6 +437,7 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
                                                   format_number(o.parameter_min) + ", " +
                                                   format_number(o.parameter_max) + "]");
     }
+    if (p.event) continue;  // keep h: the step to a switching point says nothing of the piece beyond
     h_accepted = h;
     corner_ahead = corner_ahead - h > 0.0 ? corner_ahead - h : kNoCorner;
     const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);

@@ -3,6 +3,8 @@
 /// Jacobian (dense or sparse) and its derivative in the parameter.
 
 #include <concepts>
+#include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -35,5 +37,33 @@ concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, doub
   requires std::same_as<decltype(s.linearize(x, p)), Linearization> ||
                std::same_as<decltype(s.linearize(x, p)), SparseLinearization>;
 };
+
+/// The smooth piece of a piecewise-smooth residual: one entry per switching unknown (a contact
+/// sample), 1 where the nonsmooth law takes its active branch (Signorini: the sample touches its
+/// stop, g_s = 0; penalty: the spring is compressed, f_s = k g_s), 0 where it takes the other
+/// (f_s = 0).
+using ActiveSet = std::vector<std::uint8_t>;
+
+/// A ParametrizedSystem whose residual is smooth on each piece of a finite partition, such as the
+/// complementarity min(λ_s, −g_s) or the kink of a penalty law at g_s = 0 [Leine & Nijmeijer
+/// 2004, Ch. 7; Acary & Brogliato 2008, Ch. 12]. Besides residual(x, p) and linearize(x, p) (the
+/// nonsmooth system, verified at every accepted point), it gives
+///   active_set(x, p)        the piece the nonsmooth residual picks at (x, p);
+///   residual(x, p, a),
+///   linearize(x, p, a)      the smooth residual of piece a and its linearization;
+///   events(x, p, a)         one event function per entry of a (same length and order), ≥ 0
+///                           while (x, p) lies in piece a: for Signorini λ_s on an active sample
+///                           and −g_s on an inactive one; for a penalty g_s and −g_s.
+/// A branch crosses into the neighbouring piece where an event function changes sign; the entry
+/// of that event is then flipped. pseudo_arclength locates these events and switches pieces
+/// there (continuation.hpp).
+template <class S>
+concept PiecewiseSmoothSystem =
+    ParametrizedSystem<S> && requires(const S& s, const Eigen::VectorXd& x, double p, const ActiveSet& a) {
+      { s.active_set(x, p) } -> std::same_as<ActiveSet>;
+      { s.residual(x, p, a) } -> std::convertible_to<Eigen::VectorXd>;
+      { s.events(x, p, a) } -> std::convertible_to<Eigen::VectorXd>;
+      requires std::same_as<decltype(s.linearize(x, p, a)), decltype(s.linearize(x, p))>;
+    };
 
 }  // namespace wbm::solvers

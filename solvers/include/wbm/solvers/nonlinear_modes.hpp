@@ -131,7 +131,9 @@ struct Backbone {
   /// branch; a level that could not be reached is absent or has converged = false).
   std::vector<ModeLevel> included;
   StopReason stop = StopReason::InitialPointFailed;  // continuation: why the branch ended
-  int kinks = 0;                      // corners of the nonsmooth branch (active-set changes), continuation
+  int kinks = 0;                      // continuation: corners of the nonsmooth branch, i.e. the events
+                                      // located and crossed (one or more samples switching at once)
+  int switches = 0;                   // continuation: samples switched at those events
   int rejected_steps = 0;             // continuation steps retried with half the step
   bool complete = false;              // energy_max reached (with a start: either end of the range)
   /// With BackboneContinuationOptions::start_penalty_stiffness: penalty orbits corrected, and the
@@ -253,6 +255,17 @@ class NonlinearModes {
     BackboneSystem(const NonlinearModes& modes, double penalty_stiffness);
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double energy) const;
     [[nodiscard]] SparseLinearization linearize(const Eigen::VectorXd& x, double energy) const;
+    /// The piecewise-smooth structure (PiecewiseSmoothSystem, linearization.hpp), one entry per
+    /// sample (stop-major, m per stop). Exact contact: sample s is active when the min of
+    /// min(f_s/f_ref, −g_s) picks −g_s (f_s/f_ref > −g_s); on piece a its row is −g_s (active) or
+    /// f_s/f_ref (inactive), and its event function f_s/f_ref (active) or −g_s (inactive).
+    /// Penalty: active when g_s > 0 (the spring is compressed), f_s = κ g_s on piece a where
+    /// active and 0 elsewhere; event g_s (active) or −g_s (inactive). g_s in units of g_ref.
+    /// Throw std::invalid_argument for an active set whose length is not the stops × m.
+    [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double energy) const;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double energy, const ActiveSet& active) const;
+    [[nodiscard]] SparseLinearization linearize(const Eigen::VectorXd& x, double energy, const ActiveSet& active) const;
+    [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double energy, const ActiveSet& active) const;
     /// The state of the linear mode at E ≤ 1 (an exact solution, no contact force).
     [[nodiscard]] Eigen::VectorXd linear_state(double energy) const;
     /// The state of a periodic orbit u(τ) = Σ_k Y(:, k) q_k(τ) at frequency f [Hz], e.g. a forced
@@ -282,8 +295,12 @@ class NonlinearModes {
       Eigen::VectorXd y, g, lambda;
       Eigen::VectorXd penalty_stiffness;  // f′(g) of the penalty law (penalty only)
     };
-    [[nodiscard]] Unpacked unpack(const Eigen::VectorXd& x) const;
-    [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian) const;
+    // With an active set, the penalty force follows it instead of the sign of g.
+    [[nodiscard]] Unpacked unpack(const Eigen::VectorXd& x, const ActiveSet* active = nullptr) const;
+    // The nonsmooth system (active == nullptr) or the smooth residual of piece *active.
+    [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian,
+                                               const ActiveSet* active = nullptr) const;
+    void check(const ActiveSet& active) const;
     const NonlinearModes* nm_;
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
     std::optional<contact::LinearPenalty> penalty_law_;  // κ (g)₊ on the normalized gap (penalty only)

@@ -1,0 +1,216 @@
+#pragma once
+/// Piece of pseudo_arclength (continuation.hpp), not API: one step of a piecewise-smooth system
+/// (PiecewiseSmoothSystem, linearization.hpp) on a fixed piece, with the events where the branch
+/// leaves it located and crossed.
+///
+/// On a fixed piece the residual is smooth, so the corrector converges quadratically for a small
+/// enough step and nothing depends on which branch of a min Newton's iterates happen to pick. A
+/// step that ends with an event function negative has crossed a switching surface: the crossing
+/// is located by regula falsi (Illinois) in the step length on φ(s) = min_(j crossing) e_j(z(s)),
+/// each evaluation a corrector solve on the old piece, until φ at a point beyond the last lies in
+/// the zero band (the
+/// corrector tolerance: event functions are not known better than the residual) or the bracket is
+/// below 1e-10 of the step. The point on the admissible side is a point of the branch (a corner).
+/// Every entry that crossed in the step and lies within the zero band there is flipped at once
+/// (simultaneous crossings, e.g. samples placed symmetrically in time, switch together whatever
+/// the last bits of their event functions). The new piece's tangent is its null direction, oriented so that the flipped entries'
+/// new event functions grow (rate > 0 along it): the half of the new piece that is admissible.
+/// This need not be within 90° of the old tangent (complementarity branches turn back at
+/// corners). Entries whose new event would decrease whichever way are left unflipped and the
+/// tangent recomputed; if none is left, no piece continues the branch and the step says why.
+/// [Leine & Nijmeijer 2004, Sec. 7.3 (switching in path following); Acary & Brogliato 2008,
+/// Sec. 12.2; the parametric LCP's pivoting, Cottle, Pang & Stone 1992, Sec. 4.5.]
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/detail/continuation_corrector.hpp>
+#include <wbm/solvers/linearization.hpp>
+
+namespace wbm::solvers::detail {
+
+// A piecewise-smooth system restricted to one piece, as a ParametrizedSystem for attempt_along.
+template <class S>
+struct OnPiece {
+  const S* system;
+  const ActiveSet* piece;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double p) const {
+    return system->residual(x, p, *piece);
+  }
+  [[nodiscard]] auto linearize(const Eigen::VectorXd& x, double p) const { return system->linearize(x, p, *piece); }
+};
+
+// The same at a fixed parameter, as a NonlinearSystem for newton() (landings).
+template <class S>
+struct FixedOnPiece {
+  const S* system;
+  double parameter;
+  const ActiveSet* piece;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
+    return system->residual(x, parameter, *piece);
+  }
+  [[nodiscard]] auto jacobian(const Eigen::VectorXd& x) const {
+    return system->linearize(x, parameter, *piece).jacobian;
+  }
+};
+
+// One step on a piece.
+struct PieceStep {
+  Attempt a;                 // the point reached (a.tangent: of the piece it continues on), or the failure
+  double step = 0.0;         // scaled arclength along the old tangent to a's hyperplane (< h at an event)
+  bool event = false;        // a is a switching point; the branch continues on `next`
+  ActiveSet next;            // the piece beyond the event
+  Eigen::VectorXd incoming;  // at an event: the old piece's tangent there
+  int switched = 0;          // entries flipped at the event
+  long iterations = 0;       // corrector iterations spent, location included
+  std::string failure;       // non-empty: an event was located but no piece continues the branch
+};
+
+// The tangent of `lin`'s piece: its null direction, bordered by `previous` (or, if that bordered
+// matrix is singular, by the parameter direction), normalized; NaN if none is found.
+template <class Lin, class Solver>
+Eigen::VectorXd piece_tangent(Solver& solver, const Lin& lin, const Eigen::VectorXd& previous, double xs, double ls) {
+  Eigen::VectorXd t = tangent(solver, lin, previous, xs, ls);
+  if (t.allFinite()) return t;
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(previous.size());
+  e(e.size() - 1) = 1.0;
+  return tangent(solver, lin, e, xs, ls);
+}
+
+template <class S, class Lin, class Solver>
+PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector,
+                     const ActiveSet& piece, const Eigen::VectorXd& t_last, const Eigen::VectorXd& z_last, double h,
+                     double event_tolerance, double zero_band) {
+  const auto n = z_last.size() - 1;
+  PieceStep out;
+  const OnPiece<S> on{&system, &piece};
+  auto at = [&](double step) {
+    Attempt a = attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, t_last, z_last, step);
+    out.iterations += a.iterations;
+    return a;
+  };
+  auto events = [&](const Eigen::VectorXd& z, const ActiveSet& a) -> Eigen::VectorXd {
+    return system.events(z.head(n) * xs, z(n) * ls, a);
+  };
+  out.a = at(h);
+  out.step = h;
+  if (!out.a.converged) return out;
+  Eigen::VectorXd e_hi = events(out.a.z, piece);
+  if (!(e_hi.minCoeff() < -event_tolerance)) return out;  // still on the piece
+
+  // The entries that crossed; φ(s) = their smallest event function at the point of step s.
+  const Eigen::VectorXd e_last = events(z_last, piece);
+  std::vector<Eigen::Index> crossing;
+  auto add_crossing = [&](const Eigen::VectorXd& e) {
+    for (Eigen::Index j = 0; j < e.size(); ++j) {
+      if (e(j) < -event_tolerance && std::find(crossing.begin(), crossing.end(), j) == crossing.end()) {
+        crossing.push_back(j);
+      }
+    }
+  };
+  auto phi = [&](const Eigen::VectorXd& e) {
+    double m = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j : crossing) m = std::min(m, e(j));
+    return m;
+  };
+  add_crossing(e_hi);
+  double lo = 0.0, hi = h;
+  double phi_lo = phi(e_last);             // φ at the low end (≥ 0)
+  double w_lo = phi_lo, w_hi = phi(e_hi);  // φ at the ends as Illinois weights them for the secant
+  Attempt a_lo;
+  a_lo.converged = true;
+  a_lo.z = z_last;
+  a_lo.tangent = t_last;
+  int kept = 0;  // Illinois: +1 after the low end moved, −1 after the high end moved
+  for (int it = 0; it < 100 && (lo == 0.0 || phi_lo > zero_band) && hi - lo > 1e-10 * h; ++it) {
+    double s = w_hi < w_lo ? hi - w_hi * (hi - lo) / (w_hi - w_lo) : 0.5 * (lo + hi);
+    if (!(s > lo + 1e-3 * (hi - lo) && s < hi - 1e-3 * (hi - lo))) s = 0.5 * (lo + hi);
+    Attempt a = at(s);
+    if (!a.converged) {  // the piece's corrector at this step: bisect instead
+      s = 0.5 * (lo + hi);
+      a = at(s);
+      if (!a.converged) break;
+    }
+    const Eigen::VectorXd e = events(a.z, piece);
+    add_crossing(e);  // an entry that crosses and comes back within the step joins
+    const double f = phi(e);
+    if (f >= 0.0) {
+      lo = s;
+      phi_lo = w_lo = f;
+      a_lo = std::move(a);
+      if (kept == +1) w_hi *= 0.5;
+      kept = +1;
+    } else {
+      hi = s;
+      w_hi = f;
+      e_hi = e;
+      if (kept == -1) w_lo *= 0.5;
+      kept = -1;
+    }
+  }
+  // The entries that switch: those that crossed in this step and lie within the zero band at the
+  // low end (ties: simultaneous crossings, e.g. samples placed symmetrically in time, whatever the
+  // last bits of their event functions), and once the bracket is tight every one negative at the
+  // high end; at least the one closest to its surface.
+  const Eigen::VectorXd e_lo = lo == 0.0 ? e_last : events(a_lo.z, piece);
+  const bool tight = !(hi - lo > 1e-10 * h);
+  std::vector<Eigen::Index> group;
+  Eigen::Index closest = crossing.front();
+  for (Eigen::Index j : crossing) {
+    if (e_lo(j) < e_lo(closest)) closest = j;
+    if (e_lo(j) <= zero_band || (tight && e_hi(j) < -event_tolerance)) group.push_back(j);
+  }
+  if (group.empty()) {
+    for (Eigen::Index j : crossing) {
+      if (e_lo(j) <= e_lo(closest) + zero_band) group.push_back(j);
+    }
+  }
+  out.a = std::move(a_lo);
+  out.step = lo;
+  out.event = true;
+  out.incoming = out.a.tangent;
+  const Eigen::VectorXd z = out.a.z;
+  // The new piece: flip the group, orient its tangent by the flipped entries' new events; drop
+  // the entries that would leave at once and try again.
+  constexpr double kProbe = 1e-6;
+  bool singular = false;
+  while (!group.empty()) {
+    out.next = piece;
+    for (Eigen::Index j : group) out.next[static_cast<size_t>(j)] ^= 1U;
+    const Lin lin = system.linearize(z.head(n) * xs, z(n) * ls, out.next);
+    Eigen::VectorXd t = piece_tangent(solver, lin, out.incoming, xs, ls);
+    if (!t.allFinite()) {
+      singular = true;
+      break;
+    }
+    const Eigen::VectorXd rate = (events(Eigen::VectorXd(z + kProbe * t), out.next) - events(z, out.next)) / kProbe;
+    double sum = 0.0;
+    for (Eigen::Index j : group) sum += rate(j);
+    if (sum < 0.0) t = -t;
+    const double sign = sum < 0.0 ? -1.0 : 1.0;
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index j : group) {
+      if (sign * rate(j) > 0.0) keep.push_back(j);
+    }
+    if (keep.size() == group.size()) {
+      out.a.tangent = std::move(t);
+      out.switched = static_cast<int>(group.size());
+      return out;
+    }
+    group = std::move(keep);
+  }
+  out.failure = singular ? "an event (an entry's event function through 0) was located, but the Jacobian of the piece "
+                           "beyond it is singular: no tangent continues the branch there (a degenerate switching point)"
+                         : "an event (an entry's event function through 0) was located, but no neighbouring piece "
+                           "continues the branch: the flipped entries' event functions decrease along either "
+                           "orientation of the new piece's tangent (a degenerate switching point)";
+  return out;
+}
+
+}  // namespace wbm::solvers::detail

@@ -1,0 +1,171 @@
+// Piecewise-smooth continuation (continuation.hpp, detail/continuation_events.hpp) against closed
+// forms: a spring against a stop (one event, the branch bends), a branch that turns back at the
+// corner (a fold located at the event), two symmetric samples that switch together, and the same
+// with the symmetry broken at the rounding level (the branch must not change).
+#include <algorithm>
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include <wbm/solvers/continuation.hpp>
+
+namespace {
+
+using namespace wbm;
+using solvers::ActiveSet;
+using solvers::Linearization;
+
+// DOFs u_i with springs k_i to ground and c between neighbours, a load λ on each, a stop at gap g
+// on each DOF with its contact force f_i as an unknown (Signorini), x = [u; f]:
+//   R_i     = k_i u_i + Σ_j c (u_i − u_j) + a f_i − λ      (a = 1: the stop pushes back;
+//                                                            a < 0: the branch turns back)
+//   R_(n+i) = min(f_i, g − u_i)
+// Pieces: active entry i → g − u_i = 0, event f_i; inactive → f_i = 0, event g − u_i.
+struct SpringsAgainstStops {
+  Eigen::VectorXd k;
+  double c = 0.0, a = 1.0, g = 1.0;
+  [[nodiscard]] Eigen::Index n() const { return k.size(); }
+  [[nodiscard]] Linearization eval(const Eigen::VectorXd& x, double lambda, const ActiveSet* piece) const {
+    const Eigen::Index m = n();
+    Linearization l;
+    l.residual = Eigen::VectorXd::Zero(2 * m);
+    l.jacobian = Eigen::MatrixXd::Zero(2 * m, 2 * m);
+    l.parameter_derivative = Eigen::VectorXd::Zero(2 * m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      l.residual(i) = k(i) * x(i) + a * x(m + i) - lambda;
+      l.jacobian(i, i) = k(i);
+      l.jacobian(i, m + i) = a;
+      for (Eigen::Index j : {i - 1, i + 1}) {
+        if (j < 0 || j >= m) continue;
+        l.residual(i) += c * (x(i) - x(j));
+        l.jacobian(i, i) += c;
+        l.jacobian(i, j) -= c;
+      }
+      l.parameter_derivative(i) = -1.0;
+      const double f = x(m + i), gap = g - x(i);
+      const bool active = piece ? (*piece)[static_cast<size_t>(i)] != 0 : !(f <= gap);
+      l.residual(m + i) = piece ? (active ? gap : f) : std::min(f, gap);
+      if (active) {
+        l.jacobian(m + i, i) = -1.0;
+      } else {
+        l.jacobian(m + i, m + i) = 1.0;
+      }
+    }
+    return l;
+  }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double p) const { return eval(x, p, nullptr).residual; }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double p) const { return eval(x, p, nullptr); }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double p, const ActiveSet& s) const {
+    return eval(x, p, &s).residual;
+  }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double p, const ActiveSet& s) const {
+    return eval(x, p, &s);
+  }
+  [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double /*p*/) const {
+    ActiveSet s(static_cast<size_t>(n()));
+    for (Eigen::Index i = 0; i < n(); ++i) s[static_cast<size_t>(i)] = !(x(n() + i) <= g - x(i));
+    return s;
+  }
+  [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double /*p*/, const ActiveSet& s) const {
+    Eigen::VectorXd e(n());
+    for (Eigen::Index i = 0; i < n(); ++i) e(i) = s[static_cast<size_t>(i)] ? x(n() + i) : g - x(i);
+    return e;
+  }
+};
+static_assert(solvers::PiecewiseSmoothSystem<SpringsAgainstStops>);
+
+solvers::PseudoArclengthOptions options(double lambda_min, double lambda_max, int direction = +1) {
+  solvers::PseudoArclengthOptions o;
+  o.parameter_min = lambda_min;
+  o.parameter_max = lambda_max;
+  o.direction = direction;
+  o.initial_step = 0.05;
+  o.max_step = 0.3;
+  o.corrector_tolerance = 1e-12;
+  return o;
+}
+
+// One spring, k = 2, g = 1: u = min(λ/k, g), f = max(0, λ − k g); the corner at λ = k g = 2.
+TEST(PiecewiseContinuation, SpringAgainstAStopFollowsTheClosedFormThroughOneEvent) {
+  SpringsAgainstStops s;
+  s.k = Eigen::VectorXd::Constant(1, 2.0);
+  const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd::Zero(2), 0.0, options(-0.1, 5.0));
+  ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
+  EXPECT_EQ(b.events, 1);
+  EXPECT_EQ(b.switches, 1);
+  EXPECT_EQ(b.rejected_steps, 0);
+  int corners = 0;
+  for (const auto& p : b.points) {
+    EXPECT_NEAR(p.x(0), std::min(p.parameter / 2.0, 1.0), 1e-12) << "λ = " << p.parameter;
+    EXPECT_NEAR(p.x(1), std::max(0.0, p.parameter - 2.0), 1e-12) << "λ = " << p.parameter;
+    if (p.event) {
+      ++corners;
+      EXPECT_NEAR(p.parameter, 2.0, 1e-12);  // located on the switching surface u = g
+    }
+  }
+  EXPECT_EQ(corners, 1);
+  EXPECT_TRUE(b.folds.empty());
+}
+
+// a = −1: the contact piece u = g, f = k g − λ exists for λ ≤ k g only, so the branch comes up
+// the free piece to λ = k g and turns back along the contact piece: a fold at the corner, where
+// a step-halving corrector finds no hyperplane normal to the old tangent that meets the branch.
+TEST(PiecewiseContinuation, BranchTurningBackAtTheCornerIsFollowedAndTheFoldSitsAtTheEvent) {
+  SpringsAgainstStops s;
+  s.k = Eigen::VectorXd::Constant(1, 2.0);
+  s.a = -1.0;
+  const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd::Zero(2), 0.0, options(-0.1, 5.0));
+  ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
+  EXPECT_LT(b.points.back().parameter, -0.1);  // left by the lower end, after the turn
+  EXPECT_EQ(b.events, 1);
+  ASSERT_EQ(b.folds.size(), 1U);
+  EXPECT_NEAR(b.folds[0].parameter, 2.0, 1e-12);
+  bool turned = false;
+  for (const auto& p : b.points) {
+    turned = turned || p.event;
+    // Free piece u = λ/k, f = 0; contact piece u = g, f = k g − λ.
+    EXPECT_NEAR(p.x(0), turned ? 1.0 : p.parameter / 2.0, 1e-12) << "λ = " << p.parameter;
+    EXPECT_NEAR(p.x(1), turned ? 2.0 - p.parameter : 0.0, 1e-12) << "λ = " << p.parameter;
+    EXPECT_GE(p.x(1), -1e-12);
+  }
+}
+
+// Two equal DOFs coupled by c: both reach the stop at λ = k g at once and switch in one event;
+// with k₂ = k₁ (1 + 1e-12) they reach it 1e-12 apart. Either way every point lies on the closed
+// form (u = min(λ/k, g) on each, f = max(0, λ − k g)) and the branch ends at the same place.
+TEST(PiecewiseContinuation, SimultaneousCrossingsSwitchTogetherWhateverTheirLastBits) {
+  for (double perturbation : {0.0, 1e-12, -3e-12}) {
+    SpringsAgainstStops s;
+    s.k = Eigen::Vector2d(2.0, 2.0 * (1.0 + perturbation));
+    s.c = 0.5;
+    const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd::Zero(4), 0.0, options(-0.1, 5.0));
+    ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message << " (perturbation " << perturbation << ")";
+    EXPECT_GE(b.events, 1);
+    EXPECT_LE(b.events, 2);
+    EXPECT_EQ(b.switches, 2);
+    for (const auto& p : b.points) {
+      for (int i = 0; i < 2; ++i) {
+        EXPECT_NEAR(p.x(i), std::min(p.parameter / 2.0, 1.0), 1e-10) << "λ = " << p.parameter;
+        EXPECT_NEAR(p.x(2 + i), std::max(0.0, p.parameter - s.k(i)), 1e-10) << "λ = " << p.parameter;
+      }
+    }
+    EXPECT_GT(b.points.back().parameter, 5.0);
+  }
+}
+
+// A release: from contact at λ = 5 downwards, the contact force vanishes at λ = k g and the DOF
+// leaves the stop (an active entry's event, f, through 0).
+TEST(PiecewiseContinuation, ReleaseFromTheStopIsAnEventOnTheMultiplier) {
+  SpringsAgainstStops s;
+  s.k = Eigen::VectorXd::Constant(1, 2.0);
+  const auto b = solvers::pseudo_arclength(s, Eigen::Vector2d(1.0, 3.0), 5.0, options(-1.0, 5.5, -1));
+  ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
+  EXPECT_EQ(b.events, 1);
+  EXPECT_LT(b.points.back().parameter, -1.0);
+  for (const auto& p : b.points) {
+    EXPECT_NEAR(p.x(0), std::min(p.parameter / 2.0, 1.0), 1e-12);
+    EXPECT_NEAR(p.x(1), std::max(0.0, p.parameter - 2.0), 1e-12);
+  }
+}
+
+}  // namespace
