@@ -425,6 +425,20 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       l.residual_norm = rn;
       branch.landings.push_back(std::move(l));
     }
+    // A piecewise branch that comes back to one of its recent points goes round a cycle of
+    // pieces (an orientation decided at a degenerate switching point): stop and say so.
+    if constexpr (kPiecewise) {
+      const size_t recent = std::min<size_t>(branch.points.size(), 64);
+      for (size_t k = branch.points.size() - recent; k + 1 < branch.points.size(); ++k) {
+        const Eigen::VectorXd d = z - scaled(branch.points[k].x, branch.points[k].parameter);
+        if (std::sqrt(detail::inner(d, d)) <= 1e-8) {
+          return finish(StopReason::DegenerateEvent,
+                        "the branch came back to its point at λ = " + format_number(branch.points[k].parameter) +
+                            " after " + std::to_string(branch.points.size() - k) +
+                            " points: a cycle of pieces from a degenerate switching point");
+        }
+      }
+    }
     branch.points.push_back(std::move(p));
     if (o.on_point) o.on_point(branch.points.size() - 1, branch.points.back());
     const double lambda = branch.points.back().parameter;

@@ -41,8 +41,9 @@
 /// Backbones: backbone() steps in energy with LL11 Alg. 1 or 2 (a secant predictor between
 /// levels; fine up to E ≈ 1.3 on the LL11 rod, where the branch starts turning back in energy);
 /// continue_backbone() continues the KKT conditions by pseudo-arclength through those turning
-/// points and the corners where contact samples change state (to E = 10 on the LL11 rod with
-/// N = 8, 12 or 16 and m = 256; with N = 16, m = 512 it stops at E = 1.317). docs/design.md.
+/// points and the corners where contact samples change state, located as events (BackboneSystem
+/// is a PiecewiseSmoothSystem; to E = 10 on the LL11 rod with N = 8 … 24, m = 256;
+/// reproduce/ll11_robustness tabulates N × m). docs/design.md.
 
 #include <functional>
 #include <memory>

@@ -135,10 +135,12 @@ struct Attempt {
 };
 
 // Predictor ẑ⁰ = ẑ_last + step·direction, corrector newton() without line search on the
-// bordered system, then the tangent at the converged point (from the cached linearization).
+// bordered system, then (unless with_tangent is false) the tangent at the converged point (from
+// the cached linearization).
 template <class S, class Lin, class Solver>
 Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector_options,
-                      const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step) {
+                      const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step,
+                      bool with_tangent = true) {
   Attempt a;
   const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
   NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
@@ -147,7 +149,7 @@ Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, con
   a.iterations = r.report.iterations;
   a.rnorm = r.report.residual_norms.back();
   a.z = std::move(r.x);
-  if (a.converged) {
+  if (a.converged && with_tangent) {
     a.tangent = tangent(solver, corrector.at(a.z), direction, xs, ls);
     if (!a.tangent.allFinite()) a.converged = false;
   }

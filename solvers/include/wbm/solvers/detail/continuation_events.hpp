@@ -90,8 +90,8 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   const auto n = z_last.size() - 1;
   PieceStep out;
   const OnPiece<S> on{&system, &piece};
-  auto at = [&](double step) {
-    Attempt a = attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, t_last, z_last, step);
+  auto at = [&](double step, bool with_tangent = true) {
+    Attempt a = attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, t_last, z_last, step, with_tangent);
     out.iterations += a.iterations;
     return a;
   };
@@ -131,10 +131,10 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   for (int it = 0; it < 100 && (lo == 0.0 || phi_lo > zero_band) && hi - lo > 1e-10 * h; ++it) {
     double s = w_hi < w_lo ? hi - w_hi * (hi - lo) / (w_hi - w_lo) : 0.5 * (lo + hi);
     if (!(s > lo + 1e-3 * (hi - lo) && s < hi - 1e-3 * (hi - lo))) s = 0.5 * (lo + hi);
-    Attempt a = at(s);
-    if (!a.converged) {  // the piece's corrector at this step: bisect instead
+    Attempt a = at(s, false);  // the tangent only at the point kept (below)
+    if (!a.converged) {        // the piece's corrector at this step: bisect instead
       s = 0.5 * (lo + hi);
-      a = at(s);
+      a = at(s, false);
       if (!a.converged) break;
     }
     const Eigen::VectorXd e = events(a.z, piece);
@@ -171,6 +171,11 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
       if (e_lo(j) <= e_lo(closest) + zero_band) group.push_back(j);
     }
   }
+  if (lo > 0.0) {  // the old piece's tangent at the switching point
+    const Lin at_lo = system.linearize(a_lo.z.head(n) * xs, a_lo.z(n) * ls, piece);
+    a_lo.tangent = tangent(solver, at_lo, t_last, xs, ls);
+    if (!a_lo.tangent.allFinite()) a_lo.tangent = t_last;
+  }
   out.a = std::move(a_lo);
   out.step = lo;
   out.event = true;
@@ -180,6 +185,7 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   // the entries that would leave at once and try again.
   constexpr double kProbe = 1e-6;
   bool singular = false;
+  int widened = 0;
   while (!group.empty()) {
     out.next = piece;
     for (Eigen::Index j : group) out.next[static_cast<size_t>(j)] ^= 1U;
@@ -190,6 +196,26 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
       break;
     }
     const Eigen::VectorXd rate = (events(Eigen::VectorXd(z + kProbe * t), out.next) - events(z, out.next)) / kProbe;
+    // A flipped entry whose new event hardly moves along the new piece (rate below 1e-4 of the
+    // largest event rate) cannot orient it: its partner in a simultaneous crossing was left out
+    // (noise in the event functions above the zero band, e.g. multipliers at N = 4). The entry
+    // closest to its surface that was decreasing too (within 1e4 zero bands) joins, at most four.
+    const double rate_scale = rate.cwiseAbs().maxCoeff();
+    bool degenerate = false;
+    for (Eigen::Index j : group) degenerate = degenerate || std::abs(rate(j)) < 1e-4 * rate_scale;
+    if (degenerate && widened < 4) {
+      Eigen::Index partner = -1;
+      for (Eigen::Index j = 0; j < e_lo.size(); ++j) {
+        if (std::find(group.begin(), group.end(), j) != group.end() || e_lo(j) > 1e4 * zero_band) continue;
+        if (!(e_hi(j) < e_lo(j))) continue;
+        if (partner < 0 || e_lo(j) < e_lo(partner)) partner = j;
+      }
+      if (partner >= 0) {
+        group.push_back(partner);
+        ++widened;
+        continue;
+      }
+    }
     double sum = 0.0;
     for (Eigen::Index j : group) sum += rate(j);
     if (sum < 0.0) t = -t;
