@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
                   << ", " << outs.size() << " runs in " << format("%.1f", seconds) << " s, largest difference "
                   << format("%.1e", diff) << "\n";
         const std::string outcome =
-            !valid ? "not run: " + ref.message : (ref.complete ? "range reached" : ref.stop + ": " + ref.message);
+            !valid ? "not run: " + ref.message : (ref.complete ? "range reached" : ref.message);
         rows << "| " << n_h << " | " << m << " | " << outcome << " | " << (valid ? std::to_string(ref.levels) : "")
              << " | " << (valid ? std::to_string(ref.corners) : "") << " | " << (valid ? std::to_string(ref.folds.size()) : "")
              << " | " << format("%.5f", ref.f_check) << " | " << format("%.5f", ref.f_end) << " | "

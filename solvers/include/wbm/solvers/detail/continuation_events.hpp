@@ -185,7 +185,6 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   // the entries that would leave at once and try again.
   constexpr double kProbe = 1e-6;
   bool singular = false;
-  int widened = 0;
   while (!group.empty()) {
     out.next = piece;
     for (Eigen::Index j : group) out.next[static_cast<size_t>(j)] ^= 1U;
@@ -196,26 +195,6 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
       break;
     }
     const Eigen::VectorXd rate = (events(Eigen::VectorXd(z + kProbe * t), out.next) - events(z, out.next)) / kProbe;
-    // A flipped entry whose new event hardly moves along the new piece (rate below 1e-4 of the
-    // largest event rate) cannot orient it: its partner in a simultaneous crossing was left out
-    // (noise in the event functions above the zero band, e.g. multipliers at N = 4). The entry
-    // closest to its surface that was decreasing too (within 1e4 zero bands) joins, at most four.
-    const double rate_scale = rate.cwiseAbs().maxCoeff();
-    bool degenerate = false;
-    for (Eigen::Index j : group) degenerate = degenerate || std::abs(rate(j)) < 1e-4 * rate_scale;
-    if (degenerate && widened < 4) {
-      Eigen::Index partner = -1;
-      for (Eigen::Index j = 0; j < e_lo.size(); ++j) {
-        if (std::find(group.begin(), group.end(), j) != group.end() || e_lo(j) > 1e4 * zero_band) continue;
-        if (!(e_hi(j) < e_lo(j))) continue;
-        if (partner < 0 || e_lo(j) < e_lo(partner)) partner = j;
-      }
-      if (partner >= 0) {
-        group.push_back(partner);
-        ++widened;
-        continue;
-      }
-    }
     double sum = 0.0;
     for (Eigen::Index j : group) sum += rate(j);
     if (sum < 0.0) t = -t;
