@@ -270,7 +270,6 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   ActiveSet piece;
   if constexpr (kPiecewise) piece = system.active_set(p0.x, lambda0);
   size_t standing_events = 0;
-  int returns = 0;  // returns of the branch to one of its recent points (cycle guard below)
   // On a piece the corrector aims at half the tolerance, and an event function counts as crossed
   // below −tolerance/4 (the nonsmooth residual of every point accepted is verified against the
   // tolerance). Event functions within the tolerance of 0 are at their surface (zero band): the
@@ -425,24 +424,6 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       l.corrector_iterations = r.report.iterations;
       l.residual_norm = rn;
       branch.landings.push_back(std::move(l));
-    }
-    // A piecewise branch that comes back to one of its recent points after travelling away (more
-    // than 100 times the distance) has gone round a loop of pieces (an orientation decided at a
-    // degenerate switching point). One loop may be left again on the next pass (the step differs);
-    // at the third return the branch is going round a cycle: stop and say so. Events a few 1e-9
-    // apart are not a return.
-    if constexpr (kPiecewise) {
-      const size_t recent = std::min<size_t>(branch.points.size(), 64);
-      for (size_t k = branch.points.size() - recent; k + 1 < branch.points.size(); ++k) {
-        const Eigen::VectorXd d = z - scaled(branch.points[k].x, branch.points[k].parameter);
-        if (std::sqrt(detail::inner(d, d)) <= 1e-8 && p.arclength - branch.points[k].arclength > 1e-6 &&
-            ++returns >= 3) {
-          return finish(StopReason::DegenerateEvent,
-                        "the branch came back to its point at λ = " + format_number(branch.points[k].parameter) +
-                            " after " + std::to_string(branch.points.size() - k) +
-                            " points: a cycle of pieces from a degenerate switching point");
-        }
-      }
     }
     branch.points.push_back(std::move(p));
     if (o.on_point) o.on_point(branch.points.size() - 1, branch.points.back());
