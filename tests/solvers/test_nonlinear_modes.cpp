@@ -160,14 +160,8 @@ TEST(NonlinearModes, BackbonePiecesAreSmoothAndTheirEventsMatchTheMin) {
     solvers::ActiveSet flipped = own;
     for (size_t i = 0; i < flipped.size(); i += 3) flipped[i] ^= 1U;  // a piece the min does not pick
     const Eigen::MatrixXd j(system.linearize(x, energy, flipped).jacobian);
-    Eigen::MatrixXd fd(j.rows(), j.cols());
-    const double h = 1e-7;
-    for (Eigen::Index i = 0; i < x.size(); ++i) {
-      Eigen::VectorXd p = x, m = x;
-      p(i) += h;
-      m(i) -= h;
-      fd.col(i) = (system.residual(p, energy, flipped) - system.residual(m, energy, flipped)) / (2 * h);
-    }
+    const Eigen::MatrixXd fd = wbm::testing::fd_jacobian(
+        [&](const Eigen::VectorXd& y) { return system.residual(y, energy, flipped); }, x, 1e-7, 1.0);
     EXPECT_LT((j - fd).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "penalty " << k;
     // Flipped samples trade their event for the other quantity: λ_s or −g_s (exact), −(±g_s) (penalty).
     const Eigen::VectorXd ef = system.events(x, energy, flipped);

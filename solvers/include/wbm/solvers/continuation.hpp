@@ -326,55 +326,58 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + " (h = " +
                             format_number(h) +
-                            (a.converged ? ", tangent turning too fast" : ", corrector failed, ‖R‖ = " + format_number(a.rnorm)) +
+                            (a.converged ? ", tangent turning too fast"
+                                         : ", corrector failed, ‖R‖ = " + format_number(a.rnorm)) +
                             "): a singular point of the piece (a bifurcation or an unbounded branch), not a switch");
         }
         continue;
       }
       standing_events = 0;
     } else {
-    if (o.corner_bisection && corner_ahead < kNoCorner) h = std::min(h, corner_ahead <= o.kink_step ? o.kink_step : 0.5 * corner_ahead);
-    a = attempt_along(last.tangent, z_last, h);
-    branch.corrector_iterations += a.iterations;
-    // A sharp turn halves h, down to kink_step: below it the turn is a corner of a nonsmooth
-    // branch (a contact sample changing state). The corner is then jumped: one step of the last
-    // accepted length along the old tangent; if that lands on a branch that continues in the old
-    // direction it is taken (a secondary branch that starts at the corner is not followed),
-    // otherwise the corner point itself is kept.
-    sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
-    if (sharp && h <= o.kink_step) {
-      ++branch.kinks;
-      detail::Attempt jump = attempt_along(last.tangent, z_last, h_accepted);
-      branch.corrector_iterations += jump.iterations;
-      if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
-        a = std::move(jump);
-        h = h_accepted;
-        sharp = false;
+      if (o.corner_bisection && corner_ahead < kNoCorner) {
+        h = std::min(h, corner_ahead <= o.kink_step ? o.kink_step : 0.5 * corner_ahead);
       }
-    }
-    if (!a.converged && h <= o.kink_step && o.corner_restart) {
-      detail::Attempt c;
-      if (detail::restart_at_corner(system, solver, xs, ls, last.tangent, z_last, o.kink_step, o.max_step, attempt_along,
-                                    branch.corrector_iterations, c)) {
+      a = attempt_along(last.tangent, z_last, h);
+      branch.corrector_iterations += a.iterations;
+      // A sharp turn halves h, down to kink_step: below it the turn is a corner of a nonsmooth
+      // branch (a contact sample changing state). The corner is then jumped: one step of the last
+      // accepted length along the old tangent; if that lands on a branch that continues in the old
+      // direction it is taken (a secondary branch that starts at the corner is not followed),
+      // otherwise the corner point itself is kept.
+      sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
+      if (sharp && h <= o.kink_step) {
         ++branch.kinks;
-        a = std::move(c);
-        corner_ahead = kNoCorner;
-        sharp = false;
+        detail::Attempt jump = attempt_along(last.tangent, z_last, h_accepted);
+        branch.corrector_iterations += jump.iterations;
+        if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
+          a = std::move(jump);
+          h = h_accepted;
+          sharp = false;
+        }
       }
-    }
-    if (!a.converged || (sharp && h > o.kink_step)) {
-      ++branch.rejected_steps;
-      if (a.cycled) corner_ahead = std::min(corner_ahead, h);
-      h *= 0.5;
-      if (h < o.min_step) {
-        return finish(StopReason::StepBelowMinimum,
-                      "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
-                          (a.converged ? ", tangent turning too fast)"
-                                       : ", corrector failed, ‖R‖ = " + format_number(a.rnorm) + ", tolerance " +
-                                             format_number(o.corrector_tolerance) + ")"));
+      if (!a.converged && h <= o.kink_step && o.corner_restart) {
+        detail::Attempt c;
+        if (detail::restart_at_corner(system, solver, xs, ls, last.tangent, z_last, o.kink_step, o.max_step, attempt_along,
+                                      branch.corrector_iterations, c)) {
+          ++branch.kinks;
+          a = std::move(c);
+          corner_ahead = kNoCorner;
+          sharp = false;
+        }
       }
-      continue;
-    }
+      if (!a.converged || (sharp && h > o.kink_step)) {
+        ++branch.rejected_steps;
+        if (a.cycled) corner_ahead = std::min(corner_ahead, h);
+        h *= 0.5;
+        if (h < o.min_step) {
+          return finish(StopReason::StepBelowMinimum,
+                        "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
+                            (a.converged ? ", tangent turning too fast)"
+                                         : ", corrector failed, ‖R‖ = " + format_number(a.rnorm) + ", tolerance " +
+                                               format_number(o.corrector_tolerance) + ")"));
+        }
+        continue;
+      }
     }
     const int iterations = a.iterations;
     const double rnorm = a.rnorm;
@@ -437,7 +440,8 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
                                                   format_number(o.parameter_min) + ", " +
                                                   format_number(o.parameter_max) + "]");
     }
-    if (p.event) continue;  // keep h: the step to a switching point says nothing of the piece beyond
+    // Keep h after a switching point: the step to it says nothing of the piece beyond.
+    if (branch.points.back().event) continue;
     h_accepted = h;
     corner_ahead = corner_ahead - h > 0.0 ? corner_ahead - h : kNoCorner;
     const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);
