@@ -20,21 +20,31 @@ build: configure
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-# Unit and scene tests under AddressSanitizer and UndefinedBehaviorSanitizer, with assertions on
+# Unit, scene and Python tests (tests/python, Hypothesis included, on the sanitized module with the
+# interpreter CMake found) under AddressSanitizer and UndefinedBehaviorSanitizer, with assertions on
 # (no NDEBUG: Eigen's range and size checks are active). -O1 keeps the run within minutes; any
 # report fails the run (halt_on_error, -fno-sanitize-recover). The benchmarks, the reproduce
 # executables' --quick runs and the install test are left to `make test`.
 SANITIZE_BUILD ?= build-sanitize
 SANITIZE_FLAGS  = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+CXX_FOR_ASAN   ?= g++
 check-sanitize: deps
 	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
 	  -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
+	  -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
 	  -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
 	  || { cat $(SANITIZE_BUILD).configure.log; exit 1; }
 	@cmake --build $(SANITIZE_BUILD) -j $(JOBS) --target test_wavelets test_spectral test_fem test_contact \
-	  test_solvers test_scene wbm
+	  test_solvers test_scene wbm wbm_python
 	@cd $(SANITIZE_BUILD) && ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -L 'wavelets|spectral|fem|contact|solvers|scene'
+	@# The pytest suite (Hypothesis included) on the sanitized module: the interpreter is not
+	@# instrumented, so the ASan runtime is preloaded; CPython's own allocations at exit are not
+	@# leaks of ours (detect_leaks=0).
+	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$$($(CXX_FOR_ASAN) -print-file-name=libasan.so) $$($(CXX_FOR_ASAN) -print-file-name=libubsan.so)" \
+	  ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  PYTHONPATH=$(CURDIR)/$(SANITIZE_BUILD)/python WBM_CLI=$(CURDIR)/$(SANITIZE_BUILD)/cli/wbm PYTHONDONTWRITEBYTECODE=1 \
+	  "$$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' CMakeCache.txt)" -m pytest -q -p no:cacheprovider $(CURDIR)/tests/python
 
 # libFuzzer (clang-14) on the scene parser and the Matrix Market reader, each for FUZZ_SECONDS,
 # the libraries instrumented with ASan + UBSan and assertions on; seeds are our own scenes and

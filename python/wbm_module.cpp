@@ -26,11 +26,14 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/model_checks.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/time_basis.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
+
+#include "arguments.hpp"
 
 namespace py = pybind11;
 using namespace wbm;
@@ -39,13 +42,10 @@ namespace {
 
 // JSON (nlohmann) ↔ Python objects through the json module: exact for numbers and strings.
 py::object to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
-nlohmann::json from_python(const py::handle& o) {
-  return nlohmann::json::parse(py::module_::import("json").attr("dumps")(o).cast<std::string>());
-}
 
 // A scene from a path (str or os.PathLike naming an existing file), a TOML string or a dict.
 scene::Scene scene_of(const py::object& source) {
-  if (py::isinstance<py::dict>(source)) return scene::scene_from_json(from_python(source), "<dict>");
+  if (py::isinstance<py::dict>(source)) return scene::scene_from_json(python::json_of(source, ""), "<dict>");
   const py::object fspath = py::module_::import("os").attr("fspath");
   if (py::isinstance<py::str>(source)) {
     const std::string text = source.cast<std::string>();
@@ -142,10 +142,14 @@ key, allowed range and a way out, as `wbm check` prints it.)");
       .def_property_readonly("dimension", &solvers::TimeBasis::dimension)
       .def(
           "values",
-          [](const solvers::TimeBasis& b, const Eigen::VectorXd& tau, int derivative) { return b.values(tau, derivative); },
+          [](const solvers::TimeBasis& b, const py::object& tau, int derivative) {
+            return b.values(python::vector(tau, "TimeBasis.values: tau", -1, "a 1-D array of finite times τ"),
+                            derivative);
+          },
           py::arg("tau"), py::arg("derivative") = 0,
-          "Values (or d-th τ-derivatives) at tau: array (len(tau), M), column k = function k. Raises ValueError "
-          "for a derivative the family does not have pointwise.")
+          "Values (or d-th τ-derivatives) at tau (1-D, finite, normalized time, 1-periodic): array (len(tau), M), "
+          "column k = function k. Raises ValueError for another shape or dtype, a non-finite τ, or a derivative the "
+          "family does not have pointwise.")
       .def("__repr__", [](const solvers::TimeBasis& b) {
         return "TimeBasis('" + b.key() + "', " + std::to_string(b.dimension()) + ")";
       });
@@ -170,14 +174,24 @@ order the family does not have.)");
 
   // Systems.
   py::class_<solvers::MechanicalSystem>(m, "MechanicalSystem", "M ü + C u̇ + K u = f: n × n SI matrices, stored sparse.")
-      .def(py::init([](const Eigen::MatrixXd& mass, const Eigen::MatrixXd& damping, const Eigen::MatrixXd& stiffness) {
-             solvers::MechanicalSystem s{sparse(mass), sparse(damping), sparse(stiffness)};
-             s.validate();
+      .def(py::init([](const py::object& mass, const py::object& damping, const py::object& stiffness) {
+             const Eigen::MatrixXd m = python::matrix(mass, "MechanicalSystem: mass", -1, -1, "(n, n), n >= 1");
+             const std::string square = "(n, n) = (" + std::to_string(m.rows()) + ", " + std::to_string(m.rows()) +
+                                        "), the shape of the mass";
+             if (m.cols() != m.rows()) {
+               throw std::invalid_argument("MechanicalSystem: mass has shape (" + std::to_string(m.rows()) + ", " +
+                                           std::to_string(m.cols()) + "); expected a square (n, n)");
+             }
+             solvers::MechanicalSystem s{
+                 sparse(m), sparse(python::matrix(damping, "MechanicalSystem: damping", m.rows(), m.rows(), square)),
+                 sparse(python::matrix(stiffness, "MechanicalSystem: stiffness", m.rows(), m.rows(), square))};
+             solvers::require_physical(s, "MechanicalSystem");
              return s;
            }),
            py::arg("mass"), py::arg("damping"), py::arg("stiffness"),
-           "Dense n × n arrays M [kg], C [N·s/m], K [N/m]. Raises ValueError for sizes, symmetry or a mass that "
-           "is not positive definite.")
+           "Dense n × n arrays of finite reals M [kg], C [N·s/m], K [N/m]. Raises ValueError for another shape or "
+           "dtype, a non-finite entry, an asymmetric matrix, a mass that is not positive definite or a stiffness that "
+           "is not positive semidefinite (solvers::require_physical; rigid-body modes are accepted).")
       .def_property_readonly("dofs", &solvers::MechanicalSystem::dofs)
       .def_property_readonly("mass", [](const solvers::MechanicalSystem& s) { return Eigen::MatrixXd(s.mass); })
       .def_property_readonly("damping", [](const solvers::MechanicalSystem& s) { return Eigen::MatrixXd(s.damping); })
@@ -201,8 +215,13 @@ order the family does not have.)");
 
   // Contact laws.
   py::class_<contact::ContactLaw, std::shared_ptr<contact::ContactLaw>>(m, "ContactLaw")
-      .def("force", &contact::ContactLaw::force, py::arg("u"), "Contact force f_c(u) ≥ 0 [N] at displacement u [m].")
-      .def("stiffness", &contact::ContactLaw::stiffness, py::arg("u"), "df_c/du [N/m].")
+      .def(
+          "force", [](const contact::ContactLaw& l, double u) { return l.force(python::finite(u, "ContactLaw.force: u")); },
+          py::arg("u"), "Contact force f_c(u) ≥ 0 [N] at displacement u [m] (finite; ValueError otherwise).")
+      .def(
+          "stiffness",
+          [](const contact::ContactLaw& l, double u) { return l.stiffness(python::finite(u, "ContactLaw.stiffness: u")); },
+          py::arg("u"), "df_c/du [N/m] at u [m] (finite; ValueError otherwise).")
       .def_property_readonly("gap", &contact::ContactLaw::gap)
       .def_property_readonly("rigid", &contact::ContactLaw::rigid)
       .def("__repr__", &contact::ContactLaw::describe);
@@ -400,11 +419,17 @@ other_share with f_j ≈ h f); and linear_frequency_hz, folds
 (energies where the branch turns back), converged (energy max reached), message, wall_time_s.)");
   m.def(
       "evaluate",
-      [](const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients, const Eigen::VectorXd& tau) -> Eigen::MatrixXd {
-        return coefficients * trial.values(tau, 0).transpose();
+      [](const solvers::TimeBasis& trial, const py::object& coefficients, const py::object& tau) -> Eigen::MatrixXd {
+        const int m = trial.dimension();
+        const Eigen::MatrixXd a = python::matrix(coefficients, "evaluate: coefficients", -1, m,
+                                                 "(n, M) = (n, " + std::to_string(m) +
+                                                     "): one row per DOF, one column per trial function");
+        return a * trial.values(python::vector(tau, "evaluate: tau", -1, "a 1-D array of finite times τ"), 0).transpose();
       },
       py::arg("trial"), py::arg("coefficients"), py::arg("tau"),
-      "Displacements u(τ) [m] of every DOF: array (n, len(tau)) from the n × M coefficients of solve().");
+      "Displacements u(τ) [m] of every DOF: array (n, len(tau)) from the n × M coefficients of solve() (finite "
+      "reals) at the finite normalized times tau (1-D). Raises ValueError for another shape or dtype, or a "
+      "non-finite entry.");
 
   py::register_exception_translator([](std::exception_ptr p) {
     try {

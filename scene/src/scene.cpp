@@ -18,6 +18,7 @@
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
 #include <wbm/scene/reduce.hpp>
+#include <wbm/solvers/model_checks.hpp>
 #include <toml++/toml.h>
 
 #include "reader.hpp"
@@ -176,6 +177,7 @@ class Parser {
                  "\"" + std::string(to_string(s_.analysis.algorithm)) + "\" (augmented Lagrangian, LL11 Alg. 1/2) imposes exact contact: use "
                  "law = \"rigid\", or algorithm = \"continuation\" for penalty stops");
       }
+      stiffness_definiteness(root);
       if (root.get("contact") == nullptr) {
         r_.error(root.source(), "[contact]", "missing: analysis \"nnm\" needs at least one stop (law = \"rigid\" "
                                              "for exact contact, or \"linear\" for a penalty spring), with a gap > 0");
@@ -187,11 +189,13 @@ class Parser {
       contacts(root);
       solver(root);
       timestep(root);
+      stiffness_definiteness(root);
       condense(root);
     }
     if (s_.analysis.kind != AnalysisKind::NonlinearModes) basis(root);
     if (plot) basis_plot(root);
     output(root);
+    load_harmonics(root);
     if (s_.analysis.kind == AnalysisKind::Timestep && s_.rigid() &&
         (s_.moreau_jean.steps_per_period < s_.output.samples || s_.moreau_jean.steps_per_period % s_.output.samples != 0)) {
       r_.error(root.source(), "timestep.steps_per_period",
@@ -786,6 +790,7 @@ class Parser {
           load.harmonic = static_cast<int>(r_.integer(l, section, "harmonic", 0, 1000, 1,
                                                       " (0: a constant load F cos(phase), h: h times the forcing frequency)"));
           f.loads.push_back(load);
+          load_sources_.push_back(l.contains("harmonic") ? Reader::source_of(l, "harmonic") : l.source());
         }
       }
     }
@@ -906,6 +911,39 @@ class Parser {
 
   // Static condensation of massless DOFs (solvers/condensation.hpp), checked here so that a
   // scene it cannot condense is refused with the reason.
+  // K symmetric positive semidefinite (issue #40): a negative ω² of K φ = ω² M φ is refused;
+  // rigid-body modes (ω² = 0) only where a contact can hold them, with a warning, since the
+  // harmonic-0 block of G is then singular wherever every stop is open.
+  void stiffness_definiteness(const toml::table& root) {
+    if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
+    const Structure& st = *s_.structure;
+    const solvers::StiffnessInertia inertia =
+        solvers::stiffness_inertia({st.mass, Eigen::SparseMatrix<double>(st.mass.rows(), st.mass.cols()), st.stiffness});
+    const toml::table* t = root.get_as<toml::table>("structure");
+    const toml::source_region where = t != nullptr && t->contains("stiffness") ? Reader::source_of(*t, "stiffness")
+                                                                                : root.source();
+    if (inertia.factorized && inertia.negative > 0) {
+      r_.error(where, "structure.stiffness",
+               "K is not positive semidefinite: K φ = ω² M φ has " + std::to_string(inertia.negative) +
+                   " eigenvalue(s) ω² < 0 (a negative stiffness: the equilibrium is unstable and no periodic response "
+                   "exists around it); check the sign of K and of every spring");
+    } else if (inertia.rigid_body > 0 && s_.analysis.kind == AnalysisKind::NonlinearModes) {
+      r_.error(where, "structure.stiffness",
+               "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0): analysis \"nnm\" "
+                   "continues the first mode from its linear frequency, which must be > 0; clamp a DOF or add a "
+                   "spring to ground");
+    } else if (inertia.rigid_body > 0 && s_.contacts.empty()) {
+      r_.error(where, "structure.stiffness",
+               "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0) and no [[contact]] holds "
+                   "them: the mean position is undetermined (G's harmonic-0 block K is singular); clamp a DOF, add a "
+                   "spring to ground, or add the stop that holds the structure");
+    } else if (inertia.rigid_body > 0) {
+      r_.warn(where, "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0): only the contacts "
+                     "hold the structure, and a state where every stop is open has no unique mean position "
+                     "(docs/scenes.md, [structure])");
+    }
+  }
+
   void condense(const toml::table& root) {
     if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
     const std::vector<int> massless = solvers::massless_dofs(s_.structure->mass);
@@ -1448,9 +1486,42 @@ class Parser {
     }
   }
 
+  // A load at harmonic h needs 2h < M trial functions (solve, continuation) or 2h < P output
+  // samples (timestep): above, its projection or its samples alias it to a lower harmonic.
+  void load_harmonics(const toml::table& root) {
+    if (!s_.forcing || s_.analysis.kind == AnalysisKind::NonlinearModes || s_.analysis.kind == AnalysisKind::BasisPlot) {
+      return;
+    }
+    const bool timestep = s_.analysis.kind == AnalysisKind::Timestep;
+    const int functions = timestep ? s_.output.samples : s_.basis.dimension;
+    const int highest = solvers::highest_resolved_harmonic(functions);
+    const std::string fix =
+        timestep ? "raise [output] samples above " : s_.basis.harmonics > 0 ? "raise [basis] harmonics to at least "
+                                                                             : "raise [basis] dimension (or level) above ";
+    if (highest < 1 && s_.forcing->amplitude != 0.0) {
+      r_.error(root.source(), timestep ? "output.samples" : "basis.dimension",
+               std::to_string(functions) + (timestep ? " output samples per period" : " functions") +
+                   " cannot carry the forcing at harmonic 1 (2h < " + std::to_string(functions) +
+                   " fails): use at least 3, e.g. " + (timestep ? "samples = 1024" : "harmonics = 16 or level = 6"));
+    }
+    for (size_t i = 0; i < s_.forcing->loads.size(); ++i) {
+      const auto& l = s_.forcing->loads[i];
+      if (l.amplitude == 0.0 || l.harmonic <= highest) continue;
+      const toml::source_region where = i < load_sources_.size() ? load_sources_[i] : root.source();
+      r_.error(where, "forcing.loads[" + std::to_string(i) + "].harmonic",
+               std::to_string(l.harmonic) + " is above the highest harmonic " + std::to_string(highest) + " that " +
+                   (timestep ? "the " + std::to_string(functions) + " output samples per period"
+                             : "the basis' M = " + std::to_string(functions) + " functions") +
+                   " resolve (2h < " + std::to_string(functions) + "); the load would be aliased to a lower harmonic: " +
+                   fix + std::to_string(timestep || s_.basis.harmonics == 0 ? 2 * l.harmonic : l.harmonic) +
+                   ", or remove the load");
+    }
+  }
+
   Reader& r_;
   std::filesystem::path base_;
   Scene s_;
+  std::vector<toml::source_region> load_sources_;  // of forcing.loads[i].harmonic, for load_harmonics
 };
 
 Scene parse_table(const toml::table& root, const std::filesystem::path& file) {

@@ -13,6 +13,8 @@
 
 #include <Eigen/SparseLU>
 
+#include <wbm/solvers/model_checks.hpp>
+
 namespace wbm::solvers {
 
 void MechanicalSystem::validate() const {
@@ -120,6 +122,21 @@ void HarmonicForcing::validate(int dofs) const {
   }
 }
 
+void HarmonicForcing::require_resolved(int functions, const std::string& what, const std::string& fix) const {
+  const int highest = highest_resolved_harmonic(functions);
+  const auto all = loads();
+  for (size_t j = 0; j < all.size(); ++j) {
+    const auto& l = all[j];
+    if (l.amplitude == 0.0 || l.harmonic <= highest) continue;
+    const std::string name = j == 0 ? "HarmonicForcing (the load F cos 2πft)" : "HarmonicForcing.more[" + std::to_string(j - 1) + "]";
+    throw std::invalid_argument(name + " acts at harmonic " + std::to_string(l.harmonic) + " on DOF " +
+                                std::to_string(l.dof) + ", above the highest harmonic " + std::to_string(highest) +
+                                " that " + what + " resolve (2h < " + std::to_string(functions) +
+                                "); its samples would alias it to a lower harmonic: " + fix + " to more than " +
+                                std::to_string(2 * l.harmonic) + ", or remove the load");
+  }
+}
+
 void validate_direction(const std::vector<std::pair<int, double>>& along, int dof, int dofs, const std::string& where) {
   std::set<int> dofs_in;
   double norm = 0.0;
@@ -182,8 +199,9 @@ Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const Harmon
   Eigen::SparseLU<Eigen::SparseMatrix<Complex>> lu(d);
   if (lu.info() != Eigen::Success) {
     std::ostringstream os;
-    os << "frequency_response: K - w^2 M + i w C is singular at f = " << forcing.frequency_hz
-       << " Hz (undamped natural frequency?); add damping or move the frequency";
+    const std::string why = explain_singular_dynamic_stiffness(system, forcing.frequency_hz, 1);
+    os << "frequency_response: K - w^2 M + i w C is singular at f = " << forcing.frequency_hz << " Hz: "
+       << (why.empty() ? "G is singular to working precision (check the scale of M, C and K)" : why);
     throw std::runtime_error(os.str());
   }
   Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(system.dofs());

@@ -196,6 +196,18 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     throw std::invalid_argument("trace_response: threads = " + std::to_string(o.threads) +
                                 ": must be >= 0 (0: one per hardware thread, 1: serial)");
   }
+  if (o.samples < 8) {
+    throw std::invalid_argument("trace_response: samples = " + std::to_string(o.samples) +
+                                ": must be >= 8 (P samples per period of max/min and of the monodromy steps; e.g. 512)");
+  }
+  if (!(o.max_parameter_step >= 0.0) || !std::isfinite(o.max_parameter_step)) {
+    throw std::invalid_argument("trace_response: max_parameter_step = " + format_number(o.max_parameter_step) +
+                                ": must be finite and >= 0 (0: no cap on |Δλ| per step)");
+  }
+  if (!(o.max_state >= 0.0) || !std::isfinite(o.max_state)) {
+    throw std::invalid_argument("trace_response: max_state = " + format_number(o.max_state) +
+                                ": must be finite and >= 0 (0: no bound on the contact unknowns)");
+  }
   const ForcedResponseFamily family(base, o.parameter);
   // The start, with load stepping if needed.
   const WeightedResidualSolution start = base.solve();

@@ -138,6 +138,9 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   forcing.validate(system.dofs());
   ContactPoint::validate(contacts, system.dofs());
   options.validate();
+  forcing.require_resolved(options.samples_per_period,
+                           "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
+                           "raise MoreauJeanOptions.samples_per_period (and steps_per_period, a multiple of it)");
   for (const auto& c : contacts) {
     if (!c.law->rigid()) {
       throw std::invalid_argument("integrate_moreau_jean_to_periodic: the contact at DOF " + std::to_string(c.dof) +
@@ -272,6 +275,9 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   ContactPoint::validate(contacts, system.dofs());
   refuse_rigid_stops(contacts, "integrate_to_periodic");
   options.validate();
+  forcing.require_resolved(options.samples_per_period,
+                           "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
+                           "raise TimeIntegrationOptions.samples_per_period");
   const auto start = std::chrono::steady_clock::now();
 
   const double t = 1.0 / forcing.frequency_hz;  // period T [s]

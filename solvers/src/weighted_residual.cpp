@@ -16,6 +16,7 @@
 
 #include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/model_checks.hpp>
 #include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -378,6 +379,12 @@ struct WeightedResidual::Impl {
                                   ": must be 0 (automatic, max(256, 2M)) or >= M = " + std::to_string(m));
     }
     q = options.time_samples > 0 ? options.time_samples : std::max(256, 2 * m);
+    if (dynamic_stiffness_overflows(system, forcing.frequency_hz, highest_resolved_harmonic(m))) {
+      throw std::invalid_argument("HarmonicForcing.frequency_hz = " + format_number(forcing.frequency_hz) + " Hz: " +
+                                  explain_singular_dynamic_stiffness(system, forcing.frequency_hz,
+                                                                     highest_resolved_harmonic(m)));
+    }
+    forcing.require_resolved(m, "the weighted residual's M = " + std::to_string(m) + " trial functions", "raise the basis dimension");
     const std::string why = inadmissibility(trial, weighting, options.formulation, options.operators);
     if (!why.empty()) throw std::invalid_argument(why);
 
@@ -1072,11 +1079,19 @@ struct WeightedResidual::Impl {
     return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
   }
 
+  // What makes G singular, in words (model_checks.hpp), or the generic reasons.
+  [[nodiscard]] std::string singular_reason() const {
+    const std::string why = explain_singular_dynamic_stiffness(system, forcing.frequency_hz, highest_resolved_harmonic(m));
+    return why.empty() ? "no rigid-body mode, overflow or undamped resonance found; G is singular to working precision "
+                         "(check the scale of M, C and K)"
+                       : why;
+  }
+
   void require_factorized() const {
     if (!factorized) {
       std::ostringstream os;
       os << "weighted residual " << trial.name() << ":" << weighting.name() << ": the linear operator G is singular at f = "
-         << forcing.frequency_hz << " Hz (forcing at an undamped natural frequency?); add damping or move the frequency";
+         << forcing.frequency_hz << " Hz: " << singular_reason();
       throw std::runtime_error(os.str());
     }
   }
@@ -1592,7 +1607,7 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
   s.condition_number = condition_number();
   if (!p.factorized) {
     s.report.status = SolveStatus::SingularJacobian;
-    s.report.message = "linear operator G is singular (forcing at an undamped natural frequency?)";
+    s.report.message = "linear operator G is singular: " + p.singular_reason();
     s.coefficients = Eigen::MatrixXd::Zero(p.n, p.m);
     s.relative_residual = std::numeric_limits<double>::infinity();
     return s;

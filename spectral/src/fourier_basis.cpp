@@ -55,6 +55,10 @@ double FourierBasis::value(int k, double tau, int derivative) const {
 Eigen::MatrixXd FourierBasis::values(const Eigen::VectorXd& tau, int derivative) const {
   Eigen::MatrixXd v(tau.size(), dimension_);
   for (Eigen::Index p = 0; p < tau.size(); ++p) {
+    if (!std::isfinite(tau(p))) {
+      throw std::invalid_argument("FourierBasis::values: tau[" + std::to_string(p) + "] is not finite; give finite "
+                                  "normalized times (the functions are 1-periodic)");
+    }
     for (int k = 0; k < dimension_; ++k) v(p, k) = value(k, tau(p), derivative);
   }
   return v;

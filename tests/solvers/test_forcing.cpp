@@ -4,10 +4,12 @@
 // with h_j = 0 the static K⁻¹ e F cos φ. The weighted residual (three pairs), the BDF and the
 // Moreau–Jean integrators must all give it; frequency_response sums harmonic-1 loads with their
 // phases and refuses other harmonics.
+// A load above the highest harmonic the basis or the output samples resolve is refused (issue #40).
 #include <wbm/solvers/mechanical_system.hpp>
 
 #include <cmath>
 #include <complex>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -15,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
@@ -122,4 +125,58 @@ TEST(SeveralLoads, FrequencyResponseSumsPhasedLoadsAndRefusesOtherHarmonics) {
   bad.more[2].dof = 2;
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { bad.validate(2); },
                                                          {"HarmonicForcing.more[2].dof = 2: must lie in [0, 2)"});
+}
+
+// Issue #40, item 1: a load at harmonic h needs 2h < M functions (or P output samples); above,
+// its samples alias it to a lower harmonic (harmonic 250 on H = 32 came out at harmonic 6, and
+// the run said "converged"). The highest resolved harmonic, H for M = 2H + 1, still gives the
+// closed-form amplitude F/|k − Ω²m + iΩc| with Ω = 2π H f; one more is refused with the fix.
+TEST(SeveralLoads, ALoadAboveTheHighestResolvedHarmonicIsRefusedNotAliased) {
+  Eigen::MatrixXd m(1, 1), k(1, 1), c(1, 1);
+  m << 1.0;
+  k << 4e4;
+  c << 5.0;  // α = 5 s⁻¹, C = αM
+  const solvers::MechanicalSystem system{m.sparseView(), c.sparseView(), k.sparseView()};
+  const double f = 10.0;
+  const auto at = [&](int h) { return solvers::HarmonicForcing{0, 0.0, f, {{0, 5.0, 0.0, h}}}; };
+  EXPECT_EQ(solvers::highest_resolved_harmonic(65), 32);
+  EXPECT_EQ(solvers::highest_resolved_harmonic(64), 31);  // cos 32·2πτ has no sine partner at M = 64
+
+  const auto basis = solvers::TimeBasis::fourier_harmonics(32);
+  const auto top = solvers::solve_weighted_residual(system, at(32), {}, basis, basis);
+  ASSERT_TRUE(top.report.converged()) << top.report.message;
+  const double w = 2.0 * std::numbers::pi * 32 * f;
+  const double exact = 5.0 / std::abs(std::complex<double>(4e4 - w * w, w * 5.0));
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(256, 0.0, 255.0 / 256.0);
+  const Eigen::MatrixXd u = solvers::evaluate_fields(basis, top.coefficients, tau, f).displacement;
+  EXPECT_NEAR(std::sqrt(2.0 * u.squaredNorm() / 256.0), exact, 1e-9 * exact);  // rms of one harmonic: A/√2
+
+  for (const int h : {33, 250, 1000}) {
+    wbm::testing::expect_throw_with<std::invalid_argument>(
+        [&] { (void)solvers::solve_weighted_residual(system, at(h), {}, basis, basis); },
+        {"HarmonicForcing.more[0] acts at harmonic " + std::to_string(h), "highest harmonic 32",
+         "raise the basis dimension to more than " + std::to_string(2 * h)});
+  }
+  const auto haar = solvers::TimeBasis::from_name("haar", 64);  // wavelets alias the same way: M box averages
+  const auto fourier = solvers::TimeBasis::fourier(64);
+  EXPECT_THROW((void)solvers::solve_weighted_residual(system, at(32), {}, haar, fourier), std::invalid_argument);
+  EXPECT_TRUE(solvers::solve_weighted_residual(system, at(31), {}, haar, fourier).report.converged());
+  // The forcing's own harmonic-1 load needs M ≥ 3: M = 2 (1 and cos 2πτ, no sine) cannot carry it.
+  const auto two = solvers::TimeBasis::fourier(2);
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::solve_weighted_residual(system, {0, 1.0, f}, {}, two, two); },
+      {"HarmonicForcing (the load F cos 2πft) acts at harmonic 1", "highest harmonic 0"});
+
+  solvers::TimeIntegrationOptions bdf;
+  bdf.samples_per_period = 64;
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::integrate_to_periodic(system, at(32), {}, bdf); },
+      {"P = 64 output samples", "raise TimeIntegrationOptions.samples_per_period"});
+  solvers::MoreauJeanOptions mj;
+  mj.samples_per_period = 64;
+  mj.steps_per_period = 4096;
+  const std::vector<solvers::ContactPoint> stop = {{0, std::make_shared<contact::RigidStop>(1.0)}};
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::integrate_moreau_jean_to_periodic(system, at(40), stop, mj); },
+      {"P = 64 output samples", "raise MoreauJeanOptions.samples_per_period"});
 }

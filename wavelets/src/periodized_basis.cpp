@@ -54,7 +54,12 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> PeriodizedBasis::sparse_values(cons
   const double width = function_->support_end() - function_->support_begin() + 1.0;
   entries.reserve(static_cast<size_t>(tau.size()) * static_cast<size_t>(std::min<double>(width, dimension_)));
   for (Eigen::Index p = 0; p < tau.size(); ++p) {
-    const double x = std::ldexp(tau(p), level_);
+    if (!std::isfinite(tau(p))) {
+      throw std::invalid_argument("PeriodizedBasis::values: tau[" + std::to_string(p) + "] is not finite; give "
+                                  "normalized times, finite (the functions are 1-periodic)");
+    }
+    // The functions are 1-periodic: τ − ⌊τ⌋ ∈ [0, 1) keeps the shifts below in range for any finite τ.
+    const double x = std::ldexp(tau(p) - std::floor(tau(p)), level_);
     const auto lo = static_cast<long>(std::ceil(x - function_->support_end()));
     const auto hi = static_cast<long>(std::floor(x - function_->support_begin()));
     for (long j = lo; j <= hi; ++j) {

@@ -56,7 +56,18 @@ struct HarmonicForcing {
   /// Throws std::invalid_argument naming the field, its value and the allowed range (also for
   /// each entry of `more`: DOF, finite amplitude and phase, harmonic ≥ 0).
   void validate(int dofs) const;
+  /// Refuses a load that `functions` periodic functions (or samples) per period cannot carry:
+  /// every load with F_j ≠ 0 needs 2 h_j < functions (the sampling theorem), i.e.
+  /// h_j ≤ highest_resolved_harmonic(functions); above it its samples or projections alias it to
+  /// a lower harmonic (issue #40: harmonic 250 on M = 65 functions came out at harmonic 6).
+  /// Throws std::invalid_argument naming the load, its harmonic, `what` (e.g. "the weighted
+  /// residual's M = 65 trial functions") and `fix` (e.g. "raise the basis dimension").
+  void require_resolved(int functions, const std::string& what, const std::string& fix) const;
 };
+
+/// The highest harmonic h with 2h < `functions`: ⌊(functions − 1)/2⌋ (H for M = 2H + 1 Fourier
+/// functions; M/2 − 1 for M = 2^J, whose top Fourier function cos πMτ has no sine partner).
+[[nodiscard]] constexpr int highest_resolved_harmonic(int functions) noexcept { return (functions - 1) / 2; }
 
 /// A contact law acting along a direction over the DOFs (law shared, immutable). The law is
 /// evaluated on the contact displacement u_c = e_cᵀ u, towards closing the gap g0 − u_c, and its

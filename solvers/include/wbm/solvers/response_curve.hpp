@@ -109,6 +109,7 @@ struct ResponseCurveOptions {
   int observed_dof = -1;               // DOF of max/min/amplitude; −1 = the forced DOF
   /// P samples per period for max/min, and the monodromy steps; where a verdict is not settled
   /// (some ||μ| − 1| ≤ 2 × its error estimate, floquet.hpp) P is quadrupled, at most twice.
+  /// Throws std::invalid_argument (trace_response) if P < 8.
   int samples = 512;
   bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
   /// Threads for the stability of the points (each point's monodromy matrix is independent, so

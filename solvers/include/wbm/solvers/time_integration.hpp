@@ -64,7 +64,8 @@ struct PeriodicResponse {
 ///   δ_i = rms(u_i − u_{i−1}) / rms(u_i) < periodicity_tolerance
 /// ("rms of the relative error between the tip displacements for the i and i − 1 periods",
 /// [JL14 Sec. 4]) and returns period i. Throws std::invalid_argument for invalid inputs (and
-/// for rigid stops, which have no force law: integrate_moreau_jean_to_periodic); a run that
+/// for rigid stops, which have no force law: integrate_moreau_jean_to_periodic; and for a load
+/// at a harmonic h with 2h ≥ P, which the output samples would alias); a run that
 /// hits max_periods or a GSL failure is reported in `report`, never thrown.
 [[nodiscard]] PeriodicResponse integrate_to_periodic(const MechanicalSystem& system,
                                                      const HarmonicForcing& forcing,
@@ -95,7 +96,8 @@ struct MoreauJeanOptions {
 /// First order in h through impacts (the velocity jumps), second order elsewhere for θ = ½.
 /// Periods, samples and the periodicity test δ_i are those of integrate_to_periodic. Every
 /// contact must be a rigid stop (contact::RigidStop): penalty laws go to integrate_to_periodic.
-/// Throws std::invalid_argument for invalid inputs; a run that hits max_periods is reported.
+/// Throws std::invalid_argument for invalid inputs (a load at 2h ≥ P included); a run that hits
+/// max_periods is reported.
 [[nodiscard]] PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system,
                                                                  const HarmonicForcing& forcing,
                                                                  const std::vector<ContactPoint>& contacts,

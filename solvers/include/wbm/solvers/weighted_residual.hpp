@@ -244,7 +244,8 @@ struct WeightedResidualSolution {
 /// echo of the impulses and the iteration may stagnate (reported, not hidden). Mixing rigid and
 /// penalty contacts, and ContactQuadrature::CellAverage with rigid stops, are refused.
 ///
-/// Throws std::invalid_argument for invalid inputs, for M differing between trial and weighting,
+/// Throws std::invalid_argument for invalid inputs, for a load at a harmonic h with 2h ≥ M
+/// (HarmonicForcing::require_resolved: M functions would alias it), for M differing between trial and weighting,
 /// and for a pair/formulation that needs a derivative a basis lacks; the message names the
 /// basis, the order, the term of the equation and the formulation that works (e.g. Haar trial:
 /// Formulation::Distributional). Immutable after construction.

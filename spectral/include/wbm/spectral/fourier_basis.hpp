@@ -39,6 +39,7 @@ class FourierBasis {
   /// d-th τ-derivative of q_k at τ, d ≥ 0. Throws std::out_of_range for k outside [0, M).
   [[nodiscard]] double value(int k, double tau, int derivative = 0) const;
   /// Matrix of values (rows = times, columns = basis functions): V(p, k) = q_k^{(d)}(τ_p).
+  /// Throws std::invalid_argument for a non-finite τ_p (naming p).
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
 
   /// The derivative in coefficient space, D (M × M, sparse): q_k' = Σ_l D(k, l) q_l, i.e.

@@ -48,11 +48,12 @@ class PeriodizedBasis {
   /// outside [0, M), std::invalid_argument for d > max_derivative() (naming the alternative).
   [[nodiscard]] double value(int k, double tau, int derivative = 0) const;
   /// Values (rows = times, columns = basis functions): V(p, k) = φ_{J,k}^{(d)}(τ_p); built by
-  /// support, O(Q · support width) evaluations of φ (a dense Q × M result).
+  /// support, O(Q · support width) evaluations of φ (a dense Q × M result). Any finite τ (taken
+  /// modulo 1); throws std::invalid_argument for a non-finite τ_p (naming p), and as value().
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
   /// The same values as a sparse row-major matrix (Q × M, the zeros outside the supports not
   /// stored): O(Q · support width) time and memory (DB6, M = 2^14 on Q = 2M samples: at most 11
-  /// entries per row, about 4 MB, where the dense matrix needs 4.3 GB). Throws as value().
+  /// entries per row, about 4 MB, where the dense matrix needs 4.3 GB). Throws as values().
   [[nodiscard]] Eigen::SparseMatrix<double, Eigen::RowMajor> sparse_values(const Eigen::VectorXd& tau,
                                                                            int derivative = 0) const;
   /// Values on the uniform grid τ_q = q/Q, q = 0 … Q − 1 (Q × M). Throws if samples < 1.
