@@ -6,12 +6,17 @@
 //   wbm check SCENE [--json]           validate only; print the resolved scene
 //   wbm bases [-M M]                   bases and the formulations each admits
 //   wbm --version
-// Exit status: 0 converged (or valid, for check); 1 not converged or a failed write;
-// 2 bad input (scene file, command line, unusable -o). Nothing is written on bad input.
+// Exit status: 0 converged (or valid, for check); 1 not converged, a failed write, or a tool that
+// failed (CalculiX, in `wbm reduce` and in a deck scene alike); 2 bad input (scene file, command
+// line, unusable -o). Nothing is written on bad input. SIGINT or SIGTERM during `wbm run` stops
+// at the next progress report: the staging folder (and a folder the run created) is removed, the
+// previous result stays as it was, and the process ends by the same signal (exit 130 or 143 in
+// a shell); a second signal ends it at once (the next run removes the leftover staging folder).
 // wbm plot: 0 drawn, 1 matplotlib missing or drawing failed, 2 not a result folder. A run whose
 // pictures fail still exits with the run's status (the pictures are extras; a warning says why).
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -38,6 +43,18 @@ namespace {
 constexpr int kConverged = 0;
 constexpr int kNotConverged = 1;
 constexpr int kBadInput = 2;
+
+// The signal that asked the run to stop (0: none). The handler only records it and restores the
+// default action, so that a second signal ends the process at once.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void on_stop_signal(int signal_number) {
+  g_stop_signal = signal_number;
+  std::signal(signal_number, SIG_DFL);
+}
+
+// Thrown from the progress report once a stop signal has arrived: unwinding removes the staging.
+struct Interrupted {};
 
 // A progress bar on standard error, only on a terminal and only once a run has lasted 1 s:
 // fraction done, what the analysis says (point, parameter, step size) and the elapsed time.
@@ -114,25 +131,47 @@ void print_warnings(const wbm::scene::Scene& s) {
   for (const auto& w : s.warnings) std::cerr << w << "\n";
 }
 
-// Loads a scene; prints its problems and returns nullopt on bad input.
-std::optional<wbm::scene::Scene> load(const std::string& path) {
+// Loads a scene; prints its problems and returns nullopt with `status` set: kBadInput for a bad
+// scene, kNotConverged when a tool it runs failed (CalculiX on a deck).
+std::optional<wbm::scene::Scene> load(const std::string& path, int& status) {
+  const auto print = [](const std::exception& e) {
+    const std::string what = e.what();
+    std::cerr << what;
+    if (what.empty() || what.back() != '\n') std::cerr << "\n";
+  };
   try {
     auto s = wbm::scene::load_scene(path);
     print_warnings(s);
     return s;
   } catch (const std::invalid_argument& e) {
-    std::cerr << e.what();
-    if (std::string(e.what()).back() != '\n') std::cerr << "\n";
+    print(e);
+    status = kBadInput;
   } catch (const std::runtime_error& e) {
-    std::cerr << e.what() << "\n";
+    print(e);
+    std::cerr << "wbm: a tool the scene runs failed (above)\n";
+    status = kNotConverged;
   }
   std::cerr << "wbm: " << path << ": not run; nothing written\n";
   return std::nullopt;
 }
 
+// An -o given as "" or naming a file: the message, else "".
+std::string unusable_output(const std::string& out, bool given) {
+  if (given && out.empty()) return "-o '': an empty folder name; give a folder, or leave -o out (wbm-out/<name>)";
+  std::error_code ec;
+  if (!out.empty() && std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec)) {
+    return "-o " + out + ": is a file, not a folder; give a folder (created if missing)";
+  }
+  return "";
+}
+
 // `wbm reduce`: exit 0 when written, 2 for bad input (nothing written), 1 when ccx or the
 // reduction fails.
-int reduce(const wbm::scene::ReductionRequest& request, std::string out, bool quiet) {
+int reduce(const wbm::scene::ReductionRequest& request, std::string out, bool out_given, bool quiet) {
+  if (const std::string why = unusable_output(out, out_given); !why.empty()) {
+    std::cerr << "wbm reduce: " << why << "; nothing written\n";
+    return kBadInput;
+  }
   if (out.empty()) out = (std::filesystem::path("wbm-out") / (request.deck.stem().string() + "-reduced")).string();
   try {
     const nlohmann::json s = wbm::scene::reduce_deck(request, out);
@@ -161,9 +200,15 @@ int reduce(const wbm::scene::ReductionRequest& request, std::string out, bool qu
   }
 }
 
-int run(const std::string& scene_path, std::string out, bool quiet, bool plots, const std::string& command_line) {
-  const auto scene = load(scene_path);
-  if (!scene) return kBadInput;
+int run(const std::string& scene_path, std::string out, bool out_given, bool quiet, bool plots,
+        const std::string& command_line) {
+  if (const std::string why = unusable_output(out, out_given); !why.empty()) {
+    std::cerr << "wbm: " << why << "; not run\n";
+    return kBadInput;
+  }
+  int status = kBadInput;
+  const auto scene = load(scene_path, status);
+  if (!scene) return status;
   if (out.empty()) out = (std::filesystem::path("wbm-out") / scene->name).string();
   std::optional<wbm::scene::StagedOutput> staged;
   try {
@@ -173,10 +218,26 @@ int run(const std::string& scene_path, std::string out, bool quiet, bool plots, 
     return kBadInput;
   }
   wbm::scene::AnalysisResult result;
-  {
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  const auto stopped = [&staged]() {
+    const int signal_number = g_stop_signal;
+    staged.reset();  // the staging folder, and a folder created for it, go
+    std::cerr << "\nwbm: stopped by signal " << signal_number << "; nothing written, the folder is as it was\n";
+    std::signal(signal_number, SIG_DFL);
+    std::raise(signal_number);
+    return 128 + signal_number;  // if the default action returns (it does not for SIGINT and SIGTERM)
+  };
+  try {
     ProgressBar bar(!quiet);
-    result = wbm::scene::run_analysis(*scene, [&](double f, const std::string& label) { bar(f, label); });
+    result = wbm::scene::run_analysis(*scene, [&](double f, const std::string& label) {
+      if (g_stop_signal != 0) throw Interrupted{};
+      bar(f, label);
+    });
+  } catch (const Interrupted&) {
+    return stopped();
   }
+  if (g_stop_signal != 0) return stopped();
   nlohmann::json json = {{"command", command_line},
                          {"scene_file", std::filesystem::absolute(scene_path).lexically_normal().string()},
                          {"scene", wbm::scene::to_json(*scene)},
@@ -207,7 +268,11 @@ int run(const std::string& scene_path, std::string out, bool quiet, bool plots, 
     json["files"] = files;
     files_written = files.size();
     staged->text("result.json", json.dump(2) + "\n");
+    std::signal(SIGINT, SIG_IGN);  // the commit is a few renames: let it finish
+    std::signal(SIGTERM, SIG_IGN);
     staged->commit("result.json");
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
   } catch (const std::exception& e) {
     std::cerr << "wbm: " << out << ": " << e.what() << "; nothing written\n";
     return kNotConverged;
@@ -230,8 +295,9 @@ int run(const std::string& scene_path, std::string out, bool quiet, bool plots, 
 }
 
 int check(const std::string& scene_path, bool json) {
-  const auto scene = load(scene_path);
-  if (!scene) return kBadInput;
+  int status = kBadInput;
+  const auto scene = load(scene_path, status);
+  if (!scene) return status;
   if (json) {
     std::cout << wbm::scene::to_json(*scene).dump(2) << "\n";
   } else {
@@ -302,7 +368,9 @@ int main(int argc, char** argv) {
   int dimension = 64;
   auto* run_cmd = app.add_subcommand("run", "Run the analysis of a scene; write CSV files and result.json");
   run_cmd->add_option("scene", scene_path, "Scene file (.toml), or a result.json to re-run")->required();
-  run_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<scene name>)");
+  auto* run_out = run_cmd->add_option("-o,--output", out,
+                                      "Output folder (default: wbm-out/<scene name>); the files of an earlier result "
+                                      "there that this run does not write are removed");
   run_cmd->add_flag("-q,--quiet", quiet, "No summary and no progress bar");
   bool no_plots = false;
   run_cmd->add_flag("--no-plots", no_plots, "Do not draw PNG pictures of the results (matplotlib)");
@@ -331,7 +399,7 @@ int main(int argc, char** argv) {
   reduce_cmd->add_option("--units", reduction.units,
                          "The deck's unit system, converted to SI (N/m, kg, m, Hz): SI, N-m-kg-s, N-mm-t-s, kN-mm-kg-ms; "
                          "default: the deck's units, unconverted");
-  reduce_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<deck>-reduced)");
+  auto* reduce_out = reduce_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<deck>-reduced)");
   reduce_cmd->add_flag("-q,--quiet", quiet, "No summary");
   auto* bases_cmd = app.add_subcommand("bases", "List the time bases and the formulations each admits");
   bases_cmd->add_option("-M,--dimension", dimension, "Dimension M = 2^J used for the check")->capture_default_str();
@@ -345,7 +413,7 @@ int main(int argc, char** argv) {
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
   try {
-    if (*run_cmd) return run(scene_path, out, quiet, !no_plots, command_line);
+    if (*run_cmd) return run(scene_path, out, run_out->count() > 0, quiet, !no_plots, command_line);
     if (*plot_cmd) {
       const int status = draw(plot_dir, quiet);
       if (status == 3) return kNotConverged;
@@ -360,7 +428,7 @@ int main(int argc, char** argv) {
     if (*bases_cmd) return bases(dimension);
     if (*reduce_cmd) {
       reduction.deck = deck_path;
-      return reduce(reduction, out, quiet);
+      return reduce(reduction, out, reduce_out->count() > 0, quiet);
     }
   } catch (const std::exception& e) {
     std::cerr << "wbm: " << e.what() << "\n";

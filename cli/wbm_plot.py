@@ -2,8 +2,12 @@
 """Draws the result folder of `wbm run` as PNG files beside its CSV files (`wbm run` calls it
 after a run unless --no-plots; `wbm plot DIR` calls it again).
 
-Usage: wbm_plot.py DIR [--quiet]. Reads DIR/result.json and the CSV files it lists; every number
-on a figure comes from those files. Figures (each only when its CSV exists):
+Usage: wbm_plot.py DIR [--quiet]. Reads DIR/result.json and the CSV files it lists (a CSV of an
+earlier run that the result does not list is never drawn); every number on a figure comes from
+those files. A result that did not converge is drawn with "INCOMPLETE" and the reason in red in
+the title (e.g. a backbone stopped at E = 2.48 of 10). The names of the pictures drawn are added
+to result.json under "pictures" (rewritten atomically), so that the next run into DIR removes
+them with the rest of the old result. Figures (each only when its CSV is listed):
   time_histories.png   displacement, velocity, contact force and energy over one period
   harmonics.png        amplitudes A_h of harmonics.csv (log scale)
   frequency_response.png  max/min displacement per output DOF of a sweep (restarts marked)
@@ -62,9 +66,42 @@ def save(fig, path, written):
     written.append(path.name)
 
 
+LISTED = set()  # the result's files (result.json "files"), set by main()
+NOTE = ""  # why the result is incomplete ("" when it converged), set by main()
+
+
+def listed(folder, name):
+    """True for a CSV of this result: listed in result.json and present."""
+    return name in LISTED and (folder / name).exists()
+
+
+def incomplete(result):
+    """'' for a converged result, else the reason it is incomplete, from result.json."""
+    if result.get("converged", True):
+        return ""
+    d = result.get("diagnostics", {})
+    scene = result.get("scene", {}).get("analysis", {})
+    for key, what, unit in (("nnm", "energy", ""), ("continuation", "frequency_hz", " Hz")):
+        if key in d:
+            goal = scene.get("energy" if key == "nnm" else "frequency_hz")
+            where = ""
+            if isinstance(goal, list) and len(goal) == 2:
+                where = f" (range {goal[0]:g} to {goal[1]:g}{unit})"
+            return f"INCOMPLETE{where}: " + str(d[key].get("message", "stopped early"))
+    return "INCOMPLETE: not converged (result.json: diagnostics)"
+
+
+def mark(ax, title, note):
+    """The title, and a red line saying why the result is incomplete."""
+    if note:
+        ax.set_title(title + "\n" + "\n".join(textwrap.wrap(note, 80)), fontsize=9, color="C3")
+    else:
+        ax.set_title(title, fontsize=9)
+
+
 def time_histories(folder, title, written):
     panels = [(f, p) for f, p in (("displacement.csv", "u_"), ("velocity.csv", "v_"), ("contact_force.csv", "f_c_"),
-                                  ("energy.csv", "energy")) if (folder / f).exists()]
+                                  ("energy.csv", "energy")) if listed(folder, f)]
     if not panels:
         return
     fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(6.4, 2.0 + 1.6 * len(panels)), squeeze=False)
@@ -76,12 +113,12 @@ def time_histories(folder, title, written):
         ax.set_ylabel(file.removesuffix(".csv").replace("_", " "))
         ax.legend(loc="best")
     axes[-1, 0].set_xlabel("time [s]")
-    axes[0, 0].set_title(title, fontsize=9)
+    mark(axes[0, 0], title, NOTE)
     save(fig, folder / "time_histories.png", written)
 
 
 def harmonics(folder, title, written):
-    if not (folder / "harmonics.csv").exists():
+    if not listed(folder, "harmonics.csv"):
         return
     table = read_csv(folder / "harmonics.csv")
     fig, ax = plt.subplots()
@@ -92,13 +129,13 @@ def harmonics(folder, title, written):
         ax.bar([x + k * width for x in h], [abs(v) for v in values], width=width, label=name, log=True)
     ax.set_xlabel("harmonic h [-]")
     ax.set_ylabel("amplitude |A_h| [m]")
-    ax.set_title(title, fontsize=9)
+    mark(ax, title, NOTE)
     ax.legend()
     save(fig, folder / "harmonics.png", written)
 
 
 def frequency_response(folder, title, written):
-    if not (folder / "frequency_response.csv").exists():
+    if not listed(folder, "frequency_response.csv"):
         return
     table = read_csv(folder / "frequency_response.csv")
     f = table["frequency [Hz]"]
@@ -111,13 +148,13 @@ def frequency_response(folder, title, written):
         ax.plot([f[i] for i in restarted], [first[i] for i in restarted], "kx", label="restarted from linear")
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("displacement [m]")
-    ax.set_title(title, fontsize=9)
+    mark(ax, title, NOTE)
     ax.legend()
     save(fig, folder / "frequency_response.png", written)
 
 
 def response_curve(folder, title, written):
-    if not (folder / "branch.csv").exists():
+    if not listed(folder, "branch.csv"):
         return
     table = read_csv(folder / "branch.csv")
     f = table["frequency [Hz]"]
@@ -138,7 +175,7 @@ def response_curve(folder, title, written):
         ax.plot([], [], "--", color="C0", label="unstable")
     for k, (other, values) in enumerate(amplitudes[1:]):
         ax.plot(f, values, "-", color=f"C{k + 1}", linewidth=0.8, label=other)
-    if (folder / "folds.csv").exists():
+    if listed(folder, "folds.csv"):
         folds = read_csv(folder / "folds.csv")
         for hz, crossing in zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"]):
             i = min(range(len(f)), key=lambda k: abs(f[k] - hz))
@@ -146,19 +183,19 @@ def response_curve(folder, title, written):
         ax.plot([], [], "o", color="C3", label="fold")
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(name if len(amplitudes) == 1 else "amplitude [m]")
-    ax.set_title(title, fontsize=9)
+    mark(ax, title, NOTE)
     ax.legend()
     save(fig, folder / "response_curve.png", written)
 
 
 def backbone(folder, title, written):
-    if not (folder / "backbone.csv").exists():
+    if not listed(folder, "backbone.csv"):
         return
     table = read_csv(folder / "backbone.csv")
     e, f = table["energy [-]"], table["frequency [Hz]"]
     fig, ax = plt.subplots()
     ax.plot(e, f, ".-", label="nonlinear mode")
-    if (folder / "folds.csv").exists():
+    if listed(folder, "folds.csv"):
         for energy in read_csv(folder / "folds.csv")["energy [-]"]:
             i = min(range(len(e)), key=lambda k: abs(e[k] - energy))
             ax.plot(energy, f[i], "o", color="C3")
@@ -166,14 +203,14 @@ def backbone(folder, title, written):
     ax.set_xscale("log")
     ax.set_xlabel("energy [-] (1 at contact onset)")
     ax.set_ylabel("frequency [Hz]")
-    ax.set_title(title, fontsize=9)
+    mark(ax, title, NOTE)
     ax.legend()
     save(fig, folder / "backbone.png", written)
 
 
 def modes(folder, title, written):
     for path in sorted(folder.glob("mode_E*.csv")):
-        if path.stem.endswith("_contact"):
+        if path.stem.endswith("_contact") or not listed(folder, path.name):
             continue
         table = read_csv(path)
         fig, ax = plt.subplots()
@@ -188,7 +225,7 @@ def modes(folder, title, written):
 
 
 def basis_functions(folder, title, written):
-    if not (folder / "basis_functions.csv").exists():
+    if not listed(folder, "basis_functions.csv"):
         return
     table = read_csv(folder / "basis_functions.csv")
     fig, ax = plt.subplots()
@@ -212,12 +249,19 @@ def main(argv):
         print(f"wbm plot: {folder}: no result.json (not a folder written by `wbm run`)", file=sys.stderr)
         return 2
     result = json.loads((folder / "result.json").read_text())
+    LISTED.update(result.get("files", []))
+    global NOTE
+    NOTE = incomplete(result)
     scene = result.get("scene", {})
     title = "\n".join(textwrap.wrap(scene.get("title") or Path(result.get("scene_file", str(folder))).stem, 70))
     plt.rcParams.update(STYLE)
     written = []
     for draw in (time_histories, harmonics, frequency_response, response_curve, backbone, modes, basis_functions):
         draw(folder, title, written)
+    result["pictures"] = written
+    staged = folder / ".result.json.pictures"
+    staged.write_text(json.dumps(result, indent=2) + "\n")
+    staged.replace(folder / "result.json")  # atomic: result.json stays the marker of a complete set
     if not quiet:
         print(f"wbm plot: drew {len(written)} picture(s) in {folder}" + (": " + ", ".join(written) if written else ""))
     return 0

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -156,6 +157,10 @@ Eigen::SparseMatrix<double> read_matrix_market(std::istream& in, const std::stri
 }
 
 Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw std::invalid_argument(path + ": is a directory, not a Matrix Market file");
+  }
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read Matrix Market file " + path);
   return read_matrix_market(in, path);

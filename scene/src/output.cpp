@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -11,6 +13,7 @@
 #include <unistd.h>
 
 #include <matio.h>
+#include <nlohmann/json.hpp>
 
 namespace wbm::scene {
 
@@ -202,8 +205,52 @@ void write_text(const std::filesystem::path& path, const std::string& content) {
   if (!os) throw std::runtime_error(path.string() + ": write failed");
 }
 
+namespace {
+
+// Staging folders of runs that no longer exist (killed before their destructor ran): removed.
+void remove_stale_staging(const std::filesystem::path& target) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(target, ec)) return;
+  const std::string prefix = ".wbm-staging-";
+  for (const auto& entry : std::filesystem::directory_iterator(target, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size() ||
+        name.find_first_not_of("0123456789", prefix.size()) != std::string::npos || name.size() > prefix.size() + 9) {
+      continue;
+    }
+    const auto pid = static_cast<pid_t>(std::stol(name.substr(prefix.size())));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) {
+      std::error_code ignored;
+      std::filesystem::remove_all(entry.path(), ignored);
+    }
+  }
+}
+
+// The files of the result already in `target` (its result.json's "files" and "pictures"), by
+// plain name; empty if there is none or it cannot be read.
+std::vector<std::string> previous_result_files(const std::filesystem::path& target) {
+  std::vector<std::string> files;
+  std::ifstream in(target / "result.json");
+  if (!in) return files;
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return files;
+  for (const char* key : {"files", "pictures"}) {
+    if (!j.contains(key) || !j[key].is_array()) continue;
+    for (const auto& f : j[key]) {
+      if (!f.is_string()) continue;
+      const std::string name = f.get<std::string>();
+      // Plain names only: a result.json never sends a removal outside its folder.
+      if (!name.empty() && name.find('/') == std::string::npos && name != "." && name != "..") files.push_back(name);
+    }
+  }
+  return files;
+}
+
+}  // namespace
+
 StagedOutput::StagedOutput(std::filesystem::path target) : target_(std::move(target)) {
   created_target_ = !std::filesystem::exists(target_);
+  remove_stale_staging(target_);
   staging_ = target_ / (".wbm-staging-" + std::to_string(::getpid()));
   std::filesystem::remove_all(staging_);
   std::filesystem::create_directories(staging_);
@@ -234,7 +281,12 @@ void StagedOutput::text(const std::string& file, const std::string& content) {
 }
 
 std::vector<std::filesystem::path> StagedOutput::commit(const std::string& last) {
+  const std::vector<std::string> old = previous_result_files(target_);
   std::filesystem::remove(target_ / last);
+  // The earlier result's files that this one does not write: a folder holds one result.
+  for (const auto& f : old) {
+    if (std::find(files_.begin(), files_.end(), f) == files_.end()) std::filesystem::remove(target_ / f);
+  }
   std::vector<std::filesystem::path> written;
   for (const auto& f : files_) {
     if (f == last) continue;

@@ -3,6 +3,7 @@
 // "file:line: key: what was expected", and throws them together in finish().
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -60,6 +61,12 @@ class Reader {
     if (where.begin.line > 0) os << ":" << where.begin.line;
     os << ": " << key << ": " << what;
     errors_.push_back(os.str());
+  }
+  /// An error of a tool the scene runs (CalculiX), not of the scene: finish() then throws
+  /// std::runtime_error, so that it exits 1 ("a tool failed") as `wbm reduce` does, not 2.
+  void tool_error(const toml::source_region& where, const std::string& key, const std::string& what) {
+    error(where, key, what);
+    tool_failed_ = true;
   }
   void warn(const toml::source_region& where, const std::string& what) {
     std::ostringstream os;
@@ -179,7 +186,15 @@ class Reader {
     for (const auto& a : allowed) {
       if (a == v) return v;
     }
-    error(n->source(), full, "\"" + v + "\" is not one of " + list(allowed));
+    std::string hint;
+    for (const auto& a : allowed) {
+      if (a.size() == v.size() && std::equal(a.begin(), a.end(), v.begin(), [](char x, char y) {
+            return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+          })) {
+        hint = " (names are lower case: \"" + a + "\")";
+      }
+    }
+    error(n->source(), full, "\"" + v + "\" is not one of " + list(allowed) + hint);
     return fallback.value_or("");
   }
 
@@ -202,6 +217,7 @@ class Reader {
     if (errors_.empty()) return;
     std::string all;
     for (const auto& e : errors_) all += e + "\n";
+    if (tool_failed_) throw std::runtime_error(all);
     throw std::invalid_argument(all);
   }
 
@@ -228,6 +244,7 @@ class Reader {
     return "in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   }
   std::string file_;
+  bool tool_failed_ = false;
   std::vector<std::string> errors_;
   std::vector<std::string> warnings_;
 };

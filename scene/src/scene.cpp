@@ -145,7 +145,8 @@ class Parser {
         r_.error(t->source(), "title", "expected a string, got " + Reader::type_name(*t));
       }
     }
-    analysis(root);
+    // An unknown analysis type decides nothing: the other sections' messages would be guesses.
+    if (!analysis(root)) return std::move(s_);
     const bool plot = s_.analysis.kind == AnalysisKind::BasisPlot;
     if (plot) {
       for (const char* unused : {"structure", "damping", "forcing", "contact", "solver", "timestep"}) {
@@ -207,14 +208,17 @@ class Parser {
   }
 
  private:
-  // [analysis] type first: it decides which sections are read.
-  void analysis(const toml::table& root) {
+  // [analysis] type first: it decides which sections are read. False when the type is unknown.
+  bool analysis(const toml::table& root) {
     const toml::table* t = r_.table(root, "analysis", false);
-    if (t == nullptr) return;
+    if (t == nullptr) return true;
     std::vector<std::string> known;
     for (const auto& k : analysis_keys()) known.emplace_back(k.key);
     r_.only(*t, "analysis", known);
-    s_.analysis.kind = value_of(analysis_table(), r_.choice(*t, "analysis", "type", analysis_names(), "solve"));
+    const size_t errors = r_.error_count();
+    const std::string type = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
+    if (r_.error_count() != errors && t->contains("type")) return false;
+    s_.analysis.kind = value_of(analysis_table(), type);
     for (const auto& k : analysis_keys()) {
       const toml::node* n = t->get(k.key);
       if (n == nullptr || reads(k, s_.analysis.kind)) continue;
@@ -246,6 +250,7 @@ class Parser {
       }
       a.stability = r_.boolean(*t, "analysis", "stability", rigid ? false : a.stability);
     }
+    return true;
   }
 
   // [analysis] of type "nnm": energy = [from, to] (normalized, 1 = contact onset), N, m, the
@@ -254,6 +259,7 @@ class Parser {
     Analysis& a = s_.analysis;
     const toml::node* e = t.get("energy");
     const toml::array* range = e != nullptr ? e->as_array() : nullptr;
+    bool energy_given = false;  // levels are checked against a valid range only (no follow-on errors)
     if (range == nullptr || range->size() != 2) {
       r_.error(e != nullptr ? e->source() : t.source(), "analysis.energy",
                std::string(e == nullptr ? "missing" : "expected") +
@@ -263,6 +269,8 @@ class Parser {
       a.energy_max = r_.number_value((*range)[1], "analysis.energy", detail::positive("normalized energy"));
       if (!(a.energy_min < a.energy_max)) {
         r_.error(e->source(), "analysis.energy", "the range is empty or reversed (from >= to); give from < to");
+      } else {
+        energy_given = true;
       }
     }
     a.harmonics = static_cast<int>(r_.integer(t, "analysis", "harmonics", 1, 512, a.harmonics));
@@ -286,7 +294,7 @@ class Parser {
       } else {
         for (const auto& v : *list) {
           const double level = r_.number_value(v, "analysis.levels", detail::positive("normalized energy"));
-          if (level < a.energy_min || level > a.energy_max) {
+          if (energy_given && (level < a.energy_min || level > a.energy_max)) {
             r_.error(v.source(), "analysis.levels", "energy " + detail::number_text(level) + " outside analysis.energy = [" +
                                                       detail::number_text(a.energy_min) + ", " +
                                                       detail::number_text(a.energy_max) + "]");
@@ -401,8 +409,10 @@ class Parser {
       st.mass = reduced.mass.sparseView();
       st.dof_names = std::move(reduced.names);
       st.deck = std::move(d);
-    } catch (const std::exception& e) {
+    } catch (const std::invalid_argument& e) {
       r_.error(file->source(), "structure.deck", e.what());
+    } catch (const std::exception& e) {  // CalculiX or the reduction failed: a tool, not the scene
+      r_.tool_error(file->source(), "structure.deck", e.what());
     }
   }
 
@@ -843,7 +853,16 @@ class Parser {
     const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
     for (const auto& [t, section] : tables) {
       Contact c;
-      c.law = value_of(law_table(), r_.choice(*t, section, "law", names(law_table())));
+      const size_t errors = r_.error_count();
+      const std::string law = r_.choice(*t, section, "law", names(law_table()));
+      if (r_.error_count() != errors) {
+        if (const auto given = t->get_as<std::string>("law"); given != nullptr && given->get() == "penalty") {
+          r_.error(Reader::source_of(*t, "law"), section + ".law",
+                   "a penalty law is \"linear\" (stiffness) or \"exponential\" (coefficient, exponent)");
+        }
+        continue;  // the law decides the other keys: checking them against a guess would mislead
+      }
+      c.law = value_of(law_table(), law);
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
       if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
@@ -1726,14 +1745,19 @@ Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& f
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-  if (!std::filesystem::is_regular_file(path)) {
-    throw std::runtime_error("scene " + path.string() + ": no such file (give the path of a .toml scene, or of a "
-                             "result.json to re-run it)");
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw std::invalid_argument("scene " + path.string() + ": is a directory, not a scene file (give the path of a "
+                                ".toml scene, or of a result.json to re-run it)");
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw std::invalid_argument("scene " + path.string() + ": no such file (give the path of a .toml scene, or of a "
+                                "result.json to re-run it)");
   }
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  if (!in) throw std::runtime_error("scene " + path.string() + ": cannot read the file");
+  if (!in) throw std::invalid_argument("scene " + path.string() + ": cannot read the file (permissions?)");
   if (path.extension() == ".json") {
     nlohmann::json j;
     try {

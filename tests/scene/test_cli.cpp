@@ -3,6 +3,7 @@
 // exits 1 with its diagnostics; a result.json re-runs to the same files.
 #include <algorithm>
 #include <complex>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -131,7 +132,7 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
   std::ofstream(file) << "not a folder\n";
   const Outcome blocked = run_wbm("run --no-plots " + case1() + " -o " + file.string());
   EXPECT_EQ(blocked.status, 2);
-  EXPECT_NE(blocked.err.find("cannot create the output folder"), std::string::npos) << blocked.err;
+  EXPECT_NE(blocked.err.find("is a file, not a folder"), std::string::npos) << blocked.err;
 }
 
 // Non-convergence is an outcome: exit 1, result.json with the Newton report, no curve files.
@@ -479,4 +480,133 @@ TEST(Cli, ReduceRefusesBadInputAndWritesNothing) {
   const fs::path no_material = work() / "reduce" / "no_material.inp";
   std::ofstream(no_material) << text;
   refused(no_material.string() + " -i TIP", "no_material.inp: CalculiX (ccx) could not assemble the model", 1);
+}
+
+// Issue #40, items 6 and 8: a result folder holds one result (the earlier result's files and
+// pictures that the new run does not write go, a user's file stays, and `wbm plot` draws only
+// what result.json lists); leftover staging folders of dead runs are removed; -o '' and -o FILE,
+// a directory given as a scene or a matrix, an unknown type or law each give one message and
+// exit 2, with no follow-on errors; CalculiX failing exits 1 from a deck scene as from reduce.
+TEST(Cli, AResultFolderHoldsOneResultAndEdgesHaveOneMessage) {
+  const fs::path out = work() / "one-result";
+  const fs::path branch_scene = fs::path(WBM_EXAMPLES) / "oscillator_stop.toml";
+  const fs::path solve_scene = fs::path(WBM_EXAMPLES) / "massless_contact_node.toml";
+  const Outcome first = run_wbm("run -q " + branch_scene.string() + " -o " + out.string());
+  ASSERT_EQ(first.status, 0) << first.err;
+  const auto before = nlohmann::json::parse(slurp(out / "result.json"));
+  ASSERT_FALSE(before["pictures"].empty()) << before.dump();
+  std::ofstream(out / "notes.txt") << "mine\n";
+  const pid_t dead = ::fork();  // a process that no longer exists: its staging folder is stale
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  fs::create_directories(out / (".wbm-staging-" + std::to_string(dead)) / "x");
+  const Outcome second = run_wbm("run -q " + solve_scene.string() + " -o " + out.string());
+  ASSERT_EQ(second.status, 0) << second.err;
+  const auto after = nlohmann::json::parse(slurp(out / "result.json"));
+  std::vector<std::string> present;
+  for (const auto& e : fs::directory_iterator(out)) present.push_back(e.path().filename().string());
+  std::sort(present.begin(), present.end());
+  std::vector<std::string> expected = {"notes.txt", "result.json"};
+  for (const auto& f : after["files"]) expected.push_back(f.get<std::string>());
+  for (const auto& f : after["pictures"]) expected.push_back(f.get<std::string>());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(present, expected);
+  for (const auto& f : before["files"]) {
+    const std::string name = f.get<std::string>();
+    const bool kept = std::find(expected.begin(), expected.end(), name) != expected.end();
+    EXPECT_EQ(fs::exists(out / name), kept) << name;
+  }
+
+  const auto refused = [](const std::string& args, const std::vector<std::string>& messages, int status = 2,
+                          const std::string& absent = "") {
+    const Outcome r = run_wbm(args);
+    EXPECT_EQ(r.status, status) << args << "\n" << r.err;
+    for (const auto& m : messages) EXPECT_NE(r.err.find(m), std::string::npos) << args << "\n" << r.err;
+    if (!absent.empty()) {
+      EXPECT_EQ(r.err.find(absent), std::string::npos) << args << "\n" << r.err;
+    }
+    return r.err;
+  };
+  refused("run -q " + solve_scene.string() + " -o ''", {"-o '': an empty folder name"});
+  refused("run -q " + work().string(), {"is a directory, not a scene file"});
+  const fs::path matrices = work() / "matrices.toml";
+  std::ofstream(matrices) << "[structure]\nmass = \".\"\nstiffness = [1.0]\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n";
+  refused("check " + matrices.string(), {"structure.mass", "is a directory, not a Matrix Market file"});
+  std::string nnm = slurp(fs::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  const auto variant = [&](const std::string& from, const std::string& to, const std::string& name) {
+    std::string text = nnm;
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+    std::ofstream(work() / name) << text;
+    return (work() / name).string();
+  };
+  // One line each: the problem, then "not run; nothing written".
+  const auto lines = [](const std::string& err) { return std::count(err.begin(), err.end(), '\n'); };
+  EXPECT_EQ(lines(refused("check " + variant("type = \"nnm\"", "type = \"NNM\"", "upper.toml"),
+                          {"\"NNM\" is not one of", "(names are lower case: \"nnm\")"}, 2, "[forcing]")),
+            2);
+  EXPECT_EQ(lines(refused("check " + variant("law = \"rigid\"", "law = \"penalty\"", "penalty.toml"),
+                          {"a penalty law is \"linear\""}, 2, "contact.coefficient")),
+            3);
+  EXPECT_EQ(lines(refused("check " + variant("energy = [0.5, 3.0]", "", "no_energy.toml"), {"analysis.energy: missing"},
+                          2, "analysis.levels")),
+            2);
+  // CalculiX refusing a deck (no *MATERIAL) is a tool failure: exit 1, from a scene as from reduce.
+  std::string deck = slurp(write_reduce_bar());
+  deck.erase(deck.find("*MATERIAL"), deck.find("*SOLID SECTION") - deck.find("*MATERIAL"));
+  std::ofstream(work() / "reduce" / "no_material_scene.inp") << deck;
+  const fs::path deck_scene = work() / "reduce" / "no_material.toml";
+  std::ofstream(deck_scene) << "[structure]\ndeck = \"no_material_scene.inp\"\ninterface = \"tip\"\nmodes = 4\n"
+                               "[forcing]\namplitude = 1.0\ndof = \"n36_y\"\nfrequency_hz = 10.0\n";
+  refused("run -q " + deck_scene.string(), {"CalculiX (ccx) could not assemble the model", "a tool the scene runs failed"},
+          1);
+}
+
+// SIGINT and SIGTERM during a run: the process ends by the signal, the folder keeps the earlier
+// result byte for byte, no staging folder is left, and a folder the run created is removed.
+TEST(Cli, InterruptLeavesTheFolderAsItWas) {
+  std::string long_scene = slurp(fs::path(WBM_EXAMPLES) / "rod_continuation.toml");
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"elements = 25", "elements = 200"},
+                                 {"dimension = 64", "dimension = 256"}}) {
+    ASSERT_NE(long_scene.find(from), std::string::npos);
+    long_scene.replace(long_scene.find(from), from.size(), to);
+  }
+  const fs::path scene = work() / "long.toml", kept = work() / "kept", fresh = work() / "fresh";
+  std::ofstream(scene) << long_scene;
+  ASSERT_EQ(run_wbm("run -q --no-plots " + (fs::path(WBM_EXAMPLES) / "massless_contact_node.toml").string() + " -o " +
+                    kept.string())
+                .status,
+            0);
+  const std::string result = slurp(kept / "result.json");
+  for (const auto& [signal_number, folder] : {std::pair<int, fs::path>{SIGINT, kept}, {SIGTERM, fresh}}) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      const std::string o = folder.string(), s = scene.string();
+      ::execl(WBM_CLI, WBM_CLI, "run", "-q", "--no-plots", s.c_str(), "-o", o.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Wait (at most 60 s) for the staging folder, then signal.
+    bool staging = false;
+    for (int i = 0; i < 6000 && !staging; ++i) {
+      std::error_code ec;
+      if (fs::is_directory(folder, ec)) {
+        for (const auto& e : fs::directory_iterator(folder, ec)) {
+          staging = staging || e.path().filename().string().starts_with(".wbm-staging-");
+        }
+      }
+      if (!staging) ::usleep(10000);
+    }
+    ASSERT_TRUE(staging);
+    ::usleep(300000);  // into the continuation
+    ::kill(pid, signal_number);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal_number) << status;
+  }
+  EXPECT_EQ(slurp(kept / "result.json"), result);
+  for (const auto& e : fs::directory_iterator(kept)) {
+    EXPECT_FALSE(e.path().filename().string().starts_with(".wbm-staging-")) << e.path();
+  }
+  EXPECT_FALSE(fs::exists(fresh));
 }

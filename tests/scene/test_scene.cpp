@@ -283,7 +283,7 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
       {"structure.stiffness: cannot read Matrix Market file"});
   expect_throw_with<std::invalid_argument>([&] { (void)parse("[structure\nmass = 1.0\n"); },
                                            {"inline.toml:1: TOML syntax:"});
-  expect_throw_with<std::runtime_error>([&] { (void)wbm::scene::load_scene(temp("absent.toml")); },
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::scene::load_scene(temp("absent.toml")); },
                                         {"absent.toml: no such file"});
   // JSON input has no lines: "file: key: what".
   expect_throw_with<std::invalid_argument>(

@@ -32,7 +32,8 @@ namespace wbm::fem {
 /// tests/fem/test_matrix_market.cpp and fuzzed by tests/fuzz/fuzz_matrix_market.cpp.
 [[nodiscard]] Eigen::SparseMatrix<double> read_matrix_market(std::istream& in, const std::string& source);
 
-/// The same from a file; throws std::runtime_error naming the path if it cannot be opened.
+/// The same from a file; throws std::invalid_argument for a directory and std::runtime_error
+/// naming the path if it cannot be opened.
 [[nodiscard]] Eigen::SparseMatrix<double> read_matrix_market_file(const std::string& path);
 
 /// Writes A as "%%MatrixMarket matrix coordinate real general|symmetric" text that

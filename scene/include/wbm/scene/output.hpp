@@ -48,8 +48,12 @@ void write_mat(const std::filesystem::path& path, const std::vector<Table>& tabl
 ///   2. commit() first removes `target/<last>` (the marker of a finished run, result.json),
 ///      renames every other file (each rename is atomic), then renames `<last>`.
 /// So `<last>` exists only beside a complete set of files; an interrupted run leaves the old
-/// set or no marker. Files of `target` not staged are left alone. The destructor removes the
-/// staging folder if commit() was not reached.
+/// set or no marker. A folder holds one result: commit() also removes the files of the earlier
+/// result (the plain names its result.json lists under "files" and "pictures") that this one
+/// does not write; other files of `target` are left alone. The destructor removes the staging
+/// folder if commit() was not reached (and `target` if it was created for it and is empty);
+/// the constructor removes the staging folders of processes that no longer exist (a run killed
+/// before its destructor ran).
 /// Writes `content` to `path`; throws std::runtime_error naming the file if the write fails
 /// (stream state checked after close).
 void write_text(const std::filesystem::path& path, const std::string& content);

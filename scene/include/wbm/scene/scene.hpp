@@ -34,7 +34,9 @@
 ///
 /// Errors: load_scene collects every problem of a file and throws one std::invalid_argument whose
 /// message has one line per problem, "file:line: key: what was expected" (line omitted for JSON
-/// input); a missing or unreadable file throws std::runtime_error naming the path.
+/// input); so does a missing or unreadable file, or a directory given as one (bad input, `wbm`
+/// exit 2). When CalculiX or the reduction of a [structure] deck fails (a tool, not the scene)
+/// the same message comes as std::runtime_error (`wbm` exit 1, as `wbm reduce`).
 
 #include <filesystem>
 #include <map>

@@ -1,0 +1,59 @@
+"""cli/wbm_plot.py on crafted result folders (issue #40, item 6): a picture of an incomplete
+branch says so, a CSV that result.json does not list (an earlier run's) is never drawn, and the
+pictures drawn are recorded in result.json so that the next run into the folder removes them.
+"""
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("matplotlib")
+
+SCRIPT = Path(__file__).resolve().parents[2] / "cli" / "wbm_plot.py"
+
+
+def load_plot_module():
+    spec = importlib.util.spec_from_file_location("wbm_plot", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def write_csv(path, header, rows):
+    path.write_text(",".join(header) + "\n" + "".join(",".join(str(v) for v in r) + "\n" for r in rows))
+
+
+def test_an_incomplete_backbone_is_marked_and_unlisted_files_are_not_drawn(tmp_path):
+    write_csv(tmp_path / "backbone.csv", ["energy [-]", "frequency [Hz]"], [(0.5, 100.0), (1.5, 104.0), (2.483, 107.0)])
+    write_csv(tmp_path / "branch.csv", ["frequency [Hz]", "amplitude_u [m]"], [(1.0, 1.0), (2.0, 2.0)])  # an old run's
+    message = "step below minimum at λ = 2.483 (h = 7.74e-08, corrector failed)"
+    result = {"converged": False, "files": ["backbone.csv"],
+              "scene": {"title": "two masses", "analysis": {"type": "nnm", "energy": [0.5, 10.0]}},
+              "diagnostics": {"nnm": {"message": message, "complete": False}}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    titles = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        titles[path.name] = fig.axes[0].get_title()
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    assert sorted(titles) == ["backbone.png"]  # branch.csv is not this result's
+    assert "INCOMPLETE (range 0.5 to 10): " in titles["backbone.png"]
+    assert "2.483" in titles["backbone.png"]
+    assert not (tmp_path / "response_curve.png").exists()
+    assert json.loads((tmp_path / "result.json").read_text())["pictures"] == ["backbone.png"]
+
+
+def test_a_converged_result_carries_no_mark(tmp_path):
+    write_csv(tmp_path / "backbone.csv", ["energy [-]", "frequency [Hz]"], [(0.5, 100.0), (10.0, 120.0)])
+    result = {"converged": True, "files": ["backbone.csv"], "scene": {"title": "two masses"}, "diagnostics": {}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    assert plot.incomplete(result) == ""
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    assert json.loads((tmp_path / "result.json").read_text())["pictures"] == ["backbone.png"]
