@@ -18,6 +18,7 @@
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
 #include <wbm/scene/reduce.hpp>
+#include <wbm/scene/resources.hpp>
 #include <wbm/solvers/model_checks.hpp>
 #include <toml++/toml.h>
 
@@ -197,6 +198,7 @@ class Parser {
     if (plot) basis_plot(root);
     output(root);
     load_harmonics(root);
+    if (r_.error_count() == 0) resources(root);
     if (s_.analysis.kind == AnalysisKind::Timestep && s_.rigid() &&
         (s_.moreau_jean.steps_per_period < s_.output.samples || s_.moreau_jean.steps_per_period % s_.output.samples != 0)) {
       r_.error(root.source(), "timestep.steps_per_period",
@@ -231,7 +233,8 @@ class Parser {
     if (s_.analysis.kind == AnalysisKind::NonlinearModes) nnm(*t);
     if (s_.analysis.kind == AnalysisKind::Continuation) {
       Analysis& a = s_.analysis;
-      a.max_step = r_.number(*t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
+      a.max_step = r_.number(*t, "analysis", "max_step", {"in [1e-6, 1] (scaled arclength per step; below 1e-6 a branch takes millions of steps)",
+                              [](double v) { return v >= 1e-6 && v <= 1.0; }},
                              a.max_step);
       a.max_frequency_step_hz = r_.number(*t, "analysis", "max_frequency_step_hz", detail::non_negative("Hz"),
                                           a.max_frequency_step_hz);
@@ -282,7 +285,8 @@ class Parser {
     }
     a.algorithm = value_of(nnm_algorithm_table(), r_.choice(t, "analysis", "algorithm", names(nnm_algorithm_table()),
                                                             std::string(to_string(a.algorithm))));
-    a.max_step = r_.number(t, "analysis", "max_step", {"in (0, 1]", [](double v) { return v > 0.0 && v <= 1.0; }},
+    a.max_step = r_.number(t, "analysis", "max_step", {"in [1e-6, 1] (scaled arclength per step; below 1e-6 a branch takes millions of steps)",
+                              [](double v) { return v >= 1e-6 && v <= 1.0; }},
                            5e-2);
     a.max_energy_step = r_.number(t, "analysis", "max_energy_step", detail::positive("normalized energy"),
                                   a.max_energy_step);
@@ -1534,6 +1538,25 @@ class Parser {
                    " resolve (2h < " + std::to_string(functions) + "); the load would be aliased to a lower harmonic: " +
                    fix + std::to_string(timestep || s_.basis.harmonics == 0 ? 2 * l.harmonic : l.harmonic) +
                    ", or remove the load");
+    }
+  }
+
+  // Sizes this machine cannot serve are refused with the estimate and the key (resources.hpp):
+  // memory above half the physical memory, result files above kMaxOutputBytes.
+  void resources(const toml::table& root) {
+    static constexpr double kMaxOutputBytes = 512e6;
+    const ResourceEstimate e = estimate_resources(s_);
+    const double available = physical_memory_bytes();
+    if (available > 0.0 && e.memory_bytes > 0.5 * available) {
+      r_.error(root.source(), e.memory_key,
+               "the analysis would need about " + format_bytes(e.memory_bytes) + " of memory (docs/scenes.md, "
+               "Sizes), more than half of this machine's " + format_bytes(available) + ": lower " + e.memory_key);
+    }
+    if (e.output_bytes > kMaxOutputBytes) {
+      r_.error(root.source(), "output.samples",
+               std::to_string(s_.output.samples) + " samples per period would write about " +
+                   format_bytes(e.output_bytes) + " of CSV files (at most " + format_bytes(kMaxOutputBytes) +
+                   "): lower output.samples, or output fewer DOFs");
     }
   }
 

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <wbm/scene/analysis.hpp>
+#include <wbm/scene/resources.hpp>
 #include <wbm/scene/scene.hpp>
 
 #include "testing.hpp"
@@ -106,4 +107,35 @@ TEST(SceneBoundaries, StiffnessMustBeSemidefiniteAndRigidBodyModesNeedAStop) {
             parse("structure = { mass = [1.0], stiffness = [4e4] }\nforcing = { amplitude = 1.0, frequency_hz = 1e300 }\n"));
       },
       {"frequency_hz = 1e+300 Hz", "overflows"});
+}
+
+// Item 4: sizes the parser accepted but no machine here can run ended in "std::bad_alloc" after
+// `wbm check` said valid. They are refused at parse time with the estimate and the key; a
+// max_step below the continuation's minimum step is refused with its range, not an internal
+// "PseudoArclengthOptions.steps" message.
+TEST(SceneBoundaries, SizesTheMachineCannotServeAreRefusedWithTheEstimate) {
+  if (wbm::scene::physical_memory_bytes() > 160e9) GTEST_SKIP() << "a machine with more than 160 GB";
+  const std::string rod = "[structure]\nyoung_modulus = 70e9\ndensity = 2700.0\narea = 25e-4\nlength = 1.0\n";
+  const std::string forcing = "[forcing]\namplitude = 1.0\nfrequency_hz = 150.0\n";
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(rod + "elements = 100000\n" + forcing); },
+                                           {"structure.elements: the analysis would need about", "GB of memory"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "elements = 25\n" + forcing + "[basis]\ndimension = 1048576\n"); },
+      {"basis.dimension: the analysis would need about", "lower basis.dimension"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "elements = 25\n" + forcing + "[basis]\nharmonics = 524288\n"); },
+      {"basis.harmonics: the analysis would need"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(rod + "elements = 25\n" + forcing + "[output]\nsamples = 4194304\n"); },
+      {"output.samples: 4194304 samples per period would write about", "lower output.samples"});
+  // Near the edge, still accepted: 2000 elements (32 MB for the modal problem), M = 4096.
+  EXPECT_NO_THROW((void)parse(rod + "elements = 2000\n" + forcing));
+  EXPECT_NO_THROW((void)parse(rod + "elements = 25\n" + forcing + "[basis]\ndimension = 4096\n"));
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)parse("structure = { mass = [1.0], stiffness = [4e4] }\nforcing = { amplitude = 1.0, frequency_hz = [20.0, 40.0] }\n"
+                    "analysis = { type = \"continuation\", max_step = 1e-9 }\n"
+                    "contact = { law = \"linear\", stiffness = 4e5, gap = 1e-4 }\n");
+      },
+      {"analysis.max_step", "in [1e-6, 1]"});
 }
