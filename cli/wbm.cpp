@@ -236,6 +236,9 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
     });
   } catch (const Interrupted&) {
     return stopped();
+  } catch (const std::invalid_argument& e) {  // input only the analysis can judge, e.g. an overflowing f
+    std::cerr << "wbm: " << e.what() << "\nwbm: " << scene_path << ": not run; nothing written\n";
+    return kBadInput;
   }
   if (g_stop_signal != 0) return stopped();
   nlohmann::json json = {{"command", command_line},

@@ -532,6 +532,10 @@ TEST(Cli, AResultFolderHoldsOneResultAndEdgesHaveOneMessage) {
   const fs::path matrices = work() / "matrices.toml";
   std::ofstream(matrices) << "[structure]\nmass = \".\"\nstiffness = [1.0]\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n";
   refused("check " + matrices.string(), {"structure.mass", "is a directory, not a Matrix Market file"});
+  const fs::path absurd = work() / "absurd.toml";  // only the analysis sees that (hΩ)² M overflows: still exit 2
+  std::ofstream(absurd) << "structure = { mass = [1.0], stiffness = [4e4] }\nforcing = { amplitude = 1.0, frequency_hz = 1e300 }\n";
+  refused("run -q " + absurd.string() + " -o " + (work() / "absurd").string(), {"overflows", "nothing written"});
+  EXPECT_FALSE(fs::exists(work() / "absurd"));
   std::string nnm = slurp(fs::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
   const auto variant = [&](const std::string& from, const std::string& to, const std::string& name) {
     std::string text = nnm;
