@@ -139,3 +139,13 @@ TEST(SceneBoundaries, SizesTheMachineCannotServeAreRefusedWithTheEstimate) {
       },
       {"analysis.max_step", "in [1e-6, 1]"});
 }
+
+// Item 4, nnm: 512 harmonics on one DOF was still running after 90 s; N is capped at 256.
+TEST(SceneBoundaries, NonlinearModesTakeAtMost256Harmonics) {
+  const std::string nnm = "structure = { mass = [1.0], stiffness = [4e4] }\n"
+                          "contact = { law = \"rigid\", gap = 1e-3, dof = 0 }\n"
+                          "analysis = { type = \"nnm\", energy = [0.5, 2.0], harmonics = ";
+  expect_throw_with<std::invalid_argument>([&] { (void)parse(nnm + "512 }\n"); },
+                                           {"analysis.harmonics", "256", "N = 512 minutes"});
+  EXPECT_EQ(parse(nnm + "256 }\n").analysis.harmonics, 256);
+}
