@@ -177,9 +177,15 @@ def response_curve(folder, title, written):
         ax.plot(f, values, "-", color=f"C{k + 1}", linewidth=0.8, label=other)
     if listed(folder, "folds.csv"):
         folds = read_csv(folder / "folds.csv")
-        for hz, crossing in zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"]):
-            i = min(range(len(f)), key=lambda k: abs(f[k] - hz))
-            ax.plot(hz, amplitude[i], "o", color="C3", fillstyle="full" if crossing == 1.0 else "none")
+        # Each fold at its own state (the amplitude written at the fold): on a multivalued curve
+        # the nearest point in frequency may lie on another sheet.
+        at_fold = folds[name] if name in folds else None
+        for k, (hz, crossing) in enumerate(zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"])):
+            if at_fold is not None:
+                y = at_fold[k]
+            else:  # a result written before folds.csv held the fold's amplitude
+                y = amplitude[min(range(len(f)), key=lambda i: abs(f[i] - hz))]
+            ax.plot(hz, y, "o", color="C3", fillstyle="full" if crossing == 1.0 else "none")
         ax.plot([], [], "o", color="C3", label="fold")
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(name if len(amplitudes) == 1 else "amplitude [m]")
@@ -196,9 +202,13 @@ def backbone(folder, title, written):
     fig, ax = plt.subplots()
     ax.plot(e, f, ".-", label="nonlinear mode")
     if listed(folder, "folds.csv"):
-        for energy in read_csv(folder / "folds.csv")["energy [-]"]:
-            i = min(range(len(e)), key=lambda k: abs(e[k] - energy))
-            ax.plot(energy, f[i], "o", color="C3")
+        folds = read_csv(folder / "folds.csv")
+        for k, energy in enumerate(folds["energy [-]"]):
+            if "frequency [Hz]" in folds:  # the fold's own frequency (multivalued in E)
+                y = folds["frequency [Hz]"][k]
+            else:  # a result written before folds.csv held it
+                y = f[min(range(len(e)), key=lambda i: abs(e[i] - energy))]
+            ax.plot(energy, y, "o", color="C3")
     ax.axvline(1.0, color="0.5", linewidth=0.8, label="contact onset (energy 1)")
     ax.set_xscale("log")
     ax.set_xlabel("energy [-] (1 at contact onset)")

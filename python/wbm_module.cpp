@@ -99,6 +99,14 @@ Eigen::SparseMatrix<double> sparse(const Eigen::MatrixXd& m) { return m.sparseVi
 // (dof, amplitude [N], phase [rad], harmonic) of a further load.
 using Load = std::tuple<int, double, double, int>;
 
+// The contact quadrature by name (docs/scenes.md [basis] contact_quadrature).
+solvers::ContactQuadrature quadrature(const std::string& name) {
+  if (name == "midpoint") return solvers::ContactQuadrature::Midpoint;
+  if (name == "cell-average") return solvers::ContactQuadrature::CellAverage;
+  throw std::invalid_argument("contact_quadrature = \"" + name + "\": must be \"midpoint\" (the paper's rule) or "
+                              "\"cell-average\" (smooth for a law with a corner, e.g. LinearPenalty)");
+}
+
 solvers::HarmonicForcing forcing(int dof, double amplitude, double frequency_hz, const std::vector<Load>& loads) {
   solvers::HarmonicForcing f{dof, amplitude, frequency_hz};
   for (const auto& [d, a, phase, h] : loads) f.more.push_back({d, a, phase, h});
@@ -246,10 +254,11 @@ order the family does not have.)");
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, double frequency_hz,
          const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
          const solvers::TimeBasis& weighting, const std::string& formulation, const std::vector<Load>& loads,
-         const std::vector<int>& harmonics) {
+         const std::vector<int>& harmonics, const std::string& contact_quadrature) {
         solvers::WeightedResidualOptions options;
         options.formulation = solvers::parse_formulation(formulation);
         options.harmonics = harmonics;
+        options.contact_quadrature = quadrature(contact_quadrature);
         const auto s = solvers::solve_weighted_residual(system, forcing(dof, amplitude, frequency_hz, loads),
                                                         points(contacts), trial, weighting, options);
         py::dict out;
@@ -270,13 +279,17 @@ order the family does not have.)");
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional",
       py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
+      py::arg("contact_quadrature") = "midpoint",
       R"(Forced response by weighted residuals [JL14 Eqs. (14)–(17)] to F cos(2π f t) on DOF `dof`.
 
 loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
 RigidStop or all penalty). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
 (empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
-dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖. Returns a dict:
+dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖.
+contact_quadrature: "midpoint" (the paper's f_c(u(τ_q))) or "cell-average" (the law integrated
+over each cell: C¹ in the unknowns, so a law with a corner such as LinearPenalty gives a smooth
+residual; needs a trial with a slope). Returns a dict:
 converged (verified residual), status, message, iterations, relative_residual, residual_tolerance,
 coefficients (n × M array: row = DOF, column = trial function), max_penetration [m],
 max_contact_force [N], contact_force_samples (n_c × M, rigid stops only) and wall_time_s.
@@ -287,10 +300,11 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
          const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
          const solvers::TimeBasis& weighting, const std::string& formulation, bool stability, double max_step,
          double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads,
-         const std::vector<int>& harmonics) {
+         const std::vector<int>& harmonics, const std::string& contact_quadrature) {
         solvers::WeightedResidualOptions options;
         options.formulation = solvers::parse_formulation(formulation);
         options.harmonics = harmonics;
+        options.contact_quadrature = quadrature(contact_quadrature);
         const solvers::WeightedResidual base(system, forcing(dof, amplitude, frequency_hz.first, loads), points(contacts),
                                              trial, weighting, options);
         solvers::ResponseCurveOptions o;
@@ -319,8 +333,9 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
           stable(i) = p.stable;
           dropped(i) = p.dropped_harmonics_residual;
         }
-        std::vector<double> folds;
+        std::vector<double> folds, fold_amplitudes;
         for (const auto& fold : curve.folds) folds.push_back(fold.parameter);
+        for (const auto& fold : curve.fold_points) fold_amplitudes.push_back(fold.amplitude);
         py::dict out;
         out["converged"] = curve.stop == solvers::StopReason::RangeReached;
         out["stop"] = std::string(solvers::to_string(curve.stop));
@@ -337,6 +352,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
           out["max_floquet_multiplier_error"] = py::cast(mu_error);
         }
         out["folds_hz"] = folds;
+        out["fold_amplitudes"] = fold_amplitudes;
         out["fold_confirmed"] = curve.fold_confirmed;
         out["wall_time_s"] = curve.wall_time_s;
         out["stability_time_s"] = curve.stability_time_s;
@@ -346,6 +362,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional", py::arg("stability") = true,
       py::arg("max_step") = 2e-2, py::arg("max_frequency_step_hz") = 0.0, py::arg("max_points") = 5000,
       py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
+      py::arg("contact_quadrature") = "midpoint",
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
 [Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
 matrix on `samples` steps; refused for rigid stops: pass stability=False). Arguments as solve();
@@ -353,7 +370,8 @@ max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|.
 Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
 (bool), max_floquet_multiplier, max_floquet_multiplier_error; and folds_hz (turning points),
-fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
+fold_amplitudes [m] (the forced DOF's amplitude at each fold's own state, Hermite-interpolated on
+its step: on a multivalued curve not the nearest point's), fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
 message, wall_time_s, stability_time_s; with harmonics (a selection, as in solve()):
 dropped_harmonics_residual per point. Non-convergence is returned, not raised.)");
   m.def(
@@ -402,6 +420,9 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
         out["other_harmonic"] = py::cast(other_harmonic);
         out["other_share"] = py::cast(other_share);
         out["folds"] = b.folds;
+        std::vector<double> fold_hz;
+        for (const auto& l : b.fold_levels) fold_hz.push_back(l.frequency_hz);
+        out["fold_frequencies_hz"] = fold_hz;
         out["wall_time_s"] = b.wall_time_s;
         return out;
       },
@@ -416,7 +437,7 @@ rayleigh_frequency_hz, max_penetration and complementarity [gap], first_mode_sha
 held by linear mode 1 at the fundamental) and the largest other component other_mode, other_harmonic
 (1-based), other_share (NonlinearModes::modal_components: an internal resonance shows as a large
 other_share with f_j ≈ h f); and linear_frequency_hz, folds
-(energies where the branch turns back), converged (energy max reached), message, wall_time_s.)");
+(energies where the branch turns back) and fold_frequencies_hz (the frequency at each), converged (energy max reached), message, wall_time_s.)");
   m.def(
       "evaluate",
       [](const solvers::TimeBasis& trial, const py::object& coefficients, const py::object& tau) -> Eigen::MatrixXd {

@@ -605,17 +605,42 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
       out.tables.push_back({"branch.csv", header, columns});
     }
   }
+  // Each fold with its state (issue #35): the amplitude of every output DOF at the fold itself,
+  // so that a picture marks it on its own sheet of a multivalued curve.
   nlohmann::json folds = nlohmann::json::array();
-  Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(curve.folds.size())), fold_ok = fold_hz;
-  for (size_t k = 0; k < curve.folds.size(); ++k) {
-    const auto& fold = curve.folds[k];
-    const bool crossing = curve.fold_confirmed[k];
-    fold_hz(static_cast<Eigen::Index>(k)) = fold.parameter;
-    fold_ok(static_cast<Eigen::Index>(k)) = crossing ? 1.0 : 0.0;
-    folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}});
+  const auto nf = static_cast<Eigen::Index>(curve.folds.size());
+  Eigen::VectorXd fold_hz(nf), fold_ok(nf), fold_max(nf), fold_min(nf), fold_amp(nf);
+  std::vector<Eigen::VectorXd> fold_observed(observed.size(), Eigen::VectorXd(nf));
+  for (Eigen::Index k = 0; k < nf; ++k) {
+    const auto& fold = curve.fold_points[static_cast<size_t>(k)];
+    const bool crossing = curve.fold_confirmed[static_cast<size_t>(k)];
+    fold_hz(k) = fold.parameter;
+    fold_ok(k) = crossing ? 1.0 : 0.0;
+    fold_max(k) = fold.max_displacement;
+    fold_min(k) = fold.min_displacement;
+    fold_amp(k) = fold.amplitude;
+    nlohmann::json amplitudes = {{dof, fold.amplitude}};
+    if (per_point) {
+      const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);
+      const Eigen::MatrixXd u = observed_samples(scene, base.trial(), fold.kept_coefficients, kept, observed, tau, fold.frequency_hz);
+      for (size_t d = 0; d < observed.size(); ++d) {
+        const auto row = u.row(static_cast<Eigen::Index>(d));
+        fold_observed[d](k) = 0.5 * (row.maxCoeff() - row.minCoeff());
+        amplitudes[scene.structure->dof_name(observed[d])] = fold_observed[d](k);
+      }
+    }
+    folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}, {"amplitude_m", amplitudes}});
   }
-  if (!curve.folds.empty()) {
-    out.tables.push_back({"folds.csv", {"frequency [Hz]", "floquet_crossing [-]"}, {fold_hz, fold_ok}});
+  if (nf > 0) {
+    std::vector<std::string> header = {"frequency [Hz]", "floquet_crossing [-]", "u_max_" + dof + " [m]",
+                                       "u_min_" + dof + " [m]", "amplitude_" + dof + " [m]"};
+    std::vector<Eigen::VectorXd> columns = {fold_hz, fold_ok, fold_max, fold_min, fold_amp};
+    for (size_t d = 0; per_point && d < observed.size(); ++d) {
+      if (observed[d] == scene.forcing->dof) continue;  // its columns are there already
+      header.push_back("amplitude_" + scene.structure->dof_name(observed[d]) + " [m]");
+      columns.push_back(fold_observed[d]);
+    }
+    out.tables.push_back({"folds.csv", header, columns});
   }
   out.converged = curve.stop == solvers::StopReason::RangeReached;
   out.diagnostics["continuation"] = {{"points", curve.points.size()},
@@ -742,9 +767,18 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     columns.insert(columns.end(), {first_share, other_mode, other_harmonic, other_share});
     out.tables.push_back({"backbone.csv", header, columns});
   }
-  if (!b.folds.empty()) {
-    out.tables.push_back({"folds.csv", {"energy [-]"},
-                          {Eigen::Map<const Eigen::VectorXd>(b.folds.data(), static_cast<Eigen::Index>(b.folds.size()))}});
+  if (!b.folds.empty()) {  // each fold at its own frequency (the backbone can be multivalued in E)
+    Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(b.fold_levels.size()));
+    std::vector<std::string> state;
+    for (Eigen::Index k = 0; k < fold_hz.size(); ++k) {
+      const solvers::ModeLevel& l = b.fold_levels[static_cast<size_t>(k)];
+      fold_hz(k) = std::isfinite(l.frequency_hz) ? l.frequency_hz : NAN;
+      state.push_back(l.converged() ? "on the branch (residual within tolerance)"
+                                    : "interpolated on the step (residual " + format("%.2g", l.residual_norm) + ")");
+    }
+    out.tables.push_back({"folds.csv", {"energy [-]", "frequency [Hz]"},
+                          {Eigen::Map<const Eigen::VectorXd>(b.folds.data(), static_cast<Eigen::Index>(b.folds.size())), fold_hz},
+                          state});
   }
   // Mode shapes at the asked energies.
   const Structure& st = *scene.structure;

@@ -1246,7 +1246,16 @@ class Parser {
       r_.error(Reader::source_of(*t, "trial"), "basis.trial", e.what());
     }
     const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
-    b.contact_quadrature = quadrature == "cell-average" || (quadrature == "automatic" && b.harmonics > 0 && !rigid)
+    // "automatic": cell-average for harmonics = H, and for a law with a corner (linear: k (u − g)₊)
+    // on a trial with a slope whatever M (issue #35: sampled at midpoints, the residual has a kink
+    // wherever a sample crosses the gap, and a stiff stop's continuation stalls there: 50 kg on
+    // 1 MN/m against 1e8 N/m, M = 64, at 29.98 Hz); midpoint, the paper's rule, for the smooth
+    // exponential law of [JL14] with M = 2^J, and for rigid stops.
+    const bool corner = std::any_of(s_.contacts.begin(), s_.contacts.end(),
+                                    [](const Contact& k) { return k.law == ContactLawKind::Linear; });
+    const bool sloped = tb && tb->max_derivative() >= 1;
+    b.contact_quadrature = quadrature == "cell-average" ||
+                                   (quadrature == "automatic" && !rigid && (b.harmonics > 0 || (corner && sloped)))
                                ? solvers::ContactQuadrature::CellAverage
                                : solvers::ContactQuadrature::Midpoint;
     if (rigid && quadrature == "cell-average") {

@@ -513,7 +513,10 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
       b.included.push_back(std::move(level));
     }
   }
-  for (const auto& fold : branch.folds) b.folds.push_back(fold.parameter);
+  for (const auto& fold : branch.folds) {
+    b.folds.push_back(fold.parameter);
+    b.fold_levels.push_back(system.level(fold.x, fold.parameter, o.tolerance));
+  }
   b.kinks = branch.events;
   b.switches = branch.switches;
   b.rejected_steps = branch.rejected_steps;

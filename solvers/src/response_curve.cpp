@@ -244,6 +244,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   curve.folds = branch.folds;
   curve.stop = branch.stop;
   curve.message = branch.message;
+  if (branch.stop == StopReason::StepBelowMinimum && !rigid && base.contact_quadrature() == ContactQuadrature::Midpoint) {
+    // Sampled at midpoints, a law with a corner (a linear penalty k (u − g)₊) makes the residual
+    // nonsmooth wherever a sample crosses the gap: the cell average is C¹ there (issue #35).
+    curve.message += "; a contact law with a corner sampled at midpoints (WeightedResidualOptions::contact_quadrature "
+                     "= Midpoint) has a kink wherever a sample crosses the gap: use CellAverage (scene: [basis] "
+                     "contact_quadrature = \"cell-average\"; Python: contact_quadrature=\"cell-average\"), "
+                     "or more harmonics";
+  }
   if (branch.stop == StopReason::StateBound) {
     curve.message += " (a contact coefficient exceeds max_state = " + format_number(o.max_state) + " × s_r, s_r = " +
                      format_number(base.residual_scale()) + " m: a runaway branch? raise max_state, or 0 for no bound)";
@@ -260,12 +268,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     if (contacts[c].terms() == std::vector<std::pair<int, double>>{{dof, 1.0}}) observed_contact = c;
   }
   const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
-  for (const auto& p : branch.points) {
+  // The response at one state x of the branch (a point, or a fold's interpolated state).
+  auto response_at = [&](double parameter, const Eigen::VectorXd& x, int corrector_iterations) {
     ResponsePoint r;
-    r.parameter = p.parameter;
-    r.frequency_hz = frequency ? p.parameter : base.frequency_hz();
-    r.amplitude_n = family.load(p.parameter) * base.forcing().amplitude;
-    r.contact_unknowns = p.x;
+    r.parameter = parameter;
+    r.frequency_hz = frequency ? parameter : base.frequency_hz();
+    r.amplitude_n = family.load(parameter) * base.forcing().amplitude;
+    r.contact_unknowns = x;
     Eigen::VectorXd u;
     auto keep = [&](const WeightedResidual& wr, const Eigen::VectorXd& a) {
       if (o.keep_dofs.empty()) return;
@@ -274,22 +283,21 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       for (size_t i = 0; i < o.keep_dofs.size(); ++i) r.kept_coefficients.row(static_cast<Eigen::Index>(i)) = all.row(o.keep_dofs[i]);
     };
     if (rigid) {  // the impulses: expand at this point
-      const WeightedResidual& wr = family.at(p.parameter);
-      const Eigen::VectorXd a = wr.expand_forces(p.x, family.load(p.parameter));
+      const WeightedResidual& wr = family.at(parameter);
+      const Eigen::VectorXd a = wr.expand_forces(x, family.load(parameter));
       keep(wr, a);
-      r.max_contact_force = p.x.maxCoeff();
+      r.max_contact_force = x.maxCoeff();
       u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
       r.max_displacement = u.maxCoeff();
       r.min_displacement = u.minCoeff();
       r.amplitude = 0.5 * (r.max_displacement - r.min_displacement);
-      r.corrector_iterations = p.corrector_iterations;
-      curve.points.push_back(std::move(r));
-      continue;
+      r.corrector_iterations = corrector_iterations;
+      return r;
     }
     if (!base.harmonics().empty()) {
-      r.dropped_harmonics_residual = family.at(p.parameter).dropped_harmonics_residual(p.x, family.load(p.parameter));
+      r.dropped_harmonics_residual = family.at(parameter).dropped_harmonics_residual(x, family.load(parameter));
     }
-    const Eigen::MatrixXd uc = q * spectral::as_coefficients(p.x, nc).transpose();  // P × n_c
+    const Eigen::MatrixXd uc = q * spectral::as_coefficients(x, nc).transpose();  // P × n_c
     for (int c = 0; c < nc; ++c) {
       for (Eigen::Index k = 0; k < uc.rows(); ++k) {
         r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
@@ -298,9 +306,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     if (observed_contact >= 0 && o.keep_dofs.empty()) {
       u = uc.col(observed_contact);
     } else {  // a DOF away from the contacts, or kept DOFs: expand (one more factorization of G at this point)
-      const WeightedResidual& wr = family.at(p.parameter);
-      Eigen::VectorXd a = wr.expand(p.x);
-      a += (family.load(p.parameter) - 1.0) * wr.linear_response();  // expand() is at load 1
+      const WeightedResidual& wr = family.at(parameter);
+      Eigen::VectorXd a = wr.expand(x);
+      a += (family.load(parameter) - 1.0) * wr.linear_response();  // expand() is at load 1
       keep(wr, a);
       u = observed_contact >= 0 ? Eigen::VectorXd(uc.col(observed_contact))
                                 : evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
@@ -308,9 +316,11 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.max_displacement = u.maxCoeff();
     r.min_displacement = u.minCoeff();
     r.amplitude = 0.5 * (r.max_displacement - r.min_displacement);
-    r.corrector_iterations = p.corrector_iterations;
-    curve.points.push_back(std::move(r));
-  }
+    r.corrector_iterations = corrector_iterations;
+    return r;
+  };
+  for (const auto& p : branch.points) curve.points.push_back(response_at(p.parameter, p.x, p.corrector_iterations));
+  for (const auto& fold : branch.folds) curve.fold_points.push_back(response_at(fold.parameter, fold.x, 0));
   if (o.stability) {
     // The monodromy matrix of each point, on `threads` workers taking points in turn (an atomic
     // counter: the refined points cost up to 16 times more). Each point's computation does not

@@ -1265,6 +1265,9 @@ Eigen::VectorXd WeightedResidual::expand(const Eigen::VectorXd& x) const {
 }
 
 bool WeightedResidual::rigid() const { return impl_->rigid; }
+ContactQuadrature WeightedResidual::contact_quadrature() const {
+  return impl_->cell_average_rule ? ContactQuadrature::CellAverage : ContactQuadrature::Midpoint;
+}
 
 Eigen::VectorXd WeightedResidual::collocation_times() const {
   impl_->require_rigid("collocation_times");

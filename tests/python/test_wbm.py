@@ -130,6 +130,32 @@ def test_trace_response_follows_the_closed_form_below_the_stop():
         wbm.trace_response(s, 0, 10.0, (5.0, 55.0), [(0, wbm.RigidStop(1.0))], fourier, fourier)
 
 
+def test_trace_response_gives_each_fold_its_own_amplitude():
+    # 1 kg on 40 kN/m, C = 5 M, 5 N, a stop 100 x stiffer 2 mm away (examples/scenes/
+    # stiff_stop_continuation.toml). The jump-up fold is the grazing orbit, the linear response of
+    # amplitude g: (k − mω²)² + (cω)² = (F/g)². Its amplitude is the gap, while the nearest point in
+    # frequency may lie on the upper sheet (issue #35). Sampled at midpoints the stop's corner stalls
+    # the continuation, and the message names the way out.
+    s = wbm.MechanicalSystem(mass=np.array([[1.0]]), damping=np.array([[5.0]]), stiffness=np.array([[4e4]]))
+    fourier = wbm.TimeBasis("fourier", 64)
+    stalled = wbm.trace_response(s, 0, 5.0, (15.0, 60.0), [(0, wbm.LinearPenalty(4e6, 2e-3))], fourier, fourier,
+                                 stability=False)
+    assert not stalled["converged"] and "contact_quadrature" in stalled["message"]
+    with pytest.raises(ValueError, match="contact_quadrature"):
+        wbm.trace_response(s, 0, 5.0, (15.0, 60.0), [(0, wbm.LinearPenalty(4e6, 2e-3))], fourier, fourier,
+                           contact_quadrature="trapezoid")
+    curve = wbm.trace_response(s, 0, 5.0, (15.0, 60.0), [(0, wbm.LinearPenalty(4e6, 2e-3))], fourier, fourier,
+                               stability=False, contact_quadrature="cell-average")
+    assert curve["converged"], curve["message"]
+    assert len(curve["folds_hz"]) == len(curve["fold_amplitudes"]) == 2
+    b = 2 * 4e4 - 25.0
+    grazing = math.sqrt(0.5 * (b + math.sqrt(b * b - 4 * (4e4**2 - (5.0 / 2e-3) ** 2)))) / (2 * math.pi)
+    lower = int(np.argmin(curve["folds_hz"]))
+    assert abs(curve["folds_hz"][lower] - grazing) < 0.01
+    assert curve["fold_amplitudes"][lower] == pytest.approx(2e-3, rel=1e-2)
+    assert curve["fold_amplitudes"][1 - lower] > 1.5 * curve["fold_amplitudes"][lower]
+
+
 def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
     # The 2-DOF chain of examples/scenes/two_dof_nnm.toml: below contact onset the frequency is the
     # linear one, √(k (3 − √5)/2 / m)/2π; the whole backbone equals the one `wbm run` writes.

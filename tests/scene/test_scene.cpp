@@ -419,6 +419,15 @@ TEST(Scene, NoBasisTableGivesHarmonicBalanceWithDampedHarmonics) {
   const Scene paper = parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
                             "basis = { dimension = 64 }\n");
   EXPECT_EQ(paper.basis.contact_quadrature, wbm::solvers::ContactQuadrature::Midpoint);
+  // A law with a corner is averaged over the cells whatever M (issue #35), unless the trial has no
+  // slope (Haar) or the scene asks for the paper's rule by name.
+  const std::string stop = "structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                           "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n";
+  EXPECT_EQ(parse(stop + "basis = { dimension = 64 }\n").basis.contact_quadrature, wbm::solvers::ContactQuadrature::CellAverage);
+  EXPECT_EQ(parse(stop + "basis = { trial = \"haar\", weighting = \"fourier\", dimension = 16 }\n").basis.contact_quadrature,
+            wbm::solvers::ContactQuadrature::Midpoint);
+  EXPECT_EQ(parse(stop + "basis = { dimension = 64, contact_quadrature = \"midpoint\" }\n").basis.contact_quadrature,
+            wbm::solvers::ContactQuadrature::Midpoint);
   expect_throw_with<std::invalid_argument>(
       [] {
         (void)parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
@@ -451,6 +460,36 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
   EXPECT_EQ(crossing(0), 1.0);
   EXPECT_EQ(crossing(1), 1.0);
   EXPECT_GT(hz(0), hz(1));  // the upper (jump-down) fold above the lower (jump-up) one
+  // The lower (jump-up) fold is the grazing orbit: the linear response of amplitude g,
+  // (k − mω²)² + (cω)² = (F/g)², at 32.7251 Hz (the cell-average rule smooths the corner over one
+  // cell: within 0.001 Hz of it).
+  const double k = 4e4, c = 5.0, force = 5.0, gap = 2e-3, b = 2.0 * k - c * c;
+  const double grazing_hz = std::sqrt(0.5 * (b + std::sqrt(b * b - 4.0 * (k * k - std::pow(force / gap, 2))))) / (2.0 * M_PI);
+  EXPECT_NEAR(hz(1), grazing_hz, 1e-3);
+  // Each fold's state (issue #35): its amplitude lies on the branch at its frequency, on its own
+  // sheet: the lower fold's is the gap, the upper fold's above it, and each within 1 % of a
+  // branch point less than 0.1 Hz away (the curve there has three sheets, the middle one unstable).
+  const wbm::scene::Table* fold_table = nullptr;
+  const wbm::scene::Table* branch = nullptr;
+  for (const auto& t : r.tables) {
+    if (t.file == "folds.csv") fold_table = &t;
+    if (t.file == "branch.csv") branch = &t;
+  }
+  ASSERT_TRUE(fold_table != nullptr && branch != nullptr);
+  ASSERT_EQ(fold_table->header.at(4), "amplitude_dof0 [m]");
+  ASSERT_EQ(branch->header.at(3), "amplitude_dof0 [m]");
+  const Eigen::VectorXd& fold_amplitude = fold_table->columns.at(4);
+  EXPECT_NEAR(fold_amplitude(1), gap, 1e-3 * gap);
+  EXPECT_GT(fold_amplitude(0), 1.5 * gap);
+  for (Eigen::Index k = 0; k < 2; ++k) {
+    double nearest = INFINITY;
+    for (Eigen::Index i = 0; i < branch->columns[0].size(); ++i) {
+      if (std::abs(branch->columns[0](i) - hz(k)) < 0.1) {
+        nearest = std::min(nearest, std::abs(branch->columns[3](i) - fold_amplitude(k)));
+      }
+    }
+    EXPECT_LT(nearest, 0.01 * fold_amplitude(k)) << "fold " << k << " at " << hz(k) << " Hz";
+  }
   for (const std::string basis : {"basis = { harmonics = 32, time_samples = 1024 }\n", "basis = { harmonics = 64 }\n"}) {
     const auto finer = wbm::scene::run_analysis(parse(head + basis));
     ASSERT_TRUE(finer.converged) << basis << finer.summary;
@@ -459,6 +498,31 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
     EXPECT_NEAR(hz2(0), hz(0), 0.01) << basis;
     EXPECT_NEAR(hz2(1), hz(1), 0.01) << basis;
   }
+}
+
+// The stiff stop of issue #35 with the paper's Fourier basis, M = 64, and nothing else: 50 kg on
+// 1 MN/m (c = 0.2 √(mk)), a 1e8 N/m stop at 20 µm, 10 N over 60–210 rad/s. Sampled at midpoints it
+// stalled at 29.98 Hz (a sample crossing the gap); averaged over the cells it reaches the range
+// end with the resonance's two folds, and its lower fold is the grazing orbit, where the linear
+// response's amplitude is the gap: (k − mω²)² + (cω)² = (F/g)².
+TEST(Scene, StiffStopWithThePapersFourierBasisCompletes) {
+  const double m = 50.0, k = 1e6, c = 0.2 * std::sqrt(m * k), force = 10.0, gap = 2e-5;
+  const auto r = wbm::scene::run_analysis(parse(
+      "structure = { mass = 50.0, stiffness = 1e6 }\ndamping = { alpha = " + std::to_string(c / m) + " }\n"
+      "forcing = { amplitude = 10.0, frequency_rad_s = [60.0, 210.0] }\n"
+      "contact = { law = \"linear\", stiffness = 1e8, gap = 2e-5 }\n"
+      "basis = { trial = \"fourier\", dimension = 64 }\nanalysis = { type = \"continuation\" }\n"));
+  ASSERT_TRUE(r.converged) << r.summary;
+  const wbm::scene::Table* folds = nullptr;
+  for (const auto& t : r.tables) {
+    if (t.file == "folds.csv") folds = &t;
+  }
+  ASSERT_TRUE(folds != nullptr);
+  ASSERT_EQ(folds->columns[0].size(), 2);
+  const double b = 2.0 * m * k - c * c;
+  const double grazing_hz =
+      std::sqrt((b + std::sqrt(b * b - 4.0 * m * m * (k * k - std::pow(force / gap, 2)))) / (2.0 * m * m)) / (2.0 * M_PI);
+  EXPECT_NEAR(folds->columns[0].minCoeff(), grazing_hz, 1e-3 * grazing_hz);
 }
 
 // Units must not matter (issue #19). A peer's nondimensional rod (E = ρ = S = L = 1, 20 elements,

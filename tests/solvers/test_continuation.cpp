@@ -86,8 +86,8 @@ struct Duffing {
     }
     return 0.5 * (lo + hi);
   }
-  // Golden-section extremum of f₊ on [lo, hi] (sign = +1 maximum, −1 minimum).
-  [[nodiscard]] double extremum(double lo, double hi, double sign) const {
+  // Golden-section extremum of f₊ on [lo, hi] (sign = +1 maximum, −1 minimum): its amplitude A.
+  [[nodiscard]] double extremum_amplitude(double lo, double hi, double sign) const {
     const double r = (std::sqrt(5.0) - 1) / 2;
     for (int i = 0; i < 200; ++i) {
       const double x1 = hi - r * (hi - lo), x2 = lo + r * (hi - lo);
@@ -97,11 +97,11 @@ struct Duffing {
         lo = x1;
       }
     }
-    return upper_hz(0.5 * (lo + hi));
+    return 0.5 * (lo + hi);
   }
-  // {jump-up, jump-down} fold frequencies [Hz]: the local minimum and maximum of f₊ on a fine
+  // {jump-up, jump-down} fold amplitudes A [m]: the local minimum and maximum of f₊ on a fine
   // grid, refined by golden section on the neighbouring cells.
-  [[nodiscard]] std::pair<double, double> folds_hz() const {
+  [[nodiscard]] std::pair<double, double> fold_amplitudes() const {
     const double a_max = peak_amplitude();
     const int n = 20000;
     std::vector<double> a(n), fa(n);
@@ -114,7 +114,12 @@ struct Duffing {
       if (imin < 0 && fa[i] < fa[i - 1] && fa[i] <= fa[i + 1]) imin = i;
       if (imin >= 0 && fa[i] > fa[i - 1] && fa[i] >= fa[i + 1]) imax = i;
     }
-    return {extremum(a[imin - 1], a[imin + 1], -1.0), extremum(a[imax - 1], a[imax + 1], +1.0)};
+    return {extremum_amplitude(a[imin - 1], a[imin + 1], -1.0), extremum_amplitude(a[imax - 1], a[imax + 1], +1.0)};
+  }
+  // {jump-up, jump-down} fold frequencies [Hz].
+  [[nodiscard]] std::pair<double, double> folds_hz() const {
+    const auto [a_up, a_down] = fold_amplitudes();
+    return {upper_hz(a_up), upper_hz(a_down)};
   }
 };
 
@@ -199,6 +204,26 @@ TEST(Continuation, DuffingFoldsMatchClosedFormFromEitherEnd) {
   ASSERT_EQ(down.folds.size(), 2u) << down.message;
   EXPECT_NEAR(down.folds[0].parameter, up.folds[1].parameter, 1e-6 * jump_up);
   EXPECT_NEAR(down.folds[1].parameter, up.folds[0].parameter, 1e-6 * jump_down);
+}
+
+// The state of each fold, not only its frequency: the first-harmonic amplitude at the fold
+// points equals the closed form's A at the extremum of f₊(A). The curve is multivalued there, so
+// the nearest point in frequency can lie on the other sheet: the fold state must be its own.
+TEST(Continuation, DuffingFoldStatesMatchClosedForm) {
+  const Duffing d;
+  const auto [a_up, a_down] = d.fold_amplitudes();
+  const auto curve = solvers::trace_response(d.problem(8.0), duffing_options(+1));
+  ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
+  ASSERT_EQ(curve.folds.size(), 2u);
+  ASSERT_EQ(curve.fold_points.size(), 2u);
+  const double expected[2] = {a_down, a_up};  // traced upward: the jump-down fold comes first
+  for (size_t k = 0; k < 2; ++k) {
+    const auto& f = curve.fold_points[k];
+    EXPECT_EQ(f.frequency_hz, curve.folds[k].parameter);
+    const double a = std::hypot(f.contact_unknowns(1), f.contact_unknowns(2));
+    EXPECT_NEAR(a, expected[k], 1e-4 * expected[k]) << "fold " << k << " at " << f.frequency_hz << " Hz";
+    EXPECT_NEAR(f.amplitude, a, 1e-3 * a) << "the sampled amplitude of the observed DOF (P = 512 samples)";
+  }
 }
 
 // Duffing with 8 harmonics (an accurate orbit): the monodromy matrix of the ODE about it finds

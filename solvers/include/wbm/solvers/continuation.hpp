@@ -43,8 +43,9 @@
 /// Branch::events and switches count the events and the entries flipped; a switching point where
 /// no piece continues the branch ends it with StopReason::DegenerateEvent and the reason.
 /// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
-/// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step, or, at a
-/// switching point where the new piece turns back in λ, the switching point's λ.
+/// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step, and its
+/// state (Fold::x) the interpolant of x(s) there; at a switching point where the new piece turns
+/// back in λ, the switching point's λ and x.
 /// The branch stops on a StopReason; every point it holds converged (‖R‖ ≤ corrector_tolerance);
 /// with RangeReached the last point lies beyond the range by less than one step.
 /// Non-convergence is never thrown.
@@ -154,6 +155,9 @@ struct PseudoArclengthOptions {
 struct Fold {
   double parameter = 0.0;  // λ at the turning point (Hermite interpolation)
   size_t after = 0;        // the fold lies between points[after] and points[after + 1]
+  /// The state there (length n, units of BranchPoint::x): the cubic Hermite interpolant of x(s)
+  /// on that step at the fold's arclength, or a switching point's x where the new piece turns back.
+  Eigen::VectorXd x;
 };
 
 struct Branch {
@@ -397,12 +401,17 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     // Fold: the λ-component of the tangent changes sign; Hermite cubic λ̂(s) on [0, ds] on the
     // smooth piece (to the old piece's tangent at a switching point), and at a switching point
     // whose new piece turns back in λ, the point itself.
+    // The fold's state is the Hermite interpolant of x̂(s) at the same s (an estimate on the step,
+    // not a corrected point: O(ds⁴) on a smooth piece).
     const double d0 = last.parameter_tangent(), d1 = p.event ? incoming(n) : p.parameter_tangent();
     if (d0 * d1 < 0.0) {
-      const double lambda_fold = detail::fold_parameter(z_last(n), z(n), d0, d1, ds);
-      branch.folds.push_back({lambda_fold * ls, branch.points.size() - 1});
+      const double s_fold = detail::fold_arclength(z_last(n), z(n), d0, d1, ds);
+      const Eigen::VectorXd t1 = p.event ? Eigen::VectorXd(incoming.head(n)) : Eigen::VectorXd(t_new.head(n));
+      Eigen::VectorXd x_fold = detail::hermite<Eigen::VectorXd>(z_last.head(n), z.head(n), last.tangent.head(n), t1, ds, s_fold);
+      branch.folds.push_back({detail::hermite(z_last(n), z(n), d0, d1, ds, s_fold) * ls, branch.points.size() - 1,
+                              std::move(x_fold) * xs});
     }
-    if (p.event && d1 * p.parameter_tangent() < 0.0) branch.folds.push_back({p.parameter, branch.points.size() - 1});
+    if (p.event && d1 * p.parameter_tangent() < 0.0) branch.folds.push_back({p.parameter, branch.points.size() - 1, p.x});
     // Landings on the listed values this step passed (Newton at fixed λ from the interpolation).
     for (size_t k = 0; k < o.land_on.size(); ++k) {
       const double target = o.land_on[k];

@@ -128,6 +128,10 @@ struct Backbone {
   std::vector<ModeLevel> levels;      // converged levels in branch order (E increasing between folds)
   std::vector<double> failed_energies;  // levels that did not converge (the step was then shrunk)
   std::vector<double> folds;          // energies where the branch turns back in E (continuation)
+  /// Per fold: the level at the fold's state (Fold::x: a located corner, or on a smooth piece the
+  /// Hermite interpolant of the step, whose status and residual then say how far it is from a
+  /// solution), e.g. to mark the fold at its own frequency where the backbone is multivalued in E.
+  std::vector<ModeLevel> fold_levels;
   /// The levels at the energies asked for by `include`, in that order (first passage of the
   /// branch; a level that could not be reached is absent or has converged = false).
   std::vector<ModeLevel> included;

@@ -80,6 +80,10 @@ struct ResponsePoint {
 struct ResponseCurve {
   std::vector<ResponsePoint> points;
   std::vector<Fold> folds;             // parameters of the turning points
+  /// Per fold: the response at its state Fold::x (max/min/amplitude, contact force, kept
+  /// coefficients; no stability, corrector_iterations 0), so that a fold is drawn where it lies on a
+  /// multivalued curve, not at the amplitude of the nearest point in λ.
+  std::vector<ResponsePoint> fold_points;
   /// Per fold: a Floquet multiplier crosses +1 within four points of it on either side (with
   /// stability), i.e. it is a fold of the dynamics and not only of the truncated weighted-residual
   /// system (the crossing of the truncated orbit may lag the fold by a few points: 4 on the stiff

@@ -313,6 +313,8 @@ class WeightedResidual {
   /// functions contact_residual, contact_jacobian, contact_jacobian_low_rank, expand and the
   /// homotopy then throw std::logic_error naming the rigid ones).
   [[nodiscard]] bool rigid() const;
+  /// The contact quadrature in use (WeightedResidualOptions::contact_quadrature).
+  [[nodiscard]] ContactQuadrature contact_quadrature() const;
   /// Rigid stops: the impulse instants τ_k = (k + ½)/M (length M); impulse k is paired with the
   /// gap at τ_{k+1}.
   [[nodiscard]] Eigen::VectorXd collocation_times() const;
