@@ -80,8 +80,12 @@ NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, do
   return e;
 }
 
-ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
+ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double max_wall_time_s) const {
   const auto t0 = std::chrono::steady_clock::now();
+  auto spent = [&] {
+    return max_wall_time_s > 0.0 &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > max_wall_time_s;
+  };
   if (!(energy > 0.0) || !std::isfinite(energy)) {
     throw std::invalid_argument("NonlinearModes::solve: energy " + format_number(energy) + " must be > 0");
   }
@@ -115,6 +119,10 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start) const {
   NewtonReport last_primal;
   std::string why = "Powell iteration limit reached";
   for (int j = 0; j < options_.max_powell_iterations; ++j) {
+    if (spent()) {
+      why = "wall-time budget spent (" + format_number(max_wall_time_s) + " s)";
+      break;
+    }
     ++level.powell_iterations;
     // LL11 Alg. 3, l. 3: the primal problem ∇L_κ = 0, by the Newton core: line search on
     // ‖∇L_κ‖₂, and Levenberg–Marquardt steps on ½‖∇L_κ‖² once it stalls (a change of the active
@@ -199,9 +207,22 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
   }
   std::vector<double> include = o.include;
   std::sort(include.begin(), include.end());
+  if (!(o.max_wall_time_s >= 0.0)) {
+    throw std::invalid_argument("BackboneOptions.max_wall_time_s = " + format_number(o.max_wall_time_s) +
+                                ": must be >= 0 (0: no budget)");
+  }
   Backbone b;
   double step = o.initial_step, energy = o.energy_min;
   while (true) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (o.max_wall_time_s > 0.0 && elapsed >= o.max_wall_time_s) {
+      b.stop = StopReason::TimeBudget;
+      b.message = "wall-time budget of " + format_number(o.max_wall_time_s) + " s spent (" + format_number(elapsed) +
+                  " s) " + (b.levels.empty() ? std::string("before the first level")
+                                             : "after E = " + format_number(b.levels.back().energy)) +
+                  ", next E = " + format_number(energy) + "; raise BackboneOptions::max_wall_time_s (0: no budget)";
+      break;
+    }
     // Secant predictor through the last two levels, scaled start from one.
     ModeLevel predictor;
     const ModeLevel* start = nullptr;
@@ -218,7 +239,12 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     } else if (!b.levels.empty()) {
       start = &b.levels.back();
     }
-    ModeLevel level = solve(energy, start);
+    // The level gets what is left of the budget; a level cut by it is no failed attempt.
+    ModeLevel level = solve(energy, start, o.max_wall_time_s > 0.0 ? std::max(o.max_wall_time_s - elapsed, 1e-300) : 0.0);
+    if (!level.converged() && o.max_wall_time_s > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= o.max_wall_time_s) {
+      continue;  // the check above ends the backbone
+    }
     if (level.converged()) {
       b.levels.push_back(std::move(level));
       if (o.on_level) o.on_level(b.levels.back());
@@ -232,6 +258,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
       }
       step *= 0.5;
       if (step < o.min_step) {
+        b.stop = StopReason::StepBelowMinimum;
         b.message = "energy step below minimum after E = " + format_number(b.levels.back().energy) + ": " + level.message;
         break;
       }
@@ -244,6 +271,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
   }
   if (b.message.empty()) {
     b.message = "reached E = " + format_number(o.energy_max);
+    b.stop = StopReason::RangeReached;
     b.complete = true;
   }
   for (double e : o.include) {

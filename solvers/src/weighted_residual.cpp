@@ -189,6 +189,39 @@ double elapsed(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
+// The continuation of a homotopy in decades of its parameter (κ of the penalty, σ of the contact
+// forces), shared by the two homotopies below: λ̂ = λ (decades), the state in `state_scale`
+// units, corners restarted (the (·)₊ of a penalty switches at every sample that starts touching).
+PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_max, double state_scale,
+                                             const WeightedResidualOptions& w) {
+  PseudoArclengthOptions o;
+  o.parameter_min = lambda_min;
+  o.parameter_max = lambda_max;
+  o.parameter_scale = 1.0;
+  o.state_scale = state_scale;
+  o.initial_step = 0.05;
+  o.max_step = 0.5;
+  o.min_step = 1e-9;
+  o.kink_step = 1e-6;
+  o.corner_restart = true;
+  o.max_points = w.homotopy_max_points;
+  o.corrector_tolerance = w.newton.tolerance;
+  o.initial_newton = w.newton;
+  return o;
+}
+
+// The homotopy's path in its report: points, folds, iterations, stop, and the largest σ (or κ)
+// reached, at most 10^lambda_cap.
+void record_homotopy(const Branch& branch, double lambda_cap, HomotopyReport& report) {
+  report.points = static_cast<int>(branch.points.size());
+  report.folds = static_cast<int>(branch.folds.size());
+  report.corrector_iterations = branch.corrector_iterations;
+  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
+  double lambda_max = -std::numeric_limits<double>::infinity();
+  for (const auto& bp : branch.points) lambda_max = std::max(lambda_max, bp.parameter);
+  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(lambda_max, lambda_cap));
+}
+
 }  // namespace
 
 std::string_view to_string(Formulation f) noexcept {
@@ -1420,27 +1453,10 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
   const SignoriniPenalty system{this};
   const Eigen::VectorXd start = std::pow(10.0, kMuStart) * system.penetration(Eigen::VectorXd::Zero(p.u_lin.size())) /
                                 p.force_compliance;
-  PseudoArclengthOptions o;
-  o.parameter_min = kMuStart - 1.0;
-  o.parameter_max = kMuEnd;
-  o.parameter_scale = 1.0;  // decades of κ
-  o.state_scale = p.scale / p.force_compliance;  // newtons, as c λ is metres
-  o.initial_step = 0.05;
-  o.max_step = 0.5;
-  o.min_step = 1e-9;
-  o.kink_step = 1e-6;
-  o.corner_restart = true;  // the penalty's (·)₊ has a corner at every instant that starts touching
-  o.max_points = p.options.homotopy_max_points;
-  o.corrector_tolerance = p.options.newton.tolerance;
-  o.initial_newton = p.options.newton;
+  // λ in newtons: the state scaled so that c λ is compared with s_r in metres.
+  const PseudoArclengthOptions o = homotopy_continuation(kMuStart - 1.0, kMuEnd, p.scale / p.force_compliance, p.options);
   const Branch branch = pseudo_arclength(system, start, kMuStart, o);
-  report.points = static_cast<int>(branch.points.size());
-  report.folds = static_cast<int>(branch.folds.size());
-  report.corrector_iterations = branch.corrector_iterations;
-  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
-  double mu_max = -std::numeric_limits<double>::infinity();
-  for (const auto& bp : branch.points) mu_max = std::max(mu_max, bp.parameter);
-  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(mu_max, kMuEnd));
+  record_homotopy(branch, kMuEnd, report);
   // Newton on the exact conditions from the stiffest penalty point reached: near the end of the
   // path its active set is the rigid one.
   Eigen::VectorXd guess = branch.points.empty() ? start : branch.points.back().x;
@@ -1527,27 +1543,10 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   const double coupling = p.compliance_times(nj).lpNorm<Eigen::Infinity>();
   const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
   report.lambda_start = lambda0;
-  PseudoArclengthOptions o;
-  o.parameter_min = lambda0 - 1.0;  // a path turning back below λ₀ has ended
-  o.parameter_max = 0.0;
-  o.parameter_scale = 1.0;     // decades of σ
-  o.state_scale = p.scale;     // metres, as the residual
-  o.initial_step = 0.05;
-  o.max_step = 0.5;
-  o.min_step = 1e-9;
-  o.kink_step = 1e-6;
-  o.corner_restart = true;     // piecewise laws (linear penalty) have corners in σ
-  o.max_points = p.options.homotopy_max_points;
-  o.corrector_tolerance = p.options.newton.tolerance;
-  o.initial_newton = p.options.newton;
+  // From λ₀ to σ = 1 (a path turning back below λ₀ has ended), the state in metres as the residual.
+  const PseudoArclengthOptions o = homotopy_continuation(lambda0 - 1.0, 0.0, p.scale, p.options);
   const Branch branch = pseudo_arclength(contact_homotopy(), p.x_lin, lambda0, o);
-  report.points = static_cast<int>(branch.points.size());
-  report.folds = static_cast<int>(branch.folds.size());
-  report.corrector_iterations = branch.corrector_iterations;
-  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
-  double lambda_max = -std::numeric_limits<double>::infinity();
-  for (const auto& bp : branch.points) lambda_max = std::max(lambda_max, bp.parameter);
-  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(lambda_max, 0.0));
+  record_homotopy(branch, 0.0, report);
   NewtonResult out;
   if (branch.stop != StopReason::RangeReached || branch.points.back().parameter < 0.0) {
     out.x = branch.points.empty() ? p.x_lin : branch.points.back().x;

@@ -190,40 +190,32 @@ TEST(Continuation, LinearRodFollowsTheDirectFrequencyResponse) {
   }
 }
 
-// Duffing, single harmonic: both folds of the closed form, and the same folds traced from
-// either end of the range.
+// Duffing, single harmonic: both folds of the closed form, with their states, and the same folds
+// traced from either end of the range. The first-harmonic amplitude at each fold is the closed
+// form's A at the extremum of f₊(A): the curve is multivalued there, so the nearest point in
+// frequency can lie on the other sheet, and the fold's state must be its own.
 TEST(Continuation, DuffingFoldsMatchClosedFormFromEitherEnd) {
   const Duffing d;
   const auto [jump_up, jump_down] = d.folds_hz();
+  const auto [a_up, a_down] = d.fold_amplitudes();
   const auto up = solvers::trace_response(d.problem(8.0), duffing_options(+1));
   ASSERT_EQ(up.stop, solvers::StopReason::RangeReached) << up.message;
   ASSERT_EQ(up.folds.size(), 2u);
   EXPECT_NEAR(up.folds[0].parameter, jump_down, 1e-6 * jump_down);
   EXPECT_NEAR(up.folds[1].parameter, jump_up, 1e-6 * jump_up);
-  const auto down = solvers::trace_response(d.problem(14.0), duffing_options(-1));
-  ASSERT_EQ(down.folds.size(), 2u) << down.message;
-  EXPECT_NEAR(down.folds[0].parameter, up.folds[1].parameter, 1e-6 * jump_up);
-  EXPECT_NEAR(down.folds[1].parameter, up.folds[0].parameter, 1e-6 * jump_down);
-}
-
-// The state of each fold, not only its frequency: the first-harmonic amplitude at the fold
-// points equals the closed form's A at the extremum of f₊(A). The curve is multivalued there, so
-// the nearest point in frequency can lie on the other sheet: the fold state must be its own.
-TEST(Continuation, DuffingFoldStatesMatchClosedForm) {
-  const Duffing d;
-  const auto [a_up, a_down] = d.fold_amplitudes();
-  const auto curve = solvers::trace_response(d.problem(8.0), duffing_options(+1));
-  ASSERT_EQ(curve.stop, solvers::StopReason::RangeReached) << curve.message;
-  ASSERT_EQ(curve.folds.size(), 2u);
-  ASSERT_EQ(curve.fold_points.size(), 2u);
+  ASSERT_EQ(up.fold_points.size(), 2u);
   const double expected[2] = {a_down, a_up};  // traced upward: the jump-down fold comes first
   for (size_t k = 0; k < 2; ++k) {
-    const auto& f = curve.fold_points[k];
-    EXPECT_EQ(f.frequency_hz, curve.folds[k].parameter);
+    const auto& f = up.fold_points[k];
+    EXPECT_EQ(f.frequency_hz, up.folds[k].parameter);
     const double a = std::hypot(f.contact_unknowns(1), f.contact_unknowns(2));
     EXPECT_NEAR(a, expected[k], 1e-4 * expected[k]) << "fold " << k << " at " << f.frequency_hz << " Hz";
     EXPECT_NEAR(f.amplitude, a, 1e-3 * a) << "the sampled amplitude of the observed DOF (P = 512 samples)";
   }
+  const auto down = solvers::trace_response(d.problem(14.0), duffing_options(-1));
+  ASSERT_EQ(down.folds.size(), 2u) << down.message;
+  EXPECT_NEAR(down.folds[0].parameter, up.folds[1].parameter, 1e-6 * jump_up);
+  EXPECT_NEAR(down.folds[1].parameter, up.folds[0].parameter, 1e-6 * jump_down);
 }
 
 // Duffing with 8 harmonics (an accurate orbit): the monodromy matrix of the ODE about it finds

@@ -461,6 +461,24 @@ TEST(NonlinearModes, ANonConvergedLevelIsReportedAsSuch) {
   EXPECT_NE(one_step.message.find("semismooth Newton at fixed E = 1.2"), std::string::npos) << one_step.message;
 }
 
+// Energy stepping (Alg. 1) with a wall-time budget: below contact onset every level is the linear
+// mode, and the range is reached; with a budget already spent no level is attempted, and the
+// backbone ends incomplete, saying so and naming the option; a negative budget is refused.
+TEST(NonlinearModes, EnergySteppingHonoursItsWallTimeBudget) {
+  const auto nm = modes(1e-3, 4, 64);
+  const auto full = nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = 0.0});
+  ASSERT_TRUE(full.complete) << full.message;
+  EXPECT_EQ(full.stop, solvers::StopReason::RangeReached);
+  for (const auto& l : full.levels) EXPECT_NEAR(l.frequency_hz, nm.linear_frequency_hz(), 1e-9 * l.frequency_hz);
+  const auto spent = nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = 1e-300});
+  EXPECT_FALSE(spent.complete);
+  EXPECT_TRUE(spent.levels.empty());
+  EXPECT_EQ(spent.stop, solvers::StopReason::TimeBudget);
+  EXPECT_NE(spent.message.find("max_wall_time_s"), std::string::npos) << spent.message;
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = -1.0}); },
+                                           {"max_wall_time_s = -1", "must be >= 0"});
+}
+
 // The modal eigensolver reads one triangle: a non-symmetric K is refused, naming the entry.
 TEST(NonlinearModes, RefusesANonSymmetricStiffness) {
   auto system = ll11_system();

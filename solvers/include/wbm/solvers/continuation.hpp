@@ -89,7 +89,8 @@ enum class StopReason {
   StateBound,
   Retraced,
   UndampedResonance,
-  DegenerateEvent
+  DegenerateEvent,
+  TimeBudget  // energy stepping (NonlinearModes::backbone): BackboneOptions::max_wall_time_s spent
 };
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
@@ -102,6 +103,7 @@ enum class StopReason {
     case StopReason::Retraced: return "branch retraced itself";
     case StopReason::UndampedResonance: return "undamped resonance of the top Fourier function";
     case StopReason::DegenerateEvent: return "degenerate switching point";
+    case StopReason::TimeBudget: return "wall-time budget spent";
   }
   return "?";
 }

@@ -135,7 +135,8 @@ struct Backbone {
   /// The levels at the energies asked for by `include`, in that order (first passage of the
   /// branch; a level that could not be reached is absent or has converged = false).
   std::vector<ModeLevel> included;
-  StopReason stop = StopReason::InitialPointFailed;  // continuation: why the branch ended
+  StopReason stop = StopReason::InitialPointFailed;  // why the branch ended (Alg. 1/2: range reached, step
+                                                     // below minimum, time budget, or the first level failed)
   int kinks = 0;                      // continuation: corners of the nonsmooth branch, i.e. the events
                                       // located and crossed (one or more samples switching at once)
   int switches = 0;                   // continuation: samples switched at those events
@@ -209,6 +210,10 @@ struct BackboneOptions {
                                       // also returned in Backbone::included
   /// Called after each converged level, e.g. for progress; may be empty.
   std::function<void(const ModeLevel& level)> on_level = nullptr;
+  /// > 0: no level is attempted once this wall time [s] is spent (the one in progress finishes);
+  /// the backbone then ends incomplete with StopReason::TimeBudget and the energy reached.
+  /// 0: no budget. Throws std::invalid_argument (backbone) if negative or NaN.
+  double max_wall_time_s = 0.0;
 };
 
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.
@@ -232,8 +237,10 @@ class NonlinearModes {
   [[nodiscard]] int dofs() const { return n_; }
 
   /// The mode at normalized energy E from `start` (a previous level's coefficients, scaled by
-  /// √(E/E_start)), or from the linear mode. Never throws for non-convergence.
-  [[nodiscard]] ModeLevel solve(double energy, const ModeLevel* start = nullptr) const;
+  /// √(E/E_start)), or from the linear mode. Never throws for non-convergence. With
+  /// max_wall_time_s > 0 no Powell iteration starts once that wall time [s] is spent: the level
+  /// then ends unconverged (MaxIterations) with "wall-time budget spent" in its message.
+  [[nodiscard]] ModeLevel solve(double energy, const ModeLevel* start = nullptr, double max_wall_time_s = 0.0) const;
   /// Levels from energy_min to energy_max: secant predictor between levels, step grown after
   /// quick convergence and halved after a failure (the failed energy is recorded).
   [[nodiscard]] Backbone backbone(const BackboneOptions& options) const;
