@@ -8,6 +8,8 @@
 // make reproduce: N ∈ {8, 10, 12, 16} × m ∈ {128, 256} (the N that stopped on 18ad35a; about
 // 150 s). With WBM_ROBUSTNESS_FULL=1 in the environment: N ∈ {4, 6, 8, 10, 12, 16, 24, 32} ×
 // m ∈ {64, 128, 256, 512} (about 25 min on one core). --quick: N ∈ {8, 12} × m ∈ {64, 128}, E ≤ 3.
+// Also (not in --quick) the stiff stop of issue #35 (M = 64 and the defaults) with K perturbed, and
+// JL14 Fig. 12 for every Table 2 combination with the five runs (about 20 s together).
 // A pair that ends short of the range with an explained stop (the branch retraced itself, a
 // degenerate switching point) is listed as such; the claims print agrees/disagrees with counts.
 #include <algorithm>
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include <wbm/solvers/nonlinear_modes.hpp>
+#include <wbm/solvers/response_curve.hpp>
 
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/scene.hpp>
@@ -128,6 +131,52 @@ StiffStopOutcome run_stiff_stop(const std::string& basis, double scale) {
   return out;
 }
 
+// JL14 Fig. 12 for one Table 2 combination (jl14_case2.toml, M = 64, 1000–1700 Hz, steps ≤ 2 Hz,
+// at most 10 gaps of contact displacement, as jl14_fig12; no stability), perturbed as `p`: the
+// stop, the folds [Hz] and the peak tip amplitude [m].
+struct Fig12Outcome {
+  std::string stop;
+  int points = 0;
+  std::vector<double> folds;
+  double peak = NAN, seconds = 0.0;
+};
+
+Fig12Outcome run_fig12(const scene::Scene& scene, const reproduce::Combination& c, const Perturbation& p) {
+  solvers::MechanicalSystem system = scene.system();
+  std::vector<solvers::ContactPoint> contacts = scene.contact_points();
+  solvers::HarmonicForcing forcing = scene.harmonic_forcing(1000.0);
+  system.stiffness *= 1.0 + p.scale;
+  const auto n = static_cast<int>(system.stiffness.rows());
+  if (p.reversed) {
+    Eigen::VectorXi order(n);
+    for (int i = 0; i < n; ++i) order(i) = n - 1 - i;
+    const Eigen::PermutationMatrix<Eigen::Dynamic> perm(order);
+    system.stiffness = (perm * system.stiffness * perm.transpose()).eval();
+    system.mass = (perm * system.mass * perm.transpose()).eval();
+    if (system.damping.size() > 0) system.damping = (perm * system.damping * perm.transpose()).eval();
+    for (auto& k : contacts) k.dof = n - 1 - k.dof;
+    forcing.dof = n - 1 - forcing.dof;
+  }
+  const solvers::WeightedResidual base(system, forcing, contacts, solvers::TimeBasis::from_name(c.trial, 64),
+                                       solvers::TimeBasis::from_name(c.weighting, 64),
+                                       {.formulation = reproduce::kFigureFormulation});
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = 1000.0;
+  o.parameter_max = 1700.0;
+  o.max_parameter_step = 2.0;
+  o.max_state = 10.0;
+  o.stability = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto curve = solvers::trace_response(base, o);
+  Fig12Outcome out;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.stop = std::string(solvers::to_string(curve.stop));
+  out.points = static_cast<int>(curve.points.size());
+  for (const auto& f : curve.folds) out.folds.push_back(f.parameter);
+  for (const auto& pt : curve.points) out.peak = std::isnan(out.peak) ? pt.amplitude : std::max(out.peak, pt.amplitude);
+  return out;
+}
+
 // Largest relative difference of two values (NaN on either side: infinite, unless both are NaN).
 double relative(double a, double b) {
   if (std::isnan(a) && std::isnan(b)) return 0.0;
@@ -164,6 +213,7 @@ int main(int argc, char** argv) {
     std::ostringstream rows;
     nlohmann::json meta = nlohmann::json::array();
     int pairs = 0, completed = 0, explained = 0, stopped = 0, unexplained = 0, disagreeing = 0;
+    std::ostringstream fold_differences;  // per perturbed run whose folds differ from the unperturbed one's
     double worst = 0.0, total_seconds = 0.0;
     for (int n_h : harmonics) {
       for (int m : samples) {
@@ -196,6 +246,32 @@ int main(int argc, char** argv) {
         }
         if (valid && !agree) ++disagreeing;
         if (valid && std::isfinite(diff)) worst = std::max(worst, diff);
+        // Where the fold sets differ: the folds of each run that have no counterpart within
+        // kAgree in the other, and the extent of E they span (a short turn back and forth at a
+        // corner whose orientation rounding decides, or a fold of the branch itself).
+        for (size_t k = 1; valid && k < outs.size(); ++k) {
+          std::vector<double> extra, missing;
+          auto unmatched = [](const std::vector<double>& a, const std::vector<double>& b, std::vector<double>& out) {
+            for (double x : a) {
+              if (std::none_of(b.begin(), b.end(), [&](double y) { return relative(x, y) <= kAgree; })) out.push_back(x);
+            }
+          };
+          unmatched(outs[k].folds, ref.folds, extra);
+          unmatched(ref.folds, outs[k].folds, missing);
+          if (extra.empty() && missing.empty()) continue;
+          auto listed = [&](const std::vector<double>& v) {
+            std::string text;
+            for (double x : v) text += (text.empty() ? "" : ", ") + format("%.7f", x);
+            const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+            return text + " (spanning " + format("%.1e", (*hi - *lo) / *hi) + " of E)";
+          };
+          fold_differences << "- N = " << n_h << ", m = " << m << ", " << perturbations[k].name << ": "
+                           << outs[k].corners << " corners against " << ref.corners << "; "
+                           << (extra.empty() ? std::string() : std::to_string(extra.size()) + " more folds, at E = " + listed(extra))
+                           << (extra.empty() || missing.empty() ? "" : "; ")
+                           << (missing.empty() ? std::string() : std::to_string(missing.size()) + " folds fewer, at E = " + listed(missing))
+                           << "\n";
+        }
         double seconds = 0.0;
         for (const auto& o : outs) seconds += o.seconds;
         total_seconds += seconds;
@@ -289,8 +365,57 @@ int main(int argc, char** argv) {
                       stiff_incomplete == 0 && stiff_disagreeing == 0,
                       std::to_string(2 - stiff_incomplete) + " of 2 complete, " + std::to_string(stiff_disagreeing) +
                           " disagree; largest relative difference " + format("%.1e", stiff_worst)});
-    run.meta({{"check", "independence of the LL11 rod backbone and of the stiff stop from rounding"}, {"scene", base.path},
-              {"energy_max", e_max}, {"pairs", meta}, {"stiff_stop", stiff_meta}, {"total_seconds", total_seconds}});
+    // JL14 Fig. 12 for every Table 2 combination, perturbed as the backbone (about 15 s: no
+    // stability); not in --quick.
+    std::ostringstream fig12_rows;
+    nlohmann::json fig12_meta = nullptr;
+    if (!run.quick()) {
+      fig12_meta = nlohmann::json::array();
+      const scene::Scene case2 = reproduce::load_scene("jl14_case2");
+      int fig12_disagreeing = 0, fig12_unexplained = 0;
+      double fig12_worst = 0.0;
+      for (const auto& c : reproduce::table2_combinations()) {
+        std::vector<Fig12Outcome> outs;
+        for (const auto& p : perturbations) outs.push_back(run_fig12(case2, c, p));
+        const Fig12Outcome& ref = outs.front();
+        double diff = 0.0, seconds = 0.0;
+        bool agree = true;
+        for (const auto& o : outs) {
+          seconds += o.seconds;
+          agree = agree && o.stop == ref.stop && o.folds.size() == ref.folds.size();
+          for (size_t i = 0; agree && i < o.folds.size(); ++i) diff = std::max(diff, relative(o.folds[i], ref.folds[i]));
+          diff = std::max(diff, relative(o.peak, ref.peak));
+        }
+        agree = agree && diff <= kAgree;
+        const bool explained_stop = ref.stop == solvers::to_string(solvers::StopReason::RangeReached) ||
+                                    ref.stop == solvers::to_string(solvers::StopReason::StateBound) ||
+                                    ref.stop == solvers::to_string(solvers::StopReason::UndampedResonance);
+        if (!explained_stop) ++fig12_unexplained;
+        if (!agree) ++fig12_disagreeing;
+        fig12_worst = std::max(fig12_worst, std::isfinite(diff) ? diff : 0.0);
+        total_seconds += seconds;
+        std::string folds_text;
+        for (size_t i = 0; i < ref.folds.size(); ++i) folds_text += (i ? ", " : "") + format("%.2f", ref.folds[i]);
+        fig12_rows << "| " << c.label() << " | " << ref.stop << " | " << ref.points << " | "
+                   << (folds_text.empty() ? std::string("none") : folds_text) << " | " << format("%.4f", 1e3 * ref.peak)
+                   << " | " << (std::isfinite(diff) ? format("%.1e", diff) : std::string("a value missing")) << " | "
+                   << (agree ? "agree" : "DISAGREE") << " | " << format("%.1f", seconds) << " |\n";
+        std::cerr << "ll11_robustness: Fig. 12 " << c.label() << ": " << ref.stop << ", " << format("%.1f", seconds)
+                  << " s, largest difference " << format("%.1e", diff) << "\n";
+        fig12_meta.push_back({{"combination", c.label()}, {"stop", ref.stop}, {"points", ref.points}, {"folds_hz", ref.folds},
+                              {"peak_amplitude_m", ref.peak}, {"largest_relative_difference", std::isfinite(diff) ? nlohmann::json(diff) : nlohmann::json(nullptr)},
+                              {"agree", agree}});
+      }
+      claims.push_back({"JL14 Fig. 12 for every Table 2 combination ends on the range, the state bound or an explained "
+                        "undamped resonance, and its perturbed runs agree: same stop, same folds within 1e-6 relative, "
+                        "same peak amplitude",
+                        fig12_unexplained == 0 && fig12_disagreeing == 0,
+                        std::to_string(fig12_unexplained) + " end otherwise, " + std::to_string(fig12_disagreeing) +
+                            " of 6 disagree; largest relative difference " + format("%.1e", fig12_worst)});
+    }
+    run.meta({{"check", "independence of the LL11 rod backbone, the stiff stop and JL14 Fig. 12 from rounding"},
+              {"scene", base.path}, {"energy_max", e_max}, {"pairs", meta}, {"stiff_stop", stiff_meta},
+              {"jl14_fig12", fig12_meta}, {"total_seconds", total_seconds}});
     std::ostringstream md;
     md << "## Robustness: the LL11 rod backbone against rounding (issue #35)\n\n"
        << "Files: `out/ll11_robustness/runs.csv` (one row per run; perturbation 0: none, 1–3: K scaled, 4: DOFs "
@@ -305,15 +430,28 @@ int main(int argc, char** argv) {
        << "| N | m | outcome | levels | corners | folds | f at E = " << format("%g", e_check) << " [Hz] | f at E = "
        << format("%g", e_max) << " [Hz] | largest difference | perturbed runs | time [s] |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|\n"
-       << rows.str() << "\n"
-       << "**The stiff stop of issue #35** (50 kg on 1 MN/m, c = 0.2 √(mk), a 1e8 N/m stop at 20 µm, 10 N over "
+       << rows.str() << "\n";
+    if (!fold_differences.str().empty()) {
+      md << "Runs whose folds differ from the unperturbed run's (folds without a counterpart within "
+         << format("%.0e", kAgree) << " relative; the frequencies at the landed energies are compared in the table):\n\n"
+         << fold_differences.str() << "\n";
+    }
+    md << "**The stiff stop of issue #35** (50 kg on 1 MN/m, c = 0.2 √(mk), a 1e8 N/m stop at 20 µm, 10 N over "
           "60–210 rad/s, `type = \"continuation\"`), with `basis = { trial = \"fourier\", dimension = 64 }` and with "
           "no [basis] table, each as is and with K scaled by (1 + k·1e-12), k = 1, 2, 3 (one DOF: no renumbering). "
           "The difference column is the largest relative difference of the folds' frequencies and amplitudes.\n\n"
        << "| basis | outcome | points | folds (amplitude) | largest difference | perturbed runs | time [s] |\n"
        << "|---|---|---|---|---|---|---|\n"
-       << stiff_rows.str() << "\n"
-       << reproduce::claims_markdown(claims);
+       << stiff_rows.str() << "\n";
+    if (!run.quick()) {
+      md << "**JL14 Fig. 12** (jl14_case2.toml, M = 64, distributional, 1000–1700 Hz, steps ≤ 2 Hz, at most 10 gaps; "
+            "no stability) for every Table 2 combination, with the same five runs; the difference column is the "
+            "largest relative difference of the folds and of the peak tip amplitude.\n\n"
+         << "| combination | stop | points | folds [Hz] | peak amplitude [mm] | largest difference | perturbed runs | time [s] |\n"
+         << "|---|---|---|---|---|---|---|---|\n"
+         << fig12_rows.str() << "\n";
+    }
+    md << reproduce::claims_markdown(claims);
     run.report(md.str());
   });
 }
