@@ -169,7 +169,8 @@ int main(int argc, char** argv) {
               std::to_string(powell_its) + " Powell and " + std::to_string(newton) +
               " Newton iterations in the converged levels (" + ba.message + "); the continuation covers the whole range in " +
               format("%.1f", continuation_s) + " s. Each Powell update re-solves the augmented Lagrangian by "
-              "semismooth Newton, and near the contact onset the steps fail and are halved"};
+              "semismooth Newton on a dense Hessian of the " + std::to_string(pa.system.stiffness.rows() * (2 * s.analysis.harmonics + 1) - 1) +
+              " unknowns (n (2N + 1) coefficients, the phase one fixed)" + (ba.failed_energies.empty() ? std::string() : ", and energy steps failed and were halved")};
     }
 
     // The linear modes: f_k against (2k − 1) f_1 (odd multiples for the continuous rod).
