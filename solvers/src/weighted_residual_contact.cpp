@@ -1,0 +1,382 @@
+// WeightedResidual, contact: the contact displacement samples, the contact forces n(x) under either
+// quadrature rule, their Jacobians N(x) (dense, low rank I + H W V, Fourier:Fourier shift kernel) and
+// the compliance H = P G⁻¹ Pᵀ (weighted_residual_impl.hpp).
+#include "weighted_residual_impl.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace wbm::solvers {
+
+namespace detail {
+
+void cell_average(const contact::ContactLaw& law, double u, double delta, double& f, double& dfdu, double& dfdd) {
+  const double up = u + 0.5 * delta, um = u - 0.5 * delta;
+  const double pp = law.potential(up), pm = law.potential(um);
+  if (!(std::abs(pp - pm) > 1e-4 * std::max(std::abs(pp), std::abs(pm)))) {
+    f = law.force(u);
+    dfdu = law.stiffness(u);
+    dfdd = 0.0;
+    return;
+  }
+  f = (pp - pm) / delta;
+  const double fp = law.force(up), fm = law.force(um);
+  dfdu = (fp - fm) / delta;
+  dfdd = (0.5 * (fp + fm) - f) / delta;
+}
+
+}  // namespace detail
+
+Eigen::Index rank;
+Eigen::MatrixXd WeightedResidual::Impl::TrialRows::operator()(const Eigen::MatrixXd& y) const {
+  Eigen::MatrixXd out(rank, y.cols());
+  Eigen::MatrixXd yc;  // contact c's coefficients (M × k)
+  for (int c = 0; c < contacts; ++c) {
+    const ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+    const auto na = static_cast<Eigen::Index>(rc.active.size());
+    if (na == 0 && rc.slope_rows.rows() == 0) continue;
+    if (contacts > 1) {
+      yc.resize(dimension, y.cols());
+      for (int k = 0; k < dimension; ++k) yc.row(k) = y.row(static_cast<Eigen::Index>(k) * contacts + c);
+    }
+    const Eigen::MatrixXd& yv = contacts > 1 ? yc : y;
+    if (na > 0 && sampling->trial->aft) {
+      const Eigen::MatrixXd samples = sampling->trial->to_time(yv.transpose()).transpose();  // Q × k
+      out.middleRows(rc.first, na) = samples(rc.active, Eigen::all);
+    } else if (na > 0) {
+      out.middleRows(rc.first, na) = rc.values * yv;
+    }
+    if (rc.slope_rows.rows() > 0) out.middleRows(rc.first + na, rc.slope_rows.rows()) = rc.slope_rows * yv;
+  }
+  return out;
+}
+
+
+void WeightedResidual::Impl::set_compliance() {
+  h = g->compliance(contact_directions(), contact_terms);
+  const auto nonzeros = (h.array() != 0.0).count();
+  h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
+  h_sparse.reset();
+  if (h_is_sparse) h_sparse = std::make_shared<const Eigen::SparseMatrix<double>>(h.sparseView());
+}
+
+
+// H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
+Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& v) const {
+  if (h_is_sparse) return *h_sparse * v;
+  if (g->fast_compliance_product()) return g->compliance_product(v);
+  return h * v;
+}
+
+
+// Fourier:Fourier, midpoint rule: when every harmonic h of H_cd couples only its own cos hτ
+// and sin hτ, as the 2 × 2 block [[a_h, b_h], [−b_h, a_h]] (the structure of the exact
+// Galerkin operators: G commutes with time shifts), the kernel of the contact Jacobian is
+//   φ(τ_r)ᵀ H_cd φ(τ_r') = κ_cd(r − r' mod Q) + t_cd cos πMτ_r cos πMτ_r',
+//   κ_cd(s) = H_cd(0, 0) + Σ_h [a_h cos(2πhs/Q) − b_h sin(2πhs/Q)],
+// with t_cd the entry on the top function cos πMτ (M even; it has no sine partner, so it is
+// not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
+// other coupling (discrete operators, another basis) gives no kernel.
+std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift_kernel() const {
+  if (!trial.is_fourier() || !weighting.is_fourier() || cell_average_rule || !h_is_sparse) return std::nullopt;
+  const spectral::FourierBasis basis(m);
+  const bool top = basis.has_top_function();
+  const int harmonics = top ? m / 2 : (m - 1) / 2;
+  std::vector<int> cos_index(static_cast<size_t>(harmonics) + 1, -1), sin_index = cos_index;
+  for (int k = 0; k < m; ++k) (basis.is_sine(k) ? sin_index : cos_index)[static_cast<size_t>(basis.harmonic(k))] = k;
+  const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
+  for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
+      const int row_harmonic = basis.harmonic(static_cast<int>(it.row() / nc));
+      const int col_harmonic = basis.harmonic(static_cast<int>(it.col() / nc));
+      if (std::abs(it.value()) > tol && row_harmonic != col_harmonic) return std::nullopt;
+    }
+  }
+  const int paired = top ? harmonics - 1 : harmonics;
+  ShiftKernel k;
+  k.kappa.resize(static_cast<size_t>(nc) * nc);
+  k.top = Eigen::MatrixXd::Zero(nc, nc);
+  k.g = Eigen::VectorXd::Zero(q);
+  Eigen::VectorXd cos_table(q), sin_table(q);
+  for (int i = 0; i < q; ++i) {
+    cos_table(i) = std::cos(2.0 * std::numbers::pi * i / q);
+    sin_table(i) = std::sin(2.0 * std::numbers::pi * i / q);
+  }
+  if (top) {
+    for (int r = 0; r < q; ++r) k.g(r) = basis.value(m - 1, sampling->tau(r));
+  }
+  auto at = [&](int kr, int c, int kc, int d) {  // H(k_r·n_c + c, k_c·n_c + d)
+    return h(static_cast<Eigen::Index>(kr) * nc + c, static_cast<Eigen::Index>(kc) * nc + d);
+  };
+  for (int c = 0; c < nc; ++c) {
+    for (int d = 0; d < nc; ++d) {
+      // With a selection, W = Π W: only the kept harmonics enter the kernel.
+      const auto kept = [&](int k) { return keep.size() == 0 || keep(k) != 0.0; };
+      Eigen::VectorXd kappa = Eigen::VectorXd::Constant(q, kept(0) ? at(0, c, 0, d) : 0.0);
+      for (int hh = 1; hh <= paired; ++hh) {
+        if (!kept(cos_index[static_cast<size_t>(hh)])) continue;
+        const int ci = cos_index[static_cast<size_t>(hh)], si = sin_index[static_cast<size_t>(hh)];
+        const double a = at(ci, c, ci, d), b = at(ci, c, si, d);
+        if (std::abs(a - at(si, c, si, d)) > tol || std::abs(b + at(si, c, ci, d)) > tol) return std::nullopt;
+        for (int sft = 0, index = 0; sft < q; ++sft) {  // index = h·s mod Q
+          kappa(sft) += a * cos_table(index) - b * sin_table(index);
+          index += hh;
+          if (index >= q) index -= q;
+        }
+      }
+      if (top && kept(m - 1)) k.top(c, d) = at(m - 1, c, m - 1, d);
+      k.kappa[static_cast<size_t>(c) * nc + d] = std::move(kappa);
+    }
+  }
+  return k;
+}
+
+
+// block(j, k) = (1/Q) Σ_q p_j(τ_q) κ_q q_k(τ_q) over the samples with κ_q ≠ 0 (`active`): the
+// contact Jacobian of one contact. Fourier:Fourier by Aft::jacobian (O(Q log Q + M²)); one
+// Fourier basis by one FFTW projection per function of the other (O(M Q log Q)); two wavelet
+// bases by their sparse rows (O(active · support²)).
+Eigen::MatrixXd WeightedResidual::Impl::contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const {
+  const Sampling& smp = *sampling;
+  if (trial.is_fourier() && weighting.is_fourier()) {
+    if (keep.size() == 0) return smp.aft->jacobian(kc);
+    return keep.transpose().asDiagonal() * smp.aft->jacobian(kc);  // rows: the weighting functions kept
+  }
+  if (weighting.is_fourier() || trial.is_fourier()) {
+    const SparseRows& v = weighting.is_fourier() ? smp.trial->values : smp.weighting->values;
+    Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(m, q);  // S(k, q) = κ_q v_k(τ_q)
+    for (int r : active) {
+      for (SparseRows::InnerIterator it(v, r); it; ++it) samples(it.col(), r) = kc(r) * it.value();
+    }
+    const Eigen::MatrixXd p = smp.aft->project(samples);  // (1/Q) Σ_q S(k, q) f_l(τ_q), f the Fourier basis
+    return weighting.is_fourier() ? Eigen::MatrixXd(p.transpose()) : p;
+  }
+  Eigen::MatrixXd block = Eigen::MatrixXd::Zero(m, m);
+  const SparseRows& w = smp.weighting->values;
+  const SparseRows& v = smp.trial->values;
+  double loop_cost = 0.0;  // multiply-adds of the loops over the rows' nonzeros
+  for (int r : active) loop_cost += static_cast<double>(w.outerIndexPtr()[r + 1] - w.outerIndexPtr()[r]) *
+                                    static_cast<double>(v.outerIndexPtr()[r + 1] - v.outerIndexPtr()[r]);
+  if (loop_cost > static_cast<double>(active.size()) * m * m / 8.0) {
+    // Wide supports (the orthogonal B-spline's decays exponentially but spans the period at
+    // small M): a dense product of the active rows, blocked, is faster than scalar loops.
+    Eigen::MatrixXd wa(static_cast<Eigen::Index>(active.size()), m), va(wa.rows(), m);
+    for (size_t i = 0; i < active.size(); ++i) {
+      wa.row(static_cast<Eigen::Index>(i)) = w.row(active[i]) * (kc(active[i]) / q);
+      va.row(static_cast<Eigen::Index>(i)) = v.row(active[i]);
+    }
+    block.noalias() = wa.transpose() * va;
+    return block;
+  }
+  for (int r : active) {
+    for (SparseRows::InnerIterator wj(w, r); wj; ++wj) {
+      const double wk = wj.value() * kc(r) / q;
+      for (SparseRows::InnerIterator vk(v, r); vk; ++vk) block(wj.col(), vk.col()) += wk * vk.value();
+    }
+  }
+  return block;
+}
+
+
+// f_c(u_c(τ_q)) (f̄_q for CellAverage), n_c × Q, and optionally the tangents.
+Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
+  refuse_rigid("contact forces as a function of the displacement");
+  const Sampling& smp = *sampling;
+  const Eigen::MatrixXd u = contact_samples(x);
+  Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
+  if (cell_average_rule) slope = smp.trial_slope->to_time(spectral::as_coefficients(x, nc)) / static_cast<double>(q);
+  Eigen::MatrixXd force(nc, q);
+  if (tangents != nullptr) tangents->assign(static_cast<size_t>(nc), {});
+  Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
+  for (int c = 0; c < nc; ++c) {
+    if (cell_average_rule) {
+      for (int r = 0; r < q; ++r) detail::cell_average(*contacts[c].law, u(c, r), slope(c, r), fc(r), kc(r), kd(r));
+    } else {
+      contacts[c].law->evaluate(u.row(c).transpose(), fc, kc);
+    }
+    force.row(c) = fc.transpose();
+    if (tangents == nullptr) continue;
+    ContactTangent& t = (*tangents)[static_cast<size_t>(c)];
+    for (int r = 0; r < q; ++r) {
+      if (kc(r) != 0.0) t.active.push_back(r);
+      if (kd(r) != 0.0) t.sloped.push_back(r);
+    }
+    t.kc = kc;
+    t.kd = kd;
+  }
+  return force;
+}
+
+
+// N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
+Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector<ContactTangent>& tangents) const {
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+  for (int c = 0; c < nc; ++c) {
+    const ContactTangent& t = tangents[static_cast<size_t>(c)];
+    Eigen::MatrixXd block = t.active.empty() ? Eigen::MatrixXd::Zero(m, m) : contact_block(t.kc, t.active);
+    if (!t.sloped.empty()) {
+      // CellAverage: + Σ_q p_j(τ_q)/Q ∂f̄/∂δ q̇_k(τ_q)/Q over the samples whose cell meets the
+      // law's kink (a few per crossing): their rows are evaluated here.
+      const auto [ts, ks] = sloped_samples(t);
+      block.noalias() += (ks.asDiagonal() * weighting_values(ts)).transpose() * trial.values(ts, 1);
+    }
+    for (int k = 0; k < m; ++k) {
+      for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
+    }
+  }
+  return jac;
+}
+
+
+// I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
+Eigen::MatrixXd WeightedResidual::Impl::identity_plus_hn(const std::vector<ContactTangent>& tangents) const {
+  Eigen::MatrixXd j = compliance_times(contact_force_jacobian(tangents));
+  j.diagonal().array() += 1.0;
+  return j;
+}
+
+
+// The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
+std::pair<Eigen::VectorXd, Eigen::VectorXd> WeightedResidual::Impl::sloped_samples(const ContactTangent& t) const {
+  Eigen::VectorXd ts(static_cast<Eigen::Index>(t.sloped.size())), ks(ts.size());
+  for (size_t i = 0; i < t.sloped.size(); ++i) {
+    ts(static_cast<Eigen::Index>(i)) = sampling->tau(t.sloped[i]);
+    ks(static_cast<Eigen::Index>(i)) = t.kd(t.sloped[i]) / (static_cast<double>(q) * q);
+  }
+  return {ts, ks};
+}
+
+
+// The condensed Jacobian (I + H N)/s_r with N = W V of rank r = Σ_c (active + sloped samples):
+// column i of W (n_c·M × r) is the weighting functions at the sample times κ_q/Q (or
+// ∂f̄/∂δ/Q² for a kink term), row i of V (r × n_c·M) the trial functions (or their slopes) at
+// the same time, both on the rows x(k·n_c + c) of their contact. With U = H W and
+// C = I_r + V U, Newton's step is an r × r solve (WoodburyLu). V is applied by FFTW for a
+// Fourier trial basis (all Q samples, the active ones kept) and by the sparse rows of the
+// wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
+// r × r LU then saves less than the two products with V cost (bench_weighted_residual).
+LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::VectorXd& x) const {
+  std::vector<ContactTangent> tangents;
+  (void)contact_forces(x, &tangents);
+  LowRankJacobian jac;
+  jac.scale = scale;
+  Eigen::Index rank = 0;
+  for (const auto& t : tangents) rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
+  const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+  jac.rows = size;
+  if (4 * rank > 3 * size) {
+    jac.capacitance = identity_plus_hn(tangents);
+    return jac;
+  }
+  if (shift_kernel_once()) return shift_kernel_jacobian(tangents, std::move(jac), rank);
+  auto rows = std::make_shared<std::vector<ContactRows>>(static_cast<size_t>(nc));
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, rank);
+  Eigen::Index first = 0;
+  for (int c = 0; c < nc; ++c) {
+    const ContactTangent& t = tangents[static_cast<size_t>(c)];
+    ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+    rc.first = first;
+    rc.active = t.active;
+    const auto na = static_cast<Eigen::Index>(t.active.size());
+    if (na > 0) {
+      // Row i: κ_q p_j(τ_q)/Q at the active sample q = active[i].
+      Eigen::VectorXd kc(na);
+      for (Eigen::Index i = 0; i < na; ++i) kc(i) = t.kc(t.active[static_cast<size_t>(i)]);
+      const Eigen::MatrixXd wa = sampling->weighting->project_at(t.active, kc.asDiagonal().toDenseMatrix());
+      for (int j = 0; j < m; ++j) w.block(static_cast<Eigen::Index>(j) * nc + c, first, 1, na) = wa.col(j).transpose();
+      if (!trial.is_fourier()) {
+        const SparseRows& sv = sampling->trial->values;
+        std::vector<Eigen::Triplet<double>> triplets;
+        for (Eigen::Index i = 0; i < na; ++i) {
+          for (SparseRows::InnerIterator it(sv, t.active[static_cast<size_t>(i)]); it; ++it) {
+            triplets.emplace_back(static_cast<int>(i), static_cast<int>(it.col()), it.value());
+          }
+        }
+        rc.values.resize(na, m);
+        rc.values.setFromTriplets(triplets.begin(), triplets.end());
+      }
+    }
+    if (!t.sloped.empty()) {
+      const auto [ts, ks] = sloped_samples(t);
+      const Eigen::MatrixXd ws = ks.asDiagonal() * weighting_values(ts);
+      for (int j = 0; j < m; ++j) {
+        w.block(static_cast<Eigen::Index>(j) * nc + c, first + na, 1, ws.rows()) = ws.col(j).transpose();
+      }
+      rc.slope_rows = trial.values(ts, 1);
+    }
+    first += na + static_cast<Eigen::Index>(t.sloped.size());
+  }
+  jac.times_v = TrialRows{rows, sampling, nc, m, rank};
+  jac.u = compliance_times(w);
+  jac.capacitance = jac.times_v(jac.u);
+  jac.capacitance.diagonal().array() += 1.0;
+  return jac;
+}
+
+
+// The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
+// and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW
+// projection of Z's rows placed at their samples, times the sparse H. V by FFTW, as above.
+LowRankJacobian WeightedResidual::Impl::shift_kernel_jacobian(const std::vector<ContactTangent>& tangents, LowRankJacobian jac,
+                                                              Eigen::Index rank) const {
+  struct Sample {
+    int contact, index;
+    double stiffness;
+  };
+  auto samples = std::make_shared<std::vector<Sample>>();
+  samples->reserve(static_cast<size_t>(rank));
+  for (int c = 0; c < nc; ++c) {
+    const ContactTangent& t = tangents[static_cast<size_t>(c)];
+    for (int r : t.active) samples->push_back({c, r, t.kc(r)});
+  }
+  const ShiftKernel& k = *kernel;
+  jac.capacitance.resize(rank, rank);
+  for (Eigen::Index j = 0; j < rank; ++j) {
+    const Sample& sj = (*samples)[static_cast<size_t>(j)];
+    const double weight = sj.stiffness / q;
+    for (Eigen::Index i = 0; i < rank; ++i) {
+      const Sample& si = (*samples)[static_cast<size_t>(i)];
+      const int shift = si.index >= sj.index ? si.index - sj.index : si.index - sj.index + q;
+      jac.capacitance(i, j) = (k.kappa[static_cast<size_t>(si.contact) * nc + sj.contact](shift) +
+                               k.top(si.contact, sj.contact) * k.g(si.index) * k.g(sj.index)) * weight;
+    }
+    jac.capacitance(j, j) += 1.0;
+  }
+  auto rows = std::make_shared<std::vector<ContactRows>>(static_cast<size_t>(nc));
+  Eigen::Index first = 0;
+  for (int c = 0; c < nc; ++c) {
+    ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+    rc.first = first;
+    rc.active = tangents[static_cast<size_t>(c)].active;
+    first += static_cast<Eigen::Index>(rc.active.size());
+  }
+  jac.times_v = TrialRows{rows, sampling, nc, m, rank};
+  const std::shared_ptr<const Sampling> smp = sampling;
+  const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
+  const int contacts_n = nc, dimension = m;
+  jac.times_u = [samples, rows, smp, hs, contacts_n, dimension](const Eigen::MatrixXd& z) {
+    // W Z: per contact, the rows of Z times κ_q placed at their samples, projected.
+    Eigen::MatrixXd wz(static_cast<Eigen::Index>(contacts_n) * dimension, z.cols());
+    for (int c = 0; c < contacts_n; ++c) {
+      const ContactRows& rc = (*rows)[static_cast<size_t>(c)];
+      const auto na = static_cast<Eigen::Index>(rc.active.size());
+      Eigen::MatrixXd x(z.cols(), na);  // k × active
+      for (Eigen::Index i = 0; i < na; ++i) {
+        x.col(i) = (*samples)[static_cast<size_t>(rc.first + i)].stiffness * z.row(rc.first + i).transpose();
+      }
+      const Eigen::MatrixXd projected = smp->weighting->project_at(rc.active, x);  // k × M
+      for (int l = 0; l < dimension; ++l) wz.row(static_cast<Eigen::Index>(l) * contacts_n + c) = projected.col(l).transpose();
+    }
+    return Eigen::MatrixXd(*hs * wz);
+  };
+  return jac;
+}
+
+
+Eigen::VectorXd WeightedResidual::Impl::contact_residual(const Eigen::VectorXd& x, double load) const {
+  refuse_rigid("contact_residual");
+  require_factorized();
+  return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
+}
+}  // namespace wbm::solvers

@@ -1,0 +1,421 @@
+// Private to wbm_solvers: WeightedResidual's implementation (its Impl), shared by the files that
+// define it, one job each:
+//   weighted_residual_operators.cpp  set-up: admissibility, the time operators [JL14 Eqs. (14)–(16)],
+//                                    the harmonic selection, the load projection
+//   weighted_residual_contact.cpp    the contact samples, forces and Jacobians (dense, low rank,
+//                                    shift kernel), the compliance H = P G⁻¹ Pᵀ
+//   weighted_residual_rigid.cpp      rigid stops: collocation, the Delassus operator, the Signorini
+//                                    conditions and their penalty homotopy
+//   weighted_residual_solve.cpp      the solution strategies (direct Newton, contact homotopy, load
+//                                    stepping) and the verified solve
+//   weighted_residual.cpp            the public accessors, R(a) and its full Jacobian
+#pragma once
+
+#include <wbm/solvers/weighted_residual.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Sparse>
+
+#include <wbm/contact/penalty.hpp>
+#include <wbm/solvers/continuation.hpp>
+#include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/fourier_basis.hpp>
+#include <wbm/spectral/layout.hpp>
+
+#include "kronecker_factorization.hpp"
+
+namespace wbm::solvers::detail {
+
+using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+// One time basis at the Q midpoints τ_q = (q + ½)/Q, V(q, k) = v_k^{(d)}(τ_q), d = 0 or 1, used
+// without a dense Q × M matrix: by FFTW (spectral::Aft) for the Fourier basis, by a sparse
+// row-major matrix for wavelets (compact support: O(Q · support) entries, so that the memory
+// and the products grow like M, not M²).
+struct SampledBasis {
+  std::shared_ptr<const spectral::Aft> aft;  // Fourier
+  SparseRows values;                          // wavelets (Q × M)
+  Eigen::RowVectorXd top_derivative;          // Fourier, d = 1, M = 2^J: −πM sin πMτ_q (outside the span)
+  Eigen::SparseMatrix<double> derivative_matrix;  // Fourier, d = 1: coefficients of the derivative
+  // Harmonic selection of a weighting basis: keep(k) = 1 for a kept function, 0 for a dropped
+  // one, applied to every projection (Π of WeightedResidualOptions::harmonics); empty: all kept.
+  Eigen::RowVectorXd keep;
+  int q = 0, m = 0, derivative = 0;
+
+  SampledBasis(const TimeBasis& basis, const Eigen::VectorXd& tau, int d, std::shared_ptr<const spectral::Aft> fft)
+      : q(static_cast<int>(tau.size())), m(basis.dimension()), derivative(d) {
+    if (basis.is_fourier()) {
+      aft = std::move(fft);
+      if (d == 1) derivative_matrix = spectral::FourierBasis(m).derivative_matrix();
+      if (d == 1 && m % 2 == 0) {
+        top_derivative.resize(q);
+        for (int r = 0; r < q; ++r) top_derivative(r) = -std::numbers::pi * m * std::sin(std::numbers::pi * m * tau(r));
+      }
+    } else {
+      values = basis.wavelet_basis()->sparse_values(tau, d);
+    }
+  }
+
+  // Σ_k X(i, k) v_k^{(d)}(τ_q): n × M coefficients → n × Q samples.
+  [[nodiscard]] Eigen::MatrixXd to_time(const Eigen::MatrixXd& x) const {
+    if (!aft) return (values * x.transpose()).transpose();
+    if (derivative == 0) return aft->to_time(x);
+    // The derivative's coefficients x D (spectral::FourierBasis::derivative_matrix), and the top
+    // function's derivative −πM sin πMτ (not in the basis) added on the samples.
+    const Eigen::MatrixXd dx = x * derivative_matrix;
+    Eigen::MatrixXd out = aft->to_time(dx);
+    if (top_derivative.size() > 0) out += x.col(m - 1) * top_derivative;
+    return out;
+  }
+
+  // (1/Q) Σ_q S(i, q) v_j^{(d)}(τ_q): n × Q samples → n × M (the Q-point rule for ∫ v_j s dτ).
+  // With a selection, only the kept functions' projections (the others 0).
+  [[nodiscard]] Eigen::MatrixXd project(const Eigen::MatrixXd& s) const {
+    Eigen::MatrixXd out = unselected_projection(s);
+    if (keep.size() > 0) out *= keep.asDiagonal();
+    return out;
+  }
+  // The projection on every function, selection or not.
+  [[nodiscard]] Eigen::MatrixXd unselected_projection(const Eigen::MatrixXd& s) const {
+    if (aft && derivative == 0) return aft->project(s);
+    if (aft) throw std::logic_error("SampledBasis::project: derivative samples of a Fourier basis are not projected");
+    return Eigen::MatrixXd(s * values) / static_cast<double>(q);
+  }
+
+  // project() of samples that are zero but at the times `at`: S(:, at[i]) = x(:, i) (k × |at|),
+  // without forming the k × Q samples for wavelets (their sparse rows at those times).
+  [[nodiscard]] Eigen::MatrixXd project_at(const std::vector<int>& at, const Eigen::MatrixXd& x) const {
+    if (aft) {
+      Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(x.rows(), q);
+      for (size_t i = 0; i < at.size(); ++i) samples.col(at[i]) = x.col(static_cast<Eigen::Index>(i));
+      return project(samples);
+    }
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), m);
+    for (size_t i = 0; i < at.size(); ++i) {
+      for (SparseRows::InnerIterator it(values, at[i]); it; ++it) {
+        out.col(it.col()) += (it.value() / q) * x.col(static_cast<Eigen::Index>(i));
+      }
+    }
+    if (keep.size() > 0) out *= keep.asDiagonal();
+    return out;
+  }
+};
+
+// ContactQuadrature::CellAverage at one sample: the law averaged over the cell along the tangent
+// of u, f̄ = (P(u + δ/2) − P(u − δ/2))/δ, and its partial derivatives in u and δ:
+//   ∂f̄/∂u = (f(u + δ/2) − f(u − δ/2))/δ,   ∂f̄/∂δ = ((f(u + δ/2) + f(u − δ/2))/2 − f̄)/δ.
+// Where the potential difference would lose more than four digits to cancellation
+// (|ΔP| ≤ 1e-4 max|P|: a short cell deep inside one smooth piece of the law, or δ = 0), the
+// midpoint value f(u) is used; it differs from f̄ by f''δ²/24 there.
+void cell_average(const contact::ContactLaw& law, double u, double delta, double& f, double& dfdu, double& dfdd);
+
+inline double elapsed(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+// The continuation of a homotopy in decades of its parameter (κ of the penalty, σ of the contact
+// forces), shared by the two homotopies below: λ̂ = λ (decades), the state in `state_scale`
+// units, corners restarted (the (·)₊ of a penalty switches at every sample that starts touching).
+PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_max, double state_scale,
+                                             const WeightedResidualOptions& w);
+
+// The homotopy's path in its report: points, folds, iterations, stop, and the largest σ (or κ)
+// reached, at most 10^lambda_cap.
+void record_homotopy(const Branch& branch, double lambda_cap, HomotopyReport& report);
+
+}  // namespace wbm::solvers::detail
+
+namespace wbm::solvers {
+
+struct WeightedResidual::Impl {
+  using SparseRows = detail::SparseRows;
+  MechanicalSystem system;
+  HarmonicForcing forcing;
+  std::vector<ContactPoint> contacts;
+  TimeBasis trial, weighting;
+  WeightedResidualOptions options;
+  int n, m, q, nc;
+  TimeOperators ops;
+  // Transposed time operators A_Mᵀ, A_Cᵀ, A_Kᵀ for the products U Aᵀ of the residual, sparse
+  // when at most 25 % full (Fourier:Fourier: diagonal and 2 × 2 blocks; banded wavelet
+  // Galerkin operators at large M), so that R(a) costs O(n · nnz) instead of O(n M²).
+  struct OperatorProducts {
+    std::array<Eigen::SparseMatrix<double>, 3> transposed;
+    bool sparse = false;
+  };
+  std::shared_ptr<const OperatorProducts> operator_products;
+
+  // The trial basis (values and, for ContactQuadrature::CellAverage, first derivatives) and the
+  // weighting basis at the Q midpoints τ_q = (q + ½)/Q (SampledBasis: FFTW for Fourier, sparse
+  // for wavelets); shared with at_frequency copies (const use only).
+  struct Sampling {
+    Eigen::VectorXd tau;
+    std::shared_ptr<const spectral::Aft> aft;  // when either basis is Fourier
+    std::optional<detail::SampledBasis> trial, trial_slope, weighting;
+  };
+  std::shared_ptr<const Sampling> sampling;
+  bool cell_average_rule = false;
+  // Harmonic selection (WeightedResidualOptions::harmonics, sorted): keep(k) = 1 if function k's
+  // harmonic is kept, else 0 (length M); empty without a selection.
+  Eigen::RowVectorXd keep;
+
+  // The rows of V (low_rank_contact_jacobian) of one contact: the trial functions at its samples
+  // in contact (by FFTW for a Fourier trial basis, else these sparse rows), then their slopes at
+  // its kink samples (CellAverage), from row `first` of V.
+  struct ContactRows {
+    std::vector<int> active;
+    SparseRows values;           // wavelet trial: the rows at the active samples (active × M)
+    Eigen::MatrixXd slope_rows;  // trial slopes at the kink samples (sloped × M)
+    Eigen::Index first = 0;
+  };
+  // Y (n_c·M × k, rows x(k·n_c + c)) ↦ V Y (rank × k): LowRankJacobian::times_v. Holds its data.
+  struct TrialRows {
+    std::shared_ptr<const std::vector<ContactRows>> rows;
+    std::shared_ptr<const Sampling> sampling;
+    int contacts, dimension;
+    Eigen::Index rank;
+    Eigen::MatrixXd operator()(const Eigen::MatrixXd& y) const;
+  };
+
+  // Linear solves with G (kronecker_factorization.hpp); set up once, factorized per frequency.
+  std::optional<detail::KroneckerFactorization> g;
+  bool factorized = false;
+
+  Eigen::VectorXd b, a_lin, x_lin;
+  // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 25 % of it is nonzero (the 1 × 1
+  // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
+  // Otherwise the structured blocks the factorization kept (circulant, or A_K⁻¹ Σ S with a
+  // shift-structured A_K: KroneckerFactorization::compliance_product) when there are any, else
+  // the dense product.
+  Eigen::MatrixXd h;
+  std::shared_ptr<const Eigen::SparseMatrix<double>> h_sparse;  // shared with the Jacobians' products
+  bool h_is_sparse = false;
+  // Fourier:Fourier: H's blocks commute with time shifts (ShiftKernel), detected per frequency
+  // on first use (a Jacobian of low rank), once even if several threads ask.
+  struct ShiftKernel {
+    std::vector<Eigen::VectorXd> kappa;  // κ_cd(s), s = 0..Q−1, at index c·n_c + d
+    Eigen::MatrixXd top;                 // t_cd: H's entry on the top functions cos πMτ (0 for odd M)
+    Eigen::VectorXd g;                   // cos πMτ_q (the top function at the samples)
+  };
+  mutable std::optional<ShiftKernel> kernel;
+  mutable std::once_flag kernel_once;
+  [[nodiscard]] const std::optional<ShiftKernel>& shift_kernel_once() const {
+    std::call_once(kernel_once, [this] { kernel = shift_kernel(); });
+    return kernel;
+  }
+  double scale = 1.0;
+  // Row j = k·n_c + c of P (contact c at instant k): its nonzeros (row in a, weight), the
+  // direction e_c of ContactPoint::terms() at coefficient k.
+  std::vector<detail::StackedTerms> contact_terms;
+
+  // Rigid stops (every contact a RigidStop): the trial functions at τ_{k+1} (M × M, row k: the
+  // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
+  // τ_k = (k + ½)/M over M (M × M, row j = function, column k), frequency independent and
+  // shared; per frequency the Delassus operator D = V H W, u_lin = V x_lin, and c = mean |D_ii|.
+  bool rigid = false;
+  struct Collocation {
+    Eigen::VectorXd tau;
+    Eigen::MatrixXd trial_values, weights;
+    Eigen::VectorXd gaps;  // g0 of contact c at row k·n_c + c
+  };
+  std::shared_ptr<const Collocation> collocation;
+  Eigen::MatrixXd delassus;
+  Eigen::VectorXd u_lin;
+  double force_compliance = 1.0;
+
+  Impl(MechanicalSystem s, HarmonicForcing f, std::vector<ContactPoint> c, TimeBasis tr, TimeBasis we,
+       WeightedResidualOptions o);
+
+  // The same problem at another frequency: every frequency-independent member is copied (time
+  // operators, samples, b, modal basis, residual scale); only G is factorized again.
+  Impl(const Impl& base, double frequency_hz);
+
+  // Y (M·n_c × k, rows j·n_c + c) ↦ (T ⊗ I_{n_c}) Y for an M × M time matrix T.
+  [[nodiscard]] Eigen::MatrixXd per_contact(const Eigen::MatrixXd& t, const Eigen::MatrixXd& y) const {
+    if (nc == 1) return t * y;
+    Eigen::MatrixXd out(y.rows(), y.cols());
+    for (int c = 0; c < nc; ++c) {
+      const Eigen::MatrixXd yc = y(Eigen::seq(c, Eigen::last, nc), Eigen::all);
+      out(Eigen::seq(c, Eigen::last, nc), Eigen::all) = t * yc;
+    }
+    return out;
+  }
+
+  // D = V H W and u_lin = V x_lin (rigid stops) at this frequency, and c = mean |D_ii| if asked
+  // (at the base frequency only; at_frequency copies keep it, as they keep s_r).
+  void set_delassus(bool set_force_compliance);
+
+  void require_rigid(const char* what) const {
+    if (!rigid) {
+      throw std::logic_error(std::string("WeightedResidual::") + what +
+                             ": the contacts are penalty laws, not rigid stops (use the contact_* functions)");
+    }
+  }
+  void refuse_rigid(const char* what) const {
+    if (rigid) {
+      throw std::logic_error(std::string("WeightedResidual::") + what + ": the contacts are rigid stops (" +
+                             contacts.front().law->describe() +
+                             "), which have no force law f_c(u): use signorini_residual, signorini_jacobian, "
+                             "expand_forces and residual(a, lambda)");
+    }
+  }
+
+  // φ(λ) = min(c λ, g0 − u(λ)) [m] at load s, with the gap samples u(λ) = s u_lin − D λ.
+  [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows) const;
+
+  // n(λ) = (W ⊗ I_{n_c}) λ, stacked like x: the weighted residual of the collocation impulses.
+  [[nodiscard]] Eigen::VectorXd collocation_forces(const Eigen::VectorXd& lambda) const {
+    return per_contact(collocation->weights, lambda);
+  }
+
+  void set_compliance();
+
+  // H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
+  [[nodiscard]] Eigen::MatrixXd compliance_times(const Eigen::MatrixXd& v) const;
+  [[nodiscard]] Eigen::VectorXd compliance_times(const Eigen::VectorXd& v) const {
+    return compliance_times(Eigen::MatrixXd(v)).col(0);
+  }
+
+  // Fourier:Fourier, midpoint rule: when every harmonic h of H_cd couples only its own cos hτ
+  // and sin hτ, as the 2 × 2 block [[a_h, b_h], [−b_h, a_h]] (the structure of the exact
+  // Galerkin operators: G commutes with time shifts), the kernel of the contact Jacobian is
+  //   φ(τ_r)ᵀ H_cd φ(τ_r') = κ_cd(r − r' mod Q) + t_cd cos πMτ_r cos πMτ_r',
+  //   κ_cd(s) = H_cd(0, 0) + Σ_h [a_h cos(2πhs/Q) − b_h sin(2πhs/Q)],
+  // with t_cd the entry on the top function cos πMτ (M even; it has no sine partner, so it is
+  // not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
+  // other coupling (discrete operators, another basis) gives no kernel.
+  [[nodiscard]] std::optional<ShiftKernel> shift_kernel() const;
+
+  // WeightedResidualOptions::harmonics: validated, sorted, and the mask `keep` built.
+  void select_harmonics();
+
+  // A selection projects the weighting functions only; that is the Galerkin projection on the
+  // kept span only if no time operator couples a kept function with a dropped one. True for the
+  // analytic Fourier operators and for discrete ones on Q ≥ M midpoints (products of harmonics
+  // up to M − 1 are integrated exactly); checked, as an invariant, in case that ever changes.
+  void require_block_diagonal_operators() const;
+
+  [[nodiscard]] std::vector<std::vector<std::pair<int, double>>> contact_directions() const {
+    std::vector<std::vector<std::pair<int, double>>> d;
+    for (const auto& c : contacts) d.push_back(c.terms());
+    return d;
+  }
+
+  // v += s Pᵀ x: each contact unknown spread over its direction's rows.
+  void scatter(Eigen::VectorXd& v, const Eigen::VectorXd& x, double s) const {
+    for (size_t j = 0; j < contact_terms.size(); ++j) {
+      for (const auto& [row, w] : contact_terms[j]) v(row) += s * w * x(static_cast<Eigen::Index>(j));
+    }
+  }
+
+  // G⁻¹ v (or G⁻ᵀ v) for a stacked v of length n·M.
+  [[nodiscard]] Eigen::VectorXd solve_stacked(const Eigen::VectorXd& v, bool transposed) const {
+    return g->solve(v, transposed);
+  }
+
+  void set_operator_products();
+
+  // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
+  [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
+                                                 int t) const;
+
+  // [JL14 Eqs. (14)–(16)]: exactly (connection coefficients, analytic Fourier) or by the Q-point
+  // rule A = (sign/Q) Σ_q p^{(dw)}(τ_q) q^{(dt)}(τ_q)ᵀ. The discrete rule exploits the bases:
+  //  - Fourier weighting, wavelet trial: A^{(0)} = (1/Q) Σ_q p(τ_q) q^{(dt)}(τ_q)ᵀ by one FFTW
+  //    projection per trial function (O(M Q log Q)); the weighting's derivatives stay in the
+  //    basis, row(cos ωτ)' = −ω row(sin ωτ), row(sin ωτ)' = ω row(cos ωτ), row'' = −ω² row,
+  //    except the first derivative of the top function cos πMτ, summed directly;
+  //  - two wavelet bases: sparse products of their sample matrices;
+  //  - otherwise (Fourier trial with OperatorRule::Discrete): dense values, O(Q M²).
+  void assemble_time_operators();
+
+  // (1/Q) Σ_q p_j^{(dw)}(τ_q) v_k(τ_q) from base(j, k) = (1/Q) Σ_q p_j(τ_q) v_k(τ_q) for the
+  // Fourier weighting functions p_j (FourierBasis ordering) and the samples v (Q × M).
+  [[nodiscard]] Eigen::MatrixXd fourier_weighting_derivative(const Eigen::MatrixXd& base, int dw, const SparseRows& v) const;
+
+  [[nodiscard]] Eigen::VectorXd gather(const Eigen::VectorXd& a) const {  // P a
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(contact_terms.size()));
+    for (size_t j = 0; j < contact_terms.size(); ++j) {
+      for (const auto& [row, w] : contact_terms[j]) x(static_cast<Eigen::Index>(j)) += w * a(row);
+    }
+    return x;
+  }
+
+  // Contact displacement samples U (n_c × Q) for stacked contact unknowns x.
+  [[nodiscard]] Eigen::MatrixXd contact_samples(const Eigen::VectorXd& x) const {
+    return sampling->trial->to_time(spectral::as_coefficients(x, nc));
+  }
+
+  // block(j, k) = (1/Q) Σ_q p_j(τ_q) κ_q q_k(τ_q) over the samples with κ_q ≠ 0 (`active`): the
+  // contact Jacobian of one contact. Fourier:Fourier by Aft::jacobian (O(Q log Q + M²)); one
+  // Fourier basis by one FFTW projection per function of the other (O(M Q log Q)); two wavelet
+  // bases by their sparse rows (O(active · support²)).
+  [[nodiscard]] Eigen::MatrixXd contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const;
+
+  // The contact law's derivatives at the samples of one contact: ∂f/∂u (kc) and, for
+  // CellAverage, ∂f̄/∂δ (kd), with the samples where each is nonzero.
+  struct ContactTangent {
+    Eigen::VectorXd kc, kd;
+    std::vector<int> active, sloped;
+  };
+
+  // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
+  // the law's derivatives at the samples, one ContactTangent per contact.
+  Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
+    return spectral::stacked(sampling->weighting->project(contact_force_samples(x, tangents)));
+  }
+
+  // f_c(u_c(τ_q)) (f̄_q for CellAverage), n_c × Q, and optionally the tangents.
+  Eigen::MatrixXd contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const;
+
+  // N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
+  [[nodiscard]] Eigen::MatrixXd contact_force_jacobian(const std::vector<ContactTangent>& tangents) const;
+
+  // I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
+  [[nodiscard]] Eigen::MatrixXd identity_plus_hn(const std::vector<ContactTangent>& tangents) const;
+
+  // The weighting functions at τ (rows = times), the dropped ones of a selection as 0.
+  [[nodiscard]] Eigen::MatrixXd weighting_values(const Eigen::VectorXd& tau) const {
+    Eigen::MatrixXd v = weighting.values(tau, 0);
+    if (keep.size() > 0) v *= keep.asDiagonal();
+    return v;
+  }
+
+  // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
+  [[nodiscard]] std::pair<Eigen::VectorXd, Eigen::VectorXd> sloped_samples(const ContactTangent& t) const;
+
+  // The condensed Jacobian (I + H N)/s_r with N = W V of rank r = Σ_c (active + sloped samples):
+  // column i of W (n_c·M × r) is the weighting functions at the sample times κ_q/Q (or
+  // ∂f̄/∂δ/Q² for a kink term), row i of V (r × n_c·M) the trial functions (or their slopes) at
+  // the same time, both on the rows x(k·n_c + c) of their contact. With U = H W and
+  // C = I_r + V U, Newton's step is an r × r solve (WoodburyLu). V is applied by FFTW for a
+  // Fourier trial basis (all Q samples, the active ones kept) and by the sparse rows of the
+  // wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
+  // r × r LU then saves less than the two products with V cost (bench_weighted_residual).
+  [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x) const;
+
+  // The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
+  // and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW
+  // projection of Z's rows placed at their samples, times the sparse H. V by FFTW, as above.
+  [[nodiscard]] LowRankJacobian shift_kernel_jacobian(const std::vector<ContactTangent>& tangents, LowRankJacobian jac,
+                                                      Eigen::Index rank) const;
+
+  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const;
+
+  // What makes G singular, in words (model_checks.hpp), or the generic reasons.
+  [[nodiscard]] std::string singular_reason() const;
+
+  void require_factorized() const;
+};
+
+}  // namespace wbm::solvers

@@ -1,0 +1,280 @@
+// WeightedResidual, solution strategies for penalty contact: direct Newton on the condensed
+// system, the contact homotopy in σ, load stepping, and the verified full residual
+// (weighted_residual_impl.hpp).
+#include "weighted_residual_impl.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace wbm::solvers {
+
+namespace detail {
+
+// The continuation of a homotopy in decades of its parameter (κ of the penalty, σ of the contact
+// forces), shared by the two homotopies below: λ̂ = λ (decades), the state in `state_scale`
+// units, corners restarted (the (·)₊ of a penalty switches at every sample that starts touching).
+PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_max, double state_scale,
+                                             const WeightedResidualOptions& w) {
+  PseudoArclengthOptions o;
+  o.parameter_min = lambda_min;
+  o.parameter_max = lambda_max;
+  o.parameter_scale = 1.0;
+  o.state_scale = state_scale;
+  o.initial_step = 0.05;
+  o.max_step = 0.5;
+  o.min_step = 1e-9;
+  o.kink_step = 1e-6;
+  o.corner_restart = true;
+  o.max_points = w.homotopy_max_points;
+  o.corrector_tolerance = w.newton.tolerance;
+  o.initial_newton = w.newton;
+  return o;
+}
+
+// The homotopy's path in its report: points, folds, iterations, stop, and the largest σ (or κ)
+// reached, at most 10^lambda_cap.
+void record_homotopy(const Branch& branch, double lambda_cap, HomotopyReport& report) {
+  report.points = static_cast<int>(branch.points.size());
+  report.folds = static_cast<int>(branch.folds.size());
+  report.corrector_iterations = branch.corrector_iterations;
+  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
+  double lambda_max = -std::numeric_limits<double>::infinity();
+  for (const auto& bp : branch.points) lambda_max = std::max(lambda_max, bp.parameter);
+  report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(lambda_max, lambda_cap));
+}
+
+}  // namespace detail
+
+// The condensed system at load factor s (forcing s·F) as a NonlinearSystem.
+struct WeightedResidual::Condensed {
+  const WeightedResidual* wr;
+  double load;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
+    return wr->impl_->contact_residual(x, load);
+  }
+  [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& x) const { return wr->contact_jacobian_low_rank(x); }
+};
+
+NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& steps) const {
+  // Forcing s·F for s from 0 to 1; ds doubles after a success (at most ½) and is quartered after
+  // a failure; predictor x + ds·x_lin (the linear part of the response).
+  const auto& p = *impl_;
+  double s = 0.0, ds = 0.125;
+  NewtonResult last{std::move(x), {}};
+  int iterations = 0;
+  steps = 0;
+  while (s < 1.0) {
+    const double target = std::min(1.0, s + ds);
+    Eigen::VectorXd guess = last.x + (target - s) * p.x_lin;
+    NewtonResult trial = newton(Condensed{this, target}, std::move(guess), p.options.newton);
+    iterations += trial.report.iterations;
+    ++steps;
+    if (trial.report.converged()) {
+      s = target;
+      last = std::move(trial);
+      ds = std::min(0.5, 2.0 * ds);
+    } else {
+      ds *= 0.25;
+      if (ds < 1e-6) {
+        trial.report.iterations = iterations;
+        trial.report.message = "load stepping stalled at s = " + std::to_string(s) + " of F: " + trial.report.message;
+        return trial;
+      }
+    }
+  }
+  last.report.iterations = iterations;
+  return last;
+}
+
+Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorXd& x, double lambda) const {
+  const auto& p = *problem->impl_;
+  p.require_factorized();
+  return (x - p.x_lin + std::pow(10.0, lambda) * p.compliance_times(p.contact_forces(x, nullptr))) / p.scale;
+}
+
+Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd& x, double lambda) const {
+  const auto& p = *problem->impl_;
+  p.require_factorized();
+  const double sigma = std::pow(10.0, lambda);
+  std::vector<Impl::ContactTangent> tangents;
+  const Eigen::VectorXd hn = p.compliance_times(p.contact_forces(x, &tangents));
+  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
+  Linearization l;
+  l.residual = (x - p.x_lin + sigma * hn) / p.scale;
+  l.jacobian = (sigma / p.scale) * p.compliance_times(nj);
+  l.jacobian.diagonal().array() += 1.0 / p.scale;
+  l.parameter_derivative = (std::log(10.0) * sigma / p.scale) * hn;  // dσ/dλ = σ ln 10
+  return l;
+}
+
+NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& report) const {
+  const auto& p = *impl_;
+  report.tried = true;
+  // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
+  std::vector<Impl::ContactTangent> tangents;
+  (void)p.contact_forces(p.x_lin, &tangents);
+  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
+  const double coupling = p.compliance_times(nj).lpNorm<Eigen::Infinity>();
+  const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
+  report.lambda_start = lambda0;
+  // From λ₀ to σ = 1 (a path turning back below λ₀ has ended), the state in metres as the residual.
+  const PseudoArclengthOptions o = detail::homotopy_continuation(lambda0 - 1.0, 0.0, p.scale, p.options);
+  const Branch branch = pseudo_arclength(contact_homotopy(), p.x_lin, lambda0, o);
+  detail::record_homotopy(branch, 0.0, report);
+  NewtonResult out;
+  if (branch.stop != StopReason::RangeReached || branch.points.back().parameter < 0.0) {
+    out.x = branch.points.empty() ? p.x_lin : branch.points.back().x;
+    out.report.status = SolveStatus::PathEnded;
+    out.report.iterations = static_cast<int>(branch.corrector_iterations);
+    out.report.message = "contact homotopy ended at σ = " + format_number(report.sigma_reached) + " (from σ₀ = " +
+                         format_number(std::pow(10.0, lambda0)) + ", " + std::to_string(report.points) +
+                         " points, " + std::to_string(report.folds) + " folds in σ): " + report.stop;
+    return out;
+  }
+  // The last step crossed σ = 1: interpolate x linearly in λ onto λ = 0, then Newton at σ = 1.
+  const auto& b = branch.points.back();
+  const auto& a = branch.points[branch.points.size() - 2];
+  const double w = b.parameter > a.parameter ? (0.0 - a.parameter) / (b.parameter - a.parameter) : 1.0;
+  Eigen::VectorXd guess = a.x + std::clamp(w, 0.0, 1.0) * (b.x - a.x);
+  out = newton(Condensed{this, 1.0}, std::move(guess), p.options.newton);
+  out.report.iterations += static_cast<int>(branch.corrector_iterations);
+  report.reached = out.report.converged();
+  if (report.reached) report.sigma_reached = 1.0;
+  out.report.message = "contact homotopy from σ₀ = " + format_number(std::pow(10.0, lambda0)) + " (" +
+                       std::to_string(report.points) + " points, " + std::to_string(report.folds) +
+                       " folds in σ), then Newton at σ = 1: " + out.report.message;
+  return out;
+}
+
+double WeightedResidual::rounding_floor(const Eigen::VectorXd& x) const {
+  const auto& p = *impl_;
+  const double bnorm = p.b.norm() > 0.0 ? p.b.norm() : 1.0;
+  const Eigen::VectorXd r0 = residual(expand(x));
+  double floor = 0.0;
+  for (int pattern = 0; pattern < 2; ++pattern) {
+    Eigen::VectorXd xe = x;
+    for (Eigen::Index i = 0; i < xe.size(); ++i) {
+      const double sign = ((i + pattern) % 2 == 0) ? 1.0 : -1.0;
+      xe(i) *= 1.0 + sign * std::numeric_limits<double>::epsilon();
+    }
+    floor = std::max(floor, (residual(expand(xe)) - r0).norm() / bnorm);
+  }
+  return floor;
+}
+
+std::string_view to_string(SolutionPath path) noexcept {
+  switch (path) {
+    case SolutionPath::DirectNewton: return "direct Newton";
+    case SolutionPath::ContactHomotopy: return "contact homotopy";
+    case SolutionPath::LoadStepping: return "load stepping";
+    case SolutionPath::Linear: return "linear";
+  }
+  return "unknown";
+}
+
+WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) const {
+  const auto start = std::chrono::steady_clock::now();
+  const auto& p = *impl_;
+  WeightedResidualSolution s;
+  s.frequency_hz = p.forcing.frequency_hz;
+  s.contact_unknowns = p.nc * p.m;
+  s.linear_solver = linear_solver();
+  s.operator_rule = p.ops.rule;
+  s.condition_number = condition_number();
+  if (!p.factorized) {
+    s.report.status = SolveStatus::SingularJacobian;
+    s.report.message = "linear operator G is singular: " + p.singular_reason();
+    s.coefficients = Eigen::MatrixXd::Zero(p.n, p.m);
+    s.relative_residual = std::numeric_limits<double>::infinity();
+    return s;
+  }
+  if (p.rigid) return solve_rigid(x0, std::move(s), start);
+  Eigen::VectorXd x;
+  if (p.nc > 0) {
+    Eigen::VectorXd start_x = x0 != nullptr ? *x0 : p.x_lin;
+    if (start_x.size() != p.nc * p.m) {
+      throw std::invalid_argument("WeightedResidual::solve: initial guess has length " +
+                                  std::to_string(start_x.size()) + ", expected n_c*M = " + std::to_string(p.nc * p.m));
+    }
+    NewtonResult result = newton(Condensed{this, 1.0}, start_x, p.options.newton);
+    s.path = SolutionPath::DirectNewton;
+    std::string history = "direct Newton: " + result.report.message;
+    int iterations = result.report.iterations;
+    if (!result.report.converged() && x0 == nullptr && p.options.contact_homotopy) {
+      NewtonResult h = solve_with_contact_homotopy(s.homotopy);
+      iterations += h.report.iterations;
+      history += "; " + h.report.message;
+      if (h.report.converged()) {
+        s.path = SolutionPath::ContactHomotopy;
+        h.report.iterations = iterations;
+        h.report.message = history;
+      }
+      result = std::move(h);
+    }
+    if (!result.report.converged() && x0 == nullptr) {
+      int steps = 0;
+      const SolveStatus before = result.report.status;
+      NewtonResult stepped = solve_with_load_stepping(Eigen::VectorXd::Zero(start_x.size()), steps);
+      iterations += stepped.report.iterations;
+      stepped.report.iterations = iterations;
+      stepped.report.message = history + "; load stepping (" + std::to_string(steps) + " steps): " +
+                               stepped.report.message;
+      if (stepped.report.converged()) {
+        s.path = SolutionPath::LoadStepping;
+      } else if (before == SolveStatus::PathEnded) {
+        stepped.report.status = SolveStatus::PathEnded;  // the homotopy's diagnosis stands
+      }
+      result = std::move(stepped);
+    }
+    x = std::move(result.x);
+    s.report = std::move(result.report);
+  } else {
+    s.report.status = SolveStatus::Converged;
+    s.path = SolutionPath::Linear;
+    s.report.message = "linear problem (no contact): one solve";
+    s.report.residual_norms = {0.0};
+  }
+  const Eigen::VectorXd a = p.nc > 0 ? expand(x) : p.a_lin;
+  s.coefficients = spectral::as_coefficients(a, p.n);
+  const double bnorm = p.b.norm();
+  s.relative_residual = residual(a).norm() / (bnorm > 0.0 ? bnorm : 1.0);
+  if (p.nc > 0) {
+    const Eigen::MatrixXd u = p.contact_samples(x);
+    s.max_penetration = -std::numeric_limits<double>::infinity();
+    for (int c = 0; c < p.nc; ++c) {
+      for (int k = 0; k < p.q; ++k) {
+        s.max_penetration = std::max(s.max_penetration, u(c, k) - p.contacts[c].law->gap());
+        s.max_contact_force = std::max(s.max_contact_force, p.contacts[c].law->force(u(c, k)));
+      }
+    }
+  }
+  s.residual_tolerance = p.options.residual_tolerance;
+  if (p.keep.size() > 0) s.dropped_harmonics_residual = p.nc > 0 ? dropped_harmonics_residual(x) : 0.0;
+  if (s.report.converged() && (!std::isfinite(s.relative_residual) || !s.coefficients.allFinite())) {
+    s.report.status = SolveStatus::NonFinite;
+    s.report.message = "non-finite full residual after convergence of the condensed system";
+  } else if (s.report.converged() && !(s.relative_residual <= p.options.residual_tolerance)) {
+    s.report.status = SolveStatus::ResidualNotVerified;
+    s.report.message = "the condensed system converged (" + s.report.message + "), but the full residual " +
+                       format_number(s.relative_residual) + " ‖b‖ exceeds residual_tolerance = " +
+                       format_number(p.options.residual_tolerance) +
+                       " (ill-conditioned G? condition estimate " + format_number(s.condition_number) + ")";
+    s.rounding_floor = rounding_floor(x);
+    s.report.message += "; rounding floor of the residual at this solution " + format_number(s.rounding_floor);
+  }
+  s.wall_time_s = detail::elapsed(start);
+  return s;
+}
+
+WeightedResidualSolution solve_weighted_residual(const MechanicalSystem& system, const HarmonicForcing& forcing,
+                                                 const std::vector<ContactPoint>& contacts, const TimeBasis& trial,
+                                                 const TimeBasis& weighting, const WeightedResidualOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const WeightedResidual wr(system, forcing, contacts, trial, weighting, options);
+  WeightedResidualSolution s = wr.solve();
+  s.wall_time_s = detail::elapsed(start);
+  return s;
+}
+}  // namespace wbm::solvers
