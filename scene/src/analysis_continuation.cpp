@@ -1,0 +1,186 @@
+#include "analysis_detail.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include <wbm/solvers/post_processing.hpp>
+#include <wbm/solvers/response_curve.hpp>
+#include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::scene::detail {
+
+void continuation(const Scene& scene, const Progress& progress, AnalysisResult& out) {
+  const auto started = std::chrono::steady_clock::now();
+  const auto& range = *scene.forcing->range;
+  const solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz), scene.contact_points(),
+                                       scene.trial(), scene.weighting(), scene.weighted_residual_options());
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = std::min(range.from_hz, range.to_hz);
+  o.parameter_max = std::max(range.from_hz, range.to_hz);
+  o.direction = range.to_hz > range.from_hz ? +1 : -1;
+  o.max_step = scene.analysis.max_step;
+  o.initial_step = std::min(o.initial_step, o.max_step);
+  o.max_parameter_step = scene.analysis.max_frequency_step_hz;
+  o.max_points = scene.analysis.max_points;
+  o.max_state = scene.analysis.max_state;
+  o.stability = scene.analysis.stability;
+  o.corrector_tolerance = scene.solver.newton.tolerance;
+  o.samples = scene.output.samples;
+  // Observed DOFs: their amplitudes (beyond the forced DOF's) and harmonics along the branch.
+  const std::vector<int> observed = scene.output.observe.empty() ? std::vector<int>{scene.forcing->dof} : scene.output.observe;
+  const bool per_point = !scene.output.observe.empty() || scene.output.harmonics > 0;
+  std::vector<int> kept;
+  if (per_point && scene.condensation) {
+    for (int d = 0; d < base.dofs(); ++d) kept.push_back(d);
+  } else if (per_point) {
+    for (int d : observed) kept.push_back(scene.solver_dof(d));
+  }
+  o.keep_dofs = kept;
+  double reached = 0.0;  // the largest fraction of the range covered so far (a branch turns back at folds)
+  if (progress) {
+    o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
+      reached = std::max(reached, std::abs(p.parameter - range.from_hz) / std::abs(range.to_hz - range.from_hz));
+      progress(std::min(reached, 1.0), "point " + std::to_string(i + 1) + ", f = " + format("%.6g", p.parameter) +
+                                           " Hz, step " + format("%.2g", p.step));
+    };
+  }
+  const auto curve = solvers::trace_response(base, o);
+  const std::string dof = scene.structure->dof_name(scene.forcing->dof);
+  const auto n = static_cast<Eigen::Index>(curve.points.size());
+  Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), mu_error(n), steps(n), its(n);
+  std::vector<std::string> verdict(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& p = curve.points[static_cast<size_t>(i)];
+    // The error estimate is missing (empty cell) where it could not be formed (floquet.hpp).
+    mu_error(i) = std::isfinite(p.max_multiplier_error) ? p.max_multiplier_error : NAN;
+    steps(i) = p.monodromy_steps;
+    verdict[static_cast<size_t>(i)] = !std::isfinite(p.max_multiplier_error) ? "no error estimate"
+                                      : p.stability_settled                 ? "settled"
+                                                                            : "within its error estimate";
+    f(i) = p.frequency_hz;
+    umax(i) = p.max_displacement;
+    umin(i) = p.min_displacement;
+    amp(i) = p.amplitude;
+    force(i) = p.max_contact_force;
+    stable(i) = p.stable ? 1.0 : 0.0;
+    mu(i) = p.max_multiplier;
+    its(i) = p.corrector_iterations;
+  }
+  if (n > 0) {
+    std::vector<std::string> header = {"frequency [Hz]", "u_max_" + dof + " [m]", "u_min_" + dof + " [m]",
+                                       "amplitude_" + dof + " [m]", "max_contact_force [N]"};
+    std::vector<Eigen::VectorXd> columns = {f, umax, umin, amp, force};
+    if (o.stability) {
+      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]",
+                                   "monodromy_steps [-]"});
+      columns.insert(columns.end(), {stable, mu, mu_error, steps});
+    }
+    if (!scene.basis.selected_harmonics.empty()) {
+      Eigen::VectorXd dropped(n);
+      for (Eigen::Index i = 0; i < n; ++i) dropped(i) = curve.points[static_cast<size_t>(i)].dropped_harmonics_residual;
+      header.push_back("dropped_harmonics_residual [-]");
+      columns.push_back(dropped);
+      warn_dropped_harmonics(scene, std::vector<double>(f.data(), f.data() + n),
+                             std::vector<double>(dropped.data(), dropped.data() + n), out);
+    }
+    header.push_back("corrector_iterations [-]");
+    columns.push_back(its);
+    if (per_point) {
+      const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);
+      std::vector<double> hz;
+      std::vector<Eigen::MatrixXd> samples;
+      for (const auto& p : curve.points) {
+        hz.push_back(p.frequency_hz);
+        samples.push_back(observed_samples(scene, base.trial(), p.kept_coefficients, kept, observed, tau, p.frequency_hz));
+      }
+      for (size_t d = 0; d < observed.size(); ++d) {
+        if (observed[d] == scene.forcing->dof) continue;  // its columns are there already
+        const std::string name = scene.structure->dof_name(observed[d]);
+        Eigen::VectorXd hi(n), lo(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          hi(i) = samples[static_cast<size_t>(i)].row(static_cast<Eigen::Index>(d)).maxCoeff();
+          lo(i) = samples[static_cast<size_t>(i)].row(static_cast<Eigen::Index>(d)).minCoeff();
+        }
+        header.insert(header.end(), {"u_max_" + name + " [m]", "u_min_" + name + " [m]", "amplitude_" + name + " [m]"});
+        columns.insert(columns.end(), {hi, lo, 0.5 * (hi - lo)});
+      }
+      if (scene.output.harmonics > 0) {
+        out.tables.push_back(point_harmonics(scene, "branch_harmonics.csv", observed, hz, samples));
+      }
+    }
+    if (o.stability) {
+      out.tables.push_back({"branch.csv", header, columns, verdict});
+    } else {
+      out.tables.push_back({"branch.csv", header, columns});
+    }
+  }
+  // Each fold with its state (issue #35): the amplitude of every output DOF at the fold itself,
+  // so that a picture marks it on its own sheet of a multivalued curve.
+  nlohmann::json folds = nlohmann::json::array();
+  const auto nf = static_cast<Eigen::Index>(curve.folds.size());
+  Eigen::VectorXd fold_hz(nf), fold_ok(nf), fold_max(nf), fold_min(nf), fold_amp(nf);
+  std::vector<Eigen::VectorXd> fold_observed(observed.size(), Eigen::VectorXd(nf));
+  for (Eigen::Index k = 0; k < nf; ++k) {
+    const auto& fold = curve.fold_points[static_cast<size_t>(k)];
+    const bool crossing = curve.fold_confirmed[static_cast<size_t>(k)];
+    fold_hz(k) = fold.parameter;
+    fold_ok(k) = crossing ? 1.0 : 0.0;
+    fold_max(k) = fold.max_displacement;
+    fold_min(k) = fold.min_displacement;
+    fold_amp(k) = fold.amplitude;
+    nlohmann::json amplitudes = {{dof, fold.amplitude}};
+    if (per_point) {
+      const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);
+      const Eigen::MatrixXd u = observed_samples(scene, base.trial(), fold.kept_coefficients, kept, observed, tau, fold.frequency_hz);
+      for (size_t d = 0; d < observed.size(); ++d) {
+        const auto row = u.row(static_cast<Eigen::Index>(d));
+        fold_observed[d](k) = 0.5 * (row.maxCoeff() - row.minCoeff());
+        amplitudes[scene.structure->dof_name(observed[d])] = fold_observed[d](k);
+      }
+    }
+    folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}, {"amplitude_m", amplitudes}});
+  }
+  if (nf > 0) {
+    std::vector<std::string> header = {"frequency [Hz]", "floquet_crossing [-]", "u_max_" + dof + " [m]",
+                                       "u_min_" + dof + " [m]", "amplitude_" + dof + " [m]"};
+    std::vector<Eigen::VectorXd> columns = {fold_hz, fold_ok, fold_max, fold_min, fold_amp};
+    for (size_t d = 0; per_point && d < observed.size(); ++d) {
+      if (observed[d] == scene.forcing->dof) continue;  // its columns are there already
+      header.push_back("amplitude_" + scene.structure->dof_name(observed[d]) + " [m]");
+      columns.push_back(fold_observed[d]);
+    }
+    out.tables.push_back({"folds.csv", header, columns});
+  }
+  out.converged = curve.stop == solvers::StopReason::RangeReached;
+  out.diagnostics["continuation"] = {{"points", curve.points.size()},
+                                     {"folds", folds},
+                                     {"stop", std::string(solvers::to_string(curve.stop))},
+                                     {"message", curve.message},
+                                     {"rejected_steps", curve.rejected_steps},
+                                     {"corners", curve.kinks},
+                                     {"corrector_iterations", curve.corrector_iterations},
+                                     {"continuation_time_s", curve.wall_time_s},
+                                     {"stability_time_s", curve.stability_time_s},
+                                     {"unsettled_stability_points", curve.unsettled_points}};
+  if (curve.unsettled_points > 0) {
+    out.warnings.push_back("continuation: at " + std::to_string(curve.unsettled_points) +
+                           " point(s) a Floquet multiplier lies within twice its error estimate of the unit circle "
+                           "even with 16x the monodromy steps; their stability verdict may be wrong (branch.csv, "
+                           "status column); raise [output] samples");
+  }
+  out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
+                ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
+                std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +
+                std::string(solvers::to_string(curve.stop)) + " (" +
+                format("%.3f", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()) +
+                " s in all: continuation " + format("%.3f", curve.wall_time_s) + " s, stability " +
+                format("%.3f", curve.stability_time_s) + " s)";
+}
+
+}  // namespace wbm::scene::detail

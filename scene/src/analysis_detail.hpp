@@ -1,0 +1,82 @@
+// Private to wbm_scene: the pieces of run_analysis (analysis.hpp), one file each:
+//   analysis_tables.cpp        JSON of the solver reports, the period and harmonic tables
+//   analysis_forced.cpp        [analysis] type = solve, sweep, timestep, basis-plot
+//   analysis_continuation.cpp  type = continuation (the frequency-response curve)
+//   analysis_modes.cpp         type = nnm (nonlinear normal modes)
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <wbm/scene/analysis.hpp>
+#include <wbm/solvers/weighted_residual.hpp>
+
+namespace wbm::scene::detail {
+
+// Wall time since `start` [s].
+double seconds_since(std::chrono::steady_clock::time_point start);
+
+// JSON has no NaN/inf: a non-finite diagnostic is written as null.
+nlohmann::json finite_or_null(double v);
+
+// The solver reports as written to result.json (non-finite numbers as null).
+nlohmann::json to_json(const solvers::NewtonReport& r);
+nlohmann::json to_json(const solvers::HomotopyReport& h);
+nlohmann::json to_json(const solvers::WeightedResidualSolution& s);
+
+// One number in printf notation (`spec`, e.g. "%.6g").
+std::string format(const char* spec, double v);
+
+// The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
+std::string contact_label(const Scene& scene, size_t c);
+
+// A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
+// equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).
+void harmonics_of(const Eigen::MatrixXd& samples, int h_max, Eigen::MatrixXd& amplitude, Eigen::MatrixXd& phase);
+
+// Per-period files from displacement/velocity of every solver DOF (n × P), shared by solve and
+// timestep; the written DOFs are the scene's (massless ones recovered, Scene::expand_displacement).
+void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
+                   const solvers::MechanicalSystem& system, double frequency_hz, const Eigen::VectorXd& tau,
+                   const Eigen::MatrixXd& solver_displacement, const Eigen::MatrixXd* solver_velocity,
+                   AnalysisResult& out);
+
+// Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `samples[i]` is
+// the observed DOFs' samples (k × P) at frequency `hz[i]`.
+Table point_harmonics(const Scene& scene, const std::string& file, const std::vector<int>& observed,
+                      const std::vector<double>& hz, const std::vector<Eigen::MatrixXd>& samples);
+
+// Samples (rows: `observed` scene DOFs, P columns) of a weighted-residual solution given by the
+// trial coefficients of the solver DOFs `kept` (rows of `coefficients`; with a condensation, every
+// solver DOF, so that massless DOFs can be recovered).
+Eigen::MatrixXd observed_samples(const Scene& scene, const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients,
+                                 const std::vector<int>& kept, const std::vector<int>& observed,
+                                 const Eigen::VectorXd& tau, double frequency_hz);
+
+// The scene's harmonic selection as written in the scene: "odd" or [1, 3, ...].
+std::string selection_label(const Scene& scene);
+
+// A warning in `out` when the residual left in the dropped harmonics (per point, `dropped` at
+// `hz`) exceeds 1e-6 ‖b‖: the results are then not the full harmonic balance's.
+void warn_dropped_harmonics(const Scene& scene, const std::vector<double>& hz, const std::vector<double>& dropped,
+                            AnalysisResult& out);
+
+// The analyses, each filling `out` (tables, scalars, messages) from the scene.
+
+void solve_one(const Scene& scene, AnalysisResult& out);
+
+void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& out);
+
+void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out);
+
+void basis_plot(const Scene& scene, AnalysisResult& out);
+
+void continuation(const Scene& scene, const Progress& progress, AnalysisResult& out);
+
+void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResult& out);
+
+}  // namespace wbm::scene::detail

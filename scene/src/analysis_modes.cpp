@@ -1,0 +1,201 @@
+#include "analysis_detail.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include <wbm/solvers/post_processing.hpp>
+#include <wbm/solvers/response_curve.hpp>
+#include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::scene::detail {
+
+namespace {
+
+nlohmann::json to_json(const solvers::ModeLevel& l) {
+  return {{"energy", l.energy},
+          {"converged", l.converged()},
+          {"status", std::string(solvers::to_string(l.status))},
+          {"residual_norm", finite_or_null(l.residual_norm)},
+          {"tolerance", l.tolerance},
+          {"frequency_hz", finite_or_null(l.frequency_hz)},
+          {"rayleigh_frequency_hz", finite_or_null(l.rayleigh_frequency_hz)},
+          {"equality_multiplier", finite_or_null(l.equality_multiplier)},
+          {"max_penetration_gaps", finite_or_null(l.max_penetration)},
+          {"complementarity_gaps", finite_or_null(l.complementarity)},
+          {"normalization_error", finite_or_null(l.normalization_error)},
+          {"powell_iterations", l.powell_iterations},
+          {"newton_iterations", l.newton_iterations},
+          {"inequality_measure", finite_or_null(l.inequality_measure)},
+          {"equality_measure", finite_or_null(l.equality_measure)},
+          {"message", l.message},
+          {"wall_time_s", l.wall_time_s}};
+}
+
+}  // namespace
+
+void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResult& out) {
+  const ModeProblem problem = mode_problem(scene);
+  const Analysis& a = scene.analysis;
+  const solvers::NonlinearModes modes(problem.system, problem.stops, problem.options);
+  solvers::Backbone b;
+  const bool continuation = a.algorithm == NnmAlgorithm::Continuation;
+  if (continuation) {
+    solvers::BackboneContinuationOptions o;
+    o.energy_min = a.energy_min;
+    o.energy_max = a.energy_max;
+    o.penalty_stiffness = problem.penalty_stiffness;
+    o.max_step = a.max_step;
+    o.initial_step = std::min(o.initial_step, o.max_step);
+    o.max_energy_step = a.max_energy_step;
+    o.max_points = a.max_points;
+    o.include = a.levels;
+    double reached = 0.0;
+    if (progress) {
+      o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
+        reached = std::max(reached, (p.parameter - o.energy_min) / (o.energy_max - o.energy_min));
+        progress(std::clamp(reached, 0.0, 1.0), "point " + std::to_string(i + 1) + ", E = " + format("%.4g", p.parameter) +
+                                                    ", step " + format("%.2g", p.step));
+      };
+    }
+    b = modes.continue_backbone(o);
+  } else {
+    solvers::BackboneOptions o;
+    o.energy_min = a.energy_min;
+    o.energy_max = a.energy_max;
+    o.max_step = a.max_energy_step;
+    o.initial_step = std::min(o.initial_step, o.max_step);
+    o.min_step = std::min(o.min_step, o.initial_step);
+    o.include = a.levels;
+    int count = 0;
+    if (progress) {
+      o.on_level = [&](const solvers::ModeLevel& l) {
+        ++count;
+        progress(std::clamp((l.energy - o.energy_min) / (o.energy_max - o.energy_min), 0.0, 1.0),
+                 "level " + std::to_string(count) + ", E = " + format("%.4g", l.energy) + ", " +
+                     std::to_string(l.powell_iterations) + " Powell iterations");
+      };
+    }
+    b = modes.backbone(o);
+  }
+  const auto n = static_cast<Eigen::Index>(b.levels.size());
+  Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n), norm(n), force(n), its(n), gi(n), ge(n), powell(n);
+  Eigen::VectorXd first_share(n), other_mode(n), other_harmonic(n), other_share(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& l = b.levels[static_cast<size_t>(i)];
+    e(i) = l.energy;
+    f(i) = l.frequency_hz;
+    fr(i) = l.rayleigh_frequency_hz;
+    pen(i) = l.max_penetration;
+    comp(i) = l.complementarity;
+    norm(i) = l.normalization_error;
+    force(i) = l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0;
+    its(i) = l.newton_iterations;
+    gi(i) = l.inequality_measure;
+    ge(i) = l.equality_measure;
+    powell(i) = l.powell_iterations;
+    const auto mc = modes.modal_components(l);
+    first_share(i) = mc.first_mode_share;
+    other_mode(i) = mc.mode;
+    other_harmonic(i) = mc.harmonic;
+    other_share(i) = mc.share;
+  }
+  if (n > 0) {
+    std::vector<std::string> header = {"energy [-]", "frequency [Hz]", "rayleigh_frequency [Hz]",
+                                       "max_penetration [gap]", "complementarity [gap]", "normalization_error [-]",
+                                       "max_contact_force [N]", "newton_iterations [-]"};
+    std::vector<Eigen::VectorXd> columns = {e, f, fr, pen, comp, norm, force, its};
+    if (!continuation) {
+      header.insert(header.end(), {"powell_iterations [-]", "G_i [gap]", "G_e [-]"});
+      columns.insert(columns.end(), {powell, gi, ge});
+    }
+    header.insert(header.end(), {"first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"});
+    columns.insert(columns.end(), {first_share, other_mode, other_harmonic, other_share});
+    out.tables.push_back({"backbone.csv", header, columns});
+  }
+  if (!b.folds.empty()) {  // each fold at its own frequency (the backbone can be multivalued in E)
+    Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(b.fold_levels.size()));
+    std::vector<std::string> state;
+    for (Eigen::Index k = 0; k < fold_hz.size(); ++k) {
+      const solvers::ModeLevel& l = b.fold_levels[static_cast<size_t>(k)];
+      fold_hz(k) = std::isfinite(l.frequency_hz) ? l.frequency_hz : NAN;
+      state.push_back(l.converged() ? "on the branch (residual within tolerance)"
+                                    : "interpolated on the step (residual " + format("%.2g", l.residual_norm) + ")");
+    }
+    out.tables.push_back({"folds.csv", {"energy [-]", "frequency [Hz]"},
+                          {Eigen::Map<const Eigen::VectorXd>(b.folds.data(), static_cast<Eigen::Index>(b.folds.size())), fold_hz},
+                          state});
+  }
+  // Mode shapes at the asked energies.
+  const Structure& st = *scene.structure;
+  std::vector<int> dofs = scene.output.dofs.empty() ? std::vector<int>{} : scene.output_dofs();
+  if (dofs.empty()) {
+    for (int i = 0; i < st.dofs(); ++i) dofs.push_back(i);  // nnm default: every DOF (space-time maps)
+  }
+  const int p = scene.output.samples;
+  bool levels_ok = true;
+  nlohmann::json included = nlohmann::json::array();
+  for (double energy : a.levels) {
+    const auto it = std::find_if(b.included.begin(), b.included.end(),
+                                 [&](const solvers::ModeLevel& l) { return std::abs(l.energy - energy) <= 1e-12 * energy; });
+    if (it == b.included.end() || !it->converged()) {
+      levels_ok = false;
+      included.push_back({{"energy", energy}, {"converged", false},
+                          {"message", it == b.included.end() ? "not reached by the backbone" : it->message}});
+      continue;
+    }
+    included.push_back(to_json(*it));
+    const Eigen::MatrixXd u = modes.displacement(*it, p), v = modes.velocity(*it, p);
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
+    Table t{"mode_E" + format("%g", energy) + ".csv", {"tau [-]", "time [s]"}, {tau, tau / it->frequency_hz}};
+    for (int d : dofs) {
+      t.header.push_back("u_" + st.dof_name(d) + " [m]");
+      t.columns.push_back(u.row(d).transpose());
+    }
+    for (int d : dofs) {
+      t.header.push_back("v_" + st.dof_name(d) + " [m/s]");
+      t.columns.push_back(v.row(d).transpose());
+    }
+    out.tables.push_back(std::move(t));
+    const int m = problem.options.samples;
+    Table c{"mode_E" + format("%g", energy) + "_contact.csv", {"tau [-]"}, {Eigen::VectorXd::LinSpaced(m, 0.0, 1.0 - 1.0 / m)}};
+    for (size_t k = 0; k < problem.stops.size(); ++k) {
+      c.header.push_back("contact_force_" + st.dof_name(problem.stops[k].dof) + " [N]");
+      c.columns.push_back(it->contact_force.segment(static_cast<Eigen::Index>(k) * m, m));
+    }
+    out.tables.push_back(std::move(c));
+  }
+  out.converged = b.complete && levels_ok;
+  double worst_pen = -1e300, worst_comp = 0.0;
+  for (const auto& l : b.levels) {
+    worst_pen = std::max(worst_pen, l.max_penetration);
+    worst_comp = std::max(worst_comp, l.complementarity);
+  }
+  nlohmann::json failed = b.failed_energies;
+  out.diagnostics["nnm"] = {{"algorithm", std::string(to_string(a.algorithm))},
+                            {"linear_frequency_hz", modes.linear_frequency_hz()},
+                            {"levels", b.levels.size()},
+                            {"complete", b.complete},
+                            {"message", b.message},
+                            {"folds", b.folds},
+                            {"corners", b.kinks},
+                            {"rejected_steps", b.rejected_steps},
+                            {"failed_energies", failed},
+                            {"worst_penetration_gaps", n > 0 ? finite_or_null(worst_pen) : nullptr},
+                            {"worst_complementarity_gaps", finite_or_null(worst_comp)},
+                            {"included", included},
+                            {"wall_time_s", b.wall_time_s}};
+  const auto& last = b.levels.empty() ? solvers::ModeLevel{} : b.levels.back();
+  out.summary = "first nonlinear mode, N = " + std::to_string(problem.options.harmonics) + ", m = " +
+                std::to_string(problem.options.samples) + ", " + std::string(to_string(a.algorithm)) + ": " + std::to_string(b.levels.size()) +
+                " levels, linear " + format("%.3f", modes.linear_frequency_hz()) + " Hz, E = " +
+                format("%g", last.energy) + ": " + format("%.3f", last.frequency_hz) + " Hz; " + b.message + " (" +
+                format("%.2f", b.wall_time_s) + " s)";
+}
+
+}  // namespace wbm::scene::detail

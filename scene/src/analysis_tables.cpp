@@ -1,0 +1,245 @@
+#include "analysis_detail.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include <wbm/solvers/post_processing.hpp>
+#include <wbm/solvers/response_curve.hpp>
+#include <wbm/spectral/aft.hpp>
+#include <wbm/spectral/layout.hpp>
+
+namespace wbm::scene::detail {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// JSON has no NaN/inf: a non-finite diagnostic is written as null.
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+nlohmann::json to_json(const solvers::NewtonReport& r) {
+  nlohmann::json norms = nlohmann::json::array();
+  for (double v : r.residual_norms) norms.push_back(finite_or_null(v));
+  return {{"status", std::string(solvers::to_string(r.status))},
+          {"converged", r.converged()},
+          {"iterations", r.iterations},
+          {"residual_norms", norms},
+          {"message", r.message}};
+}
+
+nlohmann::json to_json(const solvers::HomotopyReport& h) {
+  if (!h.tried) return nullptr;
+  return {{"reached", h.reached},          {"sigma_reached", h.sigma_reached}, {"lambda_start", h.lambda_start},
+          {"points", h.points},            {"folds", h.folds},                 {"corrector_iterations", h.corrector_iterations},
+          {"stop", h.stop}};
+}
+
+nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
+  return {{"frequency_hz", s.frequency_hz},
+          {"newton", to_json(s.report)},
+          {"path", std::string(solvers::to_string(s.path))},
+          {"contact_homotopy", to_json(s.homotopy)},
+          {"rounding_floor", finite_or_null(s.rounding_floor)},
+          {"relative_residual", finite_or_null(s.relative_residual)},
+          {"residual_tolerance", s.residual_tolerance},
+          {"max_penetration_m", finite_or_null(s.max_penetration)},
+          {"max_contact_force_N", finite_or_null(s.max_contact_force)},
+          {"collocation_penetration_m", finite_or_null(s.collocation_penetration)},
+          {"complementarity_m", finite_or_null(s.complementarity)},
+          {"contact_unknowns", s.contact_unknowns},
+          {"condition_number", finite_or_null(s.condition_number)},
+          {"dropped_harmonics_residual", finite_or_null(s.dropped_harmonics_residual)},
+          {"linear_solver", s.linear_solver},
+          {"operators", s.operator_rule},
+          {"wall_time_s", s.wall_time_s}};
+}
+
+std::string format(const char* spec, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, spec, v);
+  return b;
+}
+
+// The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
+std::string contact_label(const Scene& scene, size_t c) {
+  const Structure& st = *scene.structure;
+  const Contact& k = scene.contacts[c];
+  return k.against < 0 ? st.dof_name(k.dof) : st.dof_name(k.dof) + "-" + st.dof_name(k.against);
+}
+
+// A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
+// equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).
+void harmonics_of(const Eigen::MatrixXd& samples, int h_max, Eigen::MatrixXd& amplitude, Eigen::MatrixXd& phase) {
+  const spectral::Aft aft(2 * h_max + 1, static_cast<int>(samples.cols()), 0.0);
+  const Eigen::MatrixXd c = aft.to_frequency(samples);  // {1, cos 2πτ, sin 2πτ, cos 4πτ, …}
+  amplitude.resize(samples.rows(), h_max + 1);
+  phase.resize(samples.rows(), h_max + 1);
+  for (Eigen::Index r = 0; r < samples.rows(); ++r) {
+    amplitude(r, 0) = c(r, 0);
+    phase(r, 0) = 0.0;
+    for (int k = 1; k <= h_max; ++k) {
+      amplitude(r, k) = std::hypot(c(r, 2 * k - 1), c(r, 2 * k));
+      phase(r, k) = std::atan2(-c(r, 2 * k), c(r, 2 * k - 1));
+    }
+  }
+}
+
+// Per-period files from displacement/velocity of every solver DOF (n × P), shared by solve and
+// timestep; the written DOFs are the scene's (massless ones recovered, Scene::expand_displacement).
+void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>& contacts,
+                   const solvers::MechanicalSystem& system, double frequency_hz, const Eigen::VectorXd& tau,
+                   const Eigen::MatrixXd& solver_displacement, const Eigen::MatrixXd* solver_velocity,
+                   AnalysisResult& out) {
+  const Structure& st = *scene.structure;
+  const Eigen::VectorXd time = tau / frequency_hz;
+  const Eigen::MatrixXd displacement = scene.expand_displacement(solver_displacement);
+  std::optional<Eigen::MatrixXd> full_velocity;
+  if (solver_velocity != nullptr) full_velocity = scene.expand_velocity(solver_displacement, *solver_velocity);
+  const Eigen::MatrixXd* velocity = full_velocity ? &*full_velocity : nullptr;
+  Table u{"displacement.csv", {"tau [-]", "time [s]"}, {tau, time}};
+  nlohmann::json response = nlohmann::json::array();
+  for (int dof : scene.output_dofs()) {
+    const Eigen::VectorXd v = displacement.row(dof).transpose();
+    u.header.push_back("u_" + st.dof_name(dof) + " [m]");
+    u.columns.push_back(v);
+    response.push_back({{"dof", st.dof_name(dof)},
+                        {"max_m", v.maxCoeff()},
+                        {"min_m", v.minCoeff()},
+                        {"rms_m", solvers::rms(v)}});
+  }
+  out.diagnostics["response"] = response;
+  out.tables.push_back(std::move(u));
+  if (velocity != nullptr) {
+    Table v{"velocity.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    for (int dof : scene.output_dofs()) {
+      v.header.push_back("v_" + st.dof_name(dof) + " [m/s]");
+      v.columns.push_back(velocity->row(dof).transpose());
+    }
+    out.tables.push_back(std::move(v));
+  }
+  if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
+    Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    for (size_t k = 0; k < contacts.size(); ++k) {
+      const auto& c = contacts[k];
+      Eigen::VectorXd force(tau.size());
+      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(solver_displacement.col(p)));
+      f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
+      f.columns.push_back(force);
+    }
+    out.tables.push_back(std::move(f));
+  }
+  if (scene.output.harmonics > 0) {  // A_h, φ_h of u = Σ A_h cos(2πhτ + φ_h) from the P samples
+    const int h_max = scene.output.harmonics;
+    const std::vector<int> dofs = scene.output_dofs();
+    Eigen::MatrixXd observed(static_cast<Eigen::Index>(dofs.size()), tau.size());
+    for (size_t i = 0; i < dofs.size(); ++i) observed.row(static_cast<Eigen::Index>(i)) = displacement.row(dofs[i]);
+    Eigen::MatrixXd amplitude, phase;
+    harmonics_of(observed, h_max, amplitude, phase);
+    const Eigen::VectorXd h = Eigen::VectorXd::LinSpaced(h_max + 1, 0.0, h_max);
+    Table t{"harmonics.csv", {"h [-]", "frequency [Hz]"}, {h, h * frequency_hz}};
+    for (size_t i = 0; i < dofs.size(); ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      t.header.push_back("A_" + st.dof_name(dofs[i]) + " [m]");
+      t.columns.push_back(amplitude.row(r).transpose());
+      t.header.push_back("phase_" + st.dof_name(dofs[i]) + " [rad]");
+      t.columns.push_back(phase.row(r).transpose());
+    }
+    out.tables.push_back(std::move(t));
+  }
+  if (velocity != nullptr) {
+    out.tables.push_back({"energy.csv",
+                          {"tau [-]", "time [s]", "energy [J]"},
+                          {tau, time, solvers::system_energy(system, contacts, solver_displacement, *solver_velocity)}});
+  }
+}
+
+// Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `samples[i]` is
+// the observed DOFs' samples (k × P) at frequency `hz[i]`.
+Table point_harmonics(const Scene& scene, const std::string& file, const std::vector<int>& observed,
+                      const std::vector<double>& hz, const std::vector<Eigen::MatrixXd>& samples) {
+  const int h_max = scene.output.harmonics;
+  const auto n = static_cast<Eigen::Index>(hz.size());
+  Table t{file, {"frequency [Hz]"}, {Eigen::Map<const Eigen::VectorXd>(hz.data(), n)}};
+  std::vector<Eigen::VectorXd> columns(observed.size() * 2 * static_cast<size_t>(h_max + 1), Eigen::VectorXd(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::MatrixXd amplitude, phase;
+    harmonics_of(samples[static_cast<size_t>(i)], h_max, amplitude, phase);
+    size_t c = 0;
+    for (size_t d = 0; d < observed.size(); ++d) {
+      for (int h = 0; h <= h_max; ++h) {
+        columns[c++](i) = amplitude(static_cast<Eigen::Index>(d), h);
+        columns[c++](i) = phase(static_cast<Eigen::Index>(d), h);
+      }
+    }
+  }
+  for (int dof : observed) {
+    const std::string name = scene.structure->dof_name(dof);
+    for (int h = 0; h <= h_max; ++h) {
+      const std::string suffix = std::to_string(h) + "_" + name;  // (not "A" + to_string: GCC 12 -Wrestrict false positive)
+      t.header.push_back(std::string("A").append(suffix).append(" [m]"));
+      t.header.push_back(std::string("phase").append(suffix).append(" [rad]"));
+    }
+  }
+  t.columns.insert(t.columns.end(), columns.begin(), columns.end());
+  return t;
+}
+
+// Samples (rows: `observed` scene DOFs, P columns) of a weighted-residual solution given by the
+// trial coefficients of the solver DOFs `kept` (rows of `coefficients`; with a condensation, every
+// solver DOF, so that massless DOFs can be recovered).
+Eigen::MatrixXd observed_samples(const Scene& scene, const solvers::TimeBasis& trial, const Eigen::MatrixXd& coefficients,
+                                 const std::vector<int>& kept, const std::vector<int>& observed,
+                                 const Eigen::VectorXd& tau, double frequency_hz) {
+  Eigen::MatrixXd u(coefficients.rows(), tau.size());
+  for (Eigen::Index r = 0; r < coefficients.rows(); ++r) {
+    u.row(r) = solvers::evaluate_trial(trial, coefficients, static_cast<int>(r), tau, frequency_hz).transpose();
+  }
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(observed.size()), tau.size());
+  if (scene.condensation) {
+    const Eigen::MatrixXd full = scene.expand_displacement(u);  // kept = every solver DOF
+    for (size_t i = 0; i < observed.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = full.row(observed[i]);
+    return out;
+  }
+  for (size_t i = 0; i < observed.size(); ++i) {
+    const auto at = std::find(kept.begin(), kept.end(), observed[i]);
+    out.row(static_cast<Eigen::Index>(i)) = u.row(at - kept.begin());
+  }
+  return out;
+}
+
+// [basis] harmonic_selection: warn when the solutions leave more than kDroppedWarning ‖b‖ of the
+// full residual in the dropped harmonics (the selection is then an approximation, not the full
+// harmonic balance), with the largest value and where.
+constexpr double kDroppedWarning = 1e-6;
+std::string selection_label(const Scene& scene) {
+  if (scene.basis.harmonic_selection == "odd") return "\"odd\"";
+  std::string l = "[";
+  for (size_t i = 0; i < scene.basis.selected_harmonics.size(); ++i) {
+    l.append(i == 0 ? "" : ", ").append(std::to_string(scene.basis.selected_harmonics[i]));
+  }
+  return l + "]";
+}
+void warn_dropped_harmonics(const Scene& scene, const std::vector<double>& hz, const std::vector<double>& dropped,
+                            AnalysisResult& out) {
+  if (scene.basis.selected_harmonics.empty()) return;
+  double worst = 0.0, at = 0.0;
+  for (size_t i = 0; i < dropped.size(); ++i) {
+    if (std::isfinite(dropped[i]) && dropped[i] > worst) {
+      worst = dropped[i];
+      at = hz[i];
+    }
+  }
+  if (!(worst > kDroppedWarning)) return;
+  out.warnings.push_back("harmonic_selection = " + selection_label(scene) + ": the contact forces have " +
+                         "harmonics outside the selection (e.g. the mean and even harmonics of a one-sided stop); the "
+                         "residual left in the dropped harmonics reaches " + format("%.3g", worst) + " ‖b‖ at f = " +
+                         format("%.6g", at) + " Hz (> " + format("%g", kDroppedWarning) + "), so these results are "
+                         "not the full harmonic balance's: keep every harmonic (remove harmonic_selection) to compare");
+}
+
+}  // namespace wbm::scene::detail
