@@ -171,16 +171,17 @@ class Reader {
     return n->as_string()->get();
   }
 
-  // One of `allowed`; `fallback` makes it optional.
+  // One of `allowed`; `fallback` makes it optional. (A string_view: an optional std::string
+  // default argument trips GCC 12's -Wmaybe-uninitialized where this is inlined.)
   std::string choice(const toml::table& t, const std::string& section, const std::string& key,
-                     const std::vector<std::string>& allowed, std::optional<std::string> fallback = std::nullopt) {
+                     const std::vector<std::string>& allowed, std::optional<std::string_view> fallback = std::nullopt) {
     const std::string full = section + "." + key;
     const toml::node* n = t.get(key);
-    if (n == nullptr && fallback) return *fallback;
+    if (n == nullptr && fallback) return std::string(*fallback);
     if (n == nullptr || !n->is_string()) {
       error(n ? n->source() : t.source(), full,
             std::string(n ? "expected a string, " : "missing; expected ") + "one of " + list(allowed));
-      return fallback.value_or("");
+      return std::string(fallback.value_or(""));
     }
     const std::string v = n->as_string()->get();
     for (const auto& a : allowed) {
@@ -195,7 +196,7 @@ class Reader {
       }
     }
     error(n->source(), full, "\"" + v + "\" is not one of " + list(allowed) + hint);
-    return fallback.value_or("");
+    return std::string(fallback.value_or(""));
   }
 
   // Every key of `t` must be in `keys`.

@@ -1,0 +1,264 @@
+#include "scene_parser.hpp"
+
+namespace wbm::scene::detail {
+
+void Parser::contacts(const toml::table& root) {
+  const toml::node* n = root.get("contact");
+  if (n == nullptr) {
+    if (s_.analysis.kind == AnalysisKind::Continuation) {
+      r_.error(root.source(), "[contact]",
+               "missing: analysis \"continuation\" traces the branch of a nonlinear response and needs at least "
+               "one [contact]; without contact the response is linear: use type = \"solve\" with frequency_hz = "
+               "[from, to] and points = N (a sweep)");
+    }
+    return;
+  }
+  std::vector<std::pair<const toml::table*, std::string>> tables;
+  if (n->is_table()) {
+    tables.emplace_back(n->as_table(), "contact");
+  } else if (n->is_array_of_tables()) {
+    const toml::array& a = *n->as_array();
+    for (size_t i = 0; i < a.size(); ++i) tables.emplace_back(a[i].as_table(), "contact[" + std::to_string(i) + "]");
+  } else {
+    r_.error(n->source(), "contact", "expected a table [contact] or tables [[contact]]");
+    return;
+  }
+  std::set<std::pair<int, int>> dofs;  // (dof, against)
+  const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
+  for (const auto& [t, section] : tables) {
+    Contact c;
+    const size_t errors = r_.error_count();
+    const std::string law = r_.choice(*t, section, "law", names(law_table()));
+    if (r_.error_count() != errors) {
+      if (const auto given = t->get_as<std::string>("law"); given != nullptr && given->get() == "penalty") {
+        r_.error(Reader::source_of(*t, "law"), section + ".law",
+                 "a penalty law is \"linear\" (stiffness) or \"exponential\" (coefficient, exponent)");
+      }
+      continue;  // the law decides the other keys: checking them against a guess would mislead
+    }
+    c.law = value_of(law_table(), law);
+    c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
+                                                : detail::finite("m"));
+    if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"rigid\" (exact contact) with analysis.stability = true: the stability of impacting orbits "
+               "(saltation matrices) is not computed; set stability = false, or use a stiff \"linear\" penalty");
+    }
+    if (!modes && !s_.contacts.empty() &&
+        (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
+      r_.error(t->source(), section, "mixes rigid and penalty contacts; a forced response takes all \"rigid\" or "
+                                     "all penalty laws (give the rigid ones a stiff \"linear\" law)");
+    }
+    if (c.law == ContactLawKind::Exponential && modes) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)");
+    }
+    if (modes && !s_.contacts.empty() && (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
+      r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
+    }
+    if (c.law == ContactLawKind::Rigid) {
+      r_.only(*t, section, {"law", "gap", "node", "dof", "against", "direction", "nodes"});
+    } else if (c.law == ContactLawKind::Exponential) {
+      r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against", "direction", "nodes"});
+      c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
+      c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
+    } else if (c.law == ContactLawKind::Linear) {
+      r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against", "direction", "nodes"});
+      c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
+      if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
+          c.stiffness != s_.contacts.front().stiffness) {
+        r_.error(Reader::source_of(*t, "stiffness"), section + ".stiffness",
+                 "nnm penalty stops share one stiffness (" + detail::number_text(s_.contacts.front().stiffness) +
+                     " N/m in the first [[contact]])");
+      }
+    }
+    if (const toml::node* nn = t->get("nodes")) {  // one contact per node of a deck structure
+      node_contacts(*t, *nn, section, c);
+      continue;
+    }
+    c.dof = location(*t, section, default_location());
+    if (const toml::node* a = t->get("against"); a != nullptr && s_.structure) {
+      if (modes) {
+        r_.error(a->source(), section + ".against",
+                 "analysis \"nnm\" takes stops against a fixed obstacle; remove against (contacts between two "
+                 "DOFs are for forced responses)");
+      } else if (const auto other = location_value(*a, section + ".against")) {
+        if (*other == c.dof) {
+          r_.error(a->source(), section + ".against",
+                   "is the contact's own DOF " + s_.structure->dof_name(c.dof) +
+                       "; give the other body's DOF, or remove against for a fixed obstacle");
+        } else {
+          c.against = *other;
+        }
+      }
+    }
+    if (const toml::node* d = t->get("direction"); d != nullptr && s_.structure) c.along = direction(*d, section, c);
+    if (s_.structure && !dofs.insert({c.dof, c.against}).second && c.along.empty()) {
+      r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
+                                         (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
+                                         "; one law per DOF (combine them into one)");
+    }
+    s_.contacts.push_back(c);
+  }
+}
+
+// [[contact]] nodes = "SET" | [n, …] on a structure read from a deck: one contact per node,
+// with the law and gap of the table, along direction = "radial" (from structure.axis) or
+// [x, y, z] (the same unit vector at every node), over the node's x, y, z DOFs; the DOF of
+// the largest component names the contact.
+void Parser::node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law) {
+  const std::string full = section + ".nodes";
+  if (!s_.structure) return;  // the structure's own errors are reported already
+  if (!s_.structure->deck) {
+    r_.error(nn.source(), full, "nodes are for a structure read from a deck ([structure] deck = …); locate the "
+                                "contact with dof (matrices) or node (rod)");
+    return;
+  }
+  const DeckStructure& deck = *s_.structure->deck;
+  for (const char* other : {"node", "dof", "against"}) {
+    if (t.contains(other)) {
+      r_.error(Reader::source_of(t, other), section + "." + other, "beside nodes: give the nodes only (one contact each)");
+      return;
+    }
+  }
+  std::vector<int> nodes;
+  if (nn.is_string()) {
+    std::string name = nn.as_string()->get();
+    for (char& ch : name) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    const auto it = deck.node_sets.find(name);
+    if (it == deck.node_sets.end()) {
+      std::string sets;
+      for (const auto& [set, members] : deck.node_sets) sets += (sets.empty() ? "" : ", ") + set;
+      r_.error(nn.source(), full, "no node set '" + nn.as_string()->get() + "' in the deck; it defines: " + sets);
+      return;
+    }
+    nodes = it->second;
+  } else if (const toml::array* a = nn.as_array(); a != nullptr && !a->empty() && a->is_homogeneous<int64_t>()) {
+    for (const auto& v : *a) nodes.push_back(static_cast<int>(v.value<int64_t>().value_or(0)));
+  } else {
+    r_.error(nn.source(), full, "expected a node set name of the deck or a non-empty list of node numbers");
+    return;
+  }
+  const toml::node* d = t.get("direction");
+  const bool radial = d != nullptr && d->is_string() && d->as_string()->get() == "radial";
+  std::optional<Eigen::Vector3d> fixed;
+  if (d != nullptr && d->is_array()) fixed = vector3(t, section, "direction");
+  if (!radial && !fixed) {
+    if (d == nullptr || !d->is_array()) {
+      r_.error(d != nullptr ? d->source() : t.source(), section + ".direction",
+               "with nodes: \"radial\" (from structure.axis) or [x, y, z], the contact normal at every node");
+    }
+    return;
+  }
+  if (radial && !deck.axis) {
+    r_.error(d->source(), section + ".direction",
+             "\"radial\" needs structure.axis = { point = [x, y, z], direction = [x, y, z] } (the rotation axis)");
+    return;
+  }
+  if (fixed && std::abs(fixed->norm() - 1.0) > 1e-6) {
+    r_.warn(d->source(), section + ".direction: |n| = " + detail::number_text(fixed->norm()) +
+                             ", not 1: the gap and the contact force are measured along n as given");
+  }
+  const auto& names = s_.structure->dof_names;
+  static const char* axes[] = {"x", "y", "z"};
+  for (int node : nodes) {
+    const auto at = deck.coordinates.find(node);
+    if (at == deck.coordinates.end()) {
+      r_.error(nn.source(), full, "node " + std::to_string(node) + " is not an interface node (structure.interface): "
+                                  "a contact acts on the reduced model's interface DOFs; add the node to the interface");
+      continue;
+    }
+    Eigen::Vector3d n;
+    if (radial) {
+      const auto& [point, axis] = *deck.axis;
+      const Eigen::Vector3d r = at->second - point;
+      n = r - r.dot(axis) * axis;
+      if (!(n.norm() > 1e-12 * std::max(1.0, r.norm()))) {
+        r_.error(nn.source(), full, "node " + std::to_string(node) + " lies on structure.axis: no radial direction");
+        continue;
+      }
+      n.normalize();
+    } else {
+      n = *fixed;
+    }
+    Contact c = law;
+    double largest = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      if (n(k) == 0.0) continue;
+      const std::string name = std::string("n").append(std::to_string(node)).append("_").append(axes[k]);
+      const auto it = std::find(names.begin(), names.end(), name);
+      if (it == names.end()) {
+        r_.error(nn.source(), full, "node " + std::to_string(node) + " has no DOF " + name + " (fixed by *BOUNDARY?) "
+                                    "but the direction has a component along " + axes[k]);
+        c.along.clear();
+        break;
+      }
+      const int j = static_cast<int>(it - names.begin());
+      c.along.emplace_back(j, n(k));
+      if (std::abs(n(k)) > largest) {
+        largest = std::abs(n(k));
+        c.dof = j;
+      }
+    }
+    if (!c.along.empty()) s_.contacts.push_back(c);
+  }
+}
+
+// [contact] direction: ±1 (the side of the stop along the DOF) or a table {DOF name = weight}
+// (matrices); returns the (DOF, weight) pairs, empty for +1.
+std::vector<std::pair<int, double>> Parser::direction(const toml::node& d, const std::string& section, const Contact& c) {
+  const std::string full = section + ".direction";
+  const Structure& st = *s_.structure;
+  if (c.against >= 0) {
+    r_.error(d.source(), full, "beside against: a contact between two DOFs acts along u[dof] − u[against]; "
+                               "remove one of them");
+    return {};
+  }
+  if (d.is_floating_point() || d.is_integer()) {
+    const double v = d.value<double>().value_or(0.0);
+    if (v == 1.0) return {};
+    if (v == -1.0) return {{c.dof, -1.0}};
+    r_.error(d.source(), full, "expected +1 or -1 (the side of the stop along the DOF), or a table of DOF weights "
+                               "{ name = weight, … } for a normal over several DOFs; got " + detail::number_text(v));
+    return {};
+  }
+  const toml::table* t = d.as_table();
+  if (t == nullptr || st.kind == StructureKind::Rod) {
+    r_.error(d.source(), full, st.kind == StructureKind::Rod
+                                   ? "the rod has one DOF per node: direction is +1 or -1"
+                                   : "expected +1, -1 or a table { name = weight, … } over DOF names");
+    return {};
+  }
+  std::vector<std::pair<int, double>> along;
+  double norm = 0.0;
+  bool has_dof = false;
+  for (const auto& [key, value] : *t) {
+    const std::string name(key.str());
+    const auto it = std::find(st.dof_names.begin(), st.dof_names.end(), name);
+    if (it == st.dof_names.end()) {
+      r_.error(value.source(), full + "." + name, "is not a DOF name of [structure] dofs");
+      continue;
+    }
+    const double w = r_.number_value(value, full + "." + name, detail::finite(""));
+    const int j = static_cast<int>(it - st.dof_names.begin());
+    has_dof = has_dof || j == c.dof;
+    norm += w * w;
+    along.emplace_back(j, w);
+  }
+  if (!(norm > 0.0)) {
+    r_.error(d.source(), full, "every weight is zero; give a direction, e.g. a unit normal");
+    return {};
+  }
+  if (!has_dof) {
+    r_.error(d.source(), full, "does not include the contact's DOF " + st.dof_name(c.dof) +
+                                   "; dof names the contact and must be one of the direction's DOFs");
+    return {};
+  }
+  if (std::abs(norm - 1.0) > 1e-6) {
+    r_.warn(d.source(), full + ": |n| = " + detail::number_text(std::sqrt(norm)) +
+                            ", not 1: the gap and the contact force are measured along n as given");
+  }
+  return along;
+}
+
+}  // namespace wbm::scene::detail
