@@ -1,0 +1,368 @@
+// Scenes that trace a branch (wbm::scene, type = continuation and nnm): harmonic balance by
+// default, the stiff stop, unit independence, closed-form branches, progress and observed DOFs
+// along a branch, an odd harmonic selection.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <complex>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <regex>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/output.hpp>
+#include <wbm/scene/scene.hpp>
+#include <wbm/solvers/post_processing.hpp>
+
+#include "scene.hpp"  // reproduce/common: the shipped scene directory
+#include "testing.hpp"
+#include "scene_fixtures.hpp"
+
+namespace {
+
+using wbm::scene::Scene;
+using wbm::testing::column;
+using wbm::testing::expect_throw_with;
+using wbm::testing::oscillator_amplitude;
+using wbm::testing::parse;
+using wbm::testing::temp;
+using wbm::testing::write;
+
+}  // namespace
+
+// A scene without a [basis] table gets harmonic balance with H = 32 (2H + 1 functions, every
+// harmonic damped) and the cell-average contact quadrature, as a [basis] without a size does;
+// never the M = 2^J basis with its undamped top function (issue #19).
+TEST(Scene, NoBasisTableGivesHarmonicBalanceWithDampedHarmonics) {
+  const Scene s = parse("structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+                        "forcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                        "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n");
+  EXPECT_EQ(s.basis.harmonics, wbm::scene::Basis::kDefaultHarmonics);
+  EXPECT_EQ(s.basis.dimension, 2 * wbm::scene::Basis::kDefaultHarmonics + 1);
+  EXPECT_EQ(s.basis.contact_quadrature, wbm::solvers::ContactQuadrature::CellAverage);
+  const Scene paper = parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                            "basis = { dimension = 64 }\n");
+  EXPECT_EQ(paper.basis.contact_quadrature, wbm::solvers::ContactQuadrature::Midpoint);
+  // A law with a corner is averaged over the cells whatever M (issue #35), unless the trial has no
+  // slope (Haar) or the scene asks for the paper's rule by name.
+  const std::string stop = "structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                           "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n";
+  EXPECT_EQ(parse(stop + "basis = { dimension = 64 }\n").basis.contact_quadrature, wbm::solvers::ContactQuadrature::CellAverage);
+  EXPECT_EQ(parse(stop + "basis = { trial = \"haar\", weighting = \"fourier\", dimension = 16 }\n").basis.contact_quadrature,
+            wbm::solvers::ContactQuadrature::Midpoint);
+  EXPECT_EQ(parse(stop + "basis = { dimension = 64, contact_quadrature = \"midpoint\" }\n").basis.contact_quadrature,
+            wbm::solvers::ContactQuadrature::Midpoint);
+  expect_throw_with<std::invalid_argument>(
+      [] {
+        (void)parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 5.0, frequency_hz = 30.0 }\n"
+                    "basis = { trial = \"haar\", weighting = \"fourier\", dimension = 16, contact_quadrature = \"cell-average\" }\n");
+      },
+      {"basis.contact_quadrature", "Haar", "\"midpoint\""});
+}
+
+// The newcomer's stiff-stop scene (examples/scenes/stiff_stop_continuation.toml, issue #19): a stop
+// 100 times stiffer than the spring, continuation with every default. The branch reaches the
+// range end with the resonance's two folds only (the midpoint rule stalled at 35.26 Hz on a
+// sample crossing the gap), both confirmed by a Floquet multiplier crossing +1, and the folds do
+// not move with Q (256 → 1024) nor with H (32 → 64) by more than 0.01 Hz: they are the
+// oscillator's, not the discretization's.
+TEST(Scene, StiffStopContinuationRunsWithDefaults) {
+  const std::string head = "structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 5.0 }\n"
+                           "forcing = { amplitude = 5.0, frequency_hz = [15.0, 60.0] }\n"
+                           "contact = { law = \"linear\", stiffness = 4e6, gap = 2e-3 }\n"
+                           "analysis = { type = \"continuation\" }\n";
+  auto folds = [](const wbm::scene::AnalysisResult& r) {
+    for (const auto& t : r.tables) {
+      if (t.file == "folds.csv") return std::pair{t.columns.at(0), t.columns.at(1)};
+    }
+    return std::pair{Eigen::VectorXd(), Eigen::VectorXd()};
+  };
+  const auto r = wbm::scene::run_analysis(parse(head));
+  ASSERT_TRUE(r.converged) << r.summary;
+  const auto [hz, crossing] = folds(r);
+  ASSERT_EQ(hz.size(), 2) << r.summary;
+  EXPECT_EQ(crossing(0), 1.0);
+  EXPECT_EQ(crossing(1), 1.0);
+  EXPECT_GT(hz(0), hz(1));  // the upper (jump-down) fold above the lower (jump-up) one
+  // The lower (jump-up) fold is the grazing orbit: the linear response of amplitude g,
+  // (k − mω²)² + (cω)² = (F/g)², at 32.7251 Hz (the cell-average rule smooths the corner over one
+  // cell: within 0.001 Hz of it).
+  const double k = 4e4, c = 5.0, force = 5.0, gap = 2e-3, b = 2.0 * k - c * c;
+  const double grazing_hz = std::sqrt(0.5 * (b + std::sqrt(b * b - 4.0 * (k * k - std::pow(force / gap, 2))))) / (2.0 * M_PI);
+  EXPECT_NEAR(hz(1), grazing_hz, 1e-3);
+  // Each fold's state (issue #35): its amplitude lies on the branch at its frequency, on its own
+  // sheet: the lower fold's is the gap, the upper fold's above it, and each within 1 % of a
+  // branch point less than 0.1 Hz away (the curve there has three sheets, the middle one unstable).
+  const wbm::scene::Table* fold_table = nullptr;
+  const wbm::scene::Table* branch = nullptr;
+  for (const auto& t : r.tables) {
+    if (t.file == "folds.csv") fold_table = &t;
+    if (t.file == "branch.csv") branch = &t;
+  }
+  ASSERT_TRUE(fold_table != nullptr && branch != nullptr);
+  ASSERT_EQ(fold_table->header.at(4), "amplitude_dof0 [m]");
+  ASSERT_EQ(branch->header.at(3), "amplitude_dof0 [m]");
+  const Eigen::VectorXd& fold_amplitude = fold_table->columns.at(4);
+  EXPECT_NEAR(fold_amplitude(1), gap, 1e-3 * gap);
+  EXPECT_GT(fold_amplitude(0), 1.5 * gap);
+  for (Eigen::Index k = 0; k < 2; ++k) {
+    double nearest = INFINITY;
+    for (Eigen::Index i = 0; i < branch->columns[0].size(); ++i) {
+      if (std::abs(branch->columns[0](i) - hz(k)) < 0.1) {
+        nearest = std::min(nearest, std::abs(branch->columns[3](i) - fold_amplitude(k)));
+      }
+    }
+    EXPECT_LT(nearest, 0.01 * fold_amplitude(k)) << "fold " << k << " at " << hz(k) << " Hz";
+  }
+  for (const std::string basis : {"basis = { harmonics = 32, time_samples = 1024 }\n", "basis = { harmonics = 64 }\n"}) {
+    const auto finer = wbm::scene::run_analysis(parse(head + basis));
+    ASSERT_TRUE(finer.converged) << basis << finer.summary;
+    const auto [hz2, crossing2] = folds(finer);
+    ASSERT_EQ(hz2.size(), 2) << basis;
+    EXPECT_NEAR(hz2(0), hz(0), 0.01) << basis;
+    EXPECT_NEAR(hz2(1), hz(1), 0.01) << basis;
+  }
+}
+
+// The stiff stop of issue #35 with the paper's Fourier basis, M = 64, and nothing else: 50 kg on
+// 1 MN/m (c = 0.2 √(mk)), a 1e8 N/m stop at 20 µm, 10 N over 60–210 rad/s. Sampled at midpoints it
+// stalled at 29.98 Hz (a sample crossing the gap); averaged over the cells it reaches the range
+// end with the resonance's two folds, and its lower fold is the grazing orbit, where the linear
+// response's amplitude is the gap: (k − mω²)² + (cω)² = (F/g)².
+TEST(Scene, StiffStopWithThePapersFourierBasisCompletes) {
+  const double m = 50.0, k = 1e6, c = 0.2 * std::sqrt(m * k), force = 10.0, gap = 2e-5;
+  const auto r = wbm::scene::run_analysis(parse(
+      "structure = { mass = 50.0, stiffness = 1e6 }\ndamping = { alpha = " + std::to_string(c / m) + " }\n"
+      "forcing = { amplitude = 10.0, frequency_rad_s = [60.0, 210.0] }\n"
+      "contact = { law = \"linear\", stiffness = 1e8, gap = 2e-5 }\n"
+      "basis = { trial = \"fourier\", dimension = 64 }\nanalysis = { type = \"continuation\" }\n"));
+  ASSERT_TRUE(r.converged) << r.summary;
+  const wbm::scene::Table* folds = nullptr;
+  for (const auto& t : r.tables) {
+    if (t.file == "folds.csv") folds = &t;
+  }
+  ASSERT_TRUE(folds != nullptr);
+  ASSERT_EQ(folds->columns[0].size(), 2);
+  const double b = 2.0 * m * k - c * c;
+  const double grazing_hz =
+      std::sqrt((b + std::sqrt(b * b - 4.0 * m * m * (k * k - std::pow(force / gap, 2)))) / (2.0 * m * m)) / (2.0 * M_PI);
+  EXPECT_NEAR(folds->columns[0].minCoeff(), grazing_hz, 1e-3 * grazing_hz);
+}
+
+// Units must not matter (issue #19). A peer's nondimensional rod (E = ρ = S = L = 1, 20 elements,
+// C = βK with β = 0.04/π, tip force 0.01, linear stop k = 10 at gap 0.1, H = 16, 0.2–0.4 Hz) is
+// traced, then the same rod in other units of length, mass and time (factors 2⁻³, 2⁵, 2⁻⁴, so
+// every conversion is exact in binary). Continuation scales its state and parameter from the
+// problem, so the branch must be the same: the same points, frequencies and amplitudes converted
+// back to 1e-10, the same stability flags and folds. Any absolute tolerance, step or bound
+// would break this.
+TEST(Scene, ContinuationDoesNotDependOnTheUnits) {
+  auto scene = [](double sl, double sm, double st) {
+    auto num = [](double v) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%.17g", v);
+      return std::string(b);
+    };
+    const double beta = 0.04 / std::numbers::pi;
+    return parse("[structure]\nyoung_modulus = " + num(sm / (sl * st * st)) + "\ndensity = " + num(sm / (sl * sl * sl)) +
+                 "\narea = " + num(sl * sl) + "\nlength = " + num(sl) + "\nelements = 20\n[damping]\nbeta = " +
+                 num(beta * st) + "\n[forcing]\namplitude = " + num(0.01 * sm * sl / (st * st)) +
+                 "\nfrequency_hz = [" + num(0.2 / st) + ", " + num(0.4 / st) + "]\nnode = \"tip\"\n[contact]\n"
+                 "law = \"linear\"\nstiffness = " + num(10.0 * sm / (st * st)) + "\ngap = " + num(0.1 * sl) +
+                 "\nnode = \"tip\"\n[basis]\nharmonics = 16\n[analysis]\ntype = \"continuation\"\n");
+  };
+  const double sl = 0.125, sm = 32.0, st = 0.0625;
+  const auto a = wbm::scene::run_analysis(scene(1.0, 1.0, 1.0));
+  const auto b = wbm::scene::run_analysis(scene(sl, sm, st));
+  ASSERT_TRUE(a.converged) << a.summary;
+  ASSERT_TRUE(b.converged) << b.summary;
+  const auto& fa = column(a, "branch.csv", 0);
+  const auto& fb = column(b, "branch.csv", 0);
+  ASSERT_EQ(fa.size(), fb.size()) << a.summary << "\n" << b.summary;
+  EXPECT_GT(fa.size(), 20);
+  const Eigen::VectorXd f_back = fb * st;
+  EXPECT_LE((f_back - fa).cwiseAbs().maxCoeff(), 1e-10 * fa.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd amp_back = column(b, "branch.csv", 3) / sl;
+  const auto& amp = column(a, "branch.csv", 3);
+  EXPECT_LE((amp_back - amp).cwiseAbs().maxCoeff(), 1e-10 * amp.cwiseAbs().maxCoeff());
+  EXPECT_EQ(column(a, "branch.csv", 5), column(b, "branch.csv", 5));  // stable [-]
+  ASSERT_EQ(a.diagnostics["continuation"]["folds"].size(), b.diagnostics["continuation"]["folds"].size());
+  for (size_t k = 0; k < a.diagnostics["continuation"]["folds"].size(); ++k) {
+    EXPECT_NEAR(b.diagnostics["continuation"]["folds"][k]["frequency_hz"].get<double>() * st,
+                a.diagnostics["continuation"]["folds"][k]["frequency_hz"].get<double>(), 1e-10);
+  }
+}
+
+// Continuation from a scene: with the stop out of reach the oscillator is linear, so every
+// point's amplitude is F/|k − mω² + iωc| (sampled on 1024 points: within 1 − cos(π/1024)).
+TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
+  const Scene s = parse("structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n"
+                        "forcing = { amplitude = 10.0, frequency_hz = [5.0, 55.0] }\n"
+                        "contact = { law = \"linear\", stiffness = 1e6, gap = 1.0 }\n"
+                        "basis = { dimension = 8 }\n"
+                        "analysis = { type = \"continuation\", max_frequency_step_hz = 1.0 }\n");
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(wbm::scene::to_json(s), temp("c.json"))),
+            wbm::scene::to_json(s));
+  std::vector<std::pair<double, std::string>> reports;  // progress: one report per accepted point
+  const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
+  ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
+  const Eigen::VectorXd& hz = column(r, "branch.csv", 0);
+  const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
+  EXPECT_GE(hz.size(), 50);
+  ASSERT_EQ(reports.size(), static_cast<size_t>(hz.size()));
+  for (size_t i = 1; i < reports.size(); ++i) EXPECT_GE(reports[i].first, reports[i - 1].first);
+  EXPECT_NEAR(reports.back().first, 1.0, 1e-12);  // the range is covered (the fraction is capped at 1)
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "point 2, f = %.6g Hz, step ", hz(1));
+  EXPECT_EQ(reports[1].second.rfind(expected, 0), 0u) << reports[1].second;
+  for (Eigen::Index i = 0; i < hz.size(); ++i) {
+    if (hz(i) > 55.0) continue;  // the last point may lie one step beyond the range
+    const double a = oscillator_amplitude(2.0, 6.0, 8e4, 10.0, hz(i));
+    EXPECT_NEAR(amplitude(i), a, 1e-5 * a) << hz(i) << " Hz";
+  }
+  EXPECT_EQ(column(r, "branch.csv", 5).minCoeff(), 1.0);  // every point stable
+}
+
+// Progress of an nnm backbone: one report per accepted point of the energy continuation, the
+// fraction of the energy range covered, and a label with the point, its energy and the step.
+TEST(Scene, BackboneReportsProgressPerPoint) {
+  const Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  std::vector<std::pair<double, std::string>> reports;
+  const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
+  ASSERT_TRUE(r.converged);
+  ASSERT_GE(reports.size(), 10u);
+  EXPECT_EQ(reports.front().second.rfind("point 1, E = 0.5, step ", 0), 0u) << reports.front().second;
+  EXPECT_NEAR(reports.front().first, 0.0, 1e-12);
+  EXPECT_NEAR(reports.back().first, 1.0, 1e-9);  // E = 3 of [0.5, 3] reached
+  // Every backbone level is an accepted point (levels and points are the same list here).
+  EXPECT_EQ(reports.size(), static_cast<size_t>(column(r, "backbone.csv", 0).size()));
+}
+
+// Per point of a sweep and of a continuation branch: [output] observe and harmonics. Closed
+// forms: the 2-DOF chain m = 1 kg, K = [[2k, −k], [−k, k]], C = αM, forced on "a", with a stop
+// on "b" too far to be met, responds linearly, U = (K − ω²M + iωC)⁻¹ F e_a: A_1 = |U_j|,
+// φ_1 = arg U_j, A_0 = A_2 = 0, and the amplitude columns of the observed DOF "b" are |U_b|.
+TEST(Scene, ObservedDofsAndHarmonicsAlongASweepAndABranchMatchTheClosedForm) {
+  const std::string head = "structure = { mass = [1.0, 1.0], stiffness = [[2e4, -1e4], [-1e4, 1e4]], dofs = [\"a\", \"b\"] }\n"
+                           "damping = { alpha = 2.0 }\ncontact = { law = \"linear\", stiffness = 1e6, gap = 1.0, dof = \"b\" }\n"
+                           "basis = { dimension = 8 }\n";
+  auto exact = [](double hz) {
+    const double w = 2.0 * std::numbers::pi * hz;
+    Eigen::Matrix2cd d;
+    d << std::complex<double>(2e4 - w * w, 2.0 * w), -1e4, -1e4, std::complex<double>(1e4 - w * w, 2.0 * w);
+    return Eigen::Vector2cd(d.inverse() * Eigen::Vector2cd(10.0, 0.0));
+  };
+  const auto sweep = wbm::scene::run_analysis(parse(
+      head + "forcing = { amplitude = 10.0, dof = \"a\", frequencies_hz = [5.0, 12.0, 30.0] }\n"
+             "output = { samples = 64, harmonics = 2, observe = [\"b\", \"a\"] }\n"));
+  ASSERT_TRUE(sweep.converged);
+  // frequency_response.csv follows observe: b first; sweep_harmonics.csv: A0, φ0, A1, φ1, A2, φ2 per DOF.
+  const Eigen::VectorXd& hz = column(sweep, "sweep_harmonics.csv", 0);
+  ASSERT_EQ(hz.size(), 3);
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const Eigen::Vector2cd u = exact(hz(i));
+    const double scale = u.cwiseAbs().maxCoeff();
+    EXPECT_NEAR(column(sweep, "frequency_response.csv", 1)(i), std::abs(u(1)), 1e-3 * scale);  // max_u_b: sampled max
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 3)(i), std::abs(u(1)), 1e-12 * scale) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 4)(i), std::arg(u(1)), 1e-9) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 9)(i), std::abs(u(0)), 1e-12 * scale) << hz(i);
+    EXPECT_NEAR(column(sweep, "sweep_harmonics.csv", 10)(i), std::arg(u(0)), 1e-9) << hz(i);
+    for (size_t c : {1u, 5u, 7u, 11u}) EXPECT_LT(std::abs(column(sweep, "sweep_harmonics.csv", c)(i)), 1e-12 * scale) << c;
+  }
+  const auto branch = wbm::scene::run_analysis(parse(
+      head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = [5.0, 30.0] }\n"
+             "analysis = { type = \"continuation\", stability = false, max_frequency_step_hz = 1.0 }\n"
+             "output = { samples = 256, harmonics = 1, observe = [\"a\", \"b\"] }\n"));
+  ASSERT_TRUE(branch.converged);
+  const Eigen::VectorXd& f = column(branch, "branch.csv", 0);
+  const Eigen::VectorXd& amplitude_b = column(branch, "branch.csv", 8);  // after corrector_iterations: b's max, min, amplitude
+  const Eigen::VectorXd& a1_b = column(branch, "branch_harmonics.csv", 7);
+  ASSERT_GE(f.size(), 25);
+  for (Eigen::Index i = 0; i < f.size(); ++i) {
+    const Eigen::Vector2cd u = exact(f(i));
+    EXPECT_NEAR(amplitude_b(i), std::abs(u(1)), 1e-3 * std::abs(u(1))) << f(i);
+    EXPECT_NEAR(a1_b(i), std::abs(u(1)), 1e-9 * std::abs(u(1))) << f(i);
+    EXPECT_NEAR(column(branch, "branch_harmonics.csv", 3)(i), std::abs(u(0)), 1e-9 * std::abs(u(0))) << f(i);
+  }
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = 5.0 }\noutput = { observe = [\"b\"] }\n"); },
+      {"output.observe: the DOFs reported per point of a sweep or a continuation branch", "output.dofs"});
+}
+
+// [basis] harmonic_selection = "odd": on a 1-DOF oscillator between two symmetric stops (odd in
+// u) the odd-harmonic branch is the full one and drops nothing (half-wave symmetry); with one
+// stop the branch says how much it drops where the stop is touched and nothing where it is not.
+// The selection is echoed, round-trips through JSON, and what cannot be projected is refused.
+TEST(Scene, OddHarmonicSelectionOfASymmetricOscillatorIsTheFullBranch) {
+  const std::string oscillator =
+      "structure = { mass = [1.0], stiffness = [4e4] }\ndamping = { beta = 2e-4 }\n"
+      "forcing = { amplitude = 30.0, frequency_hz = [25.0, 40.0] }\n"
+      "analysis = { type = \"continuation\", stability = false }\n";
+  const std::string plus = "[[contact]]\nlaw = \"linear\"\nstiffness = 4e5\ngap = 1e-3\ndof = 0\n";
+  const std::string minus = plus + "direction = -1\n";
+  const std::string odd = "[basis]\nharmonics = 9\nharmonic_selection = \"odd\"\n";
+  const std::string all = "[basis]\nharmonics = 9\n";
+  const auto full = wbm::scene::run_analysis(parse(oscillator + all + plus + minus));
+  const Scene odd_scene = parse(oscillator + odd + plus + minus);
+  EXPECT_EQ(odd_scene.basis.selected_harmonics, (std::vector<int>{1, 3, 5, 7, 9}));
+  const auto sel = wbm::scene::run_analysis(odd_scene);
+  ASSERT_TRUE(full.converged && sel.converged);
+  const Eigen::VectorXd& f_full = column(full, "branch.csv", 0);
+  const Eigen::VectorXd& f_sel = column(sel, "branch.csv", 0);
+  ASSERT_EQ(f_full.size(), f_sel.size());
+  EXPECT_LT((f_full - f_sel).cwiseAbs().maxCoeff(), 1e-6);
+  const Eigen::VectorXd& a_full = column(full, "branch.csv", 3);
+  EXPECT_GT(a_full.maxCoeff(), 1.2e-3);  // both stops (gap 1 mm) are reached
+  EXPECT_LT((a_full - column(sel, "branch.csv", 3)).cwiseAbs().maxCoeff(), 1e-8 * a_full.maxCoeff());
+  const auto header = [](const wbm::scene::AnalysisResult& r) {
+    for (const auto& t : r.tables) {
+      if (t.file == "branch.csv") return t.header;
+    }
+    return std::vector<std::string>{};
+  };
+  ASSERT_EQ(header(sel).at(5), "dropped_harmonics_residual [-]");
+  EXPECT_NE(header(full).at(5), "dropped_harmonics_residual [-]");
+  EXPECT_LT(column(sel, "branch.csv", 5).maxCoeff(), 1e-9);
+  const nlohmann::json j = wbm::scene::to_json(odd_scene);
+  EXPECT_EQ(j["basis"]["harmonic_selection"], "odd");
+  EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("odd.json"))), j);
+
+  const auto one = wbm::scene::run_analysis(parse(oscillator + odd + plus));
+  ASSERT_TRUE(one.converged);
+  const Eigen::VectorXd& dropped = column(one, "branch.csv", 5);
+  const Eigen::VectorXd& force = column(one, "branch.csv", 4);
+  for (Eigen::Index i = 0; i < dropped.size(); ++i) {
+    if (force(i) == 0.0) {
+      EXPECT_EQ(dropped(i), 0.0);
+    }
+  }
+  EXPECT_GT(dropped.maxCoeff(), 1e-2);
+  const auto warned = [](const wbm::scene::AnalysisResult& r) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(),
+                       [](const std::string& w) { return w.find("harmonics outside the selection") != std::string::npos; });
+  };
+  EXPECT_TRUE(warned(one));
+  EXPECT_FALSE(warned(sel));
+
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = \"even\"\n" + plus); },
+      {"basis.harmonic_selection", "\"even\" is not a selection", "\"odd\""});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = [1, 10]\n" + plus); },
+      {"basis.harmonic_selection", "[0, 9]"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\nharmonics = 9\nharmonic_selection = [0, 3]\n" + plus); },
+      {"drops harmonic 1, at which a load acts on DOF dof0", "keep harmonic 1"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + "[basis]\ntrial = \"db6\"\ndimension = 32\nharmonic_selection = \"odd\"\n" + plus); },
+      {"basis.harmonic_selection", "wavelet bases have no harmonics"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)parse(oscillator + odd + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\ndof = 0\n"); },
+      {"basis.harmonic_selection", "rigid stops", "law = \"linear\""});
+}
