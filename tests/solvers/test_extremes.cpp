@@ -38,12 +38,10 @@ TEST_P(PenaltyExtremes, ConvergeWithVerifiedResidualOrReportWhy) {
       solvers::beta_damped(rod, e.beta), forcing, {{rod.tip_dof(), law}},
       {.dimension = 64, .newton = {.max_iterations = 100}});
   EXPECT_TRUE(sol.coefficients.allFinite()) << e.name;
-  if (sol.converged()) {
-    // Newton stops at 1e-10 of the gap on the contact displacements; through the contact
-    // stiffness k_c = a_c·α (up to 5e13 N/m here) that is a force residual of k_c·1e-13 m,
-    // up to ~1e-5·‖b‖ in the worst case. Measured: below 2e-7 for every converged row.
-    EXPECT_LT(sol.relative_residual, 1e-6) << e.name;
-  } else {
+  // A converged row needs no check of its residual here: converged() is the verified full
+  // residual (WeightedResidual.ConvergedRequiresTheVerifiedFullResidual). A row that does not
+  // converge must say so, with the last residual.
+  if (!sol.converged()) {
     EXPECT_NE(sol.report.message.find("last ||R||"), std::string::npos) << sol.report.message;
     EXPECT_NE(sol.report.status, solvers::SolveStatus::Converged);
   }

@@ -158,7 +158,7 @@ class DenseLu {
 /// continuation). A pattern that changes (an active-set change in a semismooth Newton)
 /// triggers a new analysis. symbolic_analyses() counts them. factorize() returns false for a
 /// numerically singular J (KLU's zero pivot) or a non-finite one. Implemented in
-/// solvers/src/sparse_lu.cpp, so that KLU stays a private dependency of wbm::solvers.
+/// solvers/src/core/sparse_lu.cpp, so that KLU stays a private dependency of wbm::solvers.
 class SparseLu {
  public:
   SparseLu();

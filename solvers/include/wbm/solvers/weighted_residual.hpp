@@ -278,7 +278,7 @@ class WeightedResidual {
   [[nodiscard]] Eigen::VectorXd linear_response() const;
   /// 1-norm condition estimate κ₁(G) = ‖G‖₁ ‖G⁻¹‖₁: ‖G‖₁ exact from the Kronecker factors,
   /// ‖G⁻¹‖₁ by Hager's method with Higham's refinements [Higham 1988, Alg. 4.1] (a lower bound,
-  /// a few solves with G and Gᵀ; solvers/src/one_norm_estimate.hpp); inf if G is singular.
+  /// a few solves with G and Gᵀ; solvers/src/core/one_norm_estimate.hpp); inf if G is singular.
   [[nodiscard]] double condition_number() const;
   /// "sparse-lu" or "modal".
   [[nodiscard]] std::string linear_solver() const;

@@ -231,15 +231,16 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
     x = std::move(result.x);
     s.report = std::move(result.report);
   } else {
+    // Converged provisionally: the full residual below verifies it (ResidualNotVerified if not).
     s.report.status = SolveStatus::Converged;
     s.path = SolutionPath::Linear;
     s.report.message = "linear problem (no contact): one solve";
-    s.report.residual_norms = {0.0};
   }
   const Eigen::VectorXd a = p.nc > 0 ? expand(x) : p.a_lin;
   s.coefficients = spectral::as_coefficients(a, p.n);
   const double bnorm = p.b.norm();
   s.relative_residual = residual(a).norm() / (bnorm > 0.0 ? bnorm : 1.0);
+  if (p.nc == 0) s.report.residual_norms = {s.relative_residual};  // the one solve's, relative to ‖b‖
   if (p.nc > 0) {
     const Eigen::MatrixXd u = p.contact_samples(x);
     s.max_penetration = -std::numeric_limits<double>::infinity();

@@ -6,7 +6,7 @@
 
 #include <unsupported/Eigen/KroneckerProduct>
 
-#include "one_norm_estimate.hpp"
+#include "core/one_norm_estimate.hpp"
 
 namespace wbm::solvers {
 
