@@ -23,17 +23,8 @@
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 
-namespace {
-
 using wbm::scene::Scene;
-using wbm::testing::column;
-using wbm::testing::expect_throw_with;
-using wbm::testing::oscillator_amplitude;
-using wbm::testing::parse;
-using wbm::testing::temp;
-using wbm::testing::write;
-
-}  // namespace
+using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 // Result files: NaN never reaches a file, and a staged run leaves nothing until commit().
 // One convention for a missing value: an empty cell beside a status column that says why, never

@@ -23,17 +23,8 @@
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 
-namespace {
-
 using wbm::scene::Scene;
-using wbm::testing::column;
-using wbm::testing::expect_throw_with;
-using wbm::testing::oscillator_amplitude;
-using wbm::testing::parse;
-using wbm::testing::temp;
-using wbm::testing::write;
-
-}  // namespace
+using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 // Table 1 of [JL14]: Case 1 150 Hz, a_c = 1e8 N, α = 50 1/m, β = 1e-4 s, g0 = 1 mm;
 // Case 2 1275 Hz, α = 20, β = 5e-6, g0 = 14.5 mm; rod of Sec. 4.

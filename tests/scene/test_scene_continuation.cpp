@@ -24,17 +24,8 @@
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 
-namespace {
-
 using wbm::scene::Scene;
-using wbm::testing::column;
-using wbm::testing::expect_throw_with;
-using wbm::testing::oscillator_amplitude;
-using wbm::testing::parse;
-using wbm::testing::temp;
-using wbm::testing::write;
-
-}  // namespace
+using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 // A scene without a [basis] table gets harmonic balance with H = 32 (2H + 1 functions, every
 // harmonic damped) and the cell-average contact quadrature, as a [basis] without a size does;

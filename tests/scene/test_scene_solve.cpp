@@ -24,17 +24,8 @@
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 
-namespace {
-
 using wbm::scene::Scene;
-using wbm::testing::column;
-using wbm::testing::expect_throw_with;
-using wbm::testing::oscillator_amplitude;
-using wbm::testing::parse;
-using wbm::testing::temp;
-using wbm::testing::write;
-
-}  // namespace
+using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 // 1-DOF oscillator (the five-line scene of docs/scenes.md, no contact): the solve equals the
 // closed-form amplitude F/|k − mω² + iωc| with c = αm, at one frequency and over a sweep.

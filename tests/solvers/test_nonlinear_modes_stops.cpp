@@ -18,41 +18,11 @@
 #include <wbm/solvers/time_integration.hpp>
 
 #include "scene.hpp"
+#include "nonlinear_modes_fixtures.hpp"
 #include "testing.hpp"
 
-namespace {
-
-// Backbone continuation options over [E_min, E_max], the other fields at their defaults.
-wbm::solvers::BackboneContinuationOptions range(double energy_min, double energy_max) {
-  wbm::solvers::BackboneContinuationOptions o;
-  o.energy_min = energy_min;
-  o.energy_max = energy_max;
-  return o;
-}
-
 using namespace wbm;
-
-// [LL11 Sec. 5.1], from the scene every reproduction uses, with the stop's gap replaced.
-solvers::MechanicalSystem ll11_system() {
-  return scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml")).system;
-}
-
-int tip_dof() { return 19; }
-
-solvers::NonlinearModes modes(double gap, int harmonics = 8, int samples = 256,
-                              solvers::ModeAlgorithm algorithm = solvers::ModeAlgorithm::Simultaneous) {
-  return solvers::NonlinearModes(ll11_system(), {{tip_dof(), gap}},
-                                 {.harmonics = harmonics, .samples = samples, .algorithm = algorithm});
-}
-
-const solvers::ModeLevel* included(const solvers::Backbone& b, double energy) {
-  for (const auto& l : b.included) {
-    if (std::abs(l.energy - energy) < 1e-12 && l.converged()) return &l;
-  }
-  return nullptr;
-}
-
-}  // namespace
+using namespace wbm::testing;
 
 namespace {
 

@@ -20,23 +20,16 @@
 
 #include "scene.hpp"
 #include "testing.hpp"
+#include "weighted_residual_fixtures.hpp"
 
 using namespace wbm;
 using solvers::Formulation;
 using solvers::TimeBasis;
+using wbm::testing::case1;
+using wbm::testing::kTable2;
+using wbm::testing::Pair;
 
 namespace {
-
-scene::Scene case1() { return reproduce::load_scene("jl14_case1"); }
-
-struct Pair {
-  const char* trial;
-  const char* weighting;
-};
-
-// The six combinations of [JL14 Table 2].
-const Pair kTable2[] = {{"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
-                        {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
 
 Eigen::VectorXd uniform_tau(int p) {
   Eigen::VectorXd tau(p);

@@ -23,26 +23,14 @@
 
 #include "scene.hpp"
 #include "testing.hpp"
+#include "weighted_residual_fixtures.hpp"
 
 using namespace wbm;
 using solvers::Formulation;
 using solvers::TimeBasis;
-
-namespace {
-
-scene::Scene case1() { return reproduce::load_scene("jl14_case1"); }
-
-struct Pair {
-  const char* trial;
-  const char* weighting;
-};
-
-// The six combinations of [JL14 Table 2].
-const Pair kTable2[] = {{"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
-                        {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
-
-
-}  // namespace
+using wbm::testing::case1;
+using wbm::testing::kTable2;
+using wbm::testing::Pair;
 
 // The contact homotopy r(x, λ) = (x − x_lin + 10^λ H n(x))/s_r: its Jacobian against central
 // differences in x, its λ-derivative against a central difference in λ, and r(x, 0) equal to the
