@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "testing.hpp"
+
 using namespace wbm::solvers;
 
 namespace {
@@ -51,6 +53,33 @@ TEST(Newton, ConvergesQuadraticallyOnASmoothRoot) {
   const auto& n = r.report.residual_norms;
   ASSERT_GE(n.size(), 4u);
   EXPECT_LT(n[n.size() - 2], 1e-3 * n[n.size() - 3]);  // super-linear near the root
+}
+
+// Invalid options are refused before the first residual, naming the field, its value and the
+// range (issue #41): a tolerance <= 0 used to be accepted and could never be met.
+TEST(Newton, RefusesInvalidOptionsNamingTheField) {
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(2, 3.0);
+  using wbm::testing::expect_throw_with;
+  expect_throw_with<std::invalid_argument>([&] { (void)newton(Cubic{}, x0, {.tolerance = 0.0}); },
+                                           {"NewtonOptions.tolerance = 0", "must be > 0"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)newton(Cubic{}, x0, {.tolerance = std::numeric_limits<double>::quiet_NaN()}); },
+      {"NewtonOptions.tolerance", "finite"});
+  expect_throw_with<std::invalid_argument>([&] { (void)newton(Cubic{}, x0, {.max_iterations = -1}); },
+                                           {"NewtonOptions.max_iterations = -1", ">= 0"});
+  expect_throw_with<std::invalid_argument>([&] { (void)newton(Cubic{}, x0, {.max_backtracks = -2}); },
+                                           {"NewtonOptions.max_backtracks = -2"});
+  expect_throw_with<std::invalid_argument>([&] { (void)newton(Cubic{}, x0, {.min_rcond = 1.0}); },
+                                           {"NewtonOptions.min_rcond = 1", "[0, 1)"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)newton(Cubic{}, x0, {.levenberg_marquardt = true, .max_lm_trials = 0}); },
+      {"NewtonOptions.max_lm_trials = 0", "levenberg_marquardt = false"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)newton(Cubic{}, x0, {.stop_on_cycle = true, .cycle_tolerance = -1e-3}); },
+      {"NewtonOptions.cycle_tolerance"});
+  // The boundary values are accepted: no iteration at all, and a bound that is met.
+  EXPECT_EQ(newton(Cubic{}, x0, {.max_iterations = 0}).report.iterations, 0);
+  EXPECT_TRUE(newton(Cubic{}, x0, {.tolerance = 1e-300, .min_rcond = 0.0}).x.isApprox(Eigen::VectorXd::Constant(2, 2.0)));
 }
 
 TEST(Newton, LineSearchGlobalizesArctan) {
@@ -126,6 +155,24 @@ TEST(Newton, SparseLuReanalysesWhenThePatternChanges) {
 // row (3·0² = 0), and Newton reports SingularJacobian instead of a step. A 3 × 3 system with a
 // known solution checks the solve itself: A = [[4, 1, 0], [1, 3, 1], [0, 1, 2]], A (1, 2, 3) =
 // (6, 10, 8).
+// DenseLu refuses factors that are not finite (it returned true whatever J held, issue #41) and
+// solves a known system; an exactly singular J has finite factors (newton() tells it by rcond or
+// by its non-finite step).
+TEST(Newton, DenseLuRefusesANonFiniteJacobianAndSolvesAKnownSystem) {
+  DenseLu lu;
+  Eigen::MatrixXd j(2, 2);
+  j << 4.0, 1.0, 2.0, 3.0;
+  ASSERT_TRUE(lu.factorize(j));
+  EXPECT_TRUE(lu.solve(Eigen::Vector2d(6.0, 8.0)).isApprox(Eigen::Vector2d(1.0, 2.0), 1e-14));
+  j(1, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(lu.factorize(j));
+  j(1, 0) = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(lu.factorize(j));
+  Eigen::MatrixXd singular(2, 2);
+  singular << 1.0, 2.0, 2.0, 4.0;
+  EXPECT_TRUE(lu.factorize(singular));
+}
+
 TEST(Newton, SparseLuRefusesASingularJacobianAndSolvesAKnownSystem) {
   SparseLu solver;
   EXPECT_FALSE(solver.factorize(SparseCubic{}.jacobian(Eigen::Vector3d(2.0, 0.0, 2.0))));

@@ -21,41 +21,11 @@
 #include <wbm/solvers/time_integration.hpp>
 
 #include "scene.hpp"
+#include "nonlinear_modes_fixtures.hpp"
 #include "testing.hpp"
 
-namespace {
-
-// Backbone continuation options over [E_min, E_max], the other fields at their defaults.
-wbm::solvers::BackboneContinuationOptions range(double energy_min, double energy_max) {
-  wbm::solvers::BackboneContinuationOptions o;
-  o.energy_min = energy_min;
-  o.energy_max = energy_max;
-  return o;
-}
-
 using namespace wbm;
-
-// [LL11 Sec. 5.1], from the scene every reproduction uses, with the stop's gap replaced.
-solvers::MechanicalSystem ll11_system() {
-  return scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml")).system;
-}
-
-int tip_dof() { return 19; }
-
-solvers::NonlinearModes modes(double gap, int harmonics = 8, int samples = 256,
-                              solvers::ModeAlgorithm algorithm = solvers::ModeAlgorithm::Simultaneous) {
-  return solvers::NonlinearModes(ll11_system(), {{tip_dof(), gap}},
-                                 {.harmonics = harmonics, .samples = samples, .algorithm = algorithm});
-}
-
-const solvers::ModeLevel* included(const solvers::Backbone& b, double energy) {
-  for (const auto& l : b.included) {
-    if (std::abs(l.energy - energy) < 1e-12 && l.converged()) return &l;
-  }
-  return nullptr;
-}
-
-}  // namespace
+using namespace wbm::testing;
 
 // "The natural frequency of its linear counterpart with clamped-free boundary conditions is
 // 1297.5 Hz" [LL11 Sec. 5.1].
@@ -477,6 +447,18 @@ TEST(NonlinearModes, EnergySteppingHonoursItsWallTimeBudget) {
   EXPECT_NE(spent.message.find("max_wall_time_s"), std::string::npos) << spent.message;
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = -1.0}); },
                                            {"max_wall_time_s = -1", "must be >= 0"});
+  // Invalid ranges and steps name the fields and their values (issue #41).
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)nm.backbone({.energy_min = 0.9, .energy_max = 0.5, .include = {}, .on_level = nullptr, .max_wall_time_s = 0.0});
+      },
+      {"BackboneOptions.energy_min = 0.9, energy_max = 0.5", "0 < energy_min < energy_max"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .initial_step = 1e-5, .min_step = 1e-4, .max_step = 0.1,
+                           .include = {}, .on_level = nullptr, .max_wall_time_s = 0.0});
+      },
+      {"BackboneOptions.min_step = 0.0001, initial_step = 1e-05", "min_step <= initial_step <= max_step"});
 }
 
 // The modal eigensolver reads one triangle: a non-symmetric K is refused, naming the entry.

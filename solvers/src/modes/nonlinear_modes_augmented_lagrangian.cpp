@@ -200,10 +200,16 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
 
 Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
   const auto t0 = std::chrono::steady_clock::now();
-  if (!(o.energy_min > 0.0 && o.energy_min < o.energy_max) || !(o.min_step > 0.0 && o.min_step <= o.initial_step &&
-                                                                 o.initial_step <= o.max_step)) {
-    throw std::invalid_argument("BackboneOptions: need 0 < energy_min < energy_max and 0 < min_step <= initial_step "
-                                "<= max_step");
+  if (!(o.energy_min > 0.0 && o.energy_min < o.energy_max)) {
+    throw std::invalid_argument("BackboneOptions.energy_min = " + format_number(o.energy_min) + ", energy_max = " +
+                                format_number(o.energy_max) + ": need 0 < energy_min < energy_max (normalized "
+                                "energies, 1 = contact onset; e.g. 0.5 and 10)");
+  }
+  if (!(o.min_step > 0.0 && o.min_step <= o.initial_step && o.initial_step <= o.max_step)) {
+    throw std::invalid_argument("BackboneOptions.min_step = " + format_number(o.min_step) + ", initial_step = " +
+                                format_number(o.initial_step) + ", max_step = " + format_number(o.max_step) +
+                                ": need 0 < min_step <= initial_step <= max_step (energy steps; defaults 1e-4, "
+                                "0.05, 0.1)");
   }
   std::vector<double> include = o.include;
   std::sort(include.begin(), include.end());

@@ -25,6 +25,9 @@ void TimeIntegrationOptions::validate() const {
 
 namespace {
 
+// Projected Gauss–Seidel sweeps on the contact LCP of one Moreau–Jean step, at most.
+constexpr int kLcpSweeps = 1000;
+
 // Right-hand side data, dense (n is small for the systems this reference is for).
 struct Ode {
   int n;
@@ -52,6 +55,13 @@ int rhs(double tau, const double y[], double dydt[], void* params) {
     dw -= o.contacts[c].law->force(o.contacts[c].displacement(u)) * o.minv_cols.col(static_cast<Eigen::Index>(c));
   }
   return dw.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+}
+
+// The status of a failed gsl_odeiv2_driver_apply: NonFinite when the state or the right-hand side
+// (GSL_EBADFUNC from rhs) is not finite, else IntegratorFailed (GSL gave up with finite
+// values: a step below its minimum, too many steps, no progress).
+SolveStatus integration_failure(int gsl_status, const Eigen::VectorXd& y) {
+  return gsl_status == GSL_EBADFUNC || !y.allFinite() ? SolveStatus::NonFinite : SolveStatus::IntegratorFailed;
 }
 
 int jacobian(double tau, const double y[], double* dfdy, double dfdt[], void* params) {
@@ -207,9 +217,14 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
           u_free(i) = ct.displacement(v_new);
           if (ct.law->gap() - ct.displacement(q) - 0.5 * h * u_old(i) <= 0.0) active.push_back(i);
         }
-        // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0.
-        for (int sweep = 0; sweep < 1000 && !active.empty(); ++sweep) {
-          double change = 0.0, size = 0.0;
+        // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0, by projected
+        // Gauss–Seidel until the impulses change by at most 1e-14 of the largest, or kLcpSweeps
+        // sweeps (counted in the report when they end unsettled).
+        bool settled = active.empty();
+        double change = 0.0, size = 0.0;
+        for (int sweep = 0; sweep < kLcpSweeps && !active.empty(); ++sweep) {
+          change = 0.0;
+          size = 0.0;
           for (Eigen::Index i : active) {
             double r = -(u_free(i) + e * u_old(i));
             for (Eigen::Index j : active) if (j != i) r += delassus(i, j) * impulse(j);
@@ -218,7 +233,14 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
             size = std::max(size, std::abs(p_new));
             impulse(i) = p_new;
           }
-          if (active.size() == 1 || change <= 1e-14 * size) break;
+          if (active.size() == 1 || change <= 1e-14 * size) {
+            settled = true;
+            break;
+          }
+        }
+        if (!settled) {
+          ++rep.unsettled_lcp_steps;
+          rep.largest_lcp_change = std::max(rep.largest_lcp_change, size > 0.0 ? change / size : change);
         }
         v_new.noalias() -= minv_e * impulse;
         force.col(step / stride) += impulse / (h * stride);
@@ -262,6 +284,11 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
     os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of "
        << steps << " Moreau–Jean steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
     rep.message = os.str();
+  }
+  if (rep.unsettled_lcp_steps > 0) {
+    rep.message += "; in " + std::to_string(rep.unsettled_lcp_steps) + " steps the contact LCP was still changing by " +
+                   format_number(rep.largest_lcp_change) + " of its largest impulse after " +
+                   std::to_string(kLcpSweeps) + " projected Gauss–Seidel sweeps";
   }
   rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -307,7 +334,7 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
       const double target = (period - 1) + static_cast<double>(p + 1) / p_count;
       const int status = gsl_odeiv2_driver_apply(driver.get(), &tau, target, y.data());
       if (status != GSL_SUCCESS || !y.allFinite()) {
-        rep.status = SolveStatus::NonFinite;
+        rep.status = integration_failure(status, y);
         std::ostringstream os;
         os << "GSL msbdf failed (" << gsl_strerror(status) << ") in period " << period << " at tau = " << tau;
         rep.message = os.str();
@@ -379,7 +406,7 @@ Trajectory integrate_free(const MechanicalSystem& system, const std::vector<Cont
     if (k > 0) {
       const int status = gsl_odeiv2_driver_apply(driver.get(), &tau, static_cast<double>(k) / p_count, y.data());
       if (status != GSL_SUCCESS || !y.allFinite()) {
-        rep.status = SolveStatus::NonFinite;
+        rep.status = integration_failure(status, y);
         rep.message = std::string("GSL msbdf failed (") + gsl_strerror(status) + ") at t = " +
                       std::to_string(tau * period_s) + " s";
         out.time_s.conservativeResize(k);

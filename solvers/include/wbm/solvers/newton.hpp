@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -103,7 +104,40 @@ struct NewtonOptions {
   /// max_iterations. Off by default.
   bool stop_on_cycle = false;
   double cycle_tolerance = 1e-3;
+
+  /// Throws std::invalid_argument naming the field, its value, the allowed range and a way out:
+  /// tolerance > 0 and finite; max_iterations, max_backtracks >= 0; min_rcond in [0, 1);
+  /// max_lm_trials >= 1 (with levenberg_marquardt); cycle_tolerance > 0 (with stop_on_cycle).
+  /// newton() calls it first.
+  void validate() const;
 };
+
+inline void NewtonOptions::validate() const {
+  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
+    throw std::invalid_argument("NewtonOptions." + field + " = " + value + ": " + rule);
+  };
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
+    fail("tolerance", format_number(tolerance),
+         "must be > 0 and finite (the bound on ‖R‖ in the system's scaling; the default is 1e-10)");
+  }
+  if (max_iterations < 0) {
+    fail("max_iterations", std::to_string(max_iterations), "must be >= 0 (0 only evaluates the start; default 50)");
+  }
+  if (max_backtracks < 0) {
+    fail("max_backtracks", std::to_string(max_backtracks), "must be >= 0 (default 30; or line_search = false)");
+  }
+  if (!(min_rcond >= 0.0 && min_rcond < 1.0)) {
+    fail("min_rcond", format_number(min_rcond), "must lie in [0, 1) (a reciprocal condition number; default 1e-15)");
+  }
+  if (levenberg_marquardt && max_lm_trials < 1) {
+    fail("max_lm_trials", std::to_string(max_lm_trials),
+         "must be >= 1 with levenberg_marquardt (default 20; or levenberg_marquardt = false)");
+  }
+  if (stop_on_cycle && !(cycle_tolerance > 0.0)) {
+    fail("cycle_tolerance", format_number(cycle_tolerance),
+         "must be > 0 with stop_on_cycle (a relative tolerance on repeated residuals; default 1e-3)");
+  }
+}
 
 struct NewtonReport {
   SolveStatus status = SolveStatus::MaxIterations;
@@ -136,10 +170,11 @@ struct NewtonResult {
 /// Linear-solver policy for dense Jacobians: Eigen::PartialPivLU with its rcond() estimate.
 class DenseLu {
  public:
-  /// Factorizes J; false if the factorization is unusable (non-finite).
+  /// Factorizes J (partial pivoting); false if the factors are not finite (a NaN or inf in J,
+  /// or an overflow). A singular J gives finite factors: newton() tells it by rcond().
   bool factorize(const Eigen::MatrixXd& jacobian) {
     lu_.compute(jacobian);
-    return true;
+    return lu_.matrixLU().allFinite();
   }
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const { return lu_.solve(rhs); }
   [[nodiscard]] std::optional<double> rcond() const { return lu_.rcond(); }
@@ -250,9 +285,11 @@ using DefaultLinearSolver =
 /// Stagnated (no acceptable step), SingularJacobian (factorization failed or rcond < min_rcond)
 /// or NonFinite (NaN/inf in R, J or the step); the returned x is then the last finite iterate.
 /// With levenberg_marquardt a singular Jacobian or a failed line search switches to LM steps.
-/// Never throws for non-convergence.
+/// Never throws for non-convergence; throws std::invalid_argument for invalid options
+/// (NewtonOptions::validate).
 template <NonlinearSystem S, class Solver>
 NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& options, Solver& solver) {
+  options.validate();
   NewtonReport report;
   report.tolerance = options.tolerance;
   auto finish = [&](SolveStatus status, const std::string& why) {

@@ -18,7 +18,9 @@ namespace wbm::solvers {
 /// ResidualNotVerified: the reduced problem converged, but the residual of the full problem,
 /// recomputed from the solution, is above its stated tolerance. PathEnded: a homotopy or
 /// continuation meant to reach the problem from an easier one stopped before it (its report
-/// says where and why, e.g. the contact homotopy of weighted_residual.hpp).
+/// says where and why, e.g. the contact homotopy of weighted_residual.hpp). IntegratorFailed:
+/// a time integrator (GSL's msbdf) gave up with finite values, e.g. its step fell below the
+/// smallest it allows (its message names GSL's error).
 enum class SolveStatus {
   Converged,
   MaxIterations,
@@ -26,11 +28,12 @@ enum class SolveStatus {
   SingularJacobian,
   NonFinite,
   ResidualNotVerified,
-  PathEnded
+  PathEnded,
+  IntegratorFailed
 };
 
 /// "converged", "max-iterations", "stagnated", "singular-jacobian", "non-finite",
-/// "residual-not-verified", "path-ended".
+/// "residual-not-verified", "path-ended", "integrator-failed".
 [[nodiscard]] constexpr std::string_view to_string(SolveStatus s) noexcept {
   switch (s) {
     case SolveStatus::Converged: return "converged";
@@ -40,6 +43,7 @@ enum class SolveStatus {
     case SolveStatus::NonFinite: return "non-finite";
     case SolveStatus::ResidualNotVerified: return "residual-not-verified";
     case SolveStatus::PathEnded: return "path-ended";
+    case SolveStatus::IntegratorFailed: return "integrator-failed";
   }
   return "unknown";
 }

@@ -25,11 +25,17 @@ struct TimeIntegrationOptions {
 };
 
 struct TimeIntegrationReport {
-  SolveStatus status = SolveStatus::MaxIterations;  // Converged, MaxIterations or NonFinite
+  /// Converged, MaxIterations, NonFinite, or IntegratorFailed (GSL gave up with finite values).
+  SolveStatus status = SolveStatus::MaxIterations;
   int periods = 0;                      // periods integrated from rest
   long steps = 0;                       // BDF steps attempted (gsl evolve count)
   std::vector<double> periodicity;      // δ_i for i = 2..periods
   double wall_time_s = 0.0;
+  /// Moreau–Jean only: the steps whose contact LCP (projected Gauss–Seidel, at most 1000 sweeps)
+  /// ended with impulses still changing by more than 1e-14 of the largest, and the largest such
+  /// relative change; the message says so when there are any.
+  long unsettled_lcp_steps = 0;
+  double largest_lcp_change = 0.0;
   std::string message;
   [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
 };
