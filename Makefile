@@ -24,12 +24,14 @@ test: build
 # interpreter CMake found) under AddressSanitizer and UndefinedBehaviorSanitizer, with assertions on
 # (no NDEBUG: Eigen's range and size checks are active). -O1 keeps the run within minutes; any
 # report fails the run (halt_on_error, -fno-sanitize-recover). The benchmarks, the reproduce
-# executables' --quick runs and the install test are left to `make test`.
+# executables' --quick runs and the install test are left to `make test`. -g1 (functions and line
+# tables: what a sanitizer's stack trace prints) instead of -g: weighted_residual_contact.cpp
+# compiled in 41 s instead of 67 s and 0.9 GB instead of 1.4 GB, measured on a loaded machine.
 SANITIZE_BUILD ?= build-sanitize
 SANITIZE_FLAGS  = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 CXX_FOR_ASAN   ?= g++
 check-sanitize: deps
-	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" \
 	  -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
 	  -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
 	  -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
@@ -59,7 +61,7 @@ check-fuzz:
 	@./scripts/install-deps fuzz
 	@command -v $(FUZZ_CXX) > /dev/null || { echo "check-fuzz: $(FUZZ_CXX) not found: run scripts/install-deps fuzz"; exit 1; }
 	@cmake -S . -B $(FUZZ_BUILD) -DCMAKE_CXX_COMPILER=$(FUZZ_CXX) -DCMAKE_BUILD_TYPE=Debug \
-	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_CXX_FLAGS="$(FUZZ_FLAGS)" \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCMAKE_CXX_FLAGS="$(FUZZ_FLAGS)" \
 	  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DWBM_BUILD_FUZZ=ON -DWBM_BUILD_TESTS=OFF \
 	  -DWBM_BUILD_BENCH=OFF -DWBM_BUILD_REPRODUCE=OFF > $(FUZZ_BUILD).configure.log 2>&1 \
 	  || { cat $(FUZZ_BUILD).configure.log; exit 1; }

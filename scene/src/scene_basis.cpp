@@ -1,3 +1,5 @@
+// The scene parser (scene_parser.hpp), [basis]: the trial and weighting bases, their size, the
+// formulation, the operator and contact quadrature rules, and the harmonic selection.
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -132,8 +134,6 @@ void Parser::basis(const toml::table& root) {
   }
 }
 
-// [basis] harmonic_selection: "all", "odd" (1, 3, …) or a list of harmonic numbers, for
-// Fourier:Fourier with penalty laws; every load must act at a kept harmonic.
 void Parser::harmonic_selection(const toml::table& t, bool harmonic_balance, bool rigid) {
   const toml::node* n = t.get("harmonic_selection");
   if (n == nullptr) return;

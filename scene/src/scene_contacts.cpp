@@ -1,3 +1,5 @@
+// The scene parser (scene_parser.hpp), [[contact]]: the law, at a DOF, between two DOFs, or on
+// the nodes of a deck set with their directions.
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -102,10 +104,6 @@ void Parser::contacts(const toml::table& root) {
   }
 }
 
-// [[contact]] nodes = "SET" | [n, …] on a structure read from a deck: one contact per node,
-// with the law and gap of the table, along direction = "radial" (from structure.axis) or
-// [x, y, z] (the same unit vector at every node), over the node's x, y, z DOFs; the DOF of
-// the largest component names the contact.
 void Parser::node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law) {
   const std::string full = section + ".nodes";
   if (!s_.structure) return;  // the structure's own errors are reported already
@@ -204,8 +202,6 @@ void Parser::node_contacts(const toml::table& t, const toml::node& nn, const std
   }
 }
 
-// [contact] direction: ±1 (the side of the stop along the DOF) or a table {DOF name = weight}
-// (matrices); returns the (DOF, weight) pairs, empty for +1.
 std::vector<std::pair<int, double>> Parser::direction(const toml::node& d, const std::string& section, const Contact& c) {
   const std::string full = section + ".direction";
   const Structure& st = *s_.structure;

@@ -1,8 +1,9 @@
+// The scene parser (scene_parser.hpp), [forcing]: the frequency or range, the loads and where
+// they act (a DOF, a named DOF or a deck node).
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
 
-// The DOF named by one location value: rod node (1 … E or "tip"), matrix DOF (name or index).
 std::optional<int> Parser::location_value(const toml::node& n, const std::string& full) {
   if (!s_.structure) return std::nullopt;  // the structure's own errors are reported already
   const Structure& st = *s_.structure;
@@ -32,7 +33,6 @@ std::optional<int> Parser::location_value(const toml::node& n, const std::string
   return std::nullopt;
 }
 
-// `node` for the rod, `dof` for matrices; `fallback` when neither is given.
 int Parser::location(const toml::table& t, const std::string& section, std::optional<int> fallback) {
   if (!s_.structure) return 0;
   const bool rod = s_.structure->kind == StructureKind::Rod;
@@ -161,7 +161,6 @@ void Parser::forcing(const toml::table& root) {
   s_.forcing = f;
 }
 
-// [[forcing.loads]] and forcing.vector: further loads F cos(2π h f t + φ) (Forcing::loads).
 void Parser::loads(const toml::table& t, Forcing& f) {
   if (const toml::node* n = t.get("loads")) {
     if (!n->is_array_of_tables()) {

@@ -1,3 +1,5 @@
+// The scene parser (scene_parser.hpp): the order in which sections are read, [analysis],
+// [damping], [solver], [timestep], [output], and the checks across sections (load harmonics, sizes).
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -75,7 +77,6 @@ Scene Parser::parse(const toml::table& root) {
   return std::move(s_);
 }
 
-// [analysis] type first: it decides which sections are read. False when the type is unknown.
 bool Parser::analysis(const toml::table& root) {
   const toml::table* t = r_.table(root, "analysis", false);
   if (t == nullptr) return true;
@@ -121,8 +122,6 @@ bool Parser::analysis(const toml::table& root) {
   return true;
 }
 
-// [analysis] of type "nnm": energy = [from, to] (normalized, 1 = contact onset), N, m, the
-// outer algorithm, steps and the levels whose mode shapes are written.
 void Parser::nnm(const toml::table& t) {
   Analysis& a = s_.analysis;
   const toml::node* e = t.get("energy");
@@ -357,8 +356,6 @@ void Parser::output(const toml::table& root) {
   }
 }
 
-// A load at harmonic h needs 2h < M trial functions (solve, continuation) or 2h < P output
-// samples (timestep): above, its projection or its samples alias it to a lower harmonic.
 void Parser::load_harmonics(const toml::table& root) {
   if (!s_.forcing || s_.analysis.kind == AnalysisKind::NonlinearModes || s_.analysis.kind == AnalysisKind::BasisPlot) {
     return;
@@ -389,8 +386,6 @@ void Parser::load_harmonics(const toml::table& root) {
   }
 }
 
-// Sizes this machine cannot serve are refused with the estimate and the key (resources.hpp):
-// memory above half the physical memory, result files above kMaxOutputBytes.
 void Parser::resources(const toml::table& root) {
   static constexpr double kMaxOutputBytes = 512e6;
   const ResourceEstimate e = estimate_resources(s_);

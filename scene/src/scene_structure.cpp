@@ -1,3 +1,5 @@
+// The scene parser (scene_parser.hpp), [structure]: the rod, matrices inline or in Matrix Market
+// files, CalculiX decks reduced by Craig–Bampton; DOF names, definiteness, static condensation.
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -43,8 +45,6 @@ void Parser::structure(const toml::table& root) {
   if (r_.error_count() == errors) s_.structure = std::move(st);
 }
 
-// [structure] deck = "…" (interface, modes, ccx, axis): the deck assembled by ccx and reduced
-// by Craig–Bampton now (scene/reduce.hpp); M_r, K_r and the names of wbm reduce's dofs.txt.
 void Parser::deck_structure(const toml::table& t, Structure& st) {
   r_.only(t, "structure", {"type", "deck", "interface", "modes", "ccx", "axis", "units"});
   const size_t errors = r_.error_count();
@@ -113,7 +113,6 @@ void Parser::deck_structure(const toml::table& t, Structure& st) {
   }
 }
 
-// A list of three finite numbers.
 std::optional<Eigen::Vector3d> Parser::vector3(const toml::table& t, const std::string& section, const std::string& key) {
   const toml::node* n = t.get(key);
   const toml::array* a = n != nullptr ? n->as_array() : nullptr;
@@ -126,7 +125,6 @@ std::optional<Eigen::Vector3d> Parser::vector3(const toml::table& t, const std::
   return v;
 }
 
-// A number (1 DOF), a list (diagonal), a list of rows, or a Matrix Market file.
 std::optional<Eigen::SparseMatrix<double>> Parser::matrix(const toml::table& t, const std::string& key, bool required,
                                                           std::string& file) {
   const std::string full = "structure." + key;
@@ -180,7 +178,6 @@ std::optional<Eigen::SparseMatrix<double>> Parser::matrix(const toml::table& t, 
   return a;
 }
 
-// Matrix Market coordinate format, real or integer, general or symmetric (fem::read_matrix_market).
 void Parser::read_market(const toml::node& n, const std::string& full, const std::filesystem::path& p,
                          Eigen::SparseMatrix<double>& a) {
   try {
@@ -305,11 +302,6 @@ void Parser::dof_names(const toml::table& t, Structure& st) {
   }
 }
 
-// Static condensation of massless DOFs (solvers/condensation.hpp), checked here so that a
-// scene it cannot condense is refused with the reason.
-// K symmetric positive semidefinite (issue #40): a negative ω² of K φ = ω² M φ is refused;
-// rigid-body modes (ω² = 0) only where a contact can hold them, with a warning, since the
-// harmonic-0 block of G is then singular wherever every stop is open.
 void Parser::stiffness_definiteness(const toml::table& root) {
   if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
   const Structure& st = *s_.structure;

@@ -39,7 +39,8 @@ def main(argv):
             if command.startswith("make "):
                 print(f"skipped (a CI step): {command}")
                 continue
-            run = re.sub(r"(?<![\w/])build/", f"{build}/", command).replace("/tmp/", f"{scratch}/")
+            # /tmp/ first: a build folder under /tmp/ must not be moved into the scratch folder.
+            run = re.sub(r"(?<![\w/])build/", f"{build}/", command.replace("/tmp/", f"{scratch}/"))
             r = subprocess.run(run, shell=True, cwd=source, capture_output=True, text=True, timeout=600)
             print(f"exit {r.returncode}: {command}")
             if r.returncode != 0:

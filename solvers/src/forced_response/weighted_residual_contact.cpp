@@ -62,7 +62,6 @@ void WeightedResidual::Impl::set_compliance() {
 }
 
 
-// H v for a vector or a matrix v (n_c·M rows, ordering x(k·n_c + c)).
 Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& v) const {
   if (h_is_sparse) return *h_sparse * v;
   if (g->fast_compliance_product()) return g->compliance_product(v);
@@ -70,14 +69,6 @@ Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& 
 }
 
 
-// Fourier:Fourier, midpoint rule: when every harmonic h of H_cd couples only its own cos hτ
-// and sin hτ, as the 2 × 2 block [[a_h, b_h], [−b_h, a_h]] (the structure of the exact
-// Galerkin operators: G commutes with time shifts), the kernel of the contact Jacobian is
-//   φ(τ_r)ᵀ H_cd φ(τ_r') = κ_cd(r − r' mod Q) + t_cd cos πMτ_r cos πMτ_r',
-//   κ_cd(s) = H_cd(0, 0) + Σ_h [a_h cos(2πhs/Q) − b_h sin(2πhs/Q)],
-// with t_cd the entry on the top function cos πMτ (M even; it has no sine partner, so it is
-// not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
-// other coupling (discrete operators, another basis) gives no kernel.
 std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift_kernel() const {
   if (!trial.is_fourier() || !weighting.is_fourier() || cell_average_rule || !h_is_sparse) return std::nullopt;
   const spectral::FourierBasis basis(m);
@@ -133,10 +124,6 @@ std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift
 }
 
 
-// block(j, k) = (1/Q) Σ_q p_j(τ_q) κ_q q_k(τ_q) over the samples with κ_q ≠ 0 (`active`): the
-// contact Jacobian of one contact. Fourier:Fourier by Aft::jacobian (O(Q log Q + M²)); one
-// Fourier basis by one FFTW projection per function of the other (O(M Q log Q)); two wavelet
-// bases by their sparse rows (O(active · support²)).
 Eigen::MatrixXd WeightedResidual::Impl::contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const {
   const Sampling& smp = *sampling;
   if (trial.is_fourier() && weighting.is_fourier()) {
@@ -179,7 +166,6 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_block(const Eigen::VectorXd& kc,
 }
 
 
-// f_c(u_c(τ_q)) (f̄_q for CellAverage), n_c × Q, and optionally the tangents.
 Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
   refuse_rigid("contact forces as a function of the displacement");
   const Sampling& smp = *sampling;
@@ -209,7 +195,6 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
 }
 
 
-// N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
 Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector<ContactTangent>& tangents) const {
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
   for (int c = 0; c < nc; ++c) {
@@ -229,7 +214,6 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
 }
 
 
-// I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
 Eigen::MatrixXd WeightedResidual::Impl::identity_plus_hn(const std::vector<ContactTangent>& tangents) const {
   Eigen::MatrixXd j = compliance_times(contact_force_jacobian(tangents));
   j.diagonal().array() += 1.0;
@@ -237,7 +221,6 @@ Eigen::MatrixXd WeightedResidual::Impl::identity_plus_hn(const std::vector<Conta
 }
 
 
-// The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
 std::pair<Eigen::VectorXd, Eigen::VectorXd> WeightedResidual::Impl::sloped_samples(const ContactTangent& t) const {
   Eigen::VectorXd ts(static_cast<Eigen::Index>(t.sloped.size())), ks(ts.size());
   for (size_t i = 0; i < t.sloped.size(); ++i) {
@@ -248,14 +231,6 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> WeightedResidual::Impl::sloped_sampl
 }
 
 
-// The condensed Jacobian (I + H N)/s_r with N = W V of rank r = Σ_c (active + sloped samples):
-// column i of W (n_c·M × r) is the weighting functions at the sample times κ_q/Q (or
-// ∂f̄/∂δ/Q² for a kink term), row i of V (r × n_c·M) the trial functions (or their slopes) at
-// the same time, both on the rows x(k·n_c + c) of their contact. With U = H W and
-// C = I_r + V U, Newton's step is an r × r solve (WoodburyLu). V is applied by FFTW for a
-// Fourier trial basis (all Q samples, the active ones kept) and by the sparse rows of the
-// wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
-// r × r LU then saves less than the two products with V cost (bench_weighted_residual).
 LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::VectorXd& x) const {
   std::vector<ContactTangent> tangents;
   (void)contact_forces(x, &tangents);
@@ -315,9 +290,6 @@ LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::V
 }
 
 
-// The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
-// and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW
-// projection of Z's rows placed at their samples, times the sparse H. V by FFTW, as above.
 LowRankJacobian WeightedResidual::Impl::shift_kernel_jacobian(const std::vector<ContactTangent>& tangents, LowRankJacobian jac,
                                                               Eigen::Index rank) const {
   struct Sample {

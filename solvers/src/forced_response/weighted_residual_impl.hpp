@@ -124,7 +124,8 @@ inline double elapsed(std::chrono::steady_clock::time_point since) {
 }
 
 // The continuation of a homotopy in decades of its parameter (κ of the penalty, σ of the contact
-// forces), shared by the two homotopies below: λ̂ = λ (decades), the state in `state_scale`
+// forces), shared by the contact homotopy (weighted_residual_solve.cpp) and the penalty homotopy
+// of rigid stops (weighted_residual_rigid.cpp): λ̂ = λ (decades), the state in `state_scale`
 // units, corners restarted (the (·)₊ of a penalty switches at every sample that starts touching).
 PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_max, double state_scale,
                                              const WeightedResidualOptions& w);

@@ -246,8 +246,6 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
 }
 
 
-// The same problem at another frequency: every frequency-independent member is copied (time
-// operators, samples, b, modal basis, residual scale); only G is factorized again.
 WeightedResidual::Impl::Impl(const Impl& base, double frequency_hz)
     : system(base.system), forcing(base.forcing), contacts(base.contacts), trial(base.trial),
       weighting(base.weighting), options(base.options), n(base.n), m(base.m), q(base.q), nc(base.nc),
@@ -267,7 +265,6 @@ WeightedResidual::Impl::Impl(const Impl& base, double frequency_hz)
 }
 
 
-// WeightedResidualOptions::harmonics: validated, sorted, and the mask `keep` built.
 void WeightedResidual::Impl::select_harmonics() {
   auto& kept = options.harmonics;
   if (kept.empty()) return;
@@ -309,10 +306,6 @@ void WeightedResidual::Impl::select_harmonics() {
 }
 
 
-// A selection projects the weighting functions only; that is the Galerkin projection on the
-// kept span only if no time operator couples a kept function with a dropped one. True for the
-// analytic Fourier operators and for discrete ones on Q ≥ M midpoints (products of harmonics
-// up to M − 1 are integrated exactly); checked, as an invariant, in case that ever changes.
 void WeightedResidual::Impl::require_block_diagonal_operators() const {
   const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
   for (const auto* op : a) {
@@ -344,7 +337,6 @@ void WeightedResidual::Impl::set_operator_products() {
 }
 
 
-// X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
 Eigen::MatrixXd WeightedResidual::Impl::operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
                                                          int t) const {
   const Eigen::MatrixXd xu = x * u;
@@ -354,14 +346,6 @@ Eigen::MatrixXd WeightedResidual::Impl::operator_product(const Eigen::SparseMatr
 }
 
 
-// [JL14 Eqs. (14)–(16)]: exactly (connection coefficients, analytic Fourier) or by the Q-point
-// rule A = (sign/Q) Σ_q p^{(dw)}(τ_q) q^{(dt)}(τ_q)ᵀ. The discrete rule exploits the bases:
-//  - Fourier weighting, wavelet trial: A^{(0)} = (1/Q) Σ_q p(τ_q) q^{(dt)}(τ_q)ᵀ by one FFTW
-//    projection per trial function (O(M Q log Q)); the weighting's derivatives stay in the
-//    basis, row(cos ωτ)' = −ω row(sin ωτ), row(sin ωτ)' = ω row(cos ωτ), row'' = −ω² row,
-//    except the first derivative of the top function cos πMτ, summed directly;
-//  - two wavelet bases: sparse products of their sample matrices;
-//  - otherwise (Fourier trial with OperatorRule::Discrete): dense values, O(Q M²).
 void WeightedResidual::Impl::assemble_time_operators() {
   const auto ts = terms(options.formulation);
   const bool exact = exact_rule(trial, weighting, options.operators);
@@ -405,8 +389,6 @@ void WeightedResidual::Impl::assemble_time_operators() {
 }
 
 
-// (1/Q) Σ_q p_j^{(dw)}(τ_q) v_k(τ_q) from base(j, k) = (1/Q) Σ_q p_j(τ_q) v_k(τ_q) for the
-// Fourier weighting functions p_j (FourierBasis ordering) and the samples v (Q × M).
 Eigen::MatrixXd WeightedResidual::Impl::fourier_weighting_derivative(const Eigen::MatrixXd& base, int dw, const SparseRows& v) const {
   if (dw == 0) return base;
   if (dw > 2) throw std::logic_error("fourier_weighting_derivative: order " + std::to_string(dw) + " > 2");
@@ -429,7 +411,6 @@ Eigen::MatrixXd WeightedResidual::Impl::fourier_weighting_derivative(const Eigen
 }
 
 
-// What makes G singular, in words (model_checks.hpp), or the generic reasons.
 std::string WeightedResidual::Impl::singular_reason() const {
   const std::string why = explain_singular_dynamic_stiffness(system, forcing.frequency_hz, highest_resolved_harmonic(m));
   return why.empty() ? "no rigid-body mode, overflow or undamped resonance found; G is singular to working precision "

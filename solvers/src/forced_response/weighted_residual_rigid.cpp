@@ -11,8 +11,6 @@
 namespace wbm::solvers {
 
 
-// D = V H W and u_lin = V x_lin (rigid stops) at this frequency, and c = mean |D_ii| if asked
-// (at the base frequency only; at_frequency copies keep it, as they keep s_r).
 void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   const Collocation& col = *collocation;
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
@@ -26,7 +24,6 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
 }
 
 
-// φ(λ) = min(c λ, g0 − u(λ)) [m] at load s, with the gap samples u(λ) = s u_lin − D λ.
 Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows) const {
   require_factorized();
   const Eigen::VectorXd gap = collocation->gaps - (load * u_lin - delassus * lambda);

@@ -12,9 +12,7 @@ namespace wbm::solvers {
 
 namespace detail {
 
-// The continuation of a homotopy in decades of its parameter (κ of the penalty, σ of the contact
-// forces), shared by the two homotopies below: λ̂ = λ (decades), the state in `state_scale`
-// units, corners restarted (the (·)₊ of a penalty switches at every sample that starts touching).
+// weighted_residual_impl.hpp says what these two are for.
 PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_max, double state_scale,
                                              const WeightedResidualOptions& w) {
   PseudoArclengthOptions o;
@@ -33,8 +31,6 @@ PseudoArclengthOptions homotopy_continuation(double lambda_min, double lambda_ma
   return o;
 }
 
-// The homotopy's path in its report: points, folds, iterations, stop, and the largest σ (or κ)
-// reached, at most 10^lambda_cap.
 void record_homotopy(const Branch& branch, double lambda_cap, HomotopyReport& report) {
   report.points = static_cast<int>(branch.points.size());
   report.folds = static_cast<int>(branch.folds.size());
