@@ -282,8 +282,9 @@ using DefaultLinearSolver =
 /// factorize(J) → bool, solve(rhs) and rcond() → optional<double>); pass the same object to
 /// successive calls to keep what it caches (SparseLu's symbolic analysis).
 /// Stops with Converged (‖R‖ ≤ tolerance, verified on the returned x), MaxIterations,
-/// Stagnated (no acceptable step), SingularJacobian (factorization failed or rcond < min_rcond)
-/// or NonFinite (NaN/inf in R, J or the step); the returned x is then the last finite iterate.
+/// Stagnated (no acceptable step), SingularJacobian (factorization failed, e.g. DenseLu's factors
+/// of a J with NaN or inf, or rcond < min_rcond) or NonFinite (NaN/inf in R or the step); the
+/// returned x is then the last finite iterate.
 /// With levenberg_marquardt a singular Jacobian or a failed line search switches to LM steps.
 /// Never throws for non-convergence; throws std::invalid_argument for invalid options
 /// (NewtonOptions::validate).
