@@ -113,14 +113,8 @@ TEST(NonlinearModes, DirectionalStopJacobianMatchesFiniteDifferences) {
     }
     const double energy = 1.4;
     const Eigen::MatrixXd j(system.linearize(x, energy).jacobian);
-    Eigen::MatrixXd fd(j.rows(), j.cols());
-    const double h = 1e-7;
-    for (Eigen::Index i = 0; i < x.size(); ++i) {
-      Eigen::VectorXd p = x, m = x;
-      p(i) += h;
-      m(i) -= h;
-      fd.col(i) = (system.residual(p, energy) - system.residual(m, energy)) / (2 * h);
-    }
+    const Eigen::MatrixXd fd = wbm::testing::fd_jacobian(
+        [&](const Eigen::VectorXd& y) { return Eigen::VectorXd(system.residual(y, energy)); }, x, 1e-7, 1.0);
     EXPECT_LT((j - fd).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "penalty " << k;
   }
 }

@@ -55,13 +55,7 @@ double WeightedResidual::condition_number() const {
 
 Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a) const {
   const auto& p = *impl_;
-  const auto u = spectral::as_coefficients(a, p.n);
-  const double fr = p.forcing.frequency_hz;
-  // (T ⊗ X) vec(U) = vec(X U Tᵀ), layout.hpp.
-  const Eigen::MatrixXd gu = fr * fr * p.operator_product(p.system.mass, u, 0) +
-                             fr * p.operator_product(p.system.damping, u, 1) +
-                             p.operator_product(p.system.stiffness, u, 2);
-  Eigen::VectorXd r = spectral::stacked(gu) - p.b;
+  Eigen::VectorXd r = p.linear_residual(a);
   if (p.nc > 0) {
     const Eigen::VectorXd nx = p.contact_forces(p.gather(a), nullptr);
     p.scatter(r, nx, 1.0);
@@ -147,10 +141,7 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
     p.scatter(rhs, nx, -1.0);
   }
   const Eigen::MatrixXd a = spectral::as_coefficients(p.solve_stacked(rhs, false), p.n);  // n × M
-  // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C: (T ⊗ S) a ↔ S A Tᵀ on the n × M coefficients.
-  const double f = p.forcing.frequency_hz;
-  const Eigen::MatrixXd ga = 2.0 * f * p.operator_product(p.system.mass, a, 0) + p.operator_product(p.system.damping, a, 1);
-  return p.gather(p.solve_stacked(spectral::stacked(ga), false)) / p.scale;
+  return p.gather(p.solve_stacked(p.frequency_derivative_times(a), false)) / p.scale;
 }
 
 Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) const {

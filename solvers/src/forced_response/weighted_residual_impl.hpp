@@ -330,6 +330,21 @@ struct WeightedResidual::Impl {
   [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
                                                  int t) const;
 
+  // G a − b for stacked coefficients a (n·M): (T ⊗ X) vec(U) = vec(X U Tᵀ), layout.hpp.
+  [[nodiscard]] Eigen::VectorXd linear_residual(const Eigen::VectorXd& a) const {
+    const auto u = spectral::as_coefficients(a, n);
+    const double fr = forcing.frequency_hz;
+    const Eigen::MatrixXd gu = fr * fr * operator_product(system.mass, u, 0) + fr * operator_product(system.damping, u, 1) +
+                               operator_product(system.stiffness, u, 2);
+    return spectral::stacked(gu) - b;
+  }
+
+  // G′ a with G′ = dG/df = 2f A_M ⊗ M + A_C ⊗ C, for n × M coefficients a, stacked.
+  [[nodiscard]] Eigen::VectorXd frequency_derivative_times(const Eigen::MatrixXd& a) const {
+    const double f = forcing.frequency_hz;
+    return spectral::stacked(2.0 * f * operator_product(system.mass, a, 0) + operator_product(system.damping, a, 1));
+  }
+
   // [JL14 Eqs. (14)–(16)]: exactly (connection coefficients, analytic Fourier) or by the Q-point
   // rule A = (sign/Q) Σ_q p^{(dw)}(τ_q) q^{(dt)}(τ_q)ᵀ. The discrete rule exploits the bases:
   //  - Fourier weighting, wavelet trial: A^{(0)} = (1/Q) Σ_q p(τ_q) q^{(dt)}(τ_q)ᵀ by one FFTW

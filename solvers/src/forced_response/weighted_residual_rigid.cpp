@@ -96,10 +96,9 @@ Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::Ve
   std::vector<int> gap_rows;
   (void)p.signorini(lambda, load, &gap_rows);
   const Eigen::MatrixXd a = spectral::as_coefficients(expand_forces(lambda, load), p.n);  // n × M
-  // G′ a with G′ = 2f A_M ⊗ M + A_C ⊗ C, then P G⁻¹, then the trial values at τ_{k+1}.
-  const double f = p.forcing.frequency_hz;
-  const Eigen::MatrixXd ga = 2.0 * f * p.operator_product(p.system.mass, a, 0) + p.operator_product(p.system.damping, a, 1);
-  const Eigen::VectorXd du = p.per_contact(p.collocation->trial_values, p.gather(p.solve_stacked(spectral::stacked(ga), false)));
+  // G′ a, then P G⁻¹, then the trial values at τ_{k+1}.
+  const Eigen::VectorXd du =
+      p.per_contact(p.collocation->trial_values, p.gather(p.solve_stacked(p.frequency_derivative_times(a), false)));
   Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
   for (int i : gap_rows) out(i) = du(i) / p.scale;  // g = g0 − u and ∂u/∂f = −V P G⁻¹ G′ a
   return out;
@@ -128,12 +127,7 @@ Eigen::VectorXd WeightedResidual::expand_forces(const Eigen::VectorXd& lambda, d
 Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a, const Eigen::VectorXd& lambda) const {
   const auto& p = *impl_;
   p.require_rigid("residual(a, lambda)");
-  const auto u = spectral::as_coefficients(a, p.n);
-  const double fr = p.forcing.frequency_hz;
-  const Eigen::MatrixXd gu = fr * fr * p.operator_product(p.system.mass, u, 0) +
-                             fr * p.operator_product(p.system.damping, u, 1) +
-                             p.operator_product(p.system.stiffness, u, 2);
-  Eigen::VectorXd r = spectral::stacked(gu) - p.b;
+  Eigen::VectorXd r = p.linear_residual(a);
   const Eigen::VectorXd nx = p.collocation_forces(lambda);
   p.scatter(r, nx, 1.0);
   return r;
