@@ -83,42 +83,32 @@ namespace wbm::solvers {
 
 namespace {
 
-// The problem at a fixed parameter, for newton().
-struct AtParameter {
-  const ForcedResponseFamily* family;
-  double lambda;
-  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return family->residual(x, lambda); }
-  [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const { return family->linearize(x, lambda).jacobian; }
-};
-
 // A branch that left the range did so on its last step, beyond the end by less than one step:
-// replace that point by the solution at the range end itself (Newton at fixed λ from the linear
-// interpolation between the last two points), so that the curve stops on the range as asked.
-// Skipped when a fold lies on that step (the interpolation could start on the other sheet);
-// if Newton fails there the overshooting point is kept and the message says so.
-void land_on_range_end(const ForcedResponseFamily& family, Branch& branch, const ResponseCurveOptions& o) {
+// that point is replaced by the continuation's landing on the end itself (Newton at fixed λ on
+// that step, PseudoArclengthOptions::land_on), so that the curve stops on the range as asked.
+// Skipped when a fold lies on that step (the landing could lie on the other sheet); if the
+// landing did not converge, the overshooting point is kept and the message says so.
+void replace_last_by_landing(Branch& branch, const ResponseCurveOptions& o) {
   if (branch.stop != StopReason::RangeReached || branch.points.size() < 2) return;
   const size_t n = branch.points.size();
   BranchPoint& last = branch.points[n - 1];
-  const BranchPoint& before = branch.points[n - 2];
-  const double end = last.parameter > o.parameter_max ? o.parameter_max : o.parameter_min;
   if (!(last.parameter > o.parameter_max || last.parameter < o.parameter_min)) return;
+  const double end = last.parameter > o.parameter_max ? o.parameter_max : o.parameter_min;
   for (const Fold& f : branch.folds) {
     if (f.after + 2 >= n) return;
   }
-  const double t = (end - before.parameter) / (last.parameter - before.parameter);
-  NewtonOptions newton_options;
-  newton_options.tolerance = o.corrector_tolerance;
-  newton_options.max_iterations = 2 * o.max_corrector_iterations;
-  NewtonResult r = newton(AtParameter{&family, end}, Eigen::VectorXd(before.x + t * (last.x - before.x)), newton_options);
-  if (!r.report.converged()) {
-    branch.message += "; landing on the range end " + format_number(end) + " failed (" + r.report.brief() + ")";
+  const BranchPoint* landing = nullptr;
+  for (const auto& l : branch.landings) {
+    if (l.parameter == end && l.arclength >= branch.points[n - 2].arclength) landing = &l;
+  }
+  if (landing == nullptr) {
+    branch.message += "; landing on the range end " + format_number(end) + " did not converge: the last point lies beyond it";
     return;
   }
-  last.x = std::move(r.x);
+  last.x = landing->x;
   last.parameter = end;
-  last.residual_norm = r.report.residual_norms.back();
-  last.corrector_iterations = r.report.iterations;
+  last.residual_norm = landing->residual_norm;
+  last.corrector_iterations = landing->corrector_iterations;
   branch.message = "landed on the range end λ = " + format_number(end);
 }
 
@@ -237,10 +227,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.corrector_tolerance = o.corrector_tolerance;
   pa.initial_newton.tolerance = o.corrector_tolerance;
   pa.on_point = o.on_point;
+  // The ends of the range are landed on by the continuation (an end the branch starts on is
+  // landed on at its first step, and not again).
+  pa.land_on = {o.parameter_min, o.parameter_max};
   Branch branch = pseudo_arclength(family, x0, lambda0, pa);
   // Rigid stops never drive the top function: it vanishes at every impulse instant.
   if (!rigid) cut_at_undamped_top_resonance(base, branch);
-  land_on_range_end(family, branch, o);
+  replace_last_by_landing(branch, o);
   curve.folds = branch.folds;
   curve.stop = branch.stop;
   curve.message = branch.message;

@@ -3,6 +3,8 @@
 // (weighted_residual_impl.hpp).
 #include "weighted_residual_impl.hpp"
 
+#include <wbm/solvers/natural_parameter.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -54,31 +56,47 @@ struct WeightedResidual::Condensed {
 };
 
 NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& steps) const {
-  // Forcing s·F for s from 0 to 1; ds doubles after a success (at most ½) and is quartered after
-  // a failure; predictor x + ds·x_lin (the linear part of the response).
+  // Natural-parameter continuation in the load factor s (forcing s·F) from 0 to 1: Δs from 1/8,
+  // doubled after a success (at most ½), quartered after a failure, down to 1e-6; predictor
+  // x + Δs·x_lin (the linear part of the response); the last step ends on s = 1.
   const auto& p = *impl_;
-  double s = 0.0, ds = 0.125;
-  NewtonResult last{std::move(x), {}};
+  NaturalParameterOptions o;
+  o.parameter_min = 0.0;
+  o.parameter_max = 1.0;
+  o.initial_step = 0.125;
+  o.max_step = 0.5;
+  o.min_step = 1e-6;
+  o.shrink = 0.25;
+  o.grow = [](double h, int) { return 2.0 * h; };
+  NewtonResult last;  // the Newton solve of the last accepted point, for its report
+  SolveStatus failed = SolveStatus::MaxIterations;  // that of the last attempt that failed
   int iterations = 0;
   steps = 0;
-  while (s < 1.0) {
-    const double target = std::min(1.0, s + ds);
-    Eigen::VectorXd guess = last.x + (target - s) * p.x_lin;
-    NewtonResult trial = newton(Condensed{this, target}, std::move(guess), p.options.newton);
-    iterations += trial.report.iterations;
+  auto correct = [&](double s, Eigen::VectorXd guess) {
+    NewtonResult r = newton(Condensed{this, s}, std::move(guess), p.options.newton);
+    iterations += r.report.iterations;
     ++steps;
-    if (trial.report.converged()) {
-      s = target;
-      last = std::move(trial);
-      ds = std::min(0.5, 2.0 * ds);
+    if (r.report.converged()) {
+      last = r;
     } else {
-      ds *= 0.25;
-      if (ds < 1e-6) {
-        trial.report.iterations = iterations;
-        trial.report.message = "load stepping stalled at s = " + std::to_string(s) + " of F: " + trial.report.message;
-        return trial;
-      }
+      failed = r.report.status;
     }
+    return to_correction(std::move(r));
+  };
+  auto predict = [&](const Branch& branch, double s) {
+    const BranchPoint& b = branch.points.back();
+    return Eigen::VectorXd(b.x + (s - b.parameter) * p.x_lin);
+  };
+  const Branch branch = natural_parameter(correct, predict, std::move(x), 0.0, o);
+  if (branch.stop != StopReason::RangeReached) {
+    NewtonResult stalled;
+    stalled.x = branch.points.empty() ? Eigen::VectorXd(p.x_lin) : branch.points.back().x;
+    stalled.report.status = failed;
+    stalled.report.iterations = iterations;
+    stalled.report.message = "load stepping stalled at s = " +
+                             format_number(branch.points.empty() ? 0.0 : branch.points.back().parameter) +
+                             " of F: " + std::string(to_string(branch.stop)) + ": " + branch.message;
+    return stalled;
   }
   last.report.iterations = iterations;
   return last;
@@ -116,7 +134,9 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
   report.lambda_start = lambda0;
   // From λ₀ to σ = 1 (a path turning back below λ₀ has ended), the state in metres as the residual.
-  const PseudoArclengthOptions o = detail::homotopy_continuation(lambda0 - 1.0, 0.0, p.scale, p.options);
+  // The continuation lands on σ = 1 (λ = 0) itself, on the piece of the step that passes it.
+  PseudoArclengthOptions o = detail::homotopy_continuation(lambda0 - 1.0, 0.0, p.scale, p.options);
+  o.land_on = {0.0};
   const Branch branch = pseudo_arclength(contact_homotopy(), p.x_lin, lambda0, o);
   detail::record_homotopy(branch, 0.0, report);
   NewtonResult out;
@@ -129,11 +149,10 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
                          " points, " + std::to_string(report.folds) + " folds in σ): " + report.stop;
     return out;
   }
-  // The last step crossed σ = 1: interpolate x linearly in λ onto λ = 0, then Newton at σ = 1.
-  const auto& b = branch.points.back();
-  const auto& a = branch.points[branch.points.size() - 2];
-  const double w = b.parameter > a.parameter ? (0.0 - a.parameter) / (b.parameter - a.parameter) : 1.0;
-  Eigen::VectorXd guess = a.x + std::clamp(w, 0.0, 1.0) * (b.x - a.x);
+  // The last step crossed σ = 1: Newton at σ = 1 from the landing there (verified on the
+  // homotopy residual already, so this restates it in the report of the condensed problem), or,
+  // if the landing did not converge, from the last point, just beyond σ = 1.
+  Eigen::VectorXd guess = branch.landings.empty() ? branch.points.back().x : branch.landings.front().x;
   out = newton(Condensed{this, 1.0}, std::move(guess), p.options.newton);
   out.report.iterations += static_cast<int>(branch.corrector_iterations);
   report.reached = out.report.converged();

@@ -12,6 +12,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <wbm/solvers/natural_parameter.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -217,68 +218,79 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     throw std::invalid_argument("BackboneOptions.max_wall_time_s = " + format_number(o.max_wall_time_s) +
                                 ": must be >= 0 (0: no budget)");
   }
+  // Natural-parameter continuation in E (natural_parameter.hpp): the state is a level's
+  // unknowns packed as [vec Y, f, λ, μ], so that the layer's secant predictor is LL11's; the
+  // corrector is Powell's augmented Lagrangian at fixed E (solve); the step grows ×1.5 after a
+  // level that took ≤ 8 Powell iterations and is halved after a failure; the steps end on the
+  // energies of `include` and on energy_max.
   Backbone b;
-  double step = o.initial_step, energy = o.energy_min;
-  while (true) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (o.max_wall_time_s > 0.0 && elapsed >= o.max_wall_time_s) {
-      b.stop = StopReason::TimeBudget;
-      b.message = "wall-time budget of " + format_number(o.max_wall_time_s) + " s spent (" + format_number(elapsed) +
-                  " s) " + (b.levels.empty() ? std::string("before the first level")
-                                             : "after E = " + format_number(b.levels.back().energy)) +
-                  ", next E = " + format_number(energy) + "; raise BackboneOptions::max_wall_time_s (0: no budget)";
-      break;
-    }
-    // Secant predictor through the last two levels, scaled start from one.
+  const Eigen::Index ny = static_cast<Eigen::Index>(n_) * f_, nl = static_cast<Eigen::Index>(stops_.size()) * options_.samples;
+  auto pack = [&](const ModeLevel& l) {
+    Eigen::VectorXd x(ny + 2 + nl);
+    x.head(ny) = spectral::stacked(l.coefficients);
+    x(ny) = l.frequency_hz;
+    x.segment(ny + 1, nl) = l.multipliers.size() == nl ? l.multipliers : Eigen::VectorXd::Zero(nl);
+    x(ny + 1 + nl) = l.equality_multiplier;
+    return x;
+  };
+  ModeLevel pending;  // the level of the last successful correction, kept by on_point
+  auto correct = [&](double energy, Eigen::VectorXd guess) {
     ModeLevel predictor;
     const ModeLevel* start = nullptr;
-    if (b.levels.size() >= 2) {
-      const auto& l0 = b.levels[b.levels.size() - 2];
-      const auto& l1 = b.levels.back();
-      const double s = (energy - l1.energy) / (l1.energy - l0.energy);
-      predictor.energy = energy;
-      predictor.coefficients = l1.coefficients + s * (l1.coefficients - l0.coefficients);
-      predictor.frequency_hz = l1.frequency_hz + s * (l1.frequency_hz - l0.frequency_hz);
-      predictor.multipliers = l1.multipliers + s * (l1.multipliers - l0.multipliers);
-      predictor.equality_multiplier = l1.equality_multiplier + s * (l1.equality_multiplier - l0.equality_multiplier);
+    if (guess.size() == ny + 2 + nl) {
+      // One level behind: its own energy (solve scales Y by √(E/E_start)); two: the secant's at E.
+      predictor.energy = b.levels.size() >= 2 ? energy : b.levels.back().energy;
+      predictor.coefficients = spectral::as_coefficients(guess.head(ny), n_);
+      predictor.frequency_hz = guess(ny);
+      predictor.multipliers = guess.segment(ny + 1, nl);
+      predictor.equality_multiplier = guess(ny + 1 + nl);
       start = &predictor;
-    } else if (!b.levels.empty()) {
-      start = &b.levels.back();
     }
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     // The level gets what is left of the budget; a level cut by it is no failed attempt.
     ModeLevel level = solve(energy, start, o.max_wall_time_s > 0.0 ? std::max(o.max_wall_time_s - elapsed, 1e-300) : 0.0);
-    if (!level.converged() && o.max_wall_time_s > 0.0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= o.max_wall_time_s) {
-      continue;  // the check above ends the backbone
-    }
-    if (level.converged()) {
-      b.levels.push_back(std::move(level));
-      if (o.on_level) o.on_level(b.levels.back());
-      if (energy >= o.energy_max) break;
-      if (b.levels.back().powell_iterations <= 8) step = std::min(o.max_step, 1.5 * step);
-    } else {
+    Correction c;
+    c.converged = level.converged();
+    c.iterations = level.powell_iterations;
+    c.residual_norm = level.residual_norm;
+    c.message = level.message;
+    const bool cut = o.max_wall_time_s > 0.0 &&
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= o.max_wall_time_s;
+    c.interrupted = !c.converged && cut;
+    if (c.converged) {
+      c.x = pack(level);
+      pending = std::move(level);
+    } else if (!cut) {
       b.failed_energies.push_back(energy);
-      if (b.levels.empty()) {
-        b.message = "the first level E = " + format_number(energy) + " did not converge: " + level.message;
-        break;
-      }
-      step *= 0.5;
-      if (step < o.min_step) {
-        b.stop = StopReason::StepBelowMinimum;
-        b.message = "energy step below minimum after E = " + format_number(b.levels.back().energy) + ": " + level.message;
-        break;
-      }
     }
-    double next = b.levels.back().energy + step;
-    for (double e : include) {
-      if (e > b.levels.back().energy + 1e-12 && e < next) next = e;
-    }
-    energy = std::min(next, o.energy_max);
-  }
-  if (b.message.empty()) {
-    b.message = "reached E = " + format_number(o.energy_max);
-    b.stop = StopReason::RangeReached;
-    b.complete = true;
+    return c;
+  };
+  NaturalParameterOptions np;
+  np.parameter_name = "E";
+  np.parameter_min = o.energy_min;
+  np.parameter_max = o.energy_max;
+  np.initial_step = o.initial_step;
+  np.min_step = o.min_step;
+  np.max_step = o.max_step;
+  np.max_wall_time_s = o.max_wall_time_s;
+  np.land_on = include;
+  np.grow = [](double h, int powell_iterations) { return powell_iterations <= 8 ? 1.5 * h : h; };
+  np.on_point = [&](size_t, const BranchPoint&) {
+    b.levels.push_back(std::move(pending));
+    if (o.on_level) o.on_level(b.levels.back());
+  };
+  const Branch branch = natural_parameter(correct, Eigen::VectorXd(), o.energy_min, np);
+  b.stop = branch.stop;
+  b.rejected_steps = branch.rejected_steps;
+  b.complete = branch.stop == StopReason::RangeReached;
+  if (branch.stop == StopReason::InitialPointFailed) {
+    b.message = "the first level E = " + format_number(o.energy_min) + " did not converge: " + branch.message;
+  } else if (branch.stop == StopReason::TimeBudget) {
+    b.message = branch.message + "; raise BackboneOptions::max_wall_time_s (0: no budget)";
+  } else if (branch.stop == StopReason::StepBelowMinimum) {
+    b.message = "energy " + branch.message;
+  } else {
+    b.message = branch.message;
   }
   for (double e : o.include) {
     for (const auto& l : b.levels) {

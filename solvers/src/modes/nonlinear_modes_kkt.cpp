@@ -10,6 +10,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <wbm/solvers/natural_parameter.hpp>
+
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -363,54 +365,72 @@ ModeLevel NonlinearModes::level_at(const BackboneSystem& system, Eigen::VectorXd
 
 std::optional<Eigen::VectorXd> NonlinearModes::homotopy_start(const BackboneSystem& exact, double energy,
                                                               const BackboneContinuationOptions& o, Backbone& b) const {
+  // Natural-parameter continuation (natural_parameter.hpp) of the penalty orbit at fixed E in
+  // μ = log₁₀(k/k₀), from k₀ to 10¹² k₀: steps of one decade, halved after a failure (a factor
+  // below 1.2 is not tried), each orbit started from the last (constant predictor). Its goal:
+  // after each penalty orbit, Signorini from it, the multipliers at its penalty forces
+  // λ_s = κ (g_s)₊; the first that converges ends the homotopy.
   const double k0 = o.start_penalty_stiffness;
   const Eigen::Index ny = exact.size() - static_cast<Eigen::Index>(stops_.size()) * options_.samples;  // Y and ω²
   const double to_lambda = 1.0 / (options_.samples * omega0_ * omega0_ * m_ref_);  // k [N/m] → κ of λ = κ g₊
-  double k = k0, factor = 10.0;
-  Eigen::VectorXd xp = BackboneSystem(*this, k0).state(o.start->coefficients, o.start->frequency_hz);
+  auto stiffness = [&](double mu) { return k0 * std::pow(10.0, mu); };
   // Intermediate orbits are corrected to √tolerance only (the Signorini point is verified at
   // `tolerance`); the start orbit with a line search (it may be far from the branch: without
   // one, Newton can land on another mode's branch), the next stages without.
   const double stage_tolerance = std::sqrt(o.tolerance);
   bool first = true;
   std::string last_exact;
-  while (k <= 1e12 * k0) {
-    const BackboneSystem penalty(*this, k);
-    const NewtonResult rp = solve_at(penalty, xp, energy, o, first, stage_tolerance);
-    const bool reached = rp.report.converged() ||
-                         (!rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance);
-    if (!reached) {
-      if (first || factor < 1.2) {
-        b.message = "penalty homotopy: the penalty orbit at k = " + format_number(k) + " N/m, E = " +
-                    format_number(energy) + " did not converge (" + rp.report.brief() + ")" +
-                    (last_exact.empty() ? std::string() : "; last Signorini attempt: " + last_exact);
-        return std::nullopt;
-      }
-      k /= factor;  // back to the last converged stage, with a smaller step
-      factor = std::sqrt(factor);
-      k *= factor;
-      continue;
-    }
+  auto correct = [&](double mu, Eigen::VectorXd guess) {
+    const NewtonResult rp = solve_at(BackboneSystem(*this, stiffness(mu)), std::move(guess), energy, o, first, stage_tolerance);
     first = false;
-    xp = rp.x;
+    Correction c;
+    c.converged = rp.report.converged() ||
+                  (!rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance);
+    c.iterations = rp.report.iterations;
+    c.message = "the penalty orbit at k = " + format_number(stiffness(mu)) + " N/m, E = " + format_number(energy) +
+                " did not converge (" + rp.report.brief() + ")";
+    if (!rp.report.residual_norms.empty()) c.residual_norm = rp.report.residual_norms.back();
+    c.x = rp.x;
+    return c;
+  };
+  std::optional<Eigen::VectorXd> reached;
+  NaturalParameterOptions np;
+  np.parameter_name = "log10(k/k0)";
+  np.parameter_min = 0.0;
+  np.parameter_max = 12.0;
+  np.initial_step = 1.0;
+  np.max_step = 1.0;
+  np.min_step = 0.5 * std::log10(1.2);  // a failed step below log₁₀ 1.2 ends it
+  np.grow = [](double h, int) { return h; };
+  np.goal = [&](const BranchPoint& point) {
     ++b.homotopy_stages;
-    // Signorini from this orbit, the multipliers at its penalty forces λ_s = κ (g_s)₊.
-    const Eigen::VectorXd y = with_phase(xp.head(ny - 1));
+    const double k = stiffness(point.parameter);
+    const Eigen::VectorXd y = with_phase(point.x.head(ny - 1));
     const Eigen::Map<const Eigen::MatrixXd> ym(y.data(), n_, f_);
     Eigen::VectorXd xe(exact.size());
-    xe.head(ny) = xp;
+    xe.head(ny) = point.x;
     xe.tail(xe.size() - ny) = (k * to_lambda) * gaps(ym).cwiseMax(0.0);
-    const NewtonResult re = solve_at(exact, std::move(xe), energy, o);
-    if (re.report.converged()) {
-      b.homotopy_stiffness = k;
-      return re.x;
+    NewtonResult re = solve_at(exact, std::move(xe), energy, o);
+    if (!re.report.converged()) {
+      last_exact = "from k = " + format_number(k) + " N/m: " + re.report.brief();
+      return false;
     }
-    last_exact = "from k = " + format_number(k) + " N/m: " + re.report.brief();
-    k *= factor;
+    b.homotopy_stiffness = k;
+    reached = std::move(re.x);
+    return true;
+  };
+  const Eigen::VectorXd xp = BackboneSystem(*this, k0).state(o.start->coefficients, o.start->frequency_hz);
+  const Branch branch = natural_parameter(
+      correct, [](const Branch& br, double) { return br.points.back().x; }, xp, 0.0, np);
+  if (reached) return reached;
+  const std::string exact_note = last_exact.empty() ? std::string() : "; last Signorini attempt: " + last_exact;
+  if (branch.stop == StopReason::RangeReached) {
+    b.message = "penalty homotopy: Signorini did not converge from any penalty orbit up to k = " +
+                format_number(stiffness(branch.points.back().parameter)) + " N/m (" +
+                std::to_string(b.homotopy_stages) + " stages from " + format_number(k0) + " N/m)" + exact_note;
+  } else {
+    b.message = "penalty homotopy: " + branch.message + exact_note;
   }
-  b.message = "penalty homotopy: Signorini did not converge from any penalty orbit up to k = " +
-              format_number(k / factor) + " N/m (" + std::to_string(b.homotopy_stages) + " stages from " +
-              format_number(k0) + " N/m); last: " + last_exact;
   return std::nullopt;
 }
 

@@ -90,7 +90,8 @@ enum class StopReason {
   Retraced,
   UndampedResonance,
   DegenerateEvent,
-  TimeBudget  // energy stepping (NonlinearModes::backbone): BackboneOptions::max_wall_time_s spent
+  TimeBudget,  // a wall-time budget spent (NaturalParameterOptions::max_wall_time_s, e.g. LL11 Alg. 1)
+  GoalReached  // the caller's goal held at the last point (NaturalParameterOptions::goal)
 };
 
 [[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
@@ -104,6 +105,7 @@ enum class StopReason {
     case StopReason::UndampedResonance: return "undamped resonance of the top Fourier function";
     case StopReason::DegenerateEvent: return "degenerate switching point";
     case StopReason::TimeBudget: return "wall-time budget spent";
+    case StopReason::GoalReached: return "goal reached";
   }
   return "?";
 }
@@ -194,6 +196,15 @@ inline void PseudoArclengthOptions::validate() const {
   if (!(kink_step >= min_step)) fail("kink_step must be >= min_step");
 }
 
+
+namespace detail {
+/// The step rule of both modes of the continuation layer (pseudo_arclength here, natural_parameter
+/// in natural_parameter.hpp): after a success with `iterations` corrector iterations,
+/// h · clamp(target/iterations, ½, 2), so that the corrector works about `target` iterations.
+[[nodiscard]] inline double adapted_step(double h, int iterations, int target) {
+  return h * std::clamp(static_cast<double>(target) / std::max(1, iterations), 0.5, 2.0);
+}
+}  // namespace detail
 
 /// Traces the branch through (x0, λ0): x0 is corrected at fixed λ0 first (initial_newton), then
 /// continued until a StopReason. Throws std::invalid_argument for invalid options or λ0 outside
@@ -455,13 +466,12 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     if (branch.points.back().event) continue;
     h_accepted = h;
     corner_ahead = corner_ahead - h > 0.0 ? corner_ahead - h : kNoCorner;
-    const double factor = std::clamp(static_cast<double>(o.target_iterations) / std::max(1, iterations), 0.5, 2.0);
     double h_max = o.max_step;
     const double t_lambda = std::abs(branch.points.back().parameter_tangent());
     if (o.max_parameter_step > 0.0 && t_lambda > 0.0) {
       h_max = std::min(h_max, o.max_parameter_step / (ls * t_lambda));  // |Δλ| ≈ h |t_λ| ls
     }
-    h = std::clamp(h * factor, o.min_step, std::max(o.min_step, h_max));
+    h = std::clamp(detail::adapted_step(h, iterations, o.target_iterations), o.min_step, std::max(o.min_step, h_max));
   }
   return finish(StopReason::MaxPoints, "point limit " + std::to_string(o.max_points) + " reached at λ = " +
                                            format_number(branch.points.back().parameter));
