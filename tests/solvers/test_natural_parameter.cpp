@@ -82,6 +82,23 @@ TEST(NaturalParameter, FollowsTheCubicAndLandsOnTheListedValuesAndTheRangeEnd) {
   EXPECT_EQ(b.rejected_steps, 0);
 }
 
+// Steps of 0.05 from 0.9 sum to 1.2999999999999994 after eight: the step ends on 1.3 itself
+// instead of leaving a step of 6e-16 to it (LL11 Alg. 2 once gave two levels at E = 1.3).
+TEST(NaturalParameter, ASumOfStepsShortOfTheEndByRoundingEndsOnIt) {
+  const Cubic cubic;
+  NaturalParameterOptions o;
+  o.parameter_min = 0.9;
+  o.parameter_max = 1.3;
+  o.initial_step = 0.05;
+  o.max_step = 0.05;
+  o.grow = [](double h, int) { return h; };
+  const Branch b = natural_parameter(newton_corrector(cubic), Eigen::VectorXd::Zero(1), 0.9, o);
+  ASSERT_EQ(b.stop, StopReason::RangeReached) << b.message;
+  EXPECT_EQ(b.points.size(), 9U);
+  EXPECT_EQ(b.points.back().parameter, 1.3);
+  for (size_t i = 1; i < b.points.size(); ++i) EXPECT_GT(b.points[i].parameter - b.points[i - 1].parameter, 0.04);
+}
+
 TEST(NaturalParameter, StepsDownwardWithDirectionMinusOne) {
   const Cubic cubic;
   NaturalParameterOptions o;

@@ -12,8 +12,8 @@
 ///              pseudo_arclength, detail::adapted_step: h · clamp(target/iterations, ½, 2),
 ///              within [min_step, max_step]); h ← shrink · h and retry from the same point after a
 ///              failure, until h < min_step;
-///   landing    a step that would pass a value of land_on, or the range's end in `direction`, is
-///              shortened to end on it exactly, so the branch holds a point at every listed value
+///   landing    a step that would pass a value of land_on, or the range's end in `direction` (or
+///              fall short of it by less than 1e-9 of its length), is shortened to end on it exactly, so the branch holds a point at every listed value
 ///              it reaches (also copied to Branch::landings) and ends on the range's end.
 /// It shares with pseudo_arclength the report (Branch: points, landings, stop, message, rejected
 /// steps, corrector iterations, wall time), the stop vocabulary (StopReason) and the step rule.
@@ -204,12 +204,16 @@ Branch natural_parameter(Correct&& correct, Predict&& predict, Eigen::VectorXd x
       return finish(StopReason::TimeBudget, budget_message("after " + o.parameter_name + " = " + format_number(last.parameter)));
     }
     // The next λ: one step on, shortened to the nearest listed value or the range's end it passes.
+    // A step that falls short of one by less than kSnap of its length ends on it: steps summed in
+    // floating point (0.9 + 8 × 0.05 = 1.2999999999999994) would otherwise add a step of 6e-16.
+    constexpr double kSnap = 1e-9;
     double next = last.parameter + o.direction * h;
+    auto passes = [&](double v) { return (next - v) * o.direction > -kSnap * h; };
     for (size_t k = 0; k < o.land_on.size(); ++k) {
       const double v = o.land_on[k];
-      if (!landed[k] && (v - last.parameter) * o.direction > 0.0 && (next - v) * o.direction > 0.0) next = v;
+      if (!landed[k] && (v - last.parameter) * o.direction > 0.0 && passes(v)) next = v;
     }
-    if ((next - end) * o.direction > 0.0) next = end;
+    if (passes(end)) next = end;
     Correction c = correct(next, predict(branch, next));
     if (!c.converged) {
       if (c.interrupted || spent()) {  // cut by the budget: no failure
