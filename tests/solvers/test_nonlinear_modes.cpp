@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -148,10 +149,11 @@ TEST(NonlinearModes, BackbonePiecesAreSmoothAndTheirEventsMatchTheMin) {
 // Independence from rounding (issue #35): the backbone of the LL11 rod with N = 12, m = 256 (it
 // stopped at E = 2.48 on 18ad35a, whose corners were crossed by step halving), again with K
 // scaled by (1 + k 1e-12), k = 1 … 3. Every run reaches E = 10, and the frequencies at the landed
-// energies 1.8 and 10 agree to 1e-9 relative.
+// energies 1.8 and 10 agree to 1e-9 relative, the folds to 1e-6.
 TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
   const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
   std::vector<double> f18, f10;
+  std::vector<std::vector<double>> folds;
   for (int k = 0; k <= 3; ++k) {
     solvers::MechanicalSystem system = problem.system;
     system.stiffness *= 1.0 + k * 1e-12;
@@ -165,12 +167,44 @@ TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
     EXPECT_GT(b.kinks, 50);  // corners crossed as events, not by halving
     f18.push_back(b.included[0].frequency_hz);
     f10.push_back(b.levels.back().frequency_hz);
+    folds.push_back(b.folds);
     EXPECT_NEAR(b.levels.back().energy, 10.0, 1e-12);
   }
   for (int k = 1; k <= 3; ++k) {
     EXPECT_NEAR(f18[k], f18[0], 1e-9 * f18[0]) << "k = " << k;
     EXPECT_NEAR(f10[k], f10[0], 1e-9 * f10[0]) << "k = " << k;
+    // The same folds: samples τ_s and 1 − τ_s of the time-symmetric orbit reach their surfaces
+    // together and must switch together (before, one switched alone with K × (1 + 1e-12) and
+    // the branch folded twice more within 3.5e-6 of E near E = 1.98629).
+    ASSERT_EQ(folds[k].size(), folds[0].size()) << "k = " << k;
+    for (size_t i = 0; i < folds[0].size(); ++i) EXPECT_NEAR(folds[k][i], folds[0][i], 1e-6 * folds[0][i]) << "k = " << k;
   }
+}
+
+// The same rod with N = 10 harmonics and m = 128 samples: at E = 2.1493 samples τ = ±1/128 enter
+// contact next to the active sample τ = 0, whose multiplier vanishes 1e-5 of arclength later.
+// The piece beyond the first switch is ill-conditioned in the multipliers, so its solution through
+// the located point has the new multipliers at −1.2e-8 (a band of 1e-10). The branch must go
+// on through both switches, as the backbone of a conservative system does (before, the
+// continuation took those multipliers for a crossing back, switched the samples back and
+// retraced the backbone to the linear mode). Its frequency at E = 1.8 is the finer
+// discretization's (N = 12, m = 256) to the discretization error, 1e-5 relative.
+TEST(NonlinearModes, BackboneEntersAnIllConditionedPieceWithoutTurningBack) {
+  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  std::vector<double> f18;
+  for (auto [harmonics, samples] : {std::pair{10, 128}, std::pair{12, 256}}) {
+    const solvers::NonlinearModes nm(problem.system, problem.stops, {.harmonics = harmonics, .samples = samples});
+    auto o = range(0.5, 2.3);
+    o.include = {1.8};
+    const auto b = nm.continue_backbone(o);
+    ASSERT_TRUE(b.complete) << "N = " << harmonics << ", m = " << samples << ": " << b.message;
+    EXPECT_EQ(b.stop, solvers::StopReason::RangeReached);
+    EXPECT_TRUE(b.folds.empty()) << "N = " << harmonics;
+    ASSERT_EQ(b.included.size(), 1U);
+    ASSERT_TRUE(b.included[0].converged());
+    f18.push_back(b.included[0].frequency_hz);
+  }
+  EXPECT_NEAR(f18[0], f18[1], 1e-5 * f18[1]);
 }
 
 // The structured KKT solver (block-diagonal harmonic balance + Schur complement on the active

@@ -11,13 +11,21 @@
 /// the zero band (the
 /// corrector tolerance: event functions are not known better than the residual) or the bracket is
 /// below 1e-10 of the step. The point on the admissible side is a point of the branch (a corner).
-/// Every entry that crossed in the step and lies within the zero band there is flipped at once
-/// (simultaneous crossings, e.g. samples placed symmetrically in time, switch together whatever
-/// the last bits of their event functions). The new piece's tangent is its null direction, oriented so that the flipped entries'
+/// Every entry that crossed in the step and lies within the zero band there, or whose own
+/// crossing (e_j/rate_j beyond the point, rate_j its mean rate over the step) lies within 1e-6
+/// of the step of the first one's, is flipped at once: simultaneous crossings, e.g. samples
+/// placed symmetrically in time, switch together whatever the last bits of their event
+/// functions, which at the located point are known only to the corrector's tolerance times the
+/// conditioning. The new piece's tangent is its null direction, oriented so that the flipped entries'
 /// new event functions grow (rate > 0 along it): the half of the new piece that is admissible.
 /// This need not be within 90° of the old tangent (complementarity branches turn back at
 /// corners). Entries whose new event would decrease whichever way are left unflipped and the
 /// tangent recomputed; if none is left, no piece continues the branch and the step says why.
+/// Where the new piece's own solution through the point has a flipped entry below its surface
+/// by more than the crossing threshold (an ill-conditioned piece: its multipliers amplify the
+/// point's residual), the switching point is moved along the new piece to where the flipped
+/// entries meet their surfaces, so that the next step does not take them for entries crossing
+/// back (onto_new_piece).
 /// [Leine & Nijmeijer 2004, Sec. 7.3 (switching in path following); Acary & Brogliato 2008,
 /// Sec. 12.2; the parametric LCP's pivoting, Cottle, Pang & Stone 1992, Sec. 4.5.]
 
@@ -83,6 +91,62 @@ Eigen::VectorXd piece_tangent(Solver& solver, const Lin& lin, const Eigen::Vecto
   return tangent(solver, lin, e, xs, ls);
 }
 
+// The switching point moved onto the new piece. It satisfies the new piece's rows of the flipped
+// entries only to the zero band, and where that piece is ill-conditioned its own solution through
+// the point can lie measurably beyond their surfaces: their event functions negative by far more
+// than the band (LL11 rod, N = 10, m = 128, samples 1 and 127 at E = 2.1493: −1.2e-8, for a band
+// of 1e-10). The next step would then take them for entries crossing back and switch them back
+// at once, and the branch would retrace itself. So when the new piece's point through it (the
+// corrector on the new piece at arclength 0 along its tangent) has a flipped entry below
+// −event_tolerance, the switching point is moved to where the new piece meets their surfaces:
+// the corrector at arclength s along the tangent, s by the secant on the smallest flipped event
+// function, until it lies in [−event_tolerance, zero_band] (at most 8 corrections); its tangent
+// is recomputed there. The point is left as it is if a correction fails. Returns the corrector
+// iterations spent.
+template <class S, class Lin, class Solver>
+long onto_new_piece(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector,
+                    const ActiveSet& next, const std::vector<Eigen::Index>& group, double event_tolerance,
+                    double zero_band, Attempt& point) {
+  const auto n = point.z.size() - 1;
+  const OnPiece<S> on{&system, &next};
+  auto smallest = [&](const Eigen::VectorXd& z) {
+    const Eigen::VectorXd e = system.events(z.head(n) * xs, z(n) * ls, next);
+    double m = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j : group) m = std::min(m, e(j));
+    return m;
+  };
+  long iterations = 0;
+  auto at = [&](double s) {
+    Attempt a = attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, point.tangent, point.z, s, false);
+    iterations += a.iterations;
+    return a;
+  };
+  Attempt a = at(0.0);
+  if (!a.converged) return iterations;
+  double s0 = 0.0, f0 = smallest(a.z);
+  if (f0 >= -event_tolerance) return iterations;  // within the band: the point stays
+  constexpr double kProbe = 1e-6;
+  double rate = (smallest(Eigen::VectorXd(a.z + kProbe * point.tangent)) - f0) / kProbe;
+  for (int it = 0; it < 8 && rate > 0.0; ++it) {
+    const double s = s0 - f0 / rate;
+    Attempt b = at(s);
+    if (!b.converged) return iterations;
+    const double f = smallest(b.z);
+    if (f >= -event_tolerance && f <= zero_band) {
+      const Lin lin = system.linearize(b.z.head(n) * xs, b.z(n) * ls, next);
+      Eigen::VectorXd t = piece_tangent(solver, lin, point.tangent, xs, ls);
+      if (!t.allFinite()) return iterations;
+      point.z = std::move(b.z);
+      point.tangent = std::move(t);
+      return iterations;
+    }
+    rate = (f - f0) / (s - s0);
+    s0 = s;
+    f0 = f;
+  }
+  return iterations;
+}
+
 template <class S, class Lin, class Solver>
 PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector,
                      const ActiveSet& piece, const Eigen::VectorXd& t_last, const Eigen::VectorXd& z_last, double h,
@@ -120,6 +184,7 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     return m;
   };
   add_crossing(e_hi);
+  const Eigen::VectorXd e_end = e_hi;  // at the end of the whole step
   double lo = 0.0, hi = h;
   double phi_lo = phi(e_last);             // φ at the low end (≥ 0)
   double w_lo = phi_lo, w_hi = phi(e_hi);  // φ at the ends as Illinois weights them for the secant
@@ -155,16 +220,33 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     }
   }
   // The entries that switch: those that crossed in this step and lie within the zero band at the
-  // low end (ties: simultaneous crossings, e.g. samples placed symmetrically in time, whatever the
-  // last bits of their event functions), and once the bracket is tight every one negative at the
-  // high end; at least the one closest to its surface.
+  // low end, those whose own crossing lies within kSimultaneous·h of the first one's, and once
+  // the bracket is tight every one negative at the high end; at least the one closest to its
+  // surface. An entry's crossing is placed at lo + e_j(lo)/rate_j, rate_j its event function's
+  // mean rate of decrease over the whole step. The second rule makes simultaneous crossings
+  // (samples placed symmetrically in time on a time-reversible orbit) switch together whatever
+  // the last bits of their event functions: at the located point these are known only to about
+  // the corrector's tolerance times the Jacobian's conditioning, which can exceed the zero band
+  // (LL11 rod, N = 12, m = 256, K × (1 + 3e-12): samples 1 and 255 at E = 1.98629, 4.0e-11 and
+  // 1.2e-10 at the located point, 8e-11 apart all along the bracket; one switched alone, the
+  // branch turned back and folded twice within 3.5e-6 of E, which the unperturbed run did not).
+  constexpr double kSimultaneous = 1e-6;
   const Eigen::VectorXd e_lo = lo == 0.0 ? e_last : events(a_lo.z, piece);
   const bool tight = !(hi - lo > 1e-10 * h);
+  auto crossing_at = [&](Eigen::Index j) {
+    if (e_lo(j) <= 0.0) return lo;
+    const double rate = (e_last(j) - e_end(j)) / h;
+    return rate > 0.0 ? lo + e_lo(j) / rate : std::numeric_limits<double>::infinity();
+  };
+  double first = std::numeric_limits<double>::infinity();
+  for (Eigen::Index j : crossing) first = std::min(first, crossing_at(j));
   std::vector<Eigen::Index> group;
   Eigen::Index closest = crossing.front();
   for (Eigen::Index j : crossing) {
     if (e_lo(j) < e_lo(closest)) closest = j;
-    if (e_lo(j) <= zero_band || (tight && e_hi(j) < -event_tolerance)) group.push_back(j);
+    if (e_lo(j) <= zero_band || crossing_at(j) <= first + kSimultaneous * h || (tight && e_hi(j) < -event_tolerance)) {
+      group.push_back(j);
+    }
   }
   if (group.empty()) {
     for (Eigen::Index j : crossing) {
@@ -206,6 +288,8 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     if (keep.size() == group.size()) {
       out.a.tangent = std::move(t);
       out.switched = static_cast<int>(group.size());
+      if (lo > 0.0) out.iterations += onto_new_piece<S, Lin>(system, solver, xs, ls, corrector, out.next, group,
+                                                              event_tolerance, zero_band, out.a);
       return out;
     }
     group = std::move(keep);
