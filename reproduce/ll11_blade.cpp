@@ -208,7 +208,9 @@ int main(int argc, char** argv) {
     // Branch 1 in order along the curve: down (reversed, without its start) then up.
     std::vector<const solvers::ModeLevel*> branch1;
     if (up && down) {
-      for (auto it = down->levels.rbegin(); it + 1 < down->levels.rend(); ++it) branch1.push_back(&*it);
+      // (an index loop: rbegin() + 1 of an empty vector lies past rend(), and a failed branch has
+      // no levels; it read garbage and ended in std::bad_alloc)
+      for (size_t k = down->levels.size(); k > 1; --k) branch1.push_back(&down->levels[k - 1]);
       for (const auto& l : up->levels) branch1.push_back(&l);
     }
 

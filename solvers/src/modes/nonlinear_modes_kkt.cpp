@@ -70,6 +70,52 @@ NewtonResult solve_at(const NonlinearModes::BackboneSystem& system, Eigen::Vecto
                 solver);
 }
 
+// The Newton homotopy [Allgower & Georg 1990, Sec. 1.2] at fixed E from x₀:
+//   H(x, t) = R(x) − (1 − t) R(x₀) = 0,  t from 0 (x = x₀, exactly) to 1 (R(x) = 0),
+// stepped in t by natural_parameter (steps from 1/4, ×2 after ≤ 3 iterations up to 1/4, halved
+// after a failure down to 1e-4), each stage semismooth Newton without line search from the
+// last. It follows the solution connected to x₀ instead of letting a line search decide, at a
+// kink, where a far start goes. The result: the Newton result at t = 1 (its report the last
+// stage's), or the last stage's failure with the t reached in its message.
+NewtonResult newton_homotopy(const NonlinearModes::BackboneSystem& system, Eigen::VectorXd x0, double energy,
+                             const BackboneContinuationOptions& o, double tolerance) {
+  struct Offset {
+    const NonlinearModes::BackboneSystem* s;
+    double energy;
+    Eigen::VectorXd offset;
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const { return s->residual(x, energy) - offset; }
+    [[nodiscard]] Eigen::SparseMatrix<double> jacobian(const Eigen::VectorXd& x) const {
+      return s->linearize(x, energy).jacobian;
+    }
+  };
+  const Eigen::VectorXd r0 = system.residual(x0, energy);
+  NewtonResult last;
+  last.x = x0;
+  auto correct = [&](double t, Eigen::VectorXd guess) {
+    auto solver = system.linear_solver();
+    last = newton(Offset{&system, energy, (1.0 - t) * r0}, std::move(guess),
+                  {.tolerance = tolerance, .max_iterations = o.max_newton_iterations, .line_search = false}, solver);
+    return to_correction(NewtonResult(last));
+  };
+  NaturalParameterOptions np;
+  np.parameter_name = "t (Newton homotopy)";
+  np.parameter_min = 0.0;
+  np.parameter_max = 1.0;
+  np.initial_step = 0.25;
+  np.max_step = 0.25;
+  np.min_step = 1e-4;
+  const Branch branch = natural_parameter(
+      correct, [](const Branch& br, double) { return br.points.back().x; }, x0, 0.0, np);
+  if (branch.stop == StopReason::RangeReached && branch.points.back().parameter == 1.0) {
+    last.x = branch.points.back().x;
+    return last;
+  }
+  last.x = branch.points.back().x;
+  last.report.status = SolveStatus::MaxIterations;
+  last.report.message = "Newton homotopy from the start: " + branch.message;
+  return last;
+}
+
 }  // namespace
 
 NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
@@ -381,7 +427,18 @@ std::optional<Eigen::VectorXd> NonlinearModes::homotopy_start(const BackboneSyst
   bool first = true;
   std::string last_exact;
   auto correct = [&](double mu, Eigen::VectorXd guess) {
-    const NewtonResult rp = solve_at(BackboneSystem(*this, stiffness(mu)), std::move(guess), energy, o, first, stage_tolerance);
+    const BackboneSystem penalty(*this, stiffness(mu));
+    Eigen::VectorXd start = guess;
+    NewtonResult rp = solve_at(penalty, std::move(guess), energy, o, first, stage_tolerance);
+    if (first && !rp.report.converged()) {
+      // Damped Newton from a far start can stall at a kink of the penalty law (a sample at
+      // g = 0, where the piece's Newton direction need not decrease ‖R‖), and whether it does
+      // depends on the start's last bits (the blade's N = 3 start at E = 3.6: stagnated as is,
+      // converged with the start scaled by 1 + 1e-12). The Newton homotopy from the start instead.
+      const int spent = rp.report.iterations;
+      rp = newton_homotopy(penalty, std::move(start), energy, o, stage_tolerance);
+      rp.report.iterations += spent;
+    }
     first = false;
     Correction c;
     c.converged = rp.report.converged() ||
