@@ -72,11 +72,11 @@ NewtonResult solve_at(const NonlinearModes::BackboneSystem& system, Eigen::Vecto
 
 // The Newton homotopy [Allgower & Georg 1990, Sec. 1.2] at fixed E from x₀:
 //   H(x, t) = R(x) − (1 − t) R(x₀) = 0,  t from 0 (x = x₀, exactly) to 1 (R(x) = 0),
-// stepped in t by natural_parameter (steps from 1/4, ×2 after ≤ 3 iterations up to 1/4, halved
-// after a failure down to 1e-4), each stage semismooth Newton without line search from the
-// last. It follows the solution connected to x₀ instead of letting a line search decide, at a
-// kink, where a far start goes. The result: the Newton result at t = 1 (its report the last
-// stage's), or the last stage's failure with the t reached in its message.
+// stepped in t by natural_parameter (steps of at most 1/4, halved after a failure down to 1e-4),
+// each stage semismooth Newton without line search from the last. It follows the solution
+// connected to x₀ instead of letting a line search decide, at a kink, where a far start goes.
+// The result: the Newton result at t = 1, or a MaxIterations result whose report.message says
+// where the stepping in t stopped.
 NewtonResult newton_homotopy(const NonlinearModes::BackboneSystem& system, Eigen::VectorXd x0, double energy,
                              const BackboneContinuationOptions& o, double tolerance) {
   struct Offset {
