@@ -59,6 +59,12 @@ if(WBM_BUILD_REPRODUCE)
   wbm_require(WBM_PYTHON python3-matplotlib "A python3 that imports matplotlib")
 endif()
 
+if(WBM_BUILD_REPRODUCE)
+  # oneTBB: reproduce/ll11_robustness.cpp runs its independent continuations in parallel.
+  find_package(TBB QUIET CONFIG)
+  wbm_require(TBB_FOUND libtbb-dev "oneTBB")
+endif()
+
 if(WBM_BUILD_PYTHON)
   find_package(Python3 QUIET COMPONENTS Interpreter Development.Module)
   wbm_require(Python3_Development.Module_FOUND python3-dev "Python 3 headers")

@@ -5,11 +5,15 @@
 // runs must agree with the unperturbed one: the same number of folds, fold energies and the
 // frequencies at the landed energies (E = 1.8 and the range's end) within 1e-6 relative.
 // Writes out/ll11_robustness/runs.csv, meta.json, report.md.
-// make reproduce: N ∈ {8, 10, 12, 16} × m ∈ {128, 256} (the N that stopped on 18ad35a; about
-// 150 s). With WBM_ROBUSTNESS_FULL=1 in the environment: N ∈ {4, 6, 8, 10, 12, 16, 24, 32} ×
-// m ∈ {64, 128, 256, 512} (about 25 min on one core). --quick: N ∈ {8, 12} × m ∈ {64, 128}, E ≤ 3.
+// The grid, from the environment variable WBM_ROBUSTNESS_GRID:
+//   full (the default, make reproduce): N ∈ {4, 6, 8, 10, 12, 16, 24, 32} × m ∈ {64, 128, 256, 512};
+//   reduced (.ci/run): N ∈ {8, 10, 12, 16} × m ∈ {128, 256}, the N that stopped on 18ad35a;
+//   --quick: N ∈ {8, 12} × m ∈ {64, 128}, E ≤ 3.
+// Any other value throws std::invalid_argument naming the variable and the allowed values.
 // Also (not in --quick) the stiff stop of issue #35 (M = 64 and the defaults) with K perturbed, and
-// JL14 Fig. 12 for every Table 2 combination with the five runs (about 20 s together).
+// JL14 Fig. 12 for every Table 2 combination with the five runs. The runs are independent and run
+// on oneTBB's workers (tbb::parallel_for), the costliest first; each run's result does not depend
+// on the thread count.
 // A pair that ends short of the range with an explained stop (the branch retraced itself, a
 // degenerate switching point) is listed as such; the claims print agrees/disagrees with counts.
 #include <algorithm>
@@ -18,9 +22,15 @@
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
 
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/response_curve.hpp>
@@ -184,6 +194,21 @@ double relative(double a, double b) {
   return std::abs(a - b) / std::max(std::abs(a), 1e-300);
 }
 
+// f(i) for every i in [0, costs.size()), on oneTBB's workers, taken in decreasing order of
+// costs[i] (an estimate) so that the longest run does not start last and leave a core idle.
+// Each f(i) must not depend on another.
+template <class T, class F>
+std::vector<T> run_all(const std::vector<double>& costs, F f) {
+  std::vector<size_t> order(costs.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return costs[a] > costs[b]; });
+  std::vector<T> results(costs.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) results[order[k]] = f(order[k]);
+  }, tbb::simple_partitioner());
+  return results;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -195,18 +220,40 @@ int main(int argc, char** argv) {
     const double e_min = base.analysis.energy_min;
     const double e_max = run.quick() ? 3.0 : base.analysis.energy_max;
     const double e_check = 1.8;  // LL11 Fig. 5's level
-    const char* full_env = std::getenv("WBM_ROBUSTNESS_FULL");
-    const bool full = !run.quick() && full_env != nullptr && std::string(full_env) == "1";
-    const std::vector<int> harmonics = run.quick() ? std::vector<int>{8, 12}
-                                       : full      ? std::vector<int>{4, 6, 8, 10, 12, 16, 24, 32}
-                                                   : std::vector<int>{8, 10, 12, 16};
-    const std::vector<int> samples = run.quick() ? std::vector<int>{64, 128}
-                                     : full      ? std::vector<int>{64, 128, 256, 512}
-                                                 : std::vector<int>{128, 256};
+    // The grid (see the file's head): full unless WBM_ROBUSTNESS_GRID says otherwise.
+    const char* grid_env = std::getenv("WBM_ROBUSTNESS_GRID");
+    const std::string grid = run.quick() ? "quick" : (grid_env != nullptr && *grid_env != 0 ? grid_env : "full");
+    if (grid != "quick" && grid != "full" && grid != "reduced") {
+      throw std::invalid_argument("ll11_robustness: WBM_ROBUSTNESS_GRID = \"" + grid +
+                                  "\" is not a grid: use \"full\" (N 4-32 x m 64-512, the default) or "
+                                  "\"reduced\" (N 8-16 x m 128-256, as .ci/run), or leave it unset");
+    }
+    const std::vector<int> harmonics = grid == "quick"  ? std::vector<int>{8, 12}
+                                       : grid == "full" ? std::vector<int>{4, 6, 8, 10, 12, 16, 24, 32}
+                                                        : std::vector<int>{8, 10, 12, 16};
+    const std::vector<int> samples = grid == "quick"  ? std::vector<int>{64, 128}
+                                     : grid == "full" ? std::vector<int>{64, 128, 256, 512}
+                                                      : std::vector<int>{128, 256};
     const std::vector<Perturbation> perturbations = {
         {"none", 0.0, false}, {"K (1 + 1e-12)", 1e-12, false}, {"K (1 + 2e-12)", 2e-12, false},
         {"K (1 + 3e-12)", 3e-12, false}, {"DOFs reversed", 0.0, true}};
     constexpr double kAgree = 1e-6;
+    // Every run of the grid at once, pair-major: run (i_h, i_m, k) is index (i_h n_m + i_m) n_p + k;
+    // cost estimate N m (the continuation's work per level grows with both).
+    const auto wall0 = std::chrono::steady_clock::now();
+    const size_t n_p = perturbations.size();
+    std::vector<double> costs;
+    for (int n_h : harmonics) {
+      for (int m : samples) costs.insert(costs.end(), n_p, static_cast<double>(n_h) * m);
+    }
+    const std::vector<Outcome> all = run_all<Outcome>(costs, [&](size_t i) {
+      const int n_h = harmonics[i / n_p / samples.size()], m = samples[i / n_p % samples.size()];
+      Outcome o = run_backbone(problem, n_h, m, e_min, e_max, e_check, perturbations[i % n_p]);
+      std::cerr << ("ll11_robustness: N = " + std::to_string(n_h) + ", m = " + std::to_string(m) + ", " +
+                    perturbations[i % n_p].name + ": " + o.stop + ", " + format("%.1f", o.seconds) + " s\n");
+      return o;
+    });
+    const double grid_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     // runs.csv columns (one row per run) and the status of each row (its stop; why a value is missing).
     std::vector<std::vector<double>> columns(10);
     std::vector<std::string> status;
@@ -217,9 +264,9 @@ int main(int argc, char** argv) {
     double worst = 0.0, total_seconds = 0.0;
     for (int n_h : harmonics) {
       for (int m : samples) {
+        const std::vector<Outcome> outs(all.begin() + static_cast<std::ptrdiff_t>(pairs * n_p),
+                                        all.begin() + static_cast<std::ptrdiff_t>((pairs + 1) * n_p));
         ++pairs;
-        std::vector<Outcome> outs;
-        for (const auto& p : perturbations) outs.push_back(run_backbone(problem, n_h, m, e_min, e_max, e_check, p));
         const Outcome& ref = outs.front();
         // Agreement of each perturbed run with the unperturbed one.
         double diff = 0.0;
@@ -327,12 +374,20 @@ int main(int argc, char** argv) {
     nlohmann::json stiff_meta = nlohmann::json::array();
     int stiff_incomplete = 0, stiff_disagreeing = 0;
     double stiff_worst = 0.0;
-    for (const auto& [label, basis] : {std::pair<std::string, std::string>{"dimension = 64", "basis = { trial = \"fourier\", dimension = 64 }\n"},
-                                       std::pair<std::string, std::string>{"defaults", ""}}) {
-      std::vector<StiffStopOutcome> outs;
-      for (const auto& p : perturbations) {
-        if (!p.reversed) outs.push_back(run_stiff_stop(basis, p.scale));
-      }
+    const std::vector<std::pair<std::string, std::string>> stiff_bases = {
+        {"dimension = 64", "basis = { trial = \"fourier\", dimension = 64 }\n"}, {"defaults", ""}};
+    std::vector<double> stiff_scales;
+    for (const auto& p : perturbations) {
+      if (!p.reversed) stiff_scales.push_back(p.scale);
+    }
+    const std::vector<StiffStopOutcome> stiff_all =
+        run_all<StiffStopOutcome>(std::vector<double>(stiff_bases.size() * stiff_scales.size(), 1.0), [&](size_t i) {
+          return run_stiff_stop(stiff_bases[i / stiff_scales.size()].second, stiff_scales[i % stiff_scales.size()]);
+        });
+    for (size_t b = 0; b < stiff_bases.size(); ++b) {
+      const std::string& label = stiff_bases[b].first;
+      const std::vector<StiffStopOutcome> outs(stiff_all.begin() + static_cast<std::ptrdiff_t>(b * stiff_scales.size()),
+                                               stiff_all.begin() + static_cast<std::ptrdiff_t>((b + 1) * stiff_scales.size()));
       const StiffStopOutcome& ref = outs.front();
       double diff = 0.0, seconds = 0.0;
       bool agree = true;
@@ -374,9 +429,15 @@ int main(int argc, char** argv) {
       const scene::Scene case2 = reproduce::load_scene("jl14_case2");
       int fig12_disagreeing = 0, fig12_unexplained = 0;
       double fig12_worst = 0.0;
-      for (const auto& c : reproduce::table2_combinations()) {
-        std::vector<Fig12Outcome> outs;
-        for (const auto& p : perturbations) outs.push_back(run_fig12(case2, c, p));
+      const auto combinations = reproduce::table2_combinations();
+      const std::vector<Fig12Outcome> fig12_all =
+          run_all<Fig12Outcome>(std::vector<double>(combinations.size() * n_p, 1.0), [&](size_t i) {
+            return run_fig12(case2, combinations[i / n_p], perturbations[i % n_p]);
+          });
+      for (size_t ci = 0; ci < combinations.size(); ++ci) {
+        const reproduce::Combination& c = combinations[ci];
+        const std::vector<Fig12Outcome> outs(fig12_all.begin() + static_cast<std::ptrdiff_t>(ci * n_p),
+                                             fig12_all.begin() + static_cast<std::ptrdiff_t>((ci + 1) * n_p));
         const Fig12Outcome& ref = outs.front();
         double diff = 0.0, seconds = 0.0;
         bool agree = true;
@@ -411,22 +472,29 @@ int main(int argc, char** argv) {
                         "same peak amplitude",
                         fig12_unexplained == 0 && fig12_disagreeing == 0,
                         std::to_string(fig12_unexplained) + " end otherwise, " + std::to_string(fig12_disagreeing) +
-                            " of 6 disagree; largest relative difference " + format("%.1e", fig12_worst)});
+                            " of " + std::to_string(combinations.size()) +
+                            " disagree; largest relative difference " + format("%.1e", fig12_worst)});
     }
     run.meta({{"check", "independence of the LL11 rod backbone, the stiff stop and JL14 Fig. 12 from rounding"},
               {"scene", base.path}, {"energy_max", e_max}, {"pairs", meta}, {"stiff_stop", stiff_meta},
-              {"jl14_fig12", fig12_meta}, {"total_seconds", total_seconds}});
+              {"jl14_fig12", fig12_meta}, {"grid", grid}, {"total_seconds", total_seconds},
+              {"grid_wall_seconds", grid_wall}});
     std::ostringstream md;
     md << "## Robustness: the LL11 rod backbone against rounding (issue #35)\n\n"
        << "Files: `out/ll11_robustness/runs.csv` (one row per run; perturbation 0: none, 1–3: K scaled, 4: DOFs "
           "reversed; status: the stop), `meta.json`. Scene `reproduce/scenes/ll11_rod.toml` with N and m "
           "replaced; continuation of the KKT conditions from E = "
        << format("%g", e_min) << " to " << format("%g", e_max)
-       << ", corners crossed as located events (continuation.hpp). Each pair runs five times: as is, with K scaled by "
+       << ", corners crossed as located events (continuation.hpp). Grid: **" << grid << "**"
+       << (grid == "full" ? std::string(" (the default of `make reproduce`)")
+                          : grid == "reduced" ? std::string(" (`WBM_ROBUSTNESS_GRID=reduced`, as .ci/run; unset it for the full grid)")
+                                              : std::string(" (--quick)"))
+       << ". Each pair runs five times: as is, with K scaled by "
           "(1 + k·1e-12) for k = 1, 2, 3, and with the DOFs numbered in reverse; the difference column is the "
           "largest relative difference of the folds' energies and of the frequencies at E = "
        << format("%g", e_check) << " and at the range's end from the unperturbed run. Time: the five runs together ("
-       << format("%.0f", total_seconds) << " s in all).\n\n"
+       << format("%.0f", total_seconds) << " s of runs in all; the grid took " << format("%.0f", grid_wall)
+       << " s on " << std::to_string(tbb::this_task_arena::max_concurrency()) << " workers).\n\n"
        << "| N | m | outcome | levels | corners | folds | f at E = " << format("%g", e_check) << " [Hz] | f at E = "
        << format("%g", e_max) << " [Hz] | largest difference | perturbed runs | time [s] |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|\n"
