@@ -57,9 +57,6 @@ if(WBM_BUILD_REPRODUCE)
     endforeach()
   endif()
   wbm_require(WBM_PYTHON python3-matplotlib "A python3 that imports matplotlib")
-endif()
-
-if(WBM_BUILD_REPRODUCE)
   # oneTBB: reproduce/ll11_robustness.cpp runs its independent continuations in parallel.
   find_package(TBB QUIET CONFIG)
   wbm_require(TBB_FOUND libtbb-dev "oneTBB")

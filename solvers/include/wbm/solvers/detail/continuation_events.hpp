@@ -23,9 +23,9 @@
 /// tangent recomputed; if none is left, no piece continues the branch and the step says why.
 /// Where the new piece's own solution through the point has a flipped entry below its surface
 /// by more than the crossing threshold (an ill-conditioned piece: its multipliers amplify the
-/// point's residual), the switching point is moved along the new piece to where the flipped
-/// entries meet their surfaces, so that the next step does not take them for entries crossing
-/// back (onto_new_piece).
+/// point's residual), the switching point is moved along the new piece into its admissible side,
+/// by as much as the flipped entries lay below their surfaces, so that the next step does not
+/// take them for entries crossing back (onto_new_piece).
 /// [Leine & Nijmeijer 2004, Sec. 7.3 (switching in path following); Acary & Brogliato 2008,
 /// Sec. 12.2; the parametric LCP's pivoting, Cottle, Pang & Stone 1992, Sec. 4.5.]
 
