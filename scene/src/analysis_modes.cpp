@@ -83,39 +83,21 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     }
     b = modes.backbone(o);
   }
-  const auto n = static_cast<Eigen::Index>(b.levels.size());
-  Eigen::VectorXd e(n), f(n), fr(n), pen(n), comp(n), norm(n), force(n), its(n), gi(n), ge(n), powell(n);
-  Eigen::VectorXd first_share(n), other_mode(n), other_harmonic(n), other_share(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& l = b.levels[static_cast<size_t>(i)];
-    e(i) = l.energy;
-    f(i) = l.frequency_hz;
-    fr(i) = l.rayleigh_frequency_hz;
-    pen(i) = l.max_penetration;
-    comp(i) = l.complementarity;
-    norm(i) = l.normalization_error;
-    force(i) = l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0;
-    its(i) = l.newton_iterations;
-    gi(i) = l.inequality_measure;
-    ge(i) = l.equality_measure;
-    powell(i) = l.powell_iterations;
-    const auto mc = modes.modal_components(l);
-    first_share(i) = mc.first_mode_share;
-    other_mode(i) = mc.mode;
-    other_harmonic(i) = mc.harmonic;
-    other_share(i) = mc.share;
-  }
+  const BackboneColumns c = backbone_columns(modes, b);
+  const Eigen::Index n = c.energy.size();
   if (n > 0) {
     std::vector<std::string> header = {"energy [-]", "frequency [Hz]", "rayleigh_frequency [Hz]",
                                        "max_penetration [gap]", "complementarity [gap]", "normalization_error [-]",
                                        "max_contact_force [N]", "newton_iterations [-]"};
-    std::vector<Eigen::VectorXd> columns = {e, f, fr, pen, comp, norm, force, its};
+    std::vector<Eigen::VectorXd> columns = {c.energy,          c.frequency_hz,        c.rayleigh_frequency_hz,
+                                           c.max_penetration, c.complementarity,     c.normalization_error,
+                                           c.max_contact_force, c.newton_iterations};
     if (!continuation) {
       header.insert(header.end(), {"powell_iterations [-]", "G_i [gap]", "G_e [-]"});
-      columns.insert(columns.end(), {powell, gi, ge});
+      columns.insert(columns.end(), {c.powell_iterations, c.inequality_measure, c.equality_measure});
     }
     header.insert(header.end(), {"first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"});
-    columns.insert(columns.end(), {first_share, other_mode, other_harmonic, other_share});
+    columns.insert(columns.end(), {c.first_mode_share, c.other_mode, c.other_harmonic, c.other_share});
     out.tables.push_back({"backbone.csv", header, columns});
   }
   if (!b.folds.empty()) {  // each fold at its own frequency (the backbone can be multivalued in E)
@@ -199,3 +181,38 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
 }
 
 }  // namespace wbm::scene::detail
+
+namespace wbm::scene {
+
+BackboneColumns backbone_columns(const solvers::NonlinearModes& modes, const solvers::Backbone& b) {
+  const auto n = static_cast<Eigen::Index>(b.levels.size());
+  BackboneColumns c;
+  for (Eigen::VectorXd* v : {&c.energy, &c.frequency_hz, &c.rayleigh_frequency_hz, &c.max_penetration, &c.complementarity,
+                             &c.normalization_error, &c.max_contact_force, &c.newton_iterations, &c.powell_iterations,
+                             &c.inequality_measure, &c.equality_measure, &c.first_mode_share, &c.other_mode,
+                             &c.other_harmonic, &c.other_share}) {
+    v->resize(n);
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& l = b.levels[static_cast<size_t>(i)];
+    c.energy(i) = l.energy;
+    c.frequency_hz(i) = l.frequency_hz;
+    c.rayleigh_frequency_hz(i) = l.rayleigh_frequency_hz;
+    c.max_penetration(i) = l.max_penetration;
+    c.complementarity(i) = l.complementarity;
+    c.normalization_error(i) = l.normalization_error;
+    c.max_contact_force(i) = l.contact_force.size() > 0 ? l.contact_force.maxCoeff() : 0.0;
+    c.newton_iterations(i) = l.newton_iterations;
+    c.powell_iterations(i) = l.powell_iterations;
+    c.inequality_measure(i) = l.inequality_measure;
+    c.equality_measure(i) = l.equality_measure;
+    const auto mc = modes.modal_components(l);
+    c.first_mode_share(i) = mc.first_mode_share;
+    c.other_mode(i) = mc.mode;
+    c.other_harmonic(i) = mc.harmonic;
+    c.other_share(i) = mc.share;
+  }
+  return c;
+}
+
+}  // namespace wbm::scene

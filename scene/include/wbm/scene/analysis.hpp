@@ -75,4 +75,21 @@ struct ModeProblem {
 /// Throws std::logic_error unless the scene's analysis is nnm.
 [[nodiscard]] ModeProblem mode_problem(const Scene& scene);
 
+/// The per-level summary of a backbone [LL11], one entry per level of b.levels in that order:
+/// the one definition behind the nnm scene's backbone.csv and the Python module's
+/// nonlinear_mode() dict. energy [-] (1 at contact onset), frequency_hz and
+/// rayleigh_frequency_hz [Hz], max_penetration and complementarity [gap], normalization_error
+/// [-], max_contact_force [N] (0 without contact samples), newton_iterations, and for Alg. 1/2
+/// levels powell_iterations, inequality_measure G_i [gap] and equality_measure G_e [-]; then
+/// NonlinearModes::modal_components: first_mode_share [-] (of m̂ held by linear mode 1 at the
+/// fundamental), other_mode and other_harmonic (1-based) and other_share [-] of the largest other
+/// component. `modes` must be the NonlinearModes that computed `b` (modal_components uses its
+/// linear modes). Throws nothing.
+struct BackboneColumns {
+  Eigen::VectorXd energy, frequency_hz, rayleigh_frequency_hz, max_penetration, complementarity, normalization_error,
+      max_contact_force, newton_iterations, powell_iterations, inequality_measure, equality_measure,
+      first_mode_share, other_mode, other_harmonic, other_share;
+};
+[[nodiscard]] BackboneColumns backbone_columns(const solvers::NonlinearModes& modes, const solvers::Backbone& b);
+
 }  // namespace wbm::scene
