@@ -4,6 +4,7 @@
 // with the symmetry broken at the rounding level (the branch must not change).
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -17,13 +18,26 @@ using solvers::Linearization;
 
 // DOFs u_i with springs k_i to ground and c between neighbours, a load λ on each, a stop at gap g
 // on each DOF with its contact force f_i as an unknown (Signorini), x = [u; f]:
-//   R_i     = k_i u_i + Σ_j c (u_i − u_j) + a f_i − λ      (a = 1: the stop pushes back;
-//                                                            a < 0: the branch turns back)
+//   R_i     = k_i u_i + Σ_j c (u_i − u_j) + a f_i − p_i(λ)  (a = 1: the stop pushes back;
+//                                                              a < 0: the branch turns back)
+// with the load p_i(λ) = λ, or, where `bump` gives its entry a value, a parabola
+// p_i(λ) = b + d − q (λ − l)² (bump_load) that meets the stop over |λ − l| < √(d/q) only.
 //   R_(n+i) = min(f_i, g − u_i)
 // Pieces: active entry i → g − u_i = 0, event f_i; inactive → f_i = 0, event g − u_i.
 struct SpringsAgainstStops {
   Eigen::VectorXd k;
   double c = 0.0, a = 1.0, g = 1.0;
+  struct Bump {
+    Eigen::Index entry = -1;  // −1: every load is λ
+    double base = 0.0, depth = 0.0, curvature = 0.0, centre = 0.0;
+  } bump;
+  [[nodiscard]] double load(Eigen::Index i, double lambda) const {
+    if (i != bump.entry) return lambda;
+    return bump.base + bump.depth - bump.curvature * (lambda - bump.centre) * (lambda - bump.centre);
+  }
+  [[nodiscard]] double load_derivative(Eigen::Index i, double lambda) const {
+    return i != bump.entry ? 1.0 : -2.0 * bump.curvature * (lambda - bump.centre);
+  }
   [[nodiscard]] Eigen::Index n() const { return k.size(); }
   [[nodiscard]] Linearization eval(const Eigen::VectorXd& x, double lambda, const ActiveSet* piece) const {
     const Eigen::Index m = n();
@@ -32,7 +46,7 @@ struct SpringsAgainstStops {
     l.jacobian = Eigen::MatrixXd::Zero(2 * m, 2 * m);
     l.parameter_derivative = Eigen::VectorXd::Zero(2 * m);
     for (Eigen::Index i = 0; i < m; ++i) {
-      l.residual(i) = k(i) * x(i) + a * x(m + i) - lambda;
+      l.residual(i) = k(i) * x(i) + a * x(m + i) - load(i, lambda);
       l.jacobian(i, i) = k(i);
       l.jacobian(i, m + i) = a;
       for (Eigen::Index j : {i - 1, i + 1}) {
@@ -41,7 +55,7 @@ struct SpringsAgainstStops {
         l.jacobian(i, i) += c;
         l.jacobian(i, j) -= c;
       }
-      l.parameter_derivative(i) = -1.0;
+      l.parameter_derivative(i) = -load_derivative(i, lambda);
       const double f = x(m + i), gap = g - x(i);
       const bool active = piece ? (*piece)[static_cast<size_t>(i)] != 0 : !(f <= gap);
       l.residual(m + i) = piece ? (active ? gap : f) : std::min(f, gap);
@@ -151,6 +165,41 @@ TEST(PiecewiseContinuation, SimultaneousCrossingsSwitchTogetherWhateverTheirLast
     }
     EXPECT_GT(b.points.back().parameter, 5.0);
   }
+}
+
+// Two unit springs, g = 1, one step from λ = 0.9 to about 1.2: DOF 0 under p₀ = λ reaches the
+// stop at λ = 1, DOF 1 under p₁ = 1 + 0.0025 − (λ − 1)² touches it only over 0.95 < λ < 1.05.
+// DOF 1's gap crosses 0 and comes back within the step, so the step's end shows only DOF 0's
+// crossing; locating it finds DOF 1's entry first. Only DOF 1 may switch there: DOF 0 is 0.05
+// from the stop (before, the step-position rule measured simultaneity from DOF 0's crossing,
+// DOF 1 having no crossing of its own by the step's mean rate, and switched DOF 0 with it: on
+// the LL11 rod at N = 10, m = 512, E = 2.497 that put two samples with multipliers 3.5e-3 out
+// of contact, the corrector jumped to another orbit and the backbone retraced itself). Three
+// events at λ = 0.95, 1 and 1.05, every point on the closed form u_i = min(p_i, g).
+TEST(PiecewiseContinuation, AnEntryThatCrossesAndReturnsWithinAStepSwitchesAloneWhereItCrosses) {
+  SpringsAgainstStops s;
+  s.k = Eigen::Vector2d(1.0, 1.0);
+  s.bump = {.entry = 1, .base = 1.0, .depth = 0.0025, .curvature = 1.0, .centre = 1.0};
+  const double lambda0 = 0.9;
+  const Eigen::Vector4d x0(lambda0, s.load(1, lambda0), 0.0, 0.0);
+  auto o = options(0.0, 1.5);
+  o.initial_step = o.max_step = 0.34;  // the first step spans DOF 1's contact and DOF 0's onset
+  const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd(x0), lambda0, o);
+  ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
+  EXPECT_EQ(b.events, 3);
+  EXPECT_EQ(b.switches, 3);
+  std::vector<double> corners;
+  for (const auto& p : b.points) {
+    for (Eigen::Index i = 0; i < 2; ++i) {
+      EXPECT_NEAR(p.x(i), std::min(s.load(i, p.parameter), 1.0), 1e-10) << "λ = " << p.parameter;
+      EXPECT_NEAR(p.x(2 + i), std::max(0.0, s.load(i, p.parameter) - 1.0), 1e-10) << "λ = " << p.parameter;
+    }
+    if (p.event) corners.push_back(p.parameter);
+  }
+  ASSERT_EQ(corners.size(), 3U);
+  EXPECT_NEAR(corners[0], 0.95, 1e-9);
+  EXPECT_NEAR(corners[1], 1.0, 1e-9);
+  EXPECT_NEAR(corners[2], 1.05, 1e-9);
 }
 
 // A release: from contact at λ = 5 downwards, the contact force vanishes at λ = k g and the DOF

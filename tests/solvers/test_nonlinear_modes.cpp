@@ -213,6 +213,47 @@ TEST(NonlinearModes, BackboneEntersAnIllConditionedPieceWithoutTurningBack) {
   EXPECT_NEAR(f18[2], f18[1], 1e-5 * f18[1]);
 }
 
+// N = 4, m = 512, the most oversampled pair of the robustness grid (m/(2N + 1) = 57): at
+// E = 1.4106 samples τ = ±1/512 release together on the time-symmetric orbit, but with only nine
+// functions the constraint rows of the active samples 0, ±1, ±2 are nearly dependent and their
+// multipliers come out up to 4 % apart, so their crossings lie 7e-5 of the step apart. One
+// switched alone; the new piece then moved its event function at 3e-10 (the probe's rounding)
+// against 13 on the old one, the orientation was left to that noise, and with K × (1 + 2e-12)
+// or (1 + 3e-12) the branch zigzagged through 6 or 14 extra folds near E = 1.411, with the DOFs
+// numbered in reverse it retraced itself there. A flip whose new piece is tangent to a flipped
+// entry's surface takes the next crossing entry with it. Every run must reach E = 1.6 with no
+// fold and the same frequency at E = 1.5 (the unperturbed run's path, which switched the pair
+// together).
+TEST(NonlinearModes, TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether) {
+  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  std::vector<double> f15;
+  for (int k = 0; k <= 4; ++k) {
+    solvers::MechanicalSystem system = problem.system;
+    std::vector<solvers::RigidStop> stops = problem.stops;
+    if (k < 4) {
+      system.stiffness *= 1.0 + k * 1e-12;
+    } else {  // the DOFs numbered in reverse
+      const auto n = static_cast<int>(system.stiffness.rows());
+      Eigen::VectorXi order(n);
+      for (int i = 0; i < n; ++i) order(i) = n - 1 - i;
+      const Eigen::PermutationMatrix<Eigen::Dynamic> perm(order);
+      system.stiffness = (perm * system.stiffness * perm.transpose()).eval();
+      system.mass = (perm * system.mass * perm.transpose()).eval();
+      for (auto& stop : stops) stop.dof = n - 1 - stop.dof;
+    }
+    const solvers::NonlinearModes nm(system, stops, {.harmonics = 4, .samples = 512});
+    auto o = range(0.5, 1.6);
+    o.include = {1.5};
+    const auto b = nm.continue_backbone(o);
+    ASSERT_TRUE(b.complete) << "run " << k << ": " << b.message;
+    EXPECT_TRUE(b.folds.empty()) << "run " << k << ": " << b.folds.size() << " folds";
+    ASSERT_EQ(b.included.size(), 1U);
+    ASSERT_TRUE(b.included[0].converged());
+    f15.push_back(b.included[0].frequency_hz);
+  }
+  for (size_t k = 1; k < f15.size(); ++k) EXPECT_NEAR(f15[k], f15[0], 1e-9 * f15[0]) << "run " << k;
+}
+
 // The structured KKT solver (block-diagonal harmonic balance + Schur complement on the active
 // samples) against a slow reference path, full-pivoting LU of the dense J: three stops (the tip,
 // and two along directions over two DOFs each, one of them through the phase DOF), samples on

@@ -21,6 +21,8 @@
 /// This need not be within 90° of the old tangent (complementarity branches turn back at
 /// corners). Entries whose new event would decrease whichever way are left unflipped and the
 /// tangent recomputed; if none is left, no piece continues the branch and the step says why.
+/// A flipped entry whose event function does not move along the new piece (tangent to its
+/// surface, the orientation left to rounding) takes the next crossing entry into the group.
 /// Where the new piece's own solution through the point has a flipped entry below its surface
 /// by more than the crossing threshold (an ill-conditioned piece: its multipliers amplify the
 /// point's residual), the switching point is moved along the new piece into its admissible side,
@@ -249,7 +251,12 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   // low end, those whose own crossing lies within kSimultaneous·h of the first one's, and once
   // the bracket is tight every one negative at the high end; at least the one closest to its
   // surface. An entry's crossing is placed at lo + e_j(lo)/rate_j, rate_j its event function's
-  // mean rate of decrease over the whole step. The second rule makes simultaneous crossings
+  // mean rate of decrease over the whole step, and at lo itself for an entry in the zero band
+  // there: the located crossing is the first, even when its entry comes back above its surface
+  // by the step's end (its mean rate then says "no crossing", and measuring simultaneity from
+  // the next entry's crossing switched that entry too, far from its surface: LL11 rod, N = 10,
+  // m = 512, E = 2.4971, samples ±66/512 with multipliers 3.5e-3 released with ±67/512, the
+  // corrector jumped to another orbit and the backbone retraced itself). The second rule makes simultaneous crossings
   // (samples placed symmetrically in time on a time-reversible orbit) switch together whatever
   // the last bits of their event functions: at the located point these are known only to about
   // the corrector's tolerance times the Jacobian's conditioning, which can exceed the zero band
@@ -260,7 +267,7 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   const Eigen::VectorXd e_lo = lo == 0.0 ? e_last : events(a_lo.z, piece);
   const bool tight = !(hi - lo > 1e-10 * h);
   auto crossing_at = [&](Eigen::Index j) {
-    if (e_lo(j) <= 0.0) return lo;
+    if (e_lo(j) <= zero_band) return lo;
     const double rate = (e_last(j) - e_end(j)) / h;
     return rate > 0.0 ? lo + e_lo(j) / rate : std::numeric_limits<double>::infinity();
   };
@@ -292,6 +299,8 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   // The new piece: flip the group, orient its tangent by the flipped entries' new events; drop
   // the entries that would leave at once and try again.
   constexpr double kProbe = 1e-6;
+  constexpr double kTransversal = 1e-6;
+  std::vector<Eigen::Index> dropped;  // entries left unflipped: they would leave at once
   bool singular = false;
   while (!group.empty()) {
     out.next = piece;
@@ -307,9 +316,43 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     for (Eigen::Index j : group) sum += rate(j);
     if (sum < 0.0) t = -t;
     const double sign = sum < 0.0 ? -1.0 : 1.0;
+    // A flipped entry whose new event function does not move along the new piece (|rate| at most
+    // kTransversal times its rate of crossing over the step on the old piece: zero to the probe's
+    // rounding) leaves the orientation to rounding, the new piece being tangent to that entry's
+    // surface. The crossing entry whose crossing comes next (not one dropped below) joins the
+    // group and the flip is tried again. LL11 rod, N = 4, m = 512, K × (1 + 1e-12), E = 1.4106:
+    // samples ±1/512 of the time-symmetric orbit, multipliers 4 % apart (the active samples' rows
+    // nearly dependent with nine functions), crossed 7e-5 of the step apart; −1/512 switched alone,
+    // its rate on the new piece was −3e-10 against 13 on the old one, and the branch folded back.
+    bool transversal = true;
+    for (Eigen::Index j : group) {
+      const double crossing_rate = std::abs(e_last(j) - e_end(j)) / h;
+      if (!(std::abs(rate(j)) > kTransversal * crossing_rate)) transversal = false;
+    }
+    if (!transversal) {
+      Eigen::Index next_entry = -1;
+      for (Eigen::Index j : crossing) {
+        if (std::find(group.begin(), group.end(), j) != group.end() ||
+            std::find(dropped.begin(), dropped.end(), j) != dropped.end()) {
+          continue;
+        }
+        if (next_entry < 0 || crossing_at(j) < crossing_at(next_entry) ||
+            (crossing_at(j) == crossing_at(next_entry) && e_lo(j) < e_lo(next_entry))) {
+          next_entry = j;
+        }
+      }
+      if (next_entry >= 0) {
+        group.push_back(next_entry);
+        continue;
+      }
+    }
     std::vector<Eigen::Index> keep;
     for (Eigen::Index j : group) {
-      if (sign * rate(j) > 0.0) keep.push_back(j);
+      if (sign * rate(j) > 0.0) {
+        keep.push_back(j);
+      } else {
+        dropped.push_back(j);
+      }
     }
     if (keep.size() == group.size()) {
       out.a.tangent = std::move(t);
