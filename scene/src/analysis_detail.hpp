@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <wbm/scene/analysis.hpp>
+#include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 namespace wbm::scene::detail {
@@ -30,6 +31,15 @@ nlohmann::json to_json(const solvers::WeightedResidualSolution& s);
 
 // One number in printf notation (`spec`, e.g. "%.6g").
 std::string format(const char* spec, double v);
+
+// How to get past a stop that is not a computed outcome, as "; way out: …" naming the scene key
+// to change and a value to try (issue #35, item 4), for type = "continuation" and "nnm": the
+// point limit ([analysis] max_points), the state bound ([analysis] max_state), a step below
+// minimum ([analysis] max_step; for nnm, or another N/m), a retraced backbone or a degenerate
+// switching point ([analysis] harmonics, samples), LL11 Alg. 1/2's wall-time budget ([analysis]
+// algorithm). Empty for an outcome (range or goal reached) and for stops whose solver message
+// names its way out already (the undamped top Fourier function, a start that did not converge).
+std::string way_out(const Scene& scene, solvers::StopReason stop);
 
 // The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
 std::string contact_label(const Scene& scene, size_t c);

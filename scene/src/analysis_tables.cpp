@@ -65,6 +65,41 @@ std::string format(const char* spec, double v) {
   return b;
 }
 
+std::string way_out(const Scene& scene, solvers::StopReason stop) {
+  using solvers::StopReason;
+  const Analysis& a = scene.analysis;
+  const bool nnm = a.kind == AnalysisKind::NonlinearModes;
+  const std::string another_discretization =
+      "change [analysis] harmonics (now " + std::to_string(a.harmonics) + ") or samples (now " +
+      std::to_string(a.samples) + "; more samples per harmonic resolve the contact instants finer, fewer keep the "
+      "constraint rows of neighbouring samples independent)";
+  switch (stop) {
+    case StopReason::MaxPoints:
+      return "; way out: raise [analysis] max_points (now " + std::to_string(a.max_points) + "), e.g. to " +
+             std::to_string(std::min(2 * a.max_points, 1000000));
+    case StopReason::StateBound:
+      return "; way out: raise [analysis] max_state (now " + format("%g", a.max_state) + "), or set it to 0 for no bound";
+    case StopReason::StepBelowMinimum:
+      return "; way out: lower [analysis] max_step (now " + format("%g", a.max_step) + "), e.g. to " +
+             format("%g", a.max_step / 4.0) +
+             (nnm ? ", or " + another_discretization
+                  : scene.basis.harmonics == 0 ? ", or use [basis] harmonics = H (2H + 1 functions, the contact "
+                                                 "averaged over cells: a smooth residual)"
+                                               : "");
+    case StopReason::Retraced:
+    case StopReason::DegenerateEvent:
+      return nnm ? "; way out: " + another_discretization : "";
+    case StopReason::TimeBudget:
+      return nnm ? "; way out: [analysis] algorithm = \"continuation\" (the KKT continuation, not bounded by a budget)" : "";
+    case StopReason::RangeReached:
+    case StopReason::GoalReached:
+    case StopReason::InitialPointFailed:
+    case StopReason::UndampedResonance:
+      return "";
+  }
+  return "";
+}
+
 // The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
 std::string contact_label(const Scene& scene, size_t c) {
   const Structure& st = *scene.structure;

@@ -220,6 +220,30 @@ TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
   EXPECT_EQ(column(r, "branch.csv", 5).minCoeff(), 1.0);  // every point stable
 }
 
+// A stop that is not a computed outcome names the key that gets past it (issue #35, item 4): the
+// point limit of a frequency continuation and of a backbone, each with its value now and one to
+// try; a complete run adds nothing.
+TEST(Scene, AStopThatIsNotAnOutcomeNamesTheKeyToChange) {
+  const std::string text = "structure = { mass = 2.0, stiffness = 8e4 }\ndamping = { alpha = 3.0 }\n"
+                           "forcing = { amplitude = 10.0, frequency_hz = [5.0, 55.0] }\n"
+                           "contact = { law = \"linear\", stiffness = 1e6, gap = 1.0 }\n"
+                           "basis = { dimension = 8 }\n";
+  const auto cut = wbm::scene::run_analysis(parse(text + "analysis = { type = \"continuation\", max_points = 3 }\n"));
+  EXPECT_FALSE(cut.converged);
+  const std::string message = cut.diagnostics["continuation"]["message"].get<std::string>();
+  EXPECT_NE(message.find("way out: raise [analysis] max_points (now 3), e.g. to 6"), std::string::npos) << message;
+  const auto full = wbm::scene::run_analysis(parse(text + "analysis = { type = \"continuation\" }\n"));
+  ASSERT_TRUE(full.converged);
+  EXPECT_EQ(full.diagnostics["continuation"]["message"].get<std::string>().find("way out"), std::string::npos);
+
+  Scene nnm = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  nnm.analysis.max_points = 4;
+  const auto b = wbm::scene::run_analysis(nnm);
+  EXPECT_FALSE(b.converged);
+  const std::string nnm_message = b.diagnostics["nnm"]["message"].get<std::string>();
+  EXPECT_NE(nnm_message.find("way out: raise [analysis] max_points (now 4), e.g. to 8"), std::string::npos) << nnm_message;
+}
+
 // Progress of an nnm backbone: one report per accepted point of the energy continuation, the
 // fraction of the energy range covered, and a label with the point, its energy and the step.
 TEST(Scene, BackboneReportsProgressPerPoint) {
