@@ -19,9 +19,9 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <Eigen/SparseCore>
 
 #include <wbm/solvers/status.hpp>
@@ -91,7 +91,8 @@ struct NewtonOptions {
   /// When the line search finds no decrease: Levenberg–Marquardt steps
   /// (JᵀJ + μ² I) d = −Jᵀ R, μ from 10⁻⁶ ‖J‖∞, ×0.3 after a decrease of ‖R‖₂ and ×4 after a
   /// failure (at most max_lm_trials per iteration); once started they replace the Newton steps
-  /// for the rest of the solve. Dense normal equations: for small systems (nonlinear modes).
+  /// for the rest of the solve. Each step is a dense Householder QR of [J; μI]
+  /// (detail::levenberg_marquardt_step): for small systems (nonlinear modes).
   bool levenberg_marquardt = false;
   int max_lm_trials = 20;
   ResidualNorm norm = ResidualNorm::Euclidean;
@@ -266,6 +267,24 @@ Eigen::MatrixXd as_dense(const J& j) {
   return Eigen::MatrixXd(j);
 }
 inline Eigen::MatrixXd as_dense(const LowRankJacobian& j) { return j.dense(); }
+
+/// The Levenberg–Marquardt step d = argmin ‖J d + r‖₂² + μ²‖d‖₂², i.e. (JᵀJ + μ²I) d = −Jᵀr,
+/// computed as the least-squares solution of the stacked system [J; μI] d = [−r; 0] by
+/// Householder QR [Moré 1978, Lecture Notes in Math. 630, 105–116; Nocedal & Wright 2006,
+/// Sec. 10.3], never by the normal equations, whose matrix has the square of J's condition
+/// number (κ(J) = 1e7 loses every digit of the step along J's small singular vectors).
+/// J: m × n (m ≥ 1), r: length m, μ > 0 (then [J; μI] has full column rank). O((m + n) n²).
+/// Returns d (length n); non-finite entries if J or r has NaN or inf.
+inline Eigen::VectorXd levenberg_marquardt_step(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& r, double mu) {
+  const Eigen::Index m = jacobian.rows();
+  const Eigen::Index n = jacobian.cols();
+  Eigen::MatrixXd stacked(m + n, n);
+  stacked.topRows(m) = jacobian;
+  stacked.bottomRows(n) = mu * Eigen::MatrixXd::Identity(n, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m + n);
+  rhs.head(m) = -r;
+  return stacked.householderQr().solve(rhs);
+}
 }  // namespace detail
 
 /// The linear solver newton() uses by default for a system: SparseLu for a sparse Jacobian,
@@ -345,15 +364,11 @@ NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& opt
         }
       }
     }
-    if (!accepted && options.levenberg_marquardt) {  // Levenberg–Marquardt on ½‖R‖₂²
+    if (!accepted && options.levenberg_marquardt) {  // Levenberg–Marquardt on ½‖R‖₂², by QR
       const Eigen::MatrixXd dense = detail::as_dense(jac);
       if (mu == 0.0) mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
-      const Eigen::MatrixXd normal = dense.transpose() * dense;
-      const Eigen::VectorXd gradient = dense.transpose() * r;
       for (int b = 0; b < options.max_lm_trials; ++b) {
-        Eigen::MatrixXd a = normal;
-        a.diagonal().array() += mu * mu;
-        const Eigen::VectorXd d = -a.ldlt().solve(gradient);
+        const Eigen::VectorXd d = detail::levenberg_marquardt_step(dense, r, mu);
         if (d.allFinite()) {
           x_new = x + d;
           r_new = system.residual(x_new);
