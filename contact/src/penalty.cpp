@@ -2,9 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_math.h>
+#include <gsl/gsl_roots.h>
 
 namespace wbm::contact {
 namespace {
@@ -116,18 +122,37 @@ double SeriesCompliance::node_position(double s) const {
   if (std::isnan(s)) return s;
   if (s <= g0 || inner_->force(s) == 0.0) return s;  // open: the node sits where the spring puts it
   // h(y) = y + c f(y) − s is increasing, h(g0) = g0 − s < 0 ≤ h(s) = c f(s): the root is in [g0, s].
-  double lo = g0, hi = s, y = s;
+  struct Residual {
+    const ContactLaw* law;
+    double c, s;
+  } residual{inner_.get(), c_, s};
+  gsl_function h;
+  h.function = [](double y, void* p) {
+    const auto* r = static_cast<const Residual*>(p);
+    return y + r->c * r->law->force(y) - r->s;
+  };
+  h.params = &residual;
+  // A force that overflows (an exponential law far in) is above the root: shrink the bracket
+  // until h is finite at its upper end, as Brent's method needs.
+  double lo = g0, hi = s;
+  for (int k = 0; k < 2100 && !std::isfinite(GSL_FN_EVAL(&h, hi)); ++k) hi = 0.5 * (lo + hi);
+  gsl_set_error_handler_off();  // report through return codes, never abort
+  const std::unique_ptr<gsl_root_fsolver, decltype(&gsl_root_fsolver_free)> solver(
+      gsl_root_fsolver_alloc(gsl_root_fsolver_brent), &gsl_root_fsolver_free);
+  if (!solver) throw std::bad_alloc();
   const double tolerance = 1e-15 * (std::abs(s) + std::abs(g0));
-  for (int k = 0; k < 200; ++k) {
-    const double h = y + c_ * inner_->force(y) - s;
-    if (h > 0.0) hi = y; else lo = y;
-    double next = y - h / (1.0 + c_ * inner_->stiffness(y));
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket: bisect
-    if (std::abs(next - y) <= tolerance || hi - lo <= tolerance) return next;
-    y = next;
+  int status = gsl_root_fsolver_set(solver.get(), &h, lo, hi);
+  for (int k = 0; k < 200 && status == GSL_SUCCESS; ++k) {
+    status = gsl_root_fsolver_iterate(solver.get());
+    if (status != GSL_SUCCESS) break;
+    lo = gsl_root_fsolver_x_lower(solver.get());
+    hi = gsl_root_fsolver_x_upper(solver.get());
+    if (gsl_root_test_interval(lo, hi, tolerance, 0.0) == GSL_SUCCESS) return gsl_root_fsolver_root(solver.get());
   }
   std::ostringstream os;
-  os << "SeriesCompliance::node_position: no convergence in 200 steps at s = " << s << " m (" << describe() << ")";
+  os << "SeriesCompliance::node_position: GSL's Brent solver did not bracket the node position to " << tolerance
+     << " m within 200 iterations at s = " << s << " m (last bracket [" << lo << ", " << hi << "] m; GSL: "
+     << gsl_strerror(status) << "; " << describe() << ")";
   throw std::runtime_error(os.str());
 }
 

@@ -4,6 +4,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -93,6 +94,36 @@ TEST(ContactLaw, RejectsInvalidParameters) {
 // spring k/(1 + ck) (force, stiffness and potential in closed form); for the exponential law the
 // node position solves its equation, the stiffness is the derivative of the force and the
 // potential's derivative is the force (central differences).
+namespace {
+// A law whose force overflows: f(u) = k (e^{α(u − g)} − 1) with no linear extension (α = 1e4 /m:
+// inf from u − g > 0.071 m).
+struct Unbounded final : ContactLaw {
+  double force(double u) const override { return u <= 1e-3 ? 0.0 : 1e6 * std::expm1(1e4 * (u - 1e-3)); }
+  double stiffness(double u) const override { return u <= 1e-3 ? 0.0 : 1e10 * std::exp(1e4 * (u - 1e-3)); }
+  double potential(double u) const override { return u <= 1e-3 ? 0.0 : 1e2 * std::expm1(1e4 * (u - 1e-3)) - 1e6 * (u - 1e-3); }
+  double gap() const override { return 1e-3; }
+  std::string describe() const override { return "unbounded exponential"; }
+};
+}  // namespace
+
+// Where the inner force overflows at s itself, the node position is still the root of
+// y + c f(y) = s (Brent's bracket is first shrunk to where the force is finite).
+TEST(SeriesCompliance, SolvesTheNodePositionWhereTheInnerForceOverflowsAtS) {
+  const auto law = std::make_shared<Unbounded>();
+  const double c = 1e-8;
+  const SeriesCompliance series(law, c);
+  for (double s : {0.2, 1.0, 1e3}) {
+    ASSERT_FALSE(std::isfinite(law->force(s))) << s;
+    const double y = series.node_position(s);
+    EXPECT_GT(y, 1e-3);
+    EXPECT_LT(y, 0.071);
+    // |y − y*| ≤ 1e-15 (|s| + |g0|) (the documented bracket), so the residual is within the
+    // slope 1 + c f'(y) times that, plus the rounding of s.
+    const double bound = 2.0 * (1.0 + c * law->stiffness(y)) * 1e-15 * (s + 1e-3) + 4.0 * std::numeric_limits<double>::epsilon() * s;
+    EXPECT_LE(std::abs(y + c * law->force(y) - s), bound) << s;
+  }
+}
+
 TEST(SeriesCompliance, IsTheLawInSeriesWithTheSpring) {
   const double c = 1e-8;  // a 1e8 N/m spring
   const auto linear = std::make_shared<LinearPenalty>(LinearPenaltyParameters{3e8, 1e-3});

@@ -96,9 +96,11 @@ class LinearPenalty final : public ContactLaw {
 /// where f, f', P are the inner law's force, stiffness and potential (P_eff: the energy of the
 /// stop and of the spring's share that the contact compresses; dP_eff/ds = f_eff). For a linear
 /// inner law k this is the series spring k / (1 + c k); a rigid stop behind a spring is the
-/// penalty 1/c (use LinearPenalty, as solvers::condense_massless does). y is solved by Newton on
-/// the monotone y + c f(y) − s (derivative ≥ 1), safeguarded by bisection on [g0, s]; it
-/// converges to |Δy| ≤ 1e-15 (|s| + |g0|) in at most 200 steps (else std::runtime_error).
+/// penalty 1/c (use LinearPenalty, as solvers::condense_massless does). y is the root of the
+/// monotone y + c f(y) − s on the bracket [g0, s], by GSL's Brent solver (gsl_root_fsolver_brent;
+/// the upper end first halved while a force overflows there), to a bracket of width
+/// ≤ 1e-15 (|s| + |g0|) within 200 iterations; else std::runtime_error with GSL's status and the
+/// last bracket.
 /// Throws std::invalid_argument for a rigid or null inner law, or c not finite and > 0.
 class SeriesCompliance final : public ContactLaw {
  public:
