@@ -17,7 +17,11 @@ wbm_require(FFTW3_FOUND libfftw3-dev "FFTW 3")
 find_package(GSL QUIET)
 wbm_require(GSL_FOUND libgsl-dev "GSL")
 
-find_package(Threads REQUIRED)  # the toolchain's threads (response-curve stability)
+find_package(Threads REQUIRED)  # the toolchain's threads (oneTBB's, and the python module's)
+# oneTBB: the stability of a response curve's points (solvers/), the robustness grid's independent
+# continuations (reproduce/ll11_robustness.cpp).
+find_package(TBB QUIET CONFIG)
+wbm_require(TBB_FOUND libtbb-dev "oneTBB")
 
 list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
 find_package(spectra 1.0 QUIET CONFIG)  # Craig–Bampton's sparse eigenproblem (fem/)
@@ -57,9 +61,6 @@ if(WBM_BUILD_REPRODUCE)
     endforeach()
   endif()
   wbm_require(WBM_PYTHON python3-matplotlib "A python3 that imports matplotlib")
-  # oneTBB: reproduce/ll11_robustness.cpp runs its independent continuations in parallel.
-  find_package(TBB QUIET CONFIG)
-  wbm_require(TBB_FOUND libtbb-dev "oneTBB")
 endif()
 
 if(WBM_BUILD_PYTHON)

@@ -1,18 +1,17 @@
 #include <wbm/solvers/response_curve.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <exception>
-#include <mutex>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
-#include <system_error>
-#include <thread>
 
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -184,7 +183,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   }
   if (o.threads < 0) {
     throw std::invalid_argument("trace_response: threads = " + std::to_string(o.threads) +
-                                ": must be >= 0 (0: one per hardware thread, 1: serial)");
+                                ": must be >= 0 (0: oneTBB's default, one per core this process may use; 1: serial)");
   }
   if (o.samples < 8) {
     throw std::invalid_argument("trace_response: samples = " + std::to_string(o.samples) +
@@ -315,53 +314,35 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   for (const auto& p : branch.points) curve.points.push_back(response_at(p.parameter, p.x, p.corrector_iterations));
   for (const auto& fold : branch.folds) curve.fold_points.push_back(response_at(fold.parameter, fold.x, 0));
   if (o.stability) {
-    // The monodromy matrix of each point, on `threads` workers taking points in turn (an atomic
-    // counter: the refined points cost up to 16 times more). Each point's computation does not
-    // depend on the others, so the results are the same for any thread count.
+    // The monodromy matrix of each point, on oneTBB's workers (at most `threads`, in a task
+    // arena), one point a task: the refined points cost up to 16 times more, and TBB's work
+    // stealing balances them. Each point's computation does not depend on the others, so the
+    // results are the same for any thread count. An exception in any task cancels the others and
+    // is rethrown here (TBB's exception propagation).
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<FloquetResult> results(curve.points.size());
-    std::atomic<size_t> next{0};
-    auto work = [&] {
-      for (size_t i = next++; i < results.size(); i = next++) {
-        const ResponsePoint& r = curve.points[i];
-        const Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
-        FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
-        // Refine where the error estimate could overturn the verdict (near a collision of two
-        // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
-        for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
-          const int steps = 4 * fl.steps;
-          const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
-          const Eigen::MatrixXd ucf =
-              base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
-          fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
-        }
-        results[i] = std::move(fl);
+    auto stability_of = [&](size_t i) {
+      const ResponsePoint& r = curve.points[i];
+      const Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+      FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+      // Refine where the error estimate could overturn the verdict (near a collision of two
+      // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
+      for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
+        const int steps = 4 * fl.steps;
+        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
+        const Eigen::MatrixXd ucf =
+            base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+        fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
       }
+      results[i] = std::move(fl);
     };
-    const unsigned hardware = std::max(1U, std::thread::hardware_concurrency());
-    const size_t workers = std::min<size_t>(o.threads > 0 ? static_cast<size_t>(o.threads) : hardware, results.size());
-    std::exception_ptr failure;  // the first exception of any worker, rethrown here
-    std::mutex failure_mutex;
-    auto guarded = [&] {
-      try {
-        work();
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        next = results.size();  // the other workers stop at their next point
-      }
-    };
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < workers; ++t) {
-      try {
-        pool.emplace_back(guarded);
-      } catch (const std::system_error&) {
-        break;  // no more threads to be had: the ones started (and this one) do the work
-      }
-    }
-    guarded();
-    for (auto& th : pool) th.join();
-    if (failure) std::rethrow_exception(failure);
+    const int workers = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+    tbb::task_arena arena(std::max(1, workers));
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, results.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) stability_of(i);
+      });
+    });
     for (size_t i = 0; i < results.size(); ++i) {
       ResponsePoint& r = curve.points[i];
       const FloquetResult& fl = results[i];

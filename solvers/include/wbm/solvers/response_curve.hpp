@@ -116,8 +116,9 @@ struct ResponseCurveOptions {
   /// Throws std::invalid_argument (trace_response) if P < 8.
   int samples = 512;
   bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
-  /// Threads for the stability of the points (each point's monodromy matrix is independent, so
-  /// the multipliers are bit-identical for any count); 0: std::thread::hardware_concurrency().
+  /// Threads for the stability of the points: a oneTBB task arena of this many (each point's
+  /// monodromy matrix is independent, so the multipliers are bit-identical for any count);
+  /// 0: oneTBB's default concurrency (the cores this process may use).
   /// stability_time_s is then wall time. Throws std::invalid_argument (trace_response) if < 0.
   int threads = 0;
   /// DOFs whose trial coefficients every point keeps (ResponsePoint::kept_coefficients), e.g. to
