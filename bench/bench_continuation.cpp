@@ -8,12 +8,12 @@
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace {
 
 const wbm::scene::Scene& case2() {
-  static const auto scene = wbm::reproduce::load_scene("jl14_case2");
+  static const auto scene = wbm::models::load_scene("jl14_case2");
   return scene;
 }
 

@@ -7,15 +7,15 @@
 #include <wbm/solvers/harmonic_balance.hpp>
 #include <wbm/solvers/time_integration.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace {
 const wbm::scene::Scene& case1() {
-  static const auto scene = wbm::reproduce::load_scene("jl14_case1");
+  static const auto scene = wbm::models::load_scene("jl14_case1");
   return scene;
 }
 const wbm::scene::Scene& case2() {
-  static const auto scene = wbm::reproduce::load_scene("jl14_case2");
+  static const auto scene = wbm::models::load_scene("jl14_case2");
   return scene;
 }
 

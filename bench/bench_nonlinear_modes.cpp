@@ -8,7 +8,7 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace {
 
@@ -22,7 +22,7 @@ wbm::solvers::BackboneContinuationOptions range(double energy_min, double energy
 
 const wbm::scene::ModeProblem& ll11() {
   static const auto problem =
-      wbm::scene::mode_problem(wbm::scene::load_scene(wbm::reproduce::scene_directory() / "ll11_rod.toml"));
+      wbm::scene::mode_problem(wbm::scene::load_scene(wbm::models::scene_directory() / "ll11_rod.toml"));
   return problem;
 }
 

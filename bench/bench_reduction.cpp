@@ -108,14 +108,14 @@ const ReducedBlade& reduced_blade(int tip) {
   if (auto it = cache.find(tip); it != cache.end()) return it->second;
   const fs::path dir = fs::temp_directory_path() / ("wbm_bench_contacts_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const auto blade = wbm::reproduce::build_blade(dir, 0.005, tip);
+  const auto blade = wbm::models::build_blade(dir, 0.005, tip);
   const auto cb = wbm::fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, 20);
   fs::remove_all(dir);
   ReducedBlade r;
   r.system.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
   r.system.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
   r.system.damping.resize(r.system.mass.rows(), r.system.mass.cols());
-  r.stops = wbm::reproduce::radial_stops(blade, 1e-4);
+  r.stops = wbm::models::radial_stops(blade, 1e-4);
   return cache.emplace(tip, std::move(r)).first->second;
 }
 

@@ -13,12 +13,12 @@
 #include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace {
 
 const wbm::scene::Scene& case1() {
-  static const auto scene = wbm::reproduce::load_scene("jl14_case1");
+  static const auto scene = wbm::models::load_scene("jl14_case1");
   return scene;
 }
 

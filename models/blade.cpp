@@ -15,7 +15,7 @@
 
 #include <wbm/fem/gmsh.hpp>
 
-namespace wbm::reproduce {
+namespace wbm::models {
 
 BladeGeometry read_blade_geometry() {
   const std::filesystem::path geo = std::filesystem::path(WBM_BLADE_DIR) / "blade.geo";
@@ -112,4 +112,4 @@ std::vector<solvers::RigidStop> radial_stops(const Blade& blade, double gap) {
   return stops;
 }
 
-}  // namespace wbm::reproduce
+}  // namespace wbm::models

@@ -1,8 +1,8 @@
 #pragma once
 /// The LL11 Sec. 5.2 blade (reproduce/blade/): gmsh mesh of blade.geo, the root node set, the
 /// CalculiX model deck blade.inp, K and M assembled by ccx, the tip interface ordered from the
-/// leading to the trailing edge, and its radial contact directions. Shared by reproduce/ll11_blade
-/// and bench/bench_reduction. SI units.
+/// leading to the trailing edge, and its radial contact directions. Shared by reproduce/ll11_blade,
+/// reproduce/ll11_blade_forced and bench/bench_reduction. SI units.
 
 #include <chrono>
 #include <filesystem>
@@ -14,7 +14,7 @@
 #include <wbm/fem/calculix.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
-namespace wbm::reproduce {
+namespace wbm::models {
 
 struct Blade {
   fem::CalculixDeck deck;            // the model deck read back (nodes, sets, element counts)
@@ -62,4 +62,4 @@ inline constexpr double kHubRadius = 0.25;
 /// vector n = (0, y, z + R)/|·| from the engine axis, g = g0 − n·u, named by its z DOF.
 [[nodiscard]] std::vector<solvers::RigidStop> radial_stops(const Blade& blade, double gap);
 
-}  // namespace wbm::reproduce
+}  // namespace wbm::models

@@ -1,4 +1,4 @@
-// Scaling table (issue #17): how the cost of a full weighted-residual solve (set-up, Newton,
+// Scaling table (issue #17; `make bench`): how the cost of a full weighted-residual solve (set-up, Newton,
 // recovery) grows with the dimension M and with the number of contact DOFs n_c, with the fitted
 // exponent p of t ≈ c·x^p (least squares on log t against log x over the last four points).
 //  - Time vs M: every combination of [JL14 Table 2] on Case 1 (reproduce/scenes/jl14_case1.toml,
@@ -210,7 +210,7 @@ int main(int argc, char** argv) {
                          {"dimension", m_chain}}}});
 
     std::ostringstream md;
-    md << "## Cost scaling of the weighted-residual solve (bench/bench_scaling.cpp)\n\n"
+    md << "## Cost scaling of the weighted-residual solve (reproduce/bench_scaling.cpp)\n\n"
        << "Files: `out/bench_scaling/scaling_dimension.csv`, `scaling_contacts.csv`, `meta.json`. Median of "
        << repeats << " full solves on one core (construction with set-up, Newton, recovery). The exponent p fits "
           "t ≈ c·x^p on the last four points (least squares in log–log).\n\n"

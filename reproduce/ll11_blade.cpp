@@ -51,17 +51,17 @@ int main(int argc, char** argv) {
     const auto started = std::chrono::steady_clock::now();
     const bool quick = run.quick();
     const double mesh_size = quick ? 0.005 : 0.0025;            // m, the largest element edge
-    const double hub_radius = reproduce::kHubRadius;            // m, engine axis ∥ x at z = −0.25 (blade.geo)
+    const double hub_radius = models::kHubRadius;            // m, engine axis ∥ x at z = −0.25 (blade.geo)
     const double gap = 1e-4;                                    // m, uniform radial gap (results are per gap)
     const int modes = 40, harmonics = quick ? 3 : 8, samples = quick ? 24 : 96;
     const double energy_max = quick ? 2.0 : 11.0;
     const std::vector<double> shown = quick ? std::vector<double>{0.8, 1.5} : std::vector<double>{0.8, 4.7, 10.4};
-    const reproduce::ScratchFolder scratch("wbm_ll11_blade");
+    const models::ScratchFolder scratch("wbm_ll11_blade");
     nlohmann::json timing;
 
     // 1–2. Mesh (gmsh), root node set, model deck, K and M (CalculiX), the 24 tip nodes from the
-    // leading to the trailing edge (reproduce/common/blade.hpp).
-    const auto blade = reproduce::build_blade(scratch.dir, mesh_size, 24);
+    // leading to the trailing edge (models/blade.hpp).
+    const auto blade = models::build_blade(scratch.dir, mesh_size, 24);
     timing["gmsh_s"] = blade.gmsh_s;
     timing["ccx_and_read_s"] = blade.ccx_s;
     const auto& deck = blade.deck;
@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
     // 3. Craig–Bampton (72 + 40), and the full model's first 10 frequencies (Spectra, no interface).
     t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(model.stiffness, model.mass, boundary, modes);
-    timing["craig_bampton_s"] = reproduce::seconds_since(t);
+    timing["craig_bampton_s"] = models::seconds_since(t);
     timing["cholesky_s"] = cb.factorization_s;
     timing["constraint_modes_s"] = cb.constraint_modes_s;
     timing["lanczos_s"] = cb.eigensolve_s;
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
     reduced.stiffness = (0.5 * (cb.stiffness + cb.stiffness.transpose())).sparseView();
     reduced.mass = (0.5 * (cb.mass + cb.mass.transpose())).sparseView();
     reduced.damping.resize(reduced.mass.rows(), reduced.mass.cols());
-    const auto stops = reproduce::radial_stops(blade, gap);
+    const auto stops = models::radial_stops(blade, gap);
     solvers::BackboneContinuationOptions co;
     co.energy_min = 0.5;
     co.energy_max = energy_max;
@@ -141,19 +141,19 @@ int main(int argc, char** argv) {
           if (!r.up->complete) r.errors.push_back("first-mode branch (up) incomplete: " + r.up->message);
           if (!r.down->complete) r.errors.push_back("first-mode branch (down) incomplete: " + r.down->message);
         }
-        r.seconds = reproduce::seconds_since(t0);
+        r.seconds = models::seconds_since(t0);
         return r;
       });
     }
 
     t = std::chrono::steady_clock::now();
     const auto full = fem::craig_bampton(model.stiffness, model.mass, {}, 10);
-    timing["full_model_modes_s"] = reproduce::seconds_since(t);
+    timing["full_model_modes_s"] = models::seconds_since(t);
     const Eigen::VectorXd f_full = full.normal_frequencies_hz;
     // A second, independent reference: CalculiX's own eigensolver on the same deck (*FREQUENCY).
     t = std::chrono::steady_clock::now();
     const std::vector<double> ccx_hz = fem::calculix_frequencies(deck, 10);
-    timing["ccx_frequencies_s"] = reproduce::seconds_since(t);
+    timing["ccx_frequencies_s"] = models::seconds_since(t);
     const Eigen::VectorXd f_ccx = Eigen::Map<const Eigen::VectorXd>(ccx_hz.data(), 10);
     const Eigen::VectorXd ccx_error = ((f_full - f_ccx).array() / f_ccx.array()).matrix();  // Spectra vs ccx
     const auto nb = static_cast<Eigen::Index>(boundary.size());
@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
     t = std::chrono::steady_clock::now();
     const solvers::NonlinearModes nnm(reduced, stops, {.harmonics = harmonics, .samples = samples});
     const auto b = nnm.continue_backbone(co);
-    timing["backbone_s"] = reproduce::seconds_since(t);
+    timing["backbone_s"] = models::seconds_since(t);
     if (!b.complete) run.fail("backbone incomplete: " + b.message);
     const double f1 = nnm.linear_frequency_hz();
 
@@ -468,7 +468,7 @@ int main(int argc, char** argv) {
                       << (up ? up->message : std::string("the N = 3 start did not converge")) << ".\n\n";
     }
 
-    const double total = reproduce::seconds_since(started);  // wall time: branch 1 overlaps the references and branch 0
+    const double total = models::seconds_since(started);  // wall time: branch 1 overlaps the references and branch 0
     run.meta({{"figure", "LL11 Figs. 6-8"}, {"mesh_size_m", mesh_size}, {"nodes", written}, {"c3d10_elements", c3d10},
               {"dofs", n_full}, {"interface_dofs", nb}, {"normal_modes", modes}, {"harmonics", harmonics},
               {"samples", samples}, {"gap_m", gap}, {"hub_radius_m", hub_radius}, {"linear_frequency_hz", f1},
@@ -489,7 +489,7 @@ int main(int argc, char** argv) {
                                  {"first_mode_share", first_share(nl - 1)}, {"detuning", end_detuning},
                                  {"internal_resonance", end_resonant}}}});
 
-    const reproduce::BladeGeometry geometry = reproduce::read_blade_geometry();
+    const models::BladeGeometry geometry = models::read_blade_geometry();
     std::ostringstream md;
     md << "## LL11 Figs. 6–8 — compressor blade against a rigid casing (`ll11_blade`)\n\n"
        << "The paper's industrial blade is not public; this is a representative compressor rotor blade built "

@@ -114,16 +114,16 @@ int main(int argc, char** argv) {
     // scaled coordinates (below) rounding alone leaves about 1.2e-8 ‖b‖ in a linear solve near
     // f1 (measured), just above the default 1e-8; 1e-7 is used and reported.
     const double residual_tolerance = 1e-7;
-    const reproduce::ScratchFolder scratch("wbm_ll11_blade_forced");
+    const models::ScratchFolder scratch("wbm_ll11_blade_forced");
     nlohmann::json timing;
 
     // The blade and its Craig–Bampton model, exactly as ll11_blade.
-    const auto blade = reproduce::build_blade(scratch.dir, mesh_size, 24);
+    const auto blade = models::build_blade(scratch.dir, mesh_size, 24);
     timing["gmsh_s"] = blade.gmsh_s;
     timing["ccx_and_read_s"] = blade.ccx_s;
     auto t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, modes);
-    timing["craig_bampton_s"] = reproduce::seconds_since(t);
+    timing["craig_bampton_s"] = models::seconds_since(t);
     // Coordinates scaled to unit diagonal mass, q = D q̂, D = diag(M_r)^(-1/2): the interface
     // DOFs (metres, each with a small share of the mass) and the mass-normalized modal
     // coordinates then weigh alike,
@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
     reduced.stiffness = (d.asDiagonal() * k_r * d.asDiagonal()).sparseView();
     reduced.mass = (d.asDiagonal() * m_r * d.asDiagonal()).sparseView();
     const auto n = static_cast<Eigen::Index>(reduced.mass.rows());
-    auto stops = reproduce::radial_stops(blade, gap);
+    auto stops = models::radial_stops(blade, gap);
     for (auto& st : stops) {
       for (auto& [j, w] : st.along) w *= d(j);
     }
@@ -195,7 +195,7 @@ int main(int argc, char** argv) {
         for (Eigen::Index j = 0; j < n; ++j) o.keep_dofs.push_back(static_cast<int>(j));
       }
       traced.push_back({label, key, solvers::trace_response(base, o), 0.0, 0.0});
-      traced.back().time_s = reproduce::seconds_since(t);
+      traced.back().time_s = models::seconds_since(t);
       traced.back().condition = base.condition_number();
       const auto& c = traced.back().curve;
       if (c.stop != solvers::StopReason::RangeReached) {
@@ -221,7 +221,7 @@ int main(int argc, char** argv) {
     const auto b = nnm.continue_backbone(co);
     if (!b.complete) run.fail("backbone incomplete: " + b.message);
     BackboneCurve backbone = backbone_curve(nnm, b.levels, observed, unit);
-    backbone.time_s = reproduce::seconds_since(t);
+    backbone.time_s = models::seconds_since(t);
     backbone.stop = b.message;
     const auto nl = static_cast<Eigen::Index>(b.levels.size());
 
@@ -255,7 +255,7 @@ int main(int argc, char** argv) {
     }
     if (!through_complete) run.fail("backbone through the forced peak incomplete: " + through_stop);
     BackboneCurve peak_branch = backbone_curve(nnm, through, observed, unit);
-    peak_branch.time_s = reproduce::seconds_since(t);
+    peak_branch.time_s = models::seconds_since(t);
     peak_branch.stop = through_stop;
     const auto np = static_cast<Eigen::Index>(through.size());
 

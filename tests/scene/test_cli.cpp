@@ -24,7 +24,7 @@
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
 
-#include "scene.hpp"  // reproduce/common: the shipped scene directory
+#include "shipped_scenes.hpp"  // models/: the shipped scene directory
 
 namespace {
 
@@ -85,7 +85,7 @@ std::vector<std::string> csv_column(const fs::path& file, const std::string& nam
   return values;
 }
 
-std::string case1() { return (wbm::reproduce::scene_directory() / "jl14_case1.toml").string(); }
+std::string case1() { return (wbm::models::scene_directory() / "jl14_case1.toml").string(); }
 
 }  // namespace
 

@@ -19,7 +19,7 @@
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/post_processing.hpp>
 
-#include "scene.hpp"  // reproduce/common: the shipped scene directory
+#include "shipped_scenes.hpp"  // models/: the shipped scene directory
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 

@@ -19,7 +19,7 @@
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/post_processing.hpp>
 
-#include "scene.hpp"  // reproduce/common: the shipped scene directory
+#include "shipped_scenes.hpp"  // models/: the shipped scene directory
 #include "testing.hpp"
 #include "scene_fixtures.hpp"
 
@@ -29,8 +29,8 @@ using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 // Table 1 of [JL14]: Case 1 150 Hz, a_c = 1e8 N, α = 50 1/m, β = 1e-4 s, g0 = 1 mm;
 // Case 2 1275 Hz, α = 20, β = 5e-6, g0 = 14.5 mm; rod of Sec. 4.
 TEST(Scene, ShippedCasesHoldTable1) {
-  const Scene s1 = wbm::reproduce::load_scene("jl14_case1");
-  const Scene s2 = wbm::reproduce::load_scene("jl14_case2");
+  const Scene s1 = wbm::models::load_scene("jl14_case1");
+  const Scene s2 = wbm::models::load_scene("jl14_case2");
   EXPECT_EQ(s1.forcing->frequency_hz, 150.0);
   EXPECT_EQ(s2.forcing->frequency_hz, 1275.0);
   ASSERT_EQ(s1.contacts.size(), 1u);
@@ -56,7 +56,7 @@ TEST(Scene, ResolvedJsonRoundTrips) {
                             "%%MatrixMarket matrix coordinate real symmetric\n% 3-DOF spring chain\n3 3 5\n"
                             "1 1 2e4\n2 1 -1e4\n2 2 2e4\n3 2 -1e4\n3 3 1e4\n");
   std::vector<Scene> scenes = {
-      wbm::reproduce::load_scene("jl14_case2"),
+      wbm::models::load_scene("jl14_case2"),
       parse("structure = { mass = [1.0, 2.0], stiffness = [[3e4, -1e4], [-1e4, 1e4]], dofs = [\"a\", \"b\"] }\n"
             "damping = { alpha = 0.5, beta = 1e-5 }\n"
             "forcing = { amplitude = 2.0, dof = \"b\", frequency_hz = [5.0, 40.0], points = 8 }\n"

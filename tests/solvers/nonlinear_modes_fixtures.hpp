@@ -8,7 +8,7 @@
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace wbm::testing {
 
@@ -22,7 +22,7 @@ inline wbm::solvers::BackboneContinuationOptions range(double energy_min, double
 
 // [LL11 Sec. 5.1], from the scene every reproduction uses, with the stop's gap replaced.
 inline wbm::solvers::MechanicalSystem ll11_system() {
-  const auto scene = wbm::scene::load_scene(wbm::reproduce::scene_directory() / "ll11_rod.toml");
+  const auto scene = wbm::scene::load_scene(wbm::models::scene_directory() / "ll11_rod.toml");
   return wbm::scene::mode_problem(scene).system;
 }
 

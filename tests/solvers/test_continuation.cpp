@@ -17,7 +17,7 @@
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/scene.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "testing.hpp"
 
 namespace {
@@ -151,7 +151,7 @@ solvers::PseudoArclengthOptions duffing_arclength(const solvers::WeightedResidua
 // ∂r/∂f against central differences of the condensed residual through at_frequency, for a
 // Galerkin and a Petrov–Galerkin pair with the Case 2 stop active.
 TEST(Continuation, FrequencyDerivativeMatchesFiniteDifferences) {
-  const auto s = reproduce::load_scene("jl14_case2");
+  const auto s = models::load_scene("jl14_case2");
   for (const auto& [tr, we] : {std::pair{"fourier", "fourier"}, std::pair{"haar", "fourier"}, std::pair{"db6", "db6"}}) {
     const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(1300.0), s.contact_points(),
                                        TimeBasis::from_name(tr, 16), TimeBasis::from_name(we, 16));
@@ -167,7 +167,7 @@ TEST(Continuation, FrequencyDerivativeMatchesFiniteDifferences) {
 // With the stop out of reach (g0 = 1 m) the rod is linear: every point of the branch through
 // the first resonance (1273 Hz) equals the direct solve (K − ω²M + iωC) U = F e_tip.
 TEST(Continuation, LinearRodFollowsTheDirectFrequencyResponse) {
-  const auto s = reproduce::load_scene("jl14_case2");
+  const auto s = models::load_scene("jl14_case2");
   const std::vector<solvers::ContactPoint> far = {
       {s.forcing->dof, std::make_shared<contact::ExponentialPenalty>(contact::ExponentialPenaltyParameters{1e8, 20.0, 1.0})}};
   const solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(1000.0), far, TimeBasis::fourier(8),
@@ -395,7 +395,7 @@ TEST(Continuation, CornerRestartFollowsAComplementarityBranchThatTurnsBack) {
 // Linear system: Φ = e^{A₀T} exactly, so the multipliers are e^{sT} with the modal eigenvalues
 // s = −ζω ± ω√(ζ² − 1), ω² = λ_i, 2ζω = β λ_i (C = βK) of the rod.
 TEST(Floquet, LinearRodMultipliersAreExponentialsOfModalEigenvalues) {
-  const auto s = reproduce::load_scene("jl14_case2");
+  const auto s = models::load_scene("jl14_case2");
   const auto sys = s.system();
   const double f = 1275.0, beta = s.damping.beta;
   const auto result = solvers::floquet_multipliers(sys, {}, Eigen::MatrixXd(0, 64), f);
@@ -539,7 +539,7 @@ TEST(Continuation, RefusesInvalidOptions) {
 // (β = 1e-7 s, a sharp fold) and a zero gap. Each branch completes or stops with a reason, and
 // every point it holds is a converged, finite solution (the residual is checked again here).
 TEST(Continuation, ExtremesCompleteOrStopWithAReasonAndValidPoints) {
-  const auto s = reproduce::load_scene("jl14_case2");
+  const auto s = models::load_scene("jl14_case2");
   const auto& c = s.contacts.front();
   struct Extreme {
     const char* what;

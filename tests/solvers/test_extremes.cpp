@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 using namespace wbm;
 
@@ -28,7 +28,7 @@ class PenaltyExtremes : public ::testing::TestWithParam<Extreme> {};
 
 TEST_P(PenaltyExtremes, ConvergeWithVerifiedResidualOrReportWhy) {
   const Extreme& e = GetParam();
-  const auto scene = reproduce::load_scene("jl14_case1");  // rod and F of [JL14 Sec. 4]
+  const auto scene = models::load_scene("jl14_case1");  // rod and F of [JL14 Sec. 4]
   auto law = std::make_shared<contact::ExponentialPenalty>(
       contact::ExponentialPenaltyParameters{e.coefficient, e.exponent, e.gap});
   const auto rod = fem::Rod(scene.structure->rod);

@@ -9,7 +9,7 @@
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/spectral/layout.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "testing.hpp"
 
 using namespace wbm;
@@ -17,8 +17,8 @@ using solvers::HarmonicBalance;
 using solvers::HarmonicBalanceOptions;
 
 namespace {
-scene::Scene case1() { return reproduce::load_scene("jl14_case1"); }
-scene::Scene case2() { return reproduce::load_scene("jl14_case2"); }
+scene::Scene case1() { return models::load_scene("jl14_case1"); }
+scene::Scene case2() { return models::load_scene("jl14_case2"); }
 }  // namespace
 
 // Published values [JL14 Sec. 4]: fundamental ≈ 1273 Hz; no-contact tip amplitudes ≈ 1.4 mm at

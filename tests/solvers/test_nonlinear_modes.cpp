@@ -21,7 +21,7 @@
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/time_integration.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "nonlinear_modes_fixtures.hpp"
 #include "testing.hpp"
 
@@ -151,7 +151,7 @@ TEST(NonlinearModes, BackbonePiecesAreSmoothAndTheirEventsMatchTheMin) {
 // scaled by (1 + k 1e-12), k = 1 … 3. Every run reaches E = 10, and the frequencies at the landed
 // energies 1.8 and 10 agree to 1e-9 relative, the folds to 1e-6.
 TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
-  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  const auto problem = scene::mode_problem(scene::load_scene(models::scene_directory() / "ll11_rod.toml"));
   std::vector<double> f18, f10;
   std::vector<std::vector<double>> folds;
   for (int k = 0; k <= 3; ++k) {
@@ -195,7 +195,7 @@ TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
 // a switching point moved to within the zero band of the new surfaces was never reached and the
 // branch turned back there. It must reach E = 2.3 too, with the same frequency at E = 1.8.
 TEST(NonlinearModes, BackboneEntersAnIllConditionedPieceWithoutTurningBack) {
-  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  const auto problem = scene::mode_problem(scene::load_scene(models::scene_directory() / "ll11_rod.toml"));
   std::vector<double> f18;
   for (auto [harmonics, samples] : {std::pair{10, 128}, std::pair{12, 256}, std::pair{12, 512}}) {
     const solvers::NonlinearModes nm(problem.system, problem.stops, {.harmonics = harmonics, .samples = samples});
@@ -225,7 +225,7 @@ TEST(NonlinearModes, BackboneEntersAnIllConditionedPieceWithoutTurningBack) {
 // fold and the same frequency at E = 1.5 (the unperturbed run's path, which switched the pair
 // together).
 TEST(NonlinearModes, TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether) {
-  const auto problem = scene::mode_problem(scene::load_scene(reproduce::scene_directory() / "ll11_rod.toml"));
+  const auto problem = scene::mode_problem(scene::load_scene(models::scene_directory() / "ll11_rod.toml"));
   std::vector<double> f15;
   for (int k = 0; k <= 4; ++k) {
     solvers::MechanicalSystem system = problem.system;

@@ -17,7 +17,7 @@
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/time_integration.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "nonlinear_modes_fixtures.hpp"
 #include "testing.hpp"
 

@@ -25,7 +25,7 @@
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/spectral/layout.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "testing.hpp"
 
 using namespace wbm;
@@ -37,7 +37,7 @@ namespace {
 // spring (the rod's mass, tuned to 0.8 × the forcing frequency) that is forced and hammers the
 // tip through a contact on u_tip − u_mass at the Case 1 gap: free, it would move 1.5 gaps.
 struct TwoBodies {
-  scene::Scene scene = reproduce::load_scene("jl14_case1");
+  scene::Scene scene = models::load_scene("jl14_case1");
   int tip = 0, mass = 0, n = 0;
   double gap = 0.0;
   Eigen::MatrixXd t;                         // u = T y

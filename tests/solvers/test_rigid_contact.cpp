@@ -23,7 +23,7 @@
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/spectral/layout.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "testing.hpp"
 
 using namespace wbm;
@@ -41,7 +41,7 @@ const Pair kTable2[] = {{"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", 
 
 // Case 1 of [JL14 Table 1] with its exponential penalty replaced by a rigid stop at the same gap.
 struct RigidCase1 {
-  scene::Scene scene = reproduce::load_scene("jl14_case1");
+  scene::Scene scene = models::load_scene("jl14_case1");
   solvers::MechanicalSystem system = scene.system();
   solvers::HarmonicForcing forcing = scene.harmonic_forcing();
   double gap = scene.contact_points().front().law->gap();
@@ -361,7 +361,7 @@ TEST(RigidContact, MeanContactForceBalancesTheMeanStaticLoad) {
 // penalty homotopy then reaches the rigid solution, whose Signorini conditions hold when
 // recomputed from the coefficients.
 TEST(RigidContact, PenaltyHomotopyRescuesACyclingActiveSet) {
-  const auto sc = reproduce::load_scene("jl14_case2");
+  const auto sc = models::load_scene("jl14_case2");
   const auto cp = sc.contact_points();
   const double g0 = cp.front().law->gap();
   const std::vector<solvers::ContactPoint> stop{{cp.front().dof, std::make_shared<contact::RigidStop>(g0)}};

@@ -21,7 +21,7 @@
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/spectral/layout.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 #include "testing.hpp"
 #include "weighted_residual_fixtures.hpp"
 

@@ -4,11 +4,11 @@
 
 #include <wbm/scene/scene.hpp>
 
-#include "scene.hpp"
+#include "shipped_scenes.hpp"
 
 namespace wbm::testing {
 
-inline wbm::scene::Scene case1() { return wbm::reproduce::load_scene("jl14_case1"); }
+inline wbm::scene::Scene case1() { return wbm::models::load_scene("jl14_case1"); }
 
 struct Pair {
   const char* trial;
