@@ -1,6 +1,7 @@
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/condensation.hpp>
 
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 #include <algorithm>
@@ -373,24 +374,11 @@ nlohmann::json to_json(const Scene& s) {
     j["basis"] = b;
   }
   if (s.analysis.kind == AnalysisKind::Solve || s.analysis.kind == AnalysisKind::Continuation) {
-    j["solver"] = {{"tolerance", s.solver.newton.tolerance},
-                   {"max_iterations", s.solver.newton.max_iterations},
-                   {"line_search", s.solver.newton.line_search},
-                   {"linear_solver", linear_solver_name(s.solver.linear_solver)},
-                   {"residual_tolerance", s.solver.residual_tolerance}};
+    j["solver"] = detail::echo_keys(detail::solver_keys(), s.solver);
   }
   if (s.analysis.kind == AnalysisKind::Timestep) {
-    if (s.rigid()) {
-      j["timestep"] = {{"steps_per_period", s.moreau_jean.steps_per_period},
-                       {"restitution", s.moreau_jean.restitution},
-                       {"periodicity_tolerance", s.moreau_jean.periodicity_tolerance},
-                       {"max_periods", s.moreau_jean.max_periods}};
-    } else {
-      j["timestep"] = {{"relative_tolerance", s.timestep.relative_tolerance},
-                       {"absolute_tolerance", s.timestep.absolute_tolerance},
-                       {"periodicity_tolerance", s.timestep.periodicity_tolerance},
-                       {"max_periods", s.timestep.max_periods}};
-    }
+    j["timestep"] = s.rigid() ? detail::echo_keys(detail::moreau_jean_keys(), s.moreau_jean)
+                              : detail::echo_keys(detail::bdf_keys(), s.timestep);
   }
   nlohmann::json out = {{"samples", s.output.samples}};
   if (s.output.harmonics > 0) out["harmonics"] = s.output.harmonics;

@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp): the order in which sections are read, [analysis],
 // [damping], [solver], [timestep], [output], and the checks across sections (load harmonics, sizes).
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -223,15 +224,7 @@ void Parser::solver(const toml::table& root) {
     r_.warn(t->source(), "[solver] (Newton) is not used by analysis \"timestep\"; ignored ([timestep] sets the BDF)");
     return;
   }
-  r_.only(*t, "solver", {"tolerance", "max_iterations", "line_search", "linear_solver", "residual_tolerance"});
-  s_.solver.residual_tolerance =
-      r_.number(*t, "solver", "residual_tolerance", detail::positive(""), s_.solver.residual_tolerance);
-  solvers::NewtonOptions& n = s_.solver.newton;
-  n.tolerance = r_.number(*t, "solver", "tolerance", detail::positive(""), n.tolerance);
-  n.max_iterations = static_cast<int>(r_.integer(*t, "solver", "max_iterations", 0, 100000, n.max_iterations));
-  n.line_search = r_.boolean(*t, "solver", "line_search", n.line_search);
-  s_.solver.linear_solver = value_of(linear_solver_table(),
-                                     r_.choice(*t, "solver", "linear_solver", names(linear_solver_table()), "automatic"));
+  detail::read_keys(r_, *t, "solver", detail::solver_keys(), s_.solver);
   if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
       s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
     r_.warn(Reader::source_of(*t, "linear_solver"),
@@ -249,27 +242,13 @@ void Parser::timestep(const toml::table& root) {
   }
   const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
   if (rigid) {  // Moreau–Jean: fixed steps and an impact law instead of error control
-    r_.only(*t, "timestep", {"steps_per_period", "restitution", "periodicity_tolerance", "max_periods"},
-            "rigid stops are integrated by Moreau–Jean; relative_tolerance and absolute_tolerance are the BDF's "
-            "(penalty laws)");
-    auto& mj = s_.moreau_jean;
-    mj.steps_per_period = static_cast<int>(r_.integer(*t, "timestep", "steps_per_period", 4, 1 << 26, mj.steps_per_period));
-    mj.restitution = r_.number(*t, "timestep", "restitution", {"in [0, 1]", [](double v) { return v >= 0.0 && v <= 1.0; }},
-                               mj.restitution);
-    mj.periodicity_tolerance =
-        r_.number(*t, "timestep", "periodicity_tolerance", detail::positive(""), mj.periodicity_tolerance);
-    mj.max_periods = static_cast<int>(r_.integer(*t, "timestep", "max_periods", 2, 10000000, mj.max_periods));
+    detail::read_keys(r_, *t, "timestep", detail::moreau_jean_keys(), s_.moreau_jean,
+                      "rigid stops are integrated by Moreau–Jean; relative_tolerance and absolute_tolerance are the "
+                      "BDF's (penalty laws)");
     return;
   }
-  r_.only(*t, "timestep", {"relative_tolerance", "absolute_tolerance", "periodicity_tolerance", "max_periods"},
-          "steps_per_period and restitution are the Moreau–Jean scheme's, for law = \"rigid\"");
-  auto& o = s_.timestep;
-  o.relative_tolerance = r_.number(*t, "timestep", "relative_tolerance",
-                                   {"in (0, 1)", [](double v) { return v > 0.0 && v < 1.0; }}, o.relative_tolerance);
-  o.absolute_tolerance = r_.number(*t, "timestep", "absolute_tolerance", detail::positive("m"), o.absolute_tolerance);
-  o.periodicity_tolerance =
-      r_.number(*t, "timestep", "periodicity_tolerance", detail::positive(""), o.periodicity_tolerance);
-  o.max_periods = static_cast<int>(r_.integer(*t, "timestep", "max_periods", 2, 10000000, o.max_periods));
+  detail::read_keys(r_, *t, "timestep", detail::bdf_keys(), s_.timestep,
+                    "steps_per_period and restitution are the Moreau–Jean scheme's, for law = \"rigid\"");
 }
 
 void Parser::output(const toml::table& root) {

@@ -272,4 +272,11 @@ struct Scene {
 [[nodiscard]] nlohmann::json to_json(const Scene& scene);
 [[nodiscard]] Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& file);
 
+/// The key table of a declared section as docs/scenes.md prints it, generated from the one
+/// declaration the parser and to_json read (| key | type | default | allowed | meaning |, one row
+/// per key in declaration order, defaults from the settings' default values). `section`:
+/// "solver", "timestep" (the BDF, penalty laws) or "timestep.rigid" (Moreau–Jean, law = "rigid").
+/// Throws std::invalid_argument for another section, naming the declared ones.
+[[nodiscard]] std::string key_table_markdown(const std::string& section);
+
 }  // namespace wbm::scene
