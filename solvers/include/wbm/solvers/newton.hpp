@@ -21,7 +21,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
-#include <Eigen/QR>
 #include <Eigen/SparseCore>
 
 #include <wbm/solvers/status.hpp>
@@ -50,20 +49,11 @@ struct LowRankJacobian {
   [[nodiscard]] Eigen::Index size() const { return dense_form() ? capacitance.rows() : rows; }
   [[nodiscard]] Eigen::Index rank() const { return capacitance.rows(); }
   /// U Z (n × k) for Z (r × k).
-  [[nodiscard]] Eigen::MatrixXd u_times(const Eigen::MatrixXd& z) const { return times_u ? times_u(z) : Eigen::MatrixXd(u * z); }
+  [[nodiscard]] Eigen::MatrixXd u_times(const Eigen::MatrixXd& z) const;
   /// J y (length n).
-  [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const {
-    if (dense_form()) return capacitance * y / scale;
-    if (rank() == 0) return y / scale;
-    return (y + u_times(times_v(y)).col(0)) / scale;
-  }
+  [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const;
   /// J as an n × n matrix: O(n² r) (the Levenberg–Marquardt fallback and tests).
-  [[nodiscard]] Eigen::MatrixXd dense() const {
-    if (dense_form()) return capacitance / scale;
-    Eigen::MatrixXd j = Eigen::MatrixXd::Identity(size(), size());
-    if (rank() > 0) j += u_times(times_v(Eigen::MatrixXd::Identity(size(), size())));
-    return j / scale;
-  }
+  [[nodiscard]] Eigen::MatrixXd dense() const;
 };
 
 /// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n), either
@@ -113,33 +103,6 @@ struct NewtonOptions {
   void validate() const;
 };
 
-inline void NewtonOptions::validate() const {
-  auto fail = [](const std::string& field, const std::string& value, const std::string& rule) {
-    throw std::invalid_argument("NewtonOptions." + field + " = " + value + ": " + rule);
-  };
-  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
-    fail("tolerance", format_number(tolerance),
-         "must be > 0 and finite (the bound on ‖R‖ in the system's scaling; the default is 1e-10)");
-  }
-  if (max_iterations < 0) {
-    fail("max_iterations", std::to_string(max_iterations), "must be >= 0 (0 only evaluates the start; default 50)");
-  }
-  if (max_backtracks < 0) {
-    fail("max_backtracks", std::to_string(max_backtracks), "must be >= 0 (default 30; or line_search = false)");
-  }
-  if (!(min_rcond >= 0.0 && min_rcond < 1.0)) {
-    fail("min_rcond", format_number(min_rcond), "must lie in [0, 1) (a reciprocal condition number; default 1e-15)");
-  }
-  if (levenberg_marquardt && max_lm_trials < 1) {
-    fail("max_lm_trials", std::to_string(max_lm_trials),
-         "must be >= 1 with levenberg_marquardt (default 20; or levenberg_marquardt = false)");
-  }
-  if (stop_on_cycle && !(cycle_tolerance > 0.0)) {
-    fail("cycle_tolerance", format_number(cycle_tolerance),
-         "must be > 0 with stop_on_cycle (a relative tolerance on repeated residuals; default 1e-3)");
-  }
-}
-
 struct NewtonReport {
   SolveStatus status = SolveStatus::MaxIterations;
   int iterations = 0;
@@ -173,12 +136,9 @@ class DenseLu {
  public:
   /// Factorizes J (partial pivoting); false if the factors are not finite (a NaN or inf in J,
   /// or an overflow). A singular J gives finite factors: newton() tells it by rcond().
-  bool factorize(const Eigen::MatrixXd& jacobian) {
-    lu_.compute(jacobian);
-    return lu_.matrixLU().allFinite();
-  }
-  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const { return lu_.solve(rhs); }
-  [[nodiscard]] std::optional<double> rcond() const { return lu_.rcond(); }
+  bool factorize(const Eigen::MatrixXd& jacobian);
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] std::optional<double> rcond() const;
 
  private:
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
@@ -219,26 +179,12 @@ class SparseLu {
 /// multiplicity n − r); in the dense form it is that of s J itself.
 class WoodburyLu {
  public:
-  bool factorize(const LowRankJacobian& jacobian) {
-    j_ = jacobian;
-    if (j_.capacitance.rows() > 0) lu_.compute(j_.capacitance);
-    return j_.capacitance.allFinite() && j_.u.allFinite();  // times_u's products are checked by newton()
-  }
-  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
-    Eigen::VectorXd d = woodbury(rhs);
-    if (!j_.dense_form()) d += woodbury(rhs - j_.apply(d));
-    return d;
-  }
-  [[nodiscard]] std::optional<double> rcond() const {
-    return j_.capacitance.rows() > 0 ? lu_.rcond() : 1.0;  // rank 0: J = I / s
-  }
+  bool factorize(const LowRankJacobian& jacobian);
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] std::optional<double> rcond() const;
 
  private:
-  [[nodiscard]] Eigen::VectorXd woodbury(const Eigen::VectorXd& y) const {
-    if (j_.dense_form()) return j_.scale * lu_.solve(y);
-    if (j_.capacitance.rows() == 0) return j_.scale * y;
-    return j_.scale * (y - j_.u_times(lu_.solve(j_.times_v(y))).col(0));
-  }
+  [[nodiscard]] Eigen::VectorXd woodbury(const Eigen::VectorXd& y) const;
   LowRankJacobian j_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
@@ -275,16 +221,7 @@ inline Eigen::MatrixXd as_dense(const LowRankJacobian& j) { return j.dense(); }
 /// number (κ(J) = 1e7 loses every digit of the step along J's small singular vectors).
 /// J: m × n (m ≥ 1), r: length m, μ > 0 (then [J; μI] has full column rank). O((m + n) n²).
 /// Returns d (length n); non-finite entries if J or r has NaN or inf.
-inline Eigen::VectorXd levenberg_marquardt_step(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& r, double mu) {
-  const Eigen::Index m = jacobian.rows();
-  const Eigen::Index n = jacobian.cols();
-  Eigen::MatrixXd stacked(m + n, n);
-  stacked.topRows(m) = jacobian;
-  stacked.bottomRows(n) = mu * Eigen::MatrixXd::Identity(n, n);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m + n);
-  rhs.head(m) = -r;
-  return stacked.householderQr().solve(rhs);
-}
+Eigen::VectorXd levenberg_marquardt_step(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& r, double mu);
 }  // namespace detail
 
 /// The linear solver newton() uses by default for a system: SparseLu for a sparse Jacobian,
