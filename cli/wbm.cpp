@@ -246,7 +246,7 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
                          {"scene", wbm::scene::to_json(*scene)},
                          {"warnings", scene->warnings},
                          {"run_warnings", result.warnings},
-                         {"converged", result.converged},
+                         {"converged", result.converged()},
                          {"diagnostics", result.diagnostics},
                          {"build", wbm::scene::build_information()}};
   size_t files_written = 0;
@@ -263,7 +263,7 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
       staged->mat("result.mat", result.tables,
                   {{"scene_file", json["scene_file"].get<std::string>()},
                    {"scene", scene->name},
-                   {"converged", result.converged ? "true" : "false"},
+                   {"converged", result.converged() ? "true" : "false"},
                    {"command", command_line},
                    {"wbm_version", wbm::scene::build_information()["wbm"].get<std::string>()}});
       files.push_back("result.mat");
@@ -283,7 +283,7 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
   for (const auto& w : result.warnings) std::cerr << "wbm: warning: " << w << "\n";
   if (!quiet) {
     std::cout << result.summary << "\n";
-    std::cout << (result.converged ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "
+    std::cout << (result.converged() ? "converged" : "NOT converged (see result.json: diagnostics)") << "; wrote "
               << files_written << " result file(s) and result.json to " << out << "\n";
   }
   const auto& formats = scene->output.formats;
@@ -294,7 +294,7 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
       std::cout << "no pictures: they are drawn from the CSV files ([output] formats has no \"csv\")\n";
     }
   }
-  return result.converged ? kConverged : kNotConverged;
+  return result.converged() ? kConverged : kNotConverged;
 }
 
 int check(const std::string& scene_path, bool json) {

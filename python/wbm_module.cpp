@@ -75,7 +75,8 @@ py::dict result_dict(const scene::AnalysisResult& r) {
     tables[py::str(t.file)] = columns;
   }
   py::dict out;
-  out["converged"] = r.converged;
+  out["converged"] = r.converged();
+  out["status"] = std::string(solvers::to_string(r.status));
   out["summary"] = r.summary;
   out["warnings"] = r.warnings;
   out["diagnostics"] = to_python(r.diagnostics);
@@ -132,7 +133,7 @@ PYBIND11_MODULE(wbm, m) {
       R"(Run a scene (docs/scenes.md) and return its results.
 
 source: a path to a .toml scene, TOML text, or a dict with the scene's keys (as scene_json() gives).
-Returns a dict: converged (bool, from verified residuals), summary (str), warnings (list of str),
+Returns a dict: converged (bool, from verified residuals: AnalysisResult::converged, as wbm run), status (str, the solvers' vocabulary), summary (str), warnings (list of str),
 diagnostics (dict: statuses, iterations, residuals, timings), tables ({file name: {column header:
 1-D numpy array}}; headers carry the units, e.g. "u_tip [m]"; "status" is a list of str when a
 table has one). Nothing is written to disk. Raises ValueError for a bad scene, with the file, line,
@@ -392,7 +393,7 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
         const auto b = modes.continue_backbone(o);
         const scene::BackboneColumns c = scene::backbone_columns(modes, b);
         py::dict out;
-        out["converged"] = b.complete;
+        out["converged"] = b.converged();  // the one definition (Backbone::converged), as wbm run
         out["message"] = b.message;
         out["linear_frequency_hz"] = modes.linear_frequency_hz();
         out["energy"] = py::cast(c.energy);
@@ -422,7 +423,7 @@ rayleigh_frequency_hz, max_penetration and complementarity [gap], first_mode_sha
 held by linear mode 1 at the fundamental) and the largest other component other_mode, other_harmonic
 (1-based), other_share (NonlinearModes::modal_components: an internal resonance shows as a large
 other_share with f_j ≈ h f); and linear_frequency_hz, folds
-(energies where the branch turns back) and fold_frequencies_hz (the frequency at each), converged (energy max reached), message, wall_time_s.)");
+(energies where the branch turns back) and fold_frequencies_hz (the frequency at each), converged (Backbone::converged: the energy range covered, as wbm run), message, wall_time_s.)");
   m.def(
       "evaluate",
       [](const solvers::TimeBasis& trial, const py::object& coefficients, const py::object& tau) -> Eigen::MatrixXd {

@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
       // as double precision goes.
       residual(k) = (sol.converged() || at_floor) && std::isfinite(sol.relative_residual) ? sol.relative_residual : NAN;
       floor(k) = std::isfinite(sol.rounding_floor) ? sol.rounding_floor : NAN;
-      sigma(k) = sol.homotopy.tried ? sol.homotopy.sigma_reached : NAN;
+      sigma(k) = sol.homotopy.tried() ? sol.homotopy.sigma_reached : NAN;
       penetration(k) = (sol.converged() || at_floor) && std::isfinite(sol.max_penetration) ? sol.max_penetration : NAN;
       cond(k) = std::isfinite(sol.condition_number) ? sol.condition_number : NAN;
       time_ms(k) = ms;

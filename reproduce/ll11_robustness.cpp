@@ -127,7 +127,7 @@ StiffStopOutcome run_stiff_stop(const std::string& basis, double scale) {
   const auto t0 = std::chrono::steady_clock::now();
   const scene::AnalysisResult r = scene::run_analysis(scene::parse_scene(text, "stiff_stop.toml"));
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  out.converged = r.converged;
+  out.converged = r.converged();
   const auto& c_json = r.diagnostics["continuation"];
   out.stop = c_json["stop"].get<std::string>();
   out.message = c_json["message"].get<std::string>();

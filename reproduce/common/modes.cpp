@@ -27,7 +27,7 @@ scene::Scene ll11_scene(const Run& run) {
 scene::AnalysisResult run_modes(Run& run, const scene::Scene& scene, const std::string& prefix) {
   scene::AnalysisResult r = scene::run_analysis(scene);
   for (const auto& t : r.tables) run.table(prefix + t.file, t.header, t.columns);
-  if (!r.converged) {
+  if (!r.converged()) {
     run.fail(prefix + scene.name + ": " + r.diagnostics["nnm"].value("message", std::string("not converged")));
   }
   return r;

@@ -64,7 +64,9 @@ AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
     out.diagnostics["condensation"] = {{"massless_dofs", massless}, {"contact_laws_on_the_structure", laws}};
   }
   out.diagnostics["analysis"] = std::string(to_string(scene.analysis.kind));
-  out.diagnostics["converged"] = out.converged;
+  out.diagnostics["converged"] = out.converged();
+  out.diagnostics["status"] = std::string(solvers::to_string(out.status));
+  if (out.stop) out.diagnostics["stop"] = std::string(solvers::to_string(*out.stop));
   out.diagnostics["wall_time_s"] = seconds_since(start);
   return out;
 }

@@ -23,7 +23,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
   const auto weighting = scene.weighting();
   const auto solution =
       solvers::solve_weighted_residual(system, forcing, contacts, trial, weighting, scene.weighted_residual_options());
-  out.converged = solution.report.converged();
+  out.status = solution.report.status;
   out.diagnostics["solution"] = to_json(solution);
   out.summary = trial.name() + ":" + weighting.name() + ", M = " + std::to_string(trial.dimension()) + ", " +
                 std::string(solvers::to_string(scene.basis.formulation)) + ", f = " +
@@ -34,7 +34,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
                    format("%.2e", solution.dropped_harmonics_residual) + " ‖b‖";
     warn_dropped_harmonics(scene, {forcing.frequency_hz}, {solution.dropped_harmonics_residual}, out);
   }
-  if (!out.converged) return;  // no curve from an unconverged iterate
+  if (!out.converged()) return;  // no curve from an unconverged iterate
   const int p = scene.output.samples;
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
   const Eigen::MatrixXd& a = solution.coefficients;
@@ -88,6 +88,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   Eigen::VectorXd previous;  // contact unknowns of the last converged point
   double previous_amplitude = NAN;  // (max − min)/2 of the forced DOF at the last converged point
   int failed = 0, restarts = 0;
+  solvers::SolveStatus first_failure = solvers::SolveStatus::Converged;  // the status of the first failed point
   nlohmann::json restarted_points = nlohmann::json::array();
   const int forced = scene.harmonic_forcing(frequencies.front()).dof;
   const bool selection = !scene.basis.selected_harmonics.empty();
@@ -113,7 +114,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
                "point " + std::to_string(i + 1) + "/" + std::to_string(frequencies.size()) + ", f = " + format("%.6g", f) + " Hz");
     }
     if (!solution.report.converged()) {
-      ++failed;
+      if (failed++ == 0) first_failure = solution.report.status;
       previous.resize(0);
       previous_amplitude = NAN;
       continue;
@@ -187,7 +188,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
   if (!harmonic_hz.empty()) {
     out.tables.push_back(point_harmonics(scene, "sweep_harmonics.csv", dofs, harmonic_hz, harmonic_samples));
   }
-  out.converged = failed == 0;
+  out.status = failed == 0 ? solvers::SolveStatus::Converged : first_failure;
   out.diagnostics["points"] = points;
   out.diagnostics["converged_points"] = rows.size();
   out.diagnostics["failed_points"] = failed;
@@ -220,7 +221,7 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
   const auto response = rigid ? solvers::integrate_moreau_jean_to_periodic(system, forcing, contacts, mj)
                               : solvers::integrate_to_periodic(system, forcing, contacts, options);
   const auto& rep = response.report;
-  out.converged = rep.converged();
+  out.status = rep.status;
   const std::string method = rigid ? "Moreau–Jean (theta = 0.5, restitution " + format("%g", mj.restitution) + ", " +
                                          std::to_string(mj.steps_per_period) + " steps per period)"
                                    : "GSL msbdf (variable-order BDF)";
@@ -235,7 +236,7 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
                                  {"wall_time_s", rep.wall_time_s}};
   out.summary = (rigid ? "Moreau–Jean at " : "BDF at ") + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
                 std::to_string(rep.steps) + " steps, " + format("%.3f", rep.wall_time_s) + " s";
-  if (!out.converged) return;
+  if (!out.converged()) return;
   period_tables(scene, contacts, system, forcing.frequency_hz, response.tau, response.displacement,
                 &response.velocity, out);
 }
@@ -260,7 +261,7 @@ void basis_plot(const Scene& scene, AnalysisResult& out) {
     t.columns.push_back(values.col(k));
   }
   out.tables.push_back(std::move(t));
-  out.converged = true;
+  out.status = solvers::SolveStatus::Converged;  // nothing to solve: the values are exact
   out.diagnostics["basis"] = {{"family", basis.name()},
                               {"dimension", m},
                               {"level", static_cast<int>(std::lround(std::log2(m)))},

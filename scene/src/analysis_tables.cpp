@@ -33,10 +33,10 @@ nlohmann::json to_json(const solvers::NewtonReport& r) {
 }
 
 nlohmann::json to_json(const solvers::HomotopyReport& h) {
-  if (!h.tried) return nullptr;
-  return {{"reached", h.reached},          {"sigma_reached", h.sigma_reached}, {"lambda_start", h.lambda_start},
+  if (!h.tried()) return nullptr;
+  return {{"reached", h.reached()},          {"sigma_reached", h.sigma_reached}, {"lambda_start", h.lambda_start},
           {"points", h.points},            {"folds", h.folds},                 {"corrector_iterations", h.corrector_iterations},
-          {"stop", h.stop}};
+          {"stop", std::string(solvers::to_string(*h.stop)) + ": " + h.message}};
 }
 
 nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {

@@ -3,6 +3,7 @@
 Run by `make test` (ctest label python) with PYTHONPATH=<build>/python and WBM_CLI=<build>/cli/wbm.
 """
 import csv
+import json
 import math
 import os
 import subprocess
@@ -73,6 +74,11 @@ def test_run_scene_equals_the_wbm_command(tmp_path):
     header, values = rows[0], np.array([[float(x) for x in r] for r in rows[1:]])
     result = wbm.run_scene(str(scene))
     assert result["converged"]
+    # One outcome protocol (issue #41): the same status and flag as the command's result.json.
+    with open(tmp_path / "result.json") as f:
+        written = json.load(f)
+    assert result["status"] == written["diagnostics"]["status"] == "converged"
+    assert written["converged"] is written["diagnostics"]["converged"] is True
     table = result["tables"]["displacement.csv"]
     assert list(table.keys()) == header
     for j, name in enumerate(header):

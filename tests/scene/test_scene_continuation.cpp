@@ -75,7 +75,7 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
     return std::pair{Eigen::VectorXd(), Eigen::VectorXd()};
   };
   const auto r = wbm::scene::run_analysis(parse(head));
-  ASSERT_TRUE(r.converged) << r.summary;
+  ASSERT_TRUE(r.converged()) << r.summary;
   const auto [hz, crossing] = folds(r);
   ASSERT_EQ(hz.size(), 2) << r.summary;
   EXPECT_EQ(crossing(0), 1.0);
@@ -113,7 +113,7 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
   }
   for (const std::string basis : {"basis = { harmonics = 32, time_samples = 1024 }\n", "basis = { harmonics = 64 }\n"}) {
     const auto finer = wbm::scene::run_analysis(parse(head + basis));
-    ASSERT_TRUE(finer.converged) << basis << finer.summary;
+    ASSERT_TRUE(finer.converged()) << basis << finer.summary;
     const auto [hz2, crossing2] = folds(finer);
     ASSERT_EQ(hz2.size(), 2) << basis;
     EXPECT_NEAR(hz2(0), hz(0), 0.01) << basis;
@@ -133,7 +133,7 @@ TEST(Scene, StiffStopWithThePapersFourierBasisCompletes) {
       "forcing = { amplitude = 10.0, frequency_rad_s = [60.0, 210.0] }\n"
       "contact = { law = \"linear\", stiffness = 1e8, gap = 2e-5 }\n"
       "basis = { trial = \"fourier\", dimension = 64 }\nanalysis = { type = \"continuation\" }\n"));
-  ASSERT_TRUE(r.converged) << r.summary;
+  ASSERT_TRUE(r.converged()) << r.summary;
   const wbm::scene::Table* folds = nullptr;
   for (const auto& t : r.tables) {
     if (t.file == "folds.csv") folds = &t;
@@ -171,8 +171,8 @@ TEST(Scene, ContinuationDoesNotDependOnTheUnits) {
   const double sl = 0.125, sm = 32.0, st = 0.0625;
   const auto a = wbm::scene::run_analysis(scene(1.0, 1.0, 1.0));
   const auto b = wbm::scene::run_analysis(scene(sl, sm, st));
-  ASSERT_TRUE(a.converged) << a.summary;
-  ASSERT_TRUE(b.converged) << b.summary;
+  ASSERT_TRUE(a.converged()) << a.summary;
+  ASSERT_TRUE(b.converged()) << b.summary;
   const auto& fa = column(a, "branch.csv", 0);
   const auto& fb = column(b, "branch.csv", 0);
   ASSERT_EQ(fa.size(), fb.size()) << a.summary << "\n" << b.summary;
@@ -202,7 +202,7 @@ TEST(Scene, ContinuationFollowsTheClosedFormAndRoundTrips) {
             wbm::scene::to_json(s));
   std::vector<std::pair<double, std::string>> reports;  // progress: one report per accepted point
   const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
-  ASSERT_TRUE(r.converged) << r.diagnostics.dump(2);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump(2);
   const Eigen::VectorXd& hz = column(r, "branch.csv", 0);
   const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
   EXPECT_GE(hz.size(), 50);
@@ -229,17 +229,25 @@ TEST(Scene, AStopThatIsNotAnOutcomeNamesTheKeyToChange) {
                            "contact = { law = \"linear\", stiffness = 1e6, gap = 1.0 }\n"
                            "basis = { dimension = 8 }\n";
   const auto cut = wbm::scene::run_analysis(parse(text + "analysis = { type = \"continuation\", max_points = 3 }\n"));
-  EXPECT_FALSE(cut.converged);
+  EXPECT_FALSE(cut.converged());
+  // One vocabulary (issue #41): the branch's stop and a status, not a bool, in the result.
+  EXPECT_EQ(cut.status, wbm::solvers::SolveStatus::PathEnded);
+  ASSERT_TRUE(cut.stop.has_value());
+  EXPECT_EQ(*cut.stop, wbm::solvers::StopReason::MaxPoints);
+  EXPECT_EQ(cut.diagnostics["status"], "path-ended");
+  EXPECT_EQ(cut.diagnostics["stop"], "point limit reached");
   const std::string message = cut.diagnostics["continuation"]["message"].get<std::string>();
   EXPECT_NE(message.find("way out: raise [analysis] max_points (now 3), e.g. to 6"), std::string::npos) << message;
   const auto full = wbm::scene::run_analysis(parse(text + "analysis = { type = \"continuation\" }\n"));
-  ASSERT_TRUE(full.converged);
+  ASSERT_TRUE(full.converged());
   EXPECT_EQ(full.diagnostics["continuation"]["message"].get<std::string>().find("way out"), std::string::npos);
 
   Scene nnm = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
   nnm.analysis.max_points = 4;
   const auto b = wbm::scene::run_analysis(nnm);
-  EXPECT_FALSE(b.converged);
+  EXPECT_FALSE(b.converged());
+  ASSERT_TRUE(b.stop.has_value());
+  EXPECT_EQ(*b.stop, wbm::solvers::StopReason::MaxPoints);
   const std::string nnm_message = b.diagnostics["nnm"]["message"].get<std::string>();
   EXPECT_NE(nnm_message.find("way out: raise [analysis] max_points (now 4), e.g. to 8"), std::string::npos) << nnm_message;
 }
@@ -250,7 +258,7 @@ TEST(Scene, BackboneReportsProgressPerPoint) {
   const Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
   std::vector<std::pair<double, std::string>> reports;
   const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
-  ASSERT_TRUE(r.converged);
+  ASSERT_TRUE(r.converged());
   ASSERT_GE(reports.size(), 10u);
   EXPECT_EQ(reports.front().second.rfind("point 1, E = 0.5, step ", 0), 0u) << reports.front().second;
   EXPECT_NEAR(reports.front().first, 0.0, 1e-12);
@@ -276,7 +284,7 @@ TEST(Scene, ObservedDofsAndHarmonicsAlongASweepAndABranchMatchTheClosedForm) {
   const auto sweep = wbm::scene::run_analysis(parse(
       head + "forcing = { amplitude = 10.0, dof = \"a\", frequencies_hz = [5.0, 12.0, 30.0] }\n"
              "output = { samples = 64, harmonics = 2, observe = [\"b\", \"a\"] }\n"));
-  ASSERT_TRUE(sweep.converged);
+  ASSERT_TRUE(sweep.converged());
   // frequency_response.csv follows observe: b first; sweep_harmonics.csv: A0, φ0, A1, φ1, A2, φ2 per DOF.
   const Eigen::VectorXd& hz = column(sweep, "sweep_harmonics.csv", 0);
   ASSERT_EQ(hz.size(), 3);
@@ -294,7 +302,7 @@ TEST(Scene, ObservedDofsAndHarmonicsAlongASweepAndABranchMatchTheClosedForm) {
       head + "forcing = { amplitude = 10.0, dof = \"a\", frequency_hz = [5.0, 30.0] }\n"
              "analysis = { type = \"continuation\", stability = false, max_frequency_step_hz = 1.0 }\n"
              "output = { samples = 256, harmonics = 1, observe = [\"a\", \"b\"] }\n"));
-  ASSERT_TRUE(branch.converged);
+  ASSERT_TRUE(branch.converged());
   const Eigen::VectorXd& f = column(branch, "branch.csv", 0);
   const Eigen::VectorXd& amplitude_b = column(branch, "branch.csv", 8);  // after corrector_iterations: b's max, min, amplitude
   const Eigen::VectorXd& a1_b = column(branch, "branch_harmonics.csv", 7);
@@ -327,7 +335,7 @@ TEST(Scene, OddHarmonicSelectionOfASymmetricOscillatorIsTheFullBranch) {
   const Scene odd_scene = parse(oscillator + odd + plus + minus);
   EXPECT_EQ(odd_scene.basis.selected_harmonics, (std::vector<int>{1, 3, 5, 7, 9}));
   const auto sel = wbm::scene::run_analysis(odd_scene);
-  ASSERT_TRUE(full.converged && sel.converged);
+  ASSERT_TRUE(full.converged() && sel.converged());
   const Eigen::VectorXd& f_full = column(full, "branch.csv", 0);
   const Eigen::VectorXd& f_sel = column(sel, "branch.csv", 0);
   ASSERT_EQ(f_full.size(), f_sel.size());
@@ -349,7 +357,7 @@ TEST(Scene, OddHarmonicSelectionOfASymmetricOscillatorIsTheFullBranch) {
   EXPECT_EQ(wbm::scene::to_json(wbm::scene::scene_from_json(j, temp("odd.json"))), j);
 
   const auto one = wbm::scene::run_analysis(parse(oscillator + odd + plus));
-  ASSERT_TRUE(one.converged);
+  ASSERT_TRUE(one.converged());
   const Eigen::VectorXd& dropped = column(one, "branch.csv", 5);
   const Eigen::VectorXd& force = column(one, "branch.csv", 4);
   for (Eigen::Index i = 0; i < dropped.size(); ++i) {

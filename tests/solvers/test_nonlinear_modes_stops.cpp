@@ -64,6 +64,25 @@ Eigen::MatrixXd harmonic_amplitudes(const Eigen::MatrixXd& y) {
 
 }  // namespace
 
+// Backbone::converged is the one definition of a converged backbone (issue #41): the branch
+// complete, and a converged level at every energy asked for. Before, `wbm run` checked the levels
+// asked for and the Python module did not (complete alone). An energy that was not asked for has
+// no level in `included`; a level that did not converge makes the backbone unconverged.
+TEST(NonlinearModes, ConvergedNeedsAConvergedLevelAtEveryEnergyAskedFor) {
+  const solvers::NonlinearModes modes(ll11_system(), {{tip_dof(), 1e-3}}, {.harmonics = 6, .samples = 96});
+  auto b = modes.continue_backbone({.energy_min = 0.5, .energy_max = 1.5, .include = {0.8, 1.2}});
+  ASSERT_TRUE(b.complete) << b.message;
+  EXPECT_TRUE(b.converged());
+  EXPECT_TRUE(b.converged({0.8, 1.2}));
+  EXPECT_FALSE(b.converged({0.8, 0.9}));  // 0.9 was not asked for: no level there
+  ASSERT_EQ(b.included.size(), 2u);
+  b.included[1].status = solvers::SolveStatus::MaxIterations;
+  EXPECT_FALSE(b.converged({0.8, 1.2}));
+  EXPECT_TRUE(b.converged({0.8}));
+  b.complete = false;
+  EXPECT_FALSE(b.converged());
+}
+
 // A stop along a direction is a change of coordinates [issue #15: radial contacts]: the rod
 // written in rotated coordinates v = Qᵀu, with its tip stop along the direction Qᵀe_tip over all
 // 20 DOFs, has the same backbone as the rod with the stop on the tip DOF — the same frequencies

@@ -373,7 +373,7 @@ TEST(RigidContact, PenaltyHomotopyRescuesACyclingActiveSet) {
   const auto s = solvers::WeightedResidual(sc.system(), sc.harmonic_forcing(), stop, db6, db6).solve();
   ASSERT_TRUE(s.converged()) << s.report.message;
   EXPECT_EQ(s.path, solvers::SolutionPath::ContactHomotopy);
-  EXPECT_TRUE(s.homotopy.reached);
+  EXPECT_TRUE(s.homotopy.reached());
   EXPECT_LE(s.complementarity, 1e-12 * g0);
   EXPECT_LE(s.collocation_penetration, 1e-12 * g0);
   EXPECT_GE(s.contact_force_samples.minCoeff(), -1e-9 * s.max_contact_force);

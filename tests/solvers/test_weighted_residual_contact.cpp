@@ -74,7 +74,7 @@ TEST(WeightedResidual, HaarFourierFig6eIsReachedByTheContactHomotopy) {
   const auto sol = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), s.contact_points(), trial, weighting);
   ASSERT_TRUE(sol.converged()) << sol.report.message;
   EXPECT_EQ(sol.path, solvers::SolutionPath::ContactHomotopy);
-  EXPECT_TRUE(sol.homotopy.reached);
+  EXPECT_TRUE(sol.homotopy.reached());
   EXPECT_EQ(sol.homotopy.sigma_reached, 1.0);
   EXPECT_LE(sol.relative_residual, 1e-8);
   const auto ref = solvers::integrate_to_periodic(s.system(), s.harmonic_forcing(), s.contact_points(), {.samples_per_period = 1024});
@@ -140,8 +140,8 @@ TEST(WeightedResidual, NearRigidStopIsDiagnosedAsRoundingFloorOrEndedPath) {
   const auto pg = solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(), contacts,
                                                    TimeBasis::from_name("db6", 64), TimeBasis::from_name("fourier", 64));
   ASSERT_EQ(pg.report.status, solvers::SolveStatus::PathEnded) << pg.report.message;
-  EXPECT_TRUE(pg.homotopy.tried);
-  EXPECT_FALSE(pg.homotopy.reached);
+  EXPECT_TRUE(pg.homotopy.tried());
+  EXPECT_FALSE(pg.homotopy.reached());
   EXPECT_LT(pg.homotopy.sigma_reached, 1.0);
   EXPECT_GE(pg.homotopy.folds, 1);
   EXPECT_TRUE(std::isnan(pg.rounding_floor));

@@ -175,7 +175,6 @@ struct WeightedResidual::SignoriniPenalty {
 
 NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport& report) const {
   const auto& p = *impl_;
-  report.tried = true;
   // From κ₀ = 10⁻², where λ ≈ κ₀ (u_lin − g0)₊ / c barely moves the structure, to κ = 10⁸
   // (penetration about 10⁻⁸ c λ), then the active-set Newton on the exact conditions.
   constexpr double kMuStart = -2.0, kMuEnd = 8.0;
@@ -192,10 +191,11 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
   Eigen::VectorXd guess = branch.points.empty() ? start : branch.points.back().x;
   NewtonResult out = newton(Signorini{this, 1.0}, std::move(guess), p.options.newton);
   out.report.iterations += static_cast<int>(branch.corrector_iterations);
-  report.reached = out.report.converged();
+  report.status = out.report.status;
   out.report.message = "penalty homotopy of the Signorini conditions, kappa from 1e" + format_number(kMuStart) +
                        " to " + format_number(report.sigma_reached) + " (" + std::to_string(report.points) + " points, " +
-                       std::to_string(report.folds) + " folds; " + report.stop + "), then the active-set Newton: " +
+                       std::to_string(report.folds) + " folds; " + std::string(to_string(branch.stop)) + ": " +
+                       report.message + "), then the active-set Newton: " +
                        out.report.message;
   if (!out.report.converged() && branch.stop != StopReason::RangeReached) out.report.status = SolveStatus::PathEnded;
   return out;

@@ -37,7 +37,8 @@ void record_homotopy(const Branch& branch, double lambda_cap, HomotopyReport& re
   report.points = static_cast<int>(branch.points.size());
   report.folds = static_cast<int>(branch.folds.size());
   report.corrector_iterations = branch.corrector_iterations;
-  report.stop = std::string(to_string(branch.stop)) + ": " + branch.message;
+  report.stop = branch.stop;
+  report.message = branch.message;
   double lambda_max = -std::numeric_limits<double>::infinity();
   for (const auto& bp : branch.points) lambda_max = std::max(lambda_max, bp.parameter);
   report.sigma_reached = branch.points.empty() ? 0.0 : std::pow(10.0, std::min(lambda_max, lambda_cap));
@@ -125,7 +126,6 @@ Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd
 
 NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& report) const {
   const auto& p = *impl_;
-  report.tried = true;
   // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
   std::vector<Impl::ContactTangent> tangents;
   (void)p.contact_forces(p.x_lin, &tangents);
@@ -146,7 +146,8 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
     out.report.iterations = static_cast<int>(branch.corrector_iterations);
     out.report.message = "contact homotopy ended at σ = " + format_number(report.sigma_reached) + " (from σ₀ = " +
                          format_number(std::pow(10.0, lambda0)) + ", " + std::to_string(report.points) +
-                         " points, " + std::to_string(report.folds) + " folds in σ): " + report.stop;
+                         " points, " + std::to_string(report.folds) + " folds in σ): " +
+                         std::string(to_string(branch.stop)) + ": " + report.message;
     return out;
   }
   // The last step crossed σ = 1: Newton at σ = 1 from the landing there (verified on the
@@ -155,8 +156,8 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   Eigen::VectorXd guess = branch.landings.empty() ? branch.points.back().x : branch.landings.front().x;
   out = newton(Condensed{this, 1.0}, std::move(guess), p.options.newton);
   out.report.iterations += static_cast<int>(branch.corrector_iterations);
-  report.reached = out.report.converged();
-  if (report.reached) report.sigma_reached = 1.0;
+  report.status = out.report.status;
+  if (report.reached()) report.sigma_reached = 1.0;
   out.report.message = "contact homotopy from σ₀ = " + format_number(std::pow(10.0, lambda0)) + " (" +
                        std::to_string(report.points) + " points, " + std::to_string(report.folds) +
                        " folds in σ), then Newton at σ = 1: " + out.report.message;

@@ -12,6 +12,15 @@
 
 namespace wbm::solvers {
 
+bool Backbone::converged(const std::vector<double>& requested) const {
+  if (!complete) return false;
+  return std::all_of(requested.begin(), requested.end(), [&](double energy) {
+    return std::any_of(included.begin(), included.end(), [&](const ModeLevel& l) {
+      return std::abs(l.energy - energy) <= 1e-12 * std::abs(energy) && l.converged();
+    });
+  });
+}
+
 void NonlinearModeOptions::validate(int dofs) const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("NonlinearModeOptions." + what); };
   if (harmonics < 1 || harmonics > 512) fail("harmonics = " + std::to_string(harmonics) + ": must lie in [1, 512]");

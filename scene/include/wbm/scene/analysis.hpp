@@ -3,6 +3,7 @@
 /// command writes them (docs/scenes.md lists every file and column). Units: SI.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 
 #include <wbm/scene/output.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
+#include <wbm/solvers/status.hpp>
 #include <wbm/scene/scene.hpp>
 
 namespace wbm::scene {
@@ -17,10 +19,20 @@ namespace wbm::scene {
 /// Progress of a long analysis: fraction in [0, 1] and a short label ("period 12, δ = 3e-5").
 using Progress = std::function<void(double fraction, const std::string& label)>;
 
+/// How a run ended, in the solvers' one vocabulary (status.hpp, continuation.hpp):
+///  - status: Converged only if every solve's residual was verified (a sweep: every frequency;
+///    timestep: the period-to-period criterion met) and, for a branch (continuation, nnm), the
+///    branch reached its range (and every nnm level asked for converged); else the status of the
+///    first failed solve, or PathEnded for a branch that stopped before its range's end.
+///  - stop: for a branch, why it ended (absent for solve, timestep and basis-plot).
+/// converged() is the project's one definition of a converged run: `wbm run`'s exit status and
+/// status line, result.json's diagnostics.converged and the MAT-file's `converged` all read it.
+/// Tables hold converged data only; a point that failed is listed in diagnostics with its status
+/// and residuals.
 struct AnalysisResult {
-  /// True only if every solve converged (a sweep: every frequency). Tables hold converged data
-  /// only; a point that failed is listed in diagnostics with its status and residuals.
-  bool converged = false;
+  solvers::SolveStatus status = solvers::SolveStatus::MaxIterations;
+  std::optional<solvers::StopReason> stop;
+  [[nodiscard]] bool converged() const { return status == solvers::SolveStatus::Converged; }
   nlohmann::json diagnostics;   // status, iterations, residuals, condition estimate, timings
   std::vector<Table> tables;    // the CSV files, in the order written
   std::string summary;          // a few lines for the terminal

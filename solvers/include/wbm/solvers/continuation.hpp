@@ -76,39 +76,7 @@
 
 namespace wbm::solvers {
 
-/// Why a branch ended. Retraced: the branch came back along a piece it had already traced
-/// (detected by the caller that knows the problem, e.g. a backbone falling back below contact
-/// onset after a corner) and was cut where it turned back. UndampedResonance: a forced response
-/// with the M = 2^J Fourier basis followed the undamped resonance of its top function cos πMτ
-/// (response_curve.hpp) and was cut where that function took over.
-enum class StopReason {
-  RangeReached,
-  StepBelowMinimum,
-  MaxPoints,
-  InitialPointFailed,
-  StateBound,
-  Retraced,
-  UndampedResonance,
-  DegenerateEvent,
-  TimeBudget,  // a wall-time budget spent (NaturalParameterOptions::max_wall_time_s, e.g. LL11 Alg. 1)
-  GoalReached  // the caller's goal held at the last point (NaturalParameterOptions::goal)
-};
-
-[[nodiscard]] constexpr std::string_view to_string(StopReason r) noexcept {
-  switch (r) {
-    case StopReason::RangeReached: return "range reached";
-    case StopReason::StepBelowMinimum: return "step below minimum";
-    case StopReason::MaxPoints: return "point limit reached";
-    case StopReason::InitialPointFailed: return "initial point did not converge";
-    case StopReason::StateBound: return "state bound exceeded";
-    case StopReason::Retraced: return "branch retraced itself";
-    case StopReason::UndampedResonance: return "undamped resonance of the top Fourier function";
-    case StopReason::DegenerateEvent: return "degenerate switching point";
-    case StopReason::TimeBudget: return "wall-time budget spent";
-    case StopReason::GoalReached: return "goal reached";
-  }
-  return "?";
-}
+// StopReason, why a branch ended, is in status.hpp with SolveStatus: one vocabulary.
 
 struct BranchPoint {
   double parameter = 0.0;       // λ

@@ -148,6 +148,11 @@ struct Backbone {
   double homotopy_stiffness = 0.0;
   std::string message;
   double wall_time_s = 0.0;
+  /// The one definition of a converged backbone, read by `wbm run`, the Python module and the
+  /// reproductions: `complete`, and every energy of `requested` (the `include` list it was run
+  /// with, or a scene's analysis.levels) has a converged level in `included` (same energy to
+  /// 1e-12 relative). Before, the CLI also checked the requested levels and Python did not.
+  [[nodiscard]] bool converged(const std::vector<double>& requested = {}) const;
 };
 
 /// Where a level's energy sits (NonlinearModes::modal_components): mode and harmonic 1-based as

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -100,15 +101,20 @@ enum class SolutionPath { DirectNewton, ContactHomotopy, LoadStepping, Linear };
 [[nodiscard]] std::string_view to_string(SolutionPath p) noexcept;
 
 /// The σ path of the contact homotopy (SolutionPath::ContactHomotopy), for reports.
+/// In the solvers' one vocabulary: `stop` is the σ branch's StopReason (absent when no homotopy
+/// was run), `status` Converged once the path reached the problem (σ = 1, or the stiffest penalty
+/// of the rigid path) and Newton converged there, else the status of that solve or PathEnded.
 struct HomotopyReport {
-  bool tried = false;
-  bool reached = false;            // the path reached σ = 1 and Newton converged there
+  std::optional<StopReason> stop;
+  SolveStatus status = SolveStatus::PathEnded;
+  std::string message;             // the branch's message (where and why it stopped)
+  [[nodiscard]] bool tried() const { return stop.has_value(); }
+  [[nodiscard]] bool reached() const { return status == SolveStatus::Converged; }
   double sigma_reached = 0.0;      // largest σ on the path (1 if reached)
   double lambda_start = 0.0;       // λ₀ = log₁₀ σ₀
   int points = 0;                  // continuation points
   int folds = 0;                   // turning points in σ on the path
   long corrector_iterations = 0;
-  std::string stop;                // the branch's StopReason and message
 };
 
 struct WeightedResidualOptions {
