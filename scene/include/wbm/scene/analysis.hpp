@@ -19,7 +19,7 @@ namespace wbm::scene {
 /// Progress of a long analysis: fraction in [0, 1] and a short label ("period 12, δ = 3e-5").
 using Progress = std::function<void(double fraction, const std::string& label)>;
 
-/// How a run ended, in the solvers' one vocabulary (status.hpp, continuation.hpp):
+/// How a run ended, in the solvers' one vocabulary (status.hpp: SolveStatus and StopReason):
 ///  - status: Converged only if every solve's residual was verified (a sweep: every frequency;
 ///    timestep: the period-to-period criterion met) and, for a branch (continuation, nnm), the
 ///    branch reached its range (and every nnm level asked for converged); else the status of the
