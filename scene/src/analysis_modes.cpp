@@ -121,15 +121,13 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     for (int i = 0; i < st.dofs(); ++i) dofs.push_back(i);  // nnm default: every DOF (space-time maps)
   }
   const int p = scene.output.samples;
-  solvers::SolveStatus first_failed_level = solvers::SolveStatus::PathEnded;  // a level asked for and not reached
-  bool levels_ok = true;
+  std::optional<solvers::SolveStatus> first_failed_level;  // the first level asked for that did not converge
   nlohmann::json included = nlohmann::json::array();
   for (double energy : a.levels) {
     const auto it = std::find_if(b.included.begin(), b.included.end(),
                                  [&](const solvers::ModeLevel& l) { return std::abs(l.energy - energy) <= 1e-12 * energy; });
     if (it == b.included.end() || !it->converged()) {
-      if (levels_ok && it != b.included.end()) first_failed_level = it->status;
-      levels_ok = false;
+      if (!first_failed_level && it != b.included.end()) first_failed_level = it->status;
       included.push_back({{"energy", energy}, {"converged", false},
                           {"message", it == b.included.end() ? "not reached by the backbone" : it->message}});
       continue;
@@ -158,7 +156,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
   // The one definition of a converged backbone (Backbone::converged), as in the Python module.
   out.stop = b.stop;
   out.status = b.converged(a.levels) ? solvers::SolveStatus::Converged
-               : b.complete          ? first_failed_level
+               : b.complete          ? first_failed_level.value_or(solvers::SolveStatus::PathEnded)
                                      : solvers::SolveStatus::PathEnded;
   double worst_pen = -1e300, worst_comp = 0.0;
   for (const auto& l : b.levels) {

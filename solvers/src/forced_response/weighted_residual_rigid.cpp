@@ -191,13 +191,13 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
   Eigen::VectorXd guess = branch.points.empty() ? start : branch.points.back().x;
   NewtonResult out = newton(Signorini{this, 1.0}, std::move(guess), p.options.newton);
   out.report.iterations += static_cast<int>(branch.corrector_iterations);
-  report.status = out.report.status;
   out.report.message = "penalty homotopy of the Signorini conditions, kappa from 1e" + format_number(kMuStart) +
                        " to " + format_number(report.sigma_reached) + " (" + std::to_string(report.points) + " points, " +
                        std::to_string(report.folds) + " folds; " + std::string(to_string(branch.stop)) + ": " +
                        report.message + "), then the active-set Newton: " +
                        out.report.message;
   if (!out.report.converged() && branch.stop != StopReason::RangeReached) out.report.status = SolveStatus::PathEnded;
+  report.status = out.report.status;
   return out;
 }
 
