@@ -5,7 +5,7 @@ OUT   ?= $(CURDIR)/out
 # Extra CMake arguments for the Release build, e.g. CMAKE_ARGS=-DWBM_WERROR=ON (.ci/run).
 CMAKE_ARGS ?=
 
-.PHONY: deps configure build test check-sanitize check-fuzz reproduce bench clean
+.PHONY: deps configure build test sanitize-configure check-sanitize check-fuzz reproduce bench clean
 
 deps:
 	@./scripts/install-deps
@@ -20,74 +20,72 @@ build: configure
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+# One instrumented build, $(SANITIZE_BUILD)/, serves check-sanitize and check-fuzz: clang-14
+# (scripts/install-deps fuzz), Debug (assertions on: Eigen's range and size checks are active) at
+# -O1 -g1, -fsanitize=address,undefined with -fno-sanitize-recover=all (any report fails the run),
+# and libFuzzer's coverage (fuzzer-no-link) so that the fuzz targets link against the same
+# libraries. Measured on 2 cores (stop 49), one sanitized test file (test_continuation.cpp):
+# g++ 95.6 s, clang 55.9 s, clang with the coverage 67.3 s; the separate g++ build for the tests
+# and clang build for the fuzzers took about 19 and 5.5 min. -g1 (functions and line tables: what
+# a sanitizer's stack trace prints) instead of -g. The libraries and tools are a unity build
+# (CMAKE_UNITY_BUILD: 8 sources a unit, each header parsed and each Eigen template instantiated
+# once per unit: wbm_solvers 261 s of CPU instead of 524 s); the tests are not (tests/CMakeLists.txt).
+SANITIZE_BUILD ?= build-sanitize
+SANITIZE_CXX   ?= clang++-14
+SANITIZE_FLAGS  = -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+SANITIZE_LINK   = -fsanitize=address,undefined
+sanitize-configure:
+	@./scripts/install-deps fuzz
+	@command -v $(SANITIZE_CXX) > /dev/null || { echo "check-sanitize: $(SANITIZE_CXX) not found: run scripts/install-deps fuzz"; exit 1; }
+	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_CXX_COMPILER=$(SANITIZE_CXX) -DCMAKE_BUILD_TYPE=Debug \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCMAKE_UNITY_BUILD=ON -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" \
+	  -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_LINK)" -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_LINK)" -DWBM_BUILD_FUZZ=ON \
+	  -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
+	  || { cat $(SANITIZE_BUILD).configure.log; exit 1; }
+
 # Unit, scene and Python tests (tests/python, Hypothesis included, on the sanitized module with the
-# interpreter CMake found) under AddressSanitizer and UndefinedBehaviorSanitizer, with assertions on
-# (no NDEBUG: Eigen's range and size checks are active). -O1 keeps the run within minutes; any
-# report fails the run (halt_on_error, -fno-sanitize-recover). The benchmarks, the reproduce
-# executables' --quick runs and the install test are left to `make test`. -g1 (functions and line
-# tables: what a sanitizer's stack trace prints) instead of -g: weighted_residual_contact.cpp
-# compiled in 41 s instead of 67 s and 0.9 GB instead of 1.4 GB, measured on a loaded machine.
-# The libraries and tools as a unity build (CMAKE_UNITY_BUILD: 8 sources a unit, each header
-# parsed and each Eigen template instantiated once per unit): wbm_solvers took 261 s of CPU
-# instead of 524 s at -O1 -g1 with the sanitizers. The tests are not (tests/CMakeLists.txt).
+# interpreter CMake found) with leak detection. The benchmarks, the reproduce executables'
+# --quick runs and the install test are left to `make test`.
 # SANITIZE_SKIP: the tests left to `make test` (Release), by name. Each repeats the LL11 backbone
 # continuation that shorter tests (BackbonePiecesAreSmoothAndTheirEventsMatchTheMin,
 # TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether, StopAlongADirectionIsAChangeOfCoordinates,
 # the scene's nnm runs) put through the same code under the sanitizers; several times over (five
 # rounding perturbations, three N x m pairs, Alg. 1 against the KKT continuation) it took, measured
-# under ASan + UBSan at -O1 (this stop, ctest -j 2): 346, 246, 147, 116 and 99 s, 954 s of the suite's
-# 2499 s. `make check-sanitize SANITIZE_SKIP=` runs them too.
+# under ASan + UBSan at -O1 (stop 48, g++, ctest -j 2): 346, 246, 147, 116 and 99 s, 954 s of the
+# suite's 2499 s. `make check-sanitize SANITIZE_SKIP=` runs them too.
 SANITIZE_SKIP  ?= NonlinearModes\.(BackboneThroughItsCornersDoesNotDependOnRounding|BackboneEntersAnIllConditionedPieceWithoutTurningBack|AugmentedLagrangianAndKktContinuationAgree|AboveContactConstraintsHoldAndFrequencyHardens)|Continuation\.ExtremesCompleteOrStopWithAReasonAndValidPoints
-SANITIZE_BUILD ?= build-sanitize
-SANITIZE_FLAGS  = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-CXX_FOR_ASAN   ?= g++
-check-sanitize: deps
-	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCMAKE_UNITY_BUILD=ON \
-	  -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
-	  -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
-	  -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
-	  || { cat $(SANITIZE_BUILD).configure.log; exit 1; }
+check-sanitize: sanitize-configure
 	@cmake --build $(SANITIZE_BUILD) -j $(JOBS) --target test_wavelets test_spectral test_fem test_contact \
 	  test_solvers test_scene wbm wbm_python
 	@cd $(SANITIZE_BUILD) && ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -L 'wavelets|spectral|fem|contact|solvers|scene' \
 	    $(if $(SANITIZE_SKIP),-E '$(SANITIZE_SKIP)')
 	@# The pytest suite (Hypothesis included) on the sanitized module: the interpreter is not
-	@# instrumented, so the ASan runtime is preloaded; CPython's own allocations at exit are not
-	@# leaks of ours (detect_leaks=0).
-	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$$($(CXX_FOR_ASAN) -print-file-name=libasan.so) $$($(CXX_FOR_ASAN) -print-file-name=libubsan.so)" \
+	@# instrumented, so clang's shared ASan runtime (which holds UBSan's handlers) is preloaded;
+	@# CPython's own allocations at exit are not leaks of ours (detect_leaks=0).
+	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$$($(SANITIZE_CXX) -print-file-name=libclang_rt.asan-x86_64.so)" \
 	  ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  PYTHONPATH=$(CURDIR)/$(SANITIZE_BUILD)/python WBM_CLI=$(CURDIR)/$(SANITIZE_BUILD)/cli/wbm PYTHONDONTWRITEBYTECODE=1 \
 	  "$$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' CMakeCache.txt)" -m pytest -q -p no:cacheprovider $(CURDIR)/tests/python
 
-# libFuzzer (clang-14) on the scene parser and the Matrix Market reader, each for FUZZ_SECONDS,
-# the libraries instrumented with ASan + UBSan and assertions on; seeds are our own scenes and
-# matrices, copied into a fresh corpus so that the source tree is never written. A crash, a
-# sanitizer report, a timeout (10 s per input) or more than 2 GB of memory fails the run and
-# leaves the input in $(FUZZ_BUILD)/findings/. Prints each target's executions.
-FUZZ_BUILD   ?= build-fuzz
+# libFuzzer on the scene parser and the Matrix Market reader, each for FUZZ_SECONDS, in the
+# sanitized build above (after check-sanitize, only the two targets are new); seeds are our own
+# scenes and matrices, copied into a fresh corpus so that the source tree is never written. A
+# crash, a sanitizer report, a timeout (10 s per input) or more than 2 GB of memory fails the run
+# and leaves the input in $(SANITIZE_BUILD)/findings/. Prints each target's executions.
 FUZZ_SECONDS ?= 60
-FUZZ_CXX     ?= clang++-14
-FUZZ_FLAGS    = -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-check-fuzz:
-	@./scripts/install-deps fuzz
-	@command -v $(FUZZ_CXX) > /dev/null || { echo "check-fuzz: $(FUZZ_CXX) not found: run scripts/install-deps fuzz"; exit 1; }
-	@cmake -S . -B $(FUZZ_BUILD) -DCMAKE_CXX_COMPILER=$(FUZZ_CXX) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_UNITY_BUILD=ON \
-	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCMAKE_CXX_FLAGS="$(FUZZ_FLAGS)" \
-	  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DWBM_BUILD_FUZZ=ON -DWBM_BUILD_TESTS=OFF \
-	  -DWBM_BUILD_BENCH=OFF -DWBM_BUILD_REPRODUCE=OFF > $(FUZZ_BUILD).configure.log 2>&1 \
-	  || { cat $(FUZZ_BUILD).configure.log; exit 1; }
-	@cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_scene fuzz_matrix_market
-	@rm -rf $(FUZZ_BUILD)/corpus && mkdir -p $(FUZZ_BUILD)/corpus/scene $(FUZZ_BUILD)/corpus/matrix_market \
-	  $(FUZZ_BUILD)/findings
-	@cp reproduce/scenes/*.toml examples/scenes/*.toml $(FUZZ_BUILD)/corpus/scene/
-	@cp examples/scenes/*.mtx $(FUZZ_BUILD)/corpus/matrix_market/
+FUZZ_DIR      = $(SANITIZE_BUILD)/fuzz-run
+check-fuzz: sanitize-configure
+	@cmake --build $(SANITIZE_BUILD) -j $(JOBS) --target fuzz_scene fuzz_matrix_market
+	@rm -rf $(FUZZ_DIR) && mkdir -p $(FUZZ_DIR)/corpus/scene $(FUZZ_DIR)/corpus/matrix_market $(FUZZ_DIR)/findings
+	@cp reproduce/scenes/*.toml examples/scenes/*.toml $(FUZZ_DIR)/corpus/scene/
+	@cp examples/scenes/*.mtx $(FUZZ_DIR)/corpus/matrix_market/
 	@for t in scene matrix_market; do \
-	  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(FUZZ_BUILD)/tests/fuzz/fuzz_$$t \
+	  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(SANITIZE_BUILD)/tests/fuzz/fuzz_$$t \
 	    -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-	    -artifact_prefix=$(FUZZ_BUILD)/findings/$$t- $(FUZZ_BUILD)/corpus/$$t > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 \
-	    || { tail -60 $(FUZZ_BUILD)/fuzz_$$t.log; echo "check-fuzz: fuzz_$$t found a failure (input in $(FUZZ_BUILD)/findings/)"; exit 1; }; \
-	  echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_BUILD)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
+	    -artifact_prefix=$(FUZZ_DIR)/findings/$$t- $(FUZZ_DIR)/corpus/$$t > $(FUZZ_DIR)/fuzz_$$t.log 2>&1 \
+	    || { tail -60 $(FUZZ_DIR)/fuzz_$$t.log; echo "check-fuzz: fuzz_$$t found a failure (input in $(FUZZ_DIR)/findings/)"; exit 1; }; \
+	  echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_DIR)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
 	done
 
 # The reproduce executables run JOBS at a time (one target each), then plot.py and report.py.
@@ -98,5 +96,4 @@ bench: build
 	@cmake --build $(BUILD) --target bench
 
 clean:
-	@rm -rf $(BUILD) $(BUILD).configure.log $(SANITIZE_BUILD) $(SANITIZE_BUILD).configure.log $(FUZZ_BUILD) \
-	  $(FUZZ_BUILD).configure.log
+	@rm -rf $(BUILD) $(BUILD).configure.log $(SANITIZE_BUILD) $(SANITIZE_BUILD).configure.log

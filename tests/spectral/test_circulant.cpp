@@ -29,5 +29,5 @@ TEST(Circulant, ProductsAndInverseMatchTheDenseMatrix) {
   not_circulant(1, 2) += 1e-6;
   EXPECT_FALSE(spectral::Circulant::is_circulant(not_circulant));
   EXPECT_THROW(spectral::Circulant(Eigen::VectorXd::Ones(4)).inverse(), std::domain_error);  // eigenvalues 4, 0, 0
-  EXPECT_THROW(spectral::Circulant(Eigen::VectorXd()), std::invalid_argument);
+  EXPECT_THROW(spectral::Circulant{Eigen::VectorXd()}, std::invalid_argument);
 }
