@@ -37,7 +37,7 @@ void BM_NonlinearModes_Fig3Backbone(benchmark::State& state) {
   double seconds = 0.0;
   for (auto _ : state) {
     const auto b = nm.continue_backbone(range(0.5, 10.0));
-    if (!b.complete) state.SkipWithError(b.message.c_str());
+    if (!b.complete()) state.SkipWithError(b.message.c_str());
     levels = b.levels.size();
     seconds = b.wall_time_s;
   }

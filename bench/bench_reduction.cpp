@@ -136,7 +136,7 @@ void BM_NonlinearMode_ContactNodes(benchmark::State& state) {
   for (auto _ : state) {
     const auto b = nnm.continue_backbone(options);
     levels = static_cast<double>(b.levels.size());
-    complete = b.complete ? 1.0 : 0.0;
+    complete = b.complete() ? 1.0 : 0.0;
   }
   state.counters["contact_nodes"] = tip;
   state.counters["reduced_dofs"] = static_cast<double>(blade.system.dofs());
@@ -165,7 +165,7 @@ void BM_KktFactorization(benchmark::State& state) {
   wbm::solvers::BranchPoint last;
   options.on_point = [&](size_t, const wbm::solvers::BranchPoint& p) { last = p; };
   const auto b = nnm.continue_backbone(options);
-  if (!b.complete || last.parameter <= 1.0) {
+  if (!b.complete() || last.parameter <= 1.0) {
     state.SkipWithError(("backbone to E = 1.5: " + b.message).c_str());
     return;
   }

@@ -38,9 +38,13 @@ struct Row {
   int x = 0;                  // M or n_c
   int unknowns = 0;           // n_c·M
   double setup_s = 0.0, total_s = 0.0;
-  bool converged = false;
-  std::string status, path;  // SolveStatus, SolutionPath
-  int iterations = 0;        // Newton iterations in all (homotopy correctors included)
+  wbm::solvers::SolveStatus status = wbm::solvers::SolveStatus::MaxIterations;
+  wbm::solvers::SolutionPath path{};
+  int iterations = 0;  // Newton iterations in all (homotopy correctors included)
+  [[nodiscard]] bool converged() const { return status == wbm::solvers::SolveStatus::Converged; }
+  [[nodiscard]] std::string outcome() const {  // "converged (direct Newton)"
+    return std::string(wbm::solvers::to_string(status)) + " (" + std::string(wbm::solvers::to_string(path)) + ")";
+  }
 };
 
 double median(std::vector<double> v) {
@@ -65,9 +69,8 @@ Row time_solve(const wbm::solvers::MechanicalSystem& system, const wbm::solvers:
     const auto t2 = clock::now();
     setup.push_back(std::chrono::duration<double>(t1 - t0).count());
     total.push_back(std::chrono::duration<double>(t2 - t0).count());
-    row.converged = sol.converged();
-    row.status = std::string(wbm::solvers::to_string(sol.report.status));
-    row.path = std::string(wbm::solvers::to_string(sol.path));
+    row.status = sol.report.status;
+    row.path = sol.path;
     row.iterations = sol.report.iterations;
     row.unknowns = sol.contact_unknowns;
   }
@@ -126,7 +129,7 @@ void write_series(wbm::reproduce::Run& run, const std::string& file, const std::
       setup.push_back(r.setup_s);
       total.push_back(r.total_s);
       iterations.push_back(r.iterations);
-      status.push_back(r.status + " (" + r.path + ")");
+      status.push_back(r.outcome());
     }
   }
   const auto col = [](const std::vector<double>& v) { return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())).eval(); };
@@ -163,7 +166,7 @@ int main(int argc, char** argv) {
         r.series = "M";
         r.label = pair.label();
         r.x = m;
-        std::cerr << r.label << " M = " << m << ": " << r.total_s * 1e3 << " ms (" << r.status << ")\n";
+        std::cerr << r.label << " M = " << m << ": " << r.total_s * 1e3 << " ms (" << r.outcome() << ")\n";
         rows.push_back(r);
       }
       by_dimension.push_back(rows);
@@ -188,17 +191,17 @@ int main(int argc, char** argv) {
       r.series = "contacts";
       r.label = "Fourier:Fourier, chain of 64, M = 16";
       r.x = nc;
-      std::cerr << "chain n_c = " << nc << ": " << r.total_s * 1e3 << " ms (" << r.status << ")\n";
+      std::cerr << "chain n_c = " << nc << ": " << r.total_s * 1e3 << " ms (" << r.outcome() << ")\n";
       chain_rows.push_back(r);
     }
 
     for (const auto& rows : by_dimension) {
       for (const auto& r : rows) {
-        if (!r.converged) run.fail(r.label + " at M = " + std::to_string(r.x) + " did not converge: " + r.status);
+        if (!r.converged()) run.fail(r.label + " at M = " + std::to_string(r.x) + " did not converge: " + r.outcome());
       }
     }
     for (const auto& r : chain_rows) {
-      if (!r.converged) run.fail(r.label + " with n_c = " + std::to_string(r.x) + " did not converge: " + r.status);
+      if (!r.converged()) run.fail(r.label + " with n_c = " + std::to_string(r.x) + " did not converge: " + r.outcome());
     }
     write_series(run, "scaling_dimension.csv", "M [-]", by_dimension, true);
     write_series(run, "scaling_contacts.csv", "contacts [-]", {chain_rows}, false);
@@ -226,8 +229,8 @@ int main(int argc, char** argv) {
       md << " " << format("%.2f", fitted_exponent(rows, 4)) << " | "
          << format("%.0f %%", 100.0 * rows.back().setup_s / rows.back().total_s) << " |\n";
       for (const auto& r : rows) {
-        if (r.path != "direct Newton") {
-          notes << "\n" << r.label << " at M = " << r.x << " went by the " << r.path << " (" << r.iterations
+        if (r.path != wbm::solvers::SolutionPath::DirectNewton) {
+          notes << "\n" << r.label << " at M = " << r.x << " went by the " << wbm::solvers::to_string(r.path) << " (" << r.iterations
                 << " Newton iterations in all).\n";
         }
       }
@@ -240,7 +243,8 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < chain_rows.size(); ++i) {
       const auto& r = chain_rows[i];
       md << "| " << r.x << " | " << r.unknowns << " | " << format("%.3g", r.total_s * 1e3) << " | " << r.iterations << " | "
-         << format("%.3g", per_iteration[i].total_s * 1e3) << " | " << r.path << " | " << r.status << " |\n";
+         << format("%.3g", per_iteration[i].total_s * 1e3) << " | " << wbm::solvers::to_string(r.path) << " | "
+         << wbm::solvers::to_string(r.status) << " |\n";
     }
     md << "\nFitted exponent in n_c: " << format("%.2f", fitted_exponent(chain_rows, 4)) << " for the solve, "
        << format("%.2f", fitted_exponent(per_iteration, 4)) << " per Newton iteration.\n\n";

@@ -138,8 +138,8 @@ int main(int argc, char** argv) {
           fo.include.clear();
           fo.energy_max = start_energy + 0.05;
           r.down = fine.continue_backbone(fo);
-          if (!r.up->complete) r.errors.push_back("first-mode branch (up) incomplete: " + r.up->message);
-          if (!r.down->complete) r.errors.push_back("first-mode branch (down) incomplete: " + r.down->message);
+          if (!r.up->complete()) r.errors.push_back("first-mode branch (up) incomplete: " + r.up->message);
+          if (!r.down->complete()) r.errors.push_back("first-mode branch (down) incomplete: " + r.down->message);
         }
         r.seconds = models::seconds_since(t0);
         return r;
@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
     const solvers::NonlinearModes nnm(reduced, stops, {.harmonics = harmonics, .samples = samples});
     const auto b = nnm.continue_backbone(co);
     timing["backbone_s"] = models::seconds_since(t);
-    if (!b.complete) run.fail("backbone incomplete: " + b.message);
+    if (!b.complete()) run.fail("backbone incomplete: " + b.message);
     const double f1 = nnm.linear_frequency_hz();
 
     // Branch 1, traced on the second core meanwhile.

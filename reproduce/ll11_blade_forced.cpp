@@ -219,7 +219,7 @@ int main(int argc, char** argv) {
     co.max_energy_step = 0.2;
     co.penalty_stiffness = k_pen;
     const auto b = nnm.continue_backbone(co);
-    if (!b.complete) run.fail("backbone incomplete: " + b.message);
+    if (!b.complete()) run.fail("backbone incomplete: " + b.message);
     BackboneCurve backbone = backbone_curve(nnm, b.levels, observed, unit);
     backbone.time_s = models::seconds_since(t);
     backbone.stop = b.message;
@@ -243,7 +243,7 @@ int main(int argc, char** argv) {
     for (int direction : {-1, +1}) {
       cp.direction = direction;
       const auto part = nnm.continue_backbone(cp);
-      through_complete = through_complete && part.complete;
+      through_complete = through_complete && part.complete();
       through_stop += std::string(direction < 0 ? "down: " : "; up: ") + part.message;
       if (direction < 0) {
         through.assign(part.levels.rbegin(), part.levels.rend());

@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
       const double reached = ba.levels.empty() ? NAN : ba.levels.back().energy;
       const double continuation_s = nnm["wall_time_s"].get<double>();
       alg_scene_meta = {{"harmonics", s.analysis.harmonics}, {"samples", s.analysis.samples},
-                        {"budget_s", kAlgBudgetS}, {"complete", ba.complete}, {"levels", ba.levels.size()},
+                        {"budget_s", kAlgBudgetS}, {"complete", ba.complete()}, {"levels", ba.levels.size()},
                         {"energy_reached", std::isfinite(reached) ? nlohmann::json(reached) : nlohmann::json(nullptr)},
                         {"failed_energies", ba.failed_energies}, {"wall_time_s", ba.wall_time_s},
                         {"newton_iterations", newton}, {"powell_iterations", powell_its},
@@ -160,8 +160,8 @@ int main(int argc, char** argv) {
               std::to_string(s.analysis.samples) + ", E from " + format("%g", bo.energy_min) + " to " +
               format("%g", bo.energy_max) + ", steps up to " + format("%g", bo.max_step) + ") finishes within " +
               format("%g", kAlgBudgetS) + " s (issue #35)",
-          ba.complete && ba.wall_time_s <= kAlgBudgetS,
-          std::string(ba.complete ? "reached E = " : "stopped at E = ") +
+          ba.complete() && ba.wall_time_s <= kAlgBudgetS,
+          std::string(ba.complete() ? "reached E = " : "stopped at E = ") +
               (std::isfinite(reached) ? format("%.4g", reached) : std::string("— (no level)")) + " (" +
               format("%.0f", 100.0 * (std::isfinite(reached) ? reached - bo.energy_min : 0.0) / (bo.energy_max - bo.energy_min)) +
               " % of the range) in " + format("%.1f", ba.wall_time_s) + " s: " + std::to_string(ba.levels.size()) +

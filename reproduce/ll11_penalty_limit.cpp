@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
       o.max_energy_step = sp.analysis.max_energy_step;
       o.include = probes;
       auto b = modes.continue_backbone(o);
-      if (!b.complete) run.fail(prefix + ": " + b.message);
+      if (!b.complete()) run.fail(prefix + ": " + b.message);
       const auto n = static_cast<Eigen::Index>(b.levels.size());
       Eigen::VectorXd e(n), f(n), pen(n);
       for (Eigen::Index i = 0; i < n; ++i) {

@@ -22,6 +22,7 @@
 #include <iostream>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -53,10 +54,17 @@ struct Perturbation {
   bool reversed = false;
 };
 
-// One run's outcome, with NaN for a value it did not reach.
+// A run's stop as its tables print it ("not a valid pair" for a pair that was not run).
+std::string stop_text(const std::optional<solvers::StopReason>& stop) {
+  return stop ? std::string(solvers::to_string(*stop)) : std::string("not a valid pair");
+}
+
+// One run's outcome, with NaN for a value it did not reach; no stop: an impossible pair, not run.
 struct Outcome {
-  std::string stop, message;
-  bool complete = false;
+  std::optional<solvers::StopReason> stop;
+  solvers::SolveStatus status = solvers::SolveStatus::PathEnded;  // Backbone::status
+  std::string message;
+  [[nodiscard]] bool complete() const { return status == solvers::SolveStatus::Converged; }
   int levels = 0, corners = 0;
   std::vector<double> folds;
   double f_check = NAN, f_end = NAN, seconds = 0.0;
@@ -89,16 +97,15 @@ Outcome run_backbone(const scene::ModeProblem& problem, int harmonics, int sampl
     o.energy_max = e_max;
     o.include = {e_check};
     const auto b = nm.continue_backbone(o);
-    out.stop = std::string(solvers::to_string(b.stop));
+    out.stop = b.stop;
+    out.status = b.status;
     out.message = b.message;
-    out.complete = b.complete;
     out.levels = static_cast<int>(b.levels.size());
     out.corners = b.kinks;
     out.folds = b.folds;
     if (!b.included.empty() && b.included[0].converged()) out.f_check = b.included[0].frequency_hz;
-    if (b.complete) out.f_end = b.levels.back().frequency_hz;
+    if (b.complete()) out.f_end = b.levels.back().frequency_hz;
   } catch (const std::invalid_argument& e) {  // an impossible pair (m <= 2N): explained, not run
-    out.stop = "not a valid pair";
     out.message = e.what();
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -109,8 +116,10 @@ Outcome run_backbone(const scene::ModeProblem& problem, int harmonics, int sampl
 // 20 µm, 10 N over 60–210 rad/s, continuation), with K scaled by 1 + scale and `basis` (a TOML
 // [basis] line, or empty for the defaults): completion, folds [Hz] and the fold amplitudes [m].
 struct StiffStopOutcome {
-  bool converged = false;
-  std::string stop, message;
+  solvers::SolveStatus status = solvers::SolveStatus::PathEnded;
+  std::optional<solvers::StopReason> stop;
+  std::string message;
+  [[nodiscard]] bool converged() const { return status == solvers::SolveStatus::Converged; }
   int points = 0;
   std::vector<double> folds, fold_amplitudes;
   double seconds = 0.0;
@@ -127,9 +136,9 @@ StiffStopOutcome run_stiff_stop(const std::string& basis, double scale) {
   const auto t0 = std::chrono::steady_clock::now();
   const scene::AnalysisResult r = scene::run_analysis(scene::parse_scene(text, "stiff_stop.toml"));
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  out.converged = r.converged();
+  out.status = r.status;
+  out.stop = r.stop;
   const auto& c_json = r.diagnostics["continuation"];
-  out.stop = c_json["stop"].get<std::string>();
   out.message = c_json["message"].get<std::string>();
   out.points = c_json["points"].get<int>();
   for (const auto& t : r.tables) {
@@ -146,7 +155,7 @@ StiffStopOutcome run_stiff_stop(const std::string& basis, double scale) {
 // at most 10 gaps of contact displacement, as jl14_fig12; no stability), perturbed as `p`: the
 // stop, the folds [Hz] and the peak tip amplitude [m].
 struct Fig12Outcome {
-  std::string stop;
+  solvers::StopReason stop = solvers::StopReason::InitialPointFailed;
   int points = 0;
   std::vector<double> folds;
   double peak = NAN, seconds = 0.0;
@@ -181,7 +190,7 @@ Fig12Outcome run_fig12(const scene::Scene& scene, const reproduce::Combination& 
   const auto curve = solvers::trace_response(base, o);
   Fig12Outcome out;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  out.stop = std::string(solvers::to_string(curve.stop));
+  out.stop = curve.stop;
   out.points = static_cast<int>(curve.points.size());
   for (const auto& f : curve.folds) out.folds.push_back(f.parameter);
   for (const auto& pt : curve.points) out.peak = std::isnan(out.peak) ? pt.amplitude : std::max(out.peak, pt.amplitude);
@@ -251,7 +260,7 @@ int main(int argc, char** argv) {
       const int n_h = harmonics[i / n_p / samples.size()], m = samples[i / n_p % samples.size()];
       Outcome o = run_backbone(problem, n_h, m, e_min, e_max, e_check, perturbations[i % n_p]);
       std::cerr << ("ll11_robustness: N = " + std::to_string(n_h) + ", m = " + std::to_string(m) + ", " +
-                    perturbations[i % n_p].name + ": " + o.stop + ", " + format("%.1f", o.seconds) + " s\n");
+                    perturbations[i % n_p].name + ": " + stop_text(o.stop) + ", " + format("%.1f", o.seconds) + " s\n");
       return o;
     });
     const double grid_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -274,20 +283,20 @@ int main(int argc, char** argv) {
         bool same_folds = true, same_outcome = true;
         for (size_t k = 1; k < outs.size(); ++k) {
           const Outcome& o = outs[k];
-          same_outcome = same_outcome && o.complete == ref.complete && o.stop == ref.stop;
+          same_outcome = same_outcome && o.status == ref.status && o.stop == ref.stop;
           same_folds = same_folds && o.folds.size() == ref.folds.size();
           for (size_t i = 0; same_folds && i < o.folds.size(); ++i) diff = std::max(diff, relative(o.folds[i], ref.folds[i]));
           diff = std::max({diff, relative(o.f_check, ref.f_check), relative(o.f_end, ref.f_end)});
         }
-        const bool valid = ref.stop != "not a valid pair";
+        const bool valid = ref.stop.has_value();
         const bool agree = same_outcome && same_folds && diff <= kAgree;
         // A degenerate switching point is a computed outcome with its reason. A backbone that
         // retraced itself is not: a conservative system's backbone does not turn back onto
         // itself, so that stop is the continuation's failure and counts as unexplained.
-        const bool explained_stop = ref.stop == solvers::to_string(solvers::StopReason::DegenerateEvent);
+        const bool explained_stop = ref.stop == solvers::StopReason::DegenerateEvent;
         if (!valid) {
           ++explained;
-        } else if (ref.complete) {
+        } else if (ref.complete()) {
           ++completed;
         } else if (explained_stop) {
           ++stopped;  // a computed outcome with its reason (a degenerate switching point)
@@ -325,11 +334,11 @@ int main(int argc, char** argv) {
         double seconds = 0.0;
         for (const auto& o : outs) seconds += o.seconds;
         total_seconds += seconds;
-        std::cerr << "ll11_robustness: N = " << n_h << ", m = " << m << ": " << (valid ? ref.stop : "not valid")
+        std::cerr << "ll11_robustness: N = " << n_h << ", m = " << m << ": " << (valid ? stop_text(ref.stop) : "not valid")
                   << ", " << outs.size() << " runs in " << format("%.1f", seconds) << " s, largest difference "
                   << format("%.1e", diff) << "\n";
         const std::string outcome =
-            !valid ? "not run: " + ref.message : (ref.complete ? "range reached" : ref.message);
+            !valid ? "not run: " + ref.message : (ref.complete() ? "range reached" : ref.message);
         rows << "| " << n_h << " | " << m << " | " << outcome << " | " << (valid ? std::to_string(ref.levels) : "")
              << " | " << (valid ? std::to_string(ref.corners) : "") << " | " << (valid ? std::to_string(ref.folds.size()) : "")
              << " | " << format("%.5f", ref.f_check) << " | " << format("%.5f", ref.f_end) << " | "
@@ -339,12 +348,12 @@ int main(int argc, char** argv) {
         for (size_t k = 0; k < outs.size(); ++k) {
           const Outcome& o = outs[k];
           const double row[] = {static_cast<double>(n_h), static_cast<double>(m), static_cast<double>(k),
-                                perturbations[k].scale, o.complete ? 1.0 : 0.0, static_cast<double>(o.levels),
+                                perturbations[k].scale, o.complete() ? 1.0 : 0.0, static_cast<double>(o.levels),
                                 static_cast<double>(o.corners), static_cast<double>(o.folds.size()), o.f_check, o.f_end};
           for (size_t c = 0; c < columns.size(); ++c) columns[c].push_back(row[c]);
-          status.push_back(o.stop);
-          runs.push_back({{"perturbation", perturbations[k].name}, {"stop", o.stop}, {"message", o.message},
-                          {"complete", o.complete}, {"levels", o.levels}, {"corners", o.corners}, {"folds", o.folds},
+          status.push_back(stop_text(o.stop));
+          runs.push_back({{"perturbation", perturbations[k].name}, {"stop", stop_text(o.stop)}, {"message", o.message},
+                          {"complete", o.complete()}, {"levels", o.levels}, {"corners", o.corners}, {"folds", o.folds},
                           {"frequency_at_check_hz", std::isfinite(o.f_check) ? nlohmann::json(o.f_check) : nlohmann::json(nullptr)},
                           {"frequency_at_end_hz", std::isfinite(o.f_end) ? nlohmann::json(o.f_end) : nlohmann::json(nullptr)},
                           {"seconds", o.seconds}});
@@ -396,13 +405,13 @@ int main(int argc, char** argv) {
       bool agree = true;
       for (const auto& o : outs) {
         seconds += o.seconds;
-        agree = agree && o.converged == ref.converged && o.folds.size() == ref.folds.size();
+        agree = agree && o.status == ref.status && o.stop == ref.stop && o.folds.size() == ref.folds.size();
         for (size_t i = 0; agree && i < o.folds.size(); ++i) {
           diff = std::max({diff, relative(o.folds[i], ref.folds[i]), relative(o.fold_amplitudes[i], ref.fold_amplitudes[i])});
         }
       }
       agree = agree && diff <= kAgree;
-      if (!ref.converged) ++stiff_incomplete;
+      if (!ref.converged()) ++stiff_incomplete;
       if (!agree) ++stiff_disagreeing;
       stiff_worst = std::max(stiff_worst, diff);
       total_seconds += seconds;
@@ -410,10 +419,12 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < ref.folds.size(); ++i) {
         folds_text += (i ? ", " : "") + format("%.4f", ref.folds[i]) + " Hz (" + format("%.3f", 1e6 * ref.fold_amplitudes[i]) + " µm)";
       }
-      stiff_rows << "| " << label << " | " << (ref.converged ? std::string("range reached") : ref.message) << " | "
+      stiff_rows << "| " << label << " | " << (ref.converged() ? std::string("range reached") : ref.message) << " | "
                  << ref.points << " | " << (folds_text.empty() ? std::string("none") : folds_text) << " | "
                  << format("%.1e", diff) << " | " << (agree ? "agree" : "DISAGREE") << " | " << format("%.1f", seconds) << " |\n";
-      stiff_meta.push_back({{"basis", label}, {"converged", ref.converged}, {"stop", ref.stop}, {"message", ref.message},
+      const nlohmann::json stop = ref.stop ? nlohmann::json(std::string(solvers::to_string(*ref.stop))) : nlohmann::json();
+      stiff_meta.push_back({{"basis", label}, {"status", std::string(solvers::to_string(ref.status))}, {"stop", stop},
+                            {"message", ref.message},
                             {"points", ref.points}, {"folds_hz", ref.folds}, {"fold_amplitudes_m", ref.fold_amplitudes},
                             {"largest_relative_difference", diff}, {"agree", agree}, {"runs", outs.size()}});
     }
@@ -451,22 +462,24 @@ int main(int argc, char** argv) {
           diff = std::max(diff, relative(o.peak, ref.peak));
         }
         agree = agree && diff <= kAgree;
-        const bool explained_stop = ref.stop == solvers::to_string(solvers::StopReason::RangeReached) ||
-                                    ref.stop == solvers::to_string(solvers::StopReason::StateBound) ||
-                                    ref.stop == solvers::to_string(solvers::StopReason::UndampedResonance);
+        const bool explained_stop = ref.stop == solvers::StopReason::RangeReached ||
+                                    ref.stop == solvers::StopReason::StateBound ||
+                                    ref.stop == solvers::StopReason::UndampedResonance;
         if (!explained_stop) ++fig12_unexplained;
         if (!agree) ++fig12_disagreeing;
         fig12_worst = std::max(fig12_worst, std::isfinite(diff) ? diff : 0.0);
         total_seconds += seconds;
         std::string folds_text;
         for (size_t i = 0; i < ref.folds.size(); ++i) folds_text += (i ? ", " : "") + format("%.2f", ref.folds[i]);
-        fig12_rows << "| " << c.label() << " | " << ref.stop << " | " << ref.points << " | "
+        fig12_rows << "| " << c.label() << " | " << solvers::to_string(ref.stop) << " | " << ref.points << " | "
                    << (folds_text.empty() ? std::string("none") : folds_text) << " | " << format("%.4f", 1e3 * ref.peak)
                    << " | " << (std::isfinite(diff) ? format("%.1e", diff) : std::string("a value missing")) << " | "
                    << (agree ? "agree" : "DISAGREE") << " | " << format("%.1f", seconds) << " |\n";
-        std::cerr << "ll11_robustness: Fig. 12 " << c.label() << ": " << ref.stop << ", " << format("%.1f", seconds)
+        std::cerr << "ll11_robustness: Fig. 12 " << c.label() << ": " << solvers::to_string(ref.stop) << ", "
+                  << format("%.1f", seconds)
                   << " s, largest difference " << format("%.1e", diff) << "\n";
-        fig12_meta.push_back({{"combination", c.label()}, {"stop", ref.stop}, {"points", ref.points}, {"folds_hz", ref.folds},
+        fig12_meta.push_back({{"combination", c.label()}, {"stop", std::string(solvers::to_string(ref.stop))},
+                              {"points", ref.points}, {"folds_hz", ref.folds},
                               {"peak_amplitude_m", ref.peak}, {"largest_relative_difference", std::isfinite(diff) ? nlohmann::json(diff) : nlohmann::json(nullptr)},
                               {"agree", agree}});
       }

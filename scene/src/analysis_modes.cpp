@@ -83,7 +83,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     }
     b = modes.backbone(o);
   }
-  if (!b.complete) b.message += way_out(scene, b.stop);
+  if (!b.complete()) b.message += way_out(scene, b.stop);
   const BackboneColumns c = backbone_columns(modes, b);
   const Eigen::Index n = c.energy.size();
   if (n > 0) {
@@ -124,12 +124,11 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
   std::optional<solvers::SolveStatus> first_failed_level;  // the first level asked for that did not converge
   nlohmann::json included = nlohmann::json::array();
   for (double energy : a.levels) {
-    const auto it = std::find_if(b.included.begin(), b.included.end(),
-                                 [&](const solvers::ModeLevel& l) { return std::abs(l.energy - energy) <= 1e-12 * energy; });
-    if (it == b.included.end() || !it->converged()) {
-      if (!first_failed_level && it != b.included.end()) first_failed_level = it->status;
+    const solvers::ModeLevel* it = b.included_at(energy);
+    if (it == nullptr || !it->converged()) {
+      if (!first_failed_level && it != nullptr) first_failed_level = it->status;
       included.push_back({{"energy", energy}, {"converged", false},
-                          {"message", it == b.included.end() ? "not reached by the backbone" : it->message}});
+                          {"message", it == nullptr ? "not reached by the backbone" : it->message}});
       continue;
     }
     included.push_back(to_json(*it));
@@ -156,7 +155,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
   // The one definition of a converged backbone (Backbone::converged), as in the Python module.
   out.stop = b.stop;
   out.status = b.converged(a.levels) ? solvers::SolveStatus::Converged
-               : b.complete          ? first_failed_level.value_or(solvers::SolveStatus::PathEnded)
+               : b.complete()        ? first_failed_level.value_or(solvers::SolveStatus::PathEnded)
                                      : solvers::SolveStatus::PathEnded;
   double worst_pen = -1e300, worst_comp = 0.0;
   for (const auto& l : b.levels) {
@@ -167,7 +166,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
   out.diagnostics["nnm"] = {{"algorithm", std::string(to_string(a.algorithm))},
                             {"linear_frequency_hz", modes.linear_frequency_hz()},
                             {"levels", b.levels.size()},
-                            {"complete", b.complete},
+                            {"complete", b.complete()},
                             {"message", b.message},
                             {"folds", b.folds},
                             {"corners", b.kinks},

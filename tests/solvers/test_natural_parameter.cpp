@@ -145,7 +145,9 @@ TEST(NaturalParameter, StopsWithinTwoMinimumStepsOfAWall) {
   const Cubic cubic;
   auto inner = newton_corrector(cubic);
   auto walled = [&](double lambda, Eigen::VectorXd guess) {
-    if (lambda > 0.5) return Correction{.x = guess, .converged = false, .iterations = 8, .message = "beyond the wall"};
+    if (lambda > 0.5) {
+      return Correction{.x = guess, .status = SolveStatus::MaxIterations, .iterations = 8, .message = "beyond the wall"};
+    }
     return inner(lambda, std::move(guess));
   };
   NaturalParameterOptions o;
@@ -171,7 +173,7 @@ TEST(NaturalParameter, GoalAndInitialFailureAndTimeBudgetAreStops) {
   EXPECT_GT(goal.points.back().x(0), 0.5);
   EXPECT_LE(goal.points[goal.points.size() - 2].x(0), 0.5);
 
-  auto never = [](double, Eigen::VectorXd x) { return Correction{.x = x, .converged = false, .message = "no"}; };
+  auto never = [](double, Eigen::VectorXd x) { return Correction{.x = x, .status = SolveStatus::Stagnated, .message = "no"}; };
   const Branch failed = natural_parameter(never, Eigen::VectorXd::Zero(1), 0.0, NaturalParameterOptions{.parameter_max = 1.0});
   EXPECT_EQ(failed.stop, StopReason::InitialPointFailed);
   EXPECT_TRUE(failed.points.empty());

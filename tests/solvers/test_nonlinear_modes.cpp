@@ -161,7 +161,7 @@ TEST(NonlinearModes, BackboneThroughItsCornersDoesNotDependOnRounding) {
     auto o = range(0.5, 10.0);
     o.include = {1.8};
     const auto b = nm.continue_backbone(o);
-    ASSERT_TRUE(b.complete) << "k = " << k << ": " << b.message;
+    ASSERT_TRUE(b.complete()) << "k = " << k << ": " << b.message;
     ASSERT_EQ(b.included.size(), 1U);
     EXPECT_TRUE(b.included[0].converged());
     EXPECT_GT(b.kinks, 50);  // corners crossed as events, not by halving
@@ -202,7 +202,7 @@ TEST(NonlinearModes, BackboneEntersAnIllConditionedPieceWithoutTurningBack) {
     auto o = range(0.5, 2.3);
     o.include = {1.8};
     const auto b = nm.continue_backbone(o);
-    ASSERT_TRUE(b.complete) << "N = " << harmonics << ", m = " << samples << ": " << b.message;
+    ASSERT_TRUE(b.complete()) << "N = " << harmonics << ", m = " << samples << ": " << b.message;
     EXPECT_EQ(b.stop, solvers::StopReason::RangeReached);
     EXPECT_TRUE(b.folds.empty()) << "N = " << harmonics;
     ASSERT_EQ(b.included.size(), 1U);
@@ -245,7 +245,7 @@ TEST(NonlinearModes, TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether) 
     auto o = range(0.5, 1.6);
     o.include = {1.5};
     const auto b = nm.continue_backbone(o);
-    ASSERT_TRUE(b.complete) << "run " << k << ": " << b.message;
+    ASSERT_TRUE(b.complete()) << "run " << k << ": " << b.message;
     EXPECT_TRUE(b.folds.empty()) << "run " << k << ": " << b.folds.size() << " folds";
     ASSERT_EQ(b.included.size(), 1U);
     ASSERT_TRUE(b.included[0].converged());
@@ -320,7 +320,7 @@ TEST(NonlinearModes, AugmentedLagrangianAndKktContinuationAgree) {
   ASSERT_TRUE(alg2.converged()) << alg2.message;
   const auto nm = modes(1e-3);
   const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.3, .include = {1.2}});
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   const auto* kkt = included(b, 1.2);
   ASSERT_NE(kkt, nullptr);
   for (const auto* l : {&alg1, &alg2}) {
@@ -337,7 +337,7 @@ TEST(NonlinearModes, AugmentedLagrangianAndKktContinuationAgree) {
 TEST(NonlinearModes, BackboneToTenTimesOnsetKeepsTheKktConditions) {
   const auto nm = modes(1e-3, 8, 64);
   const auto b = nm.continue_backbone(range(0.5, 10.0));
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   EXPECT_NEAR(b.levels.back().energy, 10.0, 1e-9);
   for (const auto& l : b.levels) {
     EXPECT_LE(l.max_penetration, 1e-10) << "E = " << l.energy;
@@ -489,7 +489,7 @@ TEST(NonlinearModes, ANonConvergedLevelIsReportedAsSuch) {
   const auto nm = modes(1e-3, 4, 64);
   const solvers::NonlinearModes::BackboneSystem system(nm, 0.0);
   const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.3, .include = {1.2}});
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   const auto* at = included(b, 1.2);
   ASSERT_NE(at, nullptr);
   EXPECT_LE(at->residual_norm, at->tolerance);
@@ -513,11 +513,11 @@ TEST(NonlinearModes, ANonConvergedLevelIsReportedAsSuch) {
 TEST(NonlinearModes, EnergySteppingHonoursItsWallTimeBudget) {
   const auto nm = modes(1e-3, 4, 64);
   const auto full = nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = 0.0});
-  ASSERT_TRUE(full.complete) << full.message;
+  ASSERT_TRUE(full.complete()) << full.message;
   EXPECT_EQ(full.stop, solvers::StopReason::RangeReached);
   for (const auto& l : full.levels) EXPECT_NEAR(l.frequency_hz, nm.linear_frequency_hz(), 1e-9 * l.frequency_hz);
   const auto spent = nm.backbone({.energy_min = 0.5, .energy_max = 0.9, .include = {}, .on_level = nullptr, .max_wall_time_s = 1e-300});
-  EXPECT_FALSE(spent.complete);
+  EXPECT_FALSE(spent.complete());
   EXPECT_TRUE(spent.levels.empty());
   EXPECT_EQ(spent.stop, solvers::StopReason::TimeBudget);
   EXPECT_NE(spent.message.find("max_wall_time_s"), std::string::npos) << spent.message;

@@ -71,15 +71,19 @@ Eigen::MatrixXd harmonic_amplitudes(const Eigen::MatrixXd& y) {
 TEST(NonlinearModes, ConvergedNeedsAConvergedLevelAtEveryEnergyAskedFor) {
   const solvers::NonlinearModes modes(ll11_system(), {{tip_dof(), 1e-3}}, {.harmonics = 6, .samples = 96});
   auto b = modes.continue_backbone({.energy_min = 0.5, .energy_max = 1.5, .include = {0.8, 1.2}});
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   EXPECT_TRUE(b.converged());
   EXPECT_TRUE(b.converged({0.8, 1.2}));
   EXPECT_FALSE(b.converged({0.8, 0.9}));  // 0.9 was not asked for: no level there
   ASSERT_EQ(b.included.size(), 2u);
+  // The same energy to 1e-12 relative, as a scene's levels are read back from decimal text.
+  EXPECT_EQ(b.included_at(1.2 * (1.0 + 5e-13)), &b.included[1]);
+  EXPECT_EQ(b.included_at(1.2 * (1.0 + 5e-12)), nullptr);
+  EXPECT_EQ(b.included_at(0.9), nullptr);
   b.included[1].status = solvers::SolveStatus::MaxIterations;
   EXPECT_FALSE(b.converged({0.8, 1.2}));
   EXPECT_TRUE(b.converged({0.8}));
-  b.complete = false;
+  b.status = solvers::SolveStatus::PathEnded;  // the range not reached
   EXPECT_FALSE(b.converged());
 }
 
@@ -98,8 +102,8 @@ TEST(NonlinearModes, StopAlongADirectionIsAChangeOfCoordinates) {
   const std::vector<double> energies = {0.8, 1.2, 2.0};
   const auto a = plain.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = energies});
   const auto b = turned.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = energies});
-  ASSERT_TRUE(a.complete) << a.message;
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(a.complete()) << a.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   for (double e : energies) {
     const auto *la = included(a, e), *lb = included(b, e);
     ASSERT_NE(la, nullptr) << e;
@@ -153,8 +157,8 @@ TEST(NonlinearModes, TheFirstStopToTouchDefinesContactOnset) {
   EXPECT_LT(both.onset_mode()(tip_dof()), 10 * gap);
   const auto a = both.continue_backbone({.energy_min = 0.5, .energy_max = 1.6, .include = {0.9, 1.5}});
   const auto b = alone.continue_backbone({.energy_min = 0.5, .energy_max = 1.6, .include = {0.9, 1.5}});
-  ASSERT_TRUE(a.complete) << a.message;
-  ASSERT_TRUE(b.complete) << b.message;
+  ASSERT_TRUE(a.complete()) << a.message;
+  ASSERT_TRUE(b.complete()) << b.message;
   for (double e : {0.9, 1.5}) {
     const auto *la = included(a, e), *lb = included(b, e);
     ASSERT_NE(la, nullptr);
@@ -213,7 +217,7 @@ TEST(NonlinearModes, ModalEnergySharesSplitTheEnergyOverModesAndHarmonics) {
               1e-9 * nm.linear_frequencies_hz()(2));
 
   const auto bb = nm.continue_backbone({.energy_min = 0.5, .energy_max = 2.0, .include = {0.8, 2.0}});
-  ASSERT_TRUE(bb.complete) << bb.message;
+  ASSERT_TRUE(bb.complete()) << bb.message;
   for (const auto& level : bb.levels) {
     const Eigen::MatrixXd sh = nm.modal_energy_shares(level);
     EXPECT_NEAR(sh.sum(), 1.0, 1e-12) << "E = " << level.energy;
@@ -238,7 +242,7 @@ TEST(NonlinearModes, ModalEnergySharesSplitTheEnergyOverModesAndHarmonics) {
 TEST(NonlinearModes, ABackboneStartedFromAShiftedOrbitIsTheSameBranch) {
   const auto nm = modes(1e-3, 6, 96);
   const auto ref = nm.continue_backbone({.energy_min = 0.5, .energy_max = 2.1, .include = {1.2, 1.5, 2.0}});
-  ASSERT_TRUE(ref.complete) << ref.message;
+  ASSERT_TRUE(ref.complete()) << ref.message;
   const auto* mid = included(ref, 1.5);
   ASSERT_NE(mid, nullptr);
   Eigen::MatrixXd shifted = mid->coefficients;
@@ -256,7 +260,7 @@ TEST(NonlinearModes, ABackboneStartedFromAShiftedOrbitIsTheSameBranch) {
     o.start = solvers::PeriodicOrbit{shifted, mid->frequency_hz};
     o.direction = direction;
     const auto b = nm.continue_backbone(o);
-    ASSERT_TRUE(b.complete) << b.message;
+    ASSERT_TRUE(b.complete()) << b.message;
     const auto *got = included(b, target), *want = included(ref, target);
     ASSERT_NE(got, nullptr) << target;
     ASSERT_NE(want, nullptr) << target;

@@ -12,12 +12,17 @@
 
 namespace wbm::solvers {
 
+const ModeLevel* Backbone::included_at(double energy) const {
+  const auto it = std::find_if(included.begin(), included.end(),
+                               [&](const ModeLevel& l) { return std::abs(l.energy - energy) <= 1e-12 * std::abs(energy); });
+  return it == included.end() ? nullptr : &*it;
+}
+
 bool Backbone::converged(const std::vector<double>& requested) const {
-  if (!complete) return false;
+  if (!complete()) return false;
   return std::all_of(requested.begin(), requested.end(), [&](double energy) {
-    return std::any_of(included.begin(), included.end(), [&](const ModeLevel& l) {
-      return std::abs(l.energy - energy) <= 1e-12 * std::abs(energy) && l.converged();
-    });
+    const ModeLevel* l = included_at(energy);
+    return l != nullptr && l->converged();
   });
 }
 

@@ -250,14 +250,14 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
     // The level gets what is left of the budget; a level cut by it is no failed attempt.
     ModeLevel level = solve(energy, start, o.max_wall_time_s > 0.0 ? std::max(o.max_wall_time_s - elapsed, 1e-300) : 0.0);
     Correction c;
-    c.converged = level.converged();
+    c.status = level.status;
     c.iterations = level.powell_iterations;
     c.residual_norm = level.residual_norm;
     c.message = level.message;
     const bool cut = o.max_wall_time_s > 0.0 &&
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= o.max_wall_time_s;
-    c.interrupted = !c.converged && cut;
-    if (c.converged) {
+    c.interrupted = !c.converged() && cut;
+    if (c.converged()) {
       c.x = pack(level);
       pending = std::move(level);
     } else if (!cut) {
@@ -282,7 +282,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
   const Branch branch = natural_parameter(correct, Eigen::VectorXd(), o.energy_min, np);
   b.stop = branch.stop;
   b.rejected_steps = branch.rejected_steps;
-  b.complete = branch.stop == StopReason::RangeReached;
+  b.status = branch.stop == StopReason::RangeReached ? SolveStatus::Converged : SolveStatus::PathEnded;
   if (branch.stop == StopReason::InitialPointFailed) {
     b.message = "the first level E = " + format_number(o.energy_min) + " did not converge: " + branch.message;
   } else if (branch.stop == StopReason::TimeBudget) {

@@ -441,8 +441,9 @@ std::optional<Eigen::VectorXd> NonlinearModes::homotopy_start(const BackboneSyst
     }
     first = false;
     Correction c;
-    c.converged = rp.report.converged() ||
-                  (!rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance);
+    // A stage is converged to the stage tolerance √tol (its residual verified against it).
+    const bool staged = !rp.report.residual_norms.empty() && rp.report.residual_norms.back() <= stage_tolerance;
+    c.status = rp.report.converged() || staged ? SolveStatus::Converged : rp.report.status;
     c.iterations = rp.report.iterations;
     c.message = "the penalty orbit at k = " + format_number(stiffness(mu)) + " N/m, E = " + format_number(energy) +
                 " did not converge (" + rp.report.brief() + ")";
@@ -598,9 +599,10 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   b.switches = branch.switches;
   b.rejected_steps = branch.rejected_steps;
   b.stop = branch.stop;
-  b.complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
-               (b.levels.back().energy >= o.energy_max * (1.0 - 1e-12) ||
-                (o.start && b.levels.back().energy <= o.energy_min * (1.0 + 1e-12)));
+  const bool complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
+                        (b.levels.back().energy >= o.energy_max * (1.0 - 1e-12) ||
+                         (o.start && b.levels.back().energy <= o.energy_min * (1.0 + 1e-12)));
+  b.status = complete ? SolveStatus::Converged : SolveStatus::PathEnded;
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
   if (b.homotopy_stages > 0) {
     b.message += "; started by a penalty homotopy (" + std::to_string(b.homotopy_stages) +

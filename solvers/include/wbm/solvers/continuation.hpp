@@ -296,22 +296,22 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         h_taken = ps.step;
         incoming = std::move(ps.incoming);
       } else {
-        sharp = ps.a.converged && detail::inner(ps.a.tangent, last.tangent) < cos_turn;
+        sharp = ps.a.converged() && detail::inner(ps.a.tangent, last.tangent) < cos_turn;
       }
       a = std::move(ps.a);
       // Every accepted point is verified on the nonsmooth residual.
-      if (a.converged) {
+      if (a.converged()) {
         a.rnorm = system.residual(a.z.head(n) * xs, a.z(n) * ls).norm();
-        if (!(a.rnorm <= o.corrector_tolerance)) a.converged = false;
+        if (!(a.rnorm <= o.corrector_tolerance)) a.status = SolveStatus::ResidualNotVerified;
       }
-      if (!a.converged || sharp) {
+      if (!a.converged() || sharp) {
         ++branch.rejected_steps;
         h *= 0.5;
         if (h < o.min_step) {
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + " (h = " +
                             format_number(h) +
-                            (a.converged ? ", tangent turning too fast"
+                            (a.converged() ? ", tangent turning too fast"
                                          : ", corrector failed, ‖R‖ = " + format_number(a.rnorm)) +
                             "): a singular point of the piece (a bifurcation or an unbounded branch), not a switch");
         }
@@ -329,18 +329,18 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
       // accepted length along the old tangent; if that lands on a branch that continues in the old
       // direction it is taken (a secondary branch that starts at the corner is not followed),
       // otherwise the corner point itself is kept.
-      sharp = a.converged && detail::inner(a.tangent, last.tangent) < cos_turn;
+      sharp = a.converged() && detail::inner(a.tangent, last.tangent) < cos_turn;
       if (sharp && h <= o.kink_step) {
         ++branch.kinks;
         detail::Attempt jump = attempt_along(last.tangent, z_last, h_accepted);
         branch.corrector_iterations += jump.iterations;
-        if (jump.converged && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
+        if (jump.converged() && detail::inner(jump.tangent, last.tangent) >= cos_turn) {
           a = std::move(jump);
           h = h_accepted;
           sharp = false;
         }
       }
-      if (!a.converged && h <= o.kink_step && o.corner_restart) {
+      if (!a.converged() && h <= o.kink_step && o.corner_restart) {
         detail::Attempt c;
         if (detail::restart_at_corner(system, solver, xs, ls, last.tangent, z_last, o.kink_step, o.max_step, attempt_along,
                                       branch.corrector_iterations, c)) {
@@ -350,14 +350,14 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
           sharp = false;
         }
       }
-      if (!a.converged || (sharp && h > o.kink_step)) {
+      if (!a.converged() || (sharp && h > o.kink_step)) {
         ++branch.rejected_steps;
-        if (a.cycled) corner_ahead = std::min(corner_ahead, h);
+        if (a.cycled()) corner_ahead = std::min(corner_ahead, h);
         h *= 0.5;
         if (h < o.min_step) {
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
-                            (a.converged ? ", tangent turning too fast)"
+                            (a.converged() ? ", tangent turning too fast)"
                                          : ", corrector failed, ‖R‖ = " + format_number(a.rnorm) + ", tolerance " +
                                                format_number(o.corrector_tolerance) + ")"));
         }

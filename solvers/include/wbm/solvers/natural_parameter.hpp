@@ -68,23 +68,25 @@ struct NaturalParameterOptions {
   void validate() const;
 };
 
-/// What the corrector reports for one fixed λ: the state, whether it converged (to the caller's
-/// verified tolerance), its iterations (for the step rule), its residual norm and, on failure, why.
+/// What the corrector reports for one fixed λ: the state, its status (Converged only to the
+/// caller's verified tolerance), its iterations (for the step rule), its residual norm and, on
+/// failure, why.
 struct Correction {
   Eigen::VectorXd x;
-  bool converged = false;
+  SolveStatus status = SolveStatus::MaxIterations;
   int iterations = 0;
   double residual_norm = std::numeric_limits<double>::quiet_NaN();
   std::string message;
   /// The corrector stopped because a wall-time budget ran out (its own or the branch's): the
   /// branch then ends with StopReason::TimeBudget instead of counting a failed step.
   bool interrupted = false;
+  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
 };
 
-/// A Newton solve at fixed λ as a Correction (converged as NewtonReport::converged() says).
+/// A Newton solve at fixed λ as a Correction (its NewtonReport's status).
 [[nodiscard]] inline Correction to_correction(NewtonResult&& r) {
   Correction c;
-  c.converged = r.report.converged();
+  c.status = r.report.status;
   c.iterations = r.report.iterations;
   if (!r.report.residual_norms.empty()) c.residual_norm = r.report.residual_norms.back();
   c.message = std::move(r.report.message);
@@ -185,7 +187,7 @@ Branch natural_parameter(Correct&& correct, Predict&& predict, Eigen::VectorXd x
   };
   if (spent()) return finish(StopReason::TimeBudget, budget_message("before the first point"));
   Correction first = correct(lambda0, std::move(x0));
-  if (!first.converged) {
+  if (!first.converged()) {
     if (first.interrupted || spent()) return finish(StopReason::TimeBudget, budget_message("during the first point"));
     return finish(StopReason::InitialPointFailed,
                   "at " + o.parameter_name + " = " + format_number(lambda0) + ": " + first.message);
@@ -215,7 +217,7 @@ Branch natural_parameter(Correct&& correct, Predict&& predict, Eigen::VectorXd x
     }
     if (passes(end)) next = end;
     Correction c = correct(next, predict(branch, next));
-    if (!c.converged) {
+    if (!c.converged()) {
       if (c.interrupted || spent()) {  // cut by the budget: no failure
         return finish(StopReason::TimeBudget, budget_message("during the step from " + o.parameter_name + " = " +
                                                              format_number(last.parameter) + " to " + format_number(next)));

@@ -141,17 +141,24 @@ struct Backbone {
                                       // located and crossed (one or more samples switching at once)
   int switches = 0;                   // continuation: samples switched at those events
   int rejected_steps = 0;             // continuation steps retried with half the step
-  bool complete = false;              // energy_max reached (with a start: either end of the range)
+  /// Converged: the branch reached the end of its energy range (energy_max; with a start, either
+  /// end) and holds a level there; PathEnded: it stopped before (`stop` and `message` say why).
+  SolveStatus status = SolveStatus::PathEnded;
   /// With BackboneContinuationOptions::start_penalty_stiffness: penalty orbits corrected, and the
   /// penalty stiffness [N/m] whose orbit started the Signorini Newton that converged (0 if none).
   int homotopy_stages = 0;
   double homotopy_stiffness = 0.0;
   std::string message;
   double wall_time_s = 0.0;
+  /// The range was reached: status == Converged.
+  [[nodiscard]] bool complete() const { return status == SolveStatus::Converged; }
+  /// The level of `included` at `energy` (the same energy to 1e-12 relative), converged or not;
+  /// nullptr when the branch did not reach it.
+  [[nodiscard]] const ModeLevel* included_at(double energy) const;
   /// The one definition of a converged backbone, read by `wbm run`, the Python module and the
-  /// reproductions: `complete`, and every energy of `requested` (the `include` list it was run
-  /// with, or a scene's analysis.levels) has a converged level in `included` (same energy to
-  /// 1e-12 relative). Before, the CLI also checked the requested levels and Python did not.
+  /// reproductions: complete(), and every energy of `requested` (the `include` list it was run
+  /// with, or a scene's analysis.levels) has a converged level in `included` (included_at).
+  /// Before, the CLI also checked the requested levels and Python did not.
   [[nodiscard]] bool converged(const std::vector<double>& requested = {}) const;
 };
 

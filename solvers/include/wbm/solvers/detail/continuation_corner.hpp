@@ -70,7 +70,7 @@ bool restart_at_corner(const S& system, Solver& solver, double xs, double ls, co
     for (double step = std::min(max_step, 1e3 * kink_step); step >= kink_step; step *= 0.25) {
       Attempt c = attempt(Eigen::VectorXd(sign * t_new), z_corner, step);
       corrector_iterations += c.iterations;
-      if (!c.converged) continue;
+      if (!c.converged()) continue;
       const Lin landed = system.linearize(c.z.head(n) * xs, c.z(n) * ls);
       const Eigen::ArrayXd from_here = row_change(landed.jacobian, here.jacobian).array();
       const double to_new = (row_change(landed.jacobian, beyond.jacobian).array() * switching).sum();

@@ -125,13 +125,18 @@ Eigen::VectorXd tangent(Solver& solver, const Lin& l, const Eigen::VectorXd& pre
 }
 
 // One predictor–corrector attempt: the scaled point ẑ reached, its tangent, and the corrector's
-// outcome.
+// outcome: Newton's status; SingularJacobian when the converged point has no tangent (the bordered
+// matrix did not factorize); ResidualNotVerified when the nonsmooth residual recomputed at an
+// accepted point is above the corrector tolerance (pseudo_arclength).
 struct Attempt {
-  bool converged = false;
+  SolveStatus status = SolveStatus::MaxIterations;
   int iterations = 0;
   double rnorm = 0.0;
-  bool cycled = false;   // the corrector was stopped because its iterates cycled (stop_on_cycle)
   Eigen::VectorXd z, tangent;
+  [[nodiscard]] bool converged() const { return status == SolveStatus::Converged; }
+  // The corrector was stopped because its iterates cycled (stop_on_cycle): without line search
+  // only a cycle stagnates.
+  [[nodiscard]] bool cycled() const { return status == SolveStatus::Stagnated; }
 };
 
 // Predictor ẑ⁰ = ẑ_last + step·direction, corrector newton() without line search on the
@@ -144,14 +149,13 @@ Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, con
   Attempt a;
   const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
   NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
-  a.converged = r.report.converged();
-  a.cycled = r.report.status == SolveStatus::Stagnated;  // without line search only a cycle stagnates
+  a.status = r.report.status;
   a.iterations = r.report.iterations;
   a.rnorm = r.report.residual_norms.back();
   a.z = std::move(r.x);
-  if (a.converged && with_tangent) {
+  if (a.converged() && with_tangent) {
     a.tangent = tangent(solver, corrector.at(a.z), direction, xs, ls);
-    if (!a.tangent.allFinite()) a.converged = false;
+    if (!a.tangent.allFinite()) a.status = SolveStatus::SingularJacobian;
   }
   return a;
 }

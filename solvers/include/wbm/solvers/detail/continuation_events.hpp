@@ -135,7 +135,7 @@ long onto_new_piece(const S& system, Solver& solver, double xs, double ls, const
     return a;
   };
   Attempt a = at(0.0);
-  if (!a.converged) return iterations;
+  if (!a.converged()) return iterations;
   const Eigen::VectorXd e0 = events(a.z);
   double s0 = 0.0, f0 = smallest(e0, true);
   if (f0 >= -event_tolerance) return iterations;  // admissible: the point stays
@@ -155,7 +155,7 @@ long onto_new_piece(const S& system, Solver& solver, double xs, double ls, const
   for (int it = 0; it < 8; ++it) {
     const double s = s0 + (target - f0) / rate;
     Attempt b = at(s);
-    if (!b.converged) return iterations;
+    if (!b.converged()) return iterations;
     const Eigen::VectorXd e = events(b.z);
     const double f = smallest(e, true);
     if (f >= -event_tolerance && smallest(e, false) >= -event_tolerance) {
@@ -192,7 +192,7 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   };
   out.a = at(h);
   out.step = h;
-  if (!out.a.converged) return out;
+  if (!out.a.converged()) return out;
   Eigen::VectorXd e_hi = events(out.a.z, piece);
   if (!(e_hi.minCoeff() < -event_tolerance)) return out;  // still on the piece
 
@@ -217,7 +217,7 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   double phi_lo = phi(e_last);             // φ at the low end (≥ 0)
   double w_lo = phi_lo, w_hi = phi(e_hi);  // φ at the ends as Illinois weights them for the secant
   Attempt a_lo;
-  a_lo.converged = true;
+  a_lo.status = SolveStatus::Converged;
   a_lo.z = z_last;
   a_lo.tangent = t_last;
   int kept = 0;  // Illinois: +1 after the low end moved, −1 after the high end moved
@@ -225,10 +225,10 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     double s = w_hi < w_lo ? hi - w_hi * (hi - lo) / (w_hi - w_lo) : 0.5 * (lo + hi);
     if (!(s > lo + 1e-3 * (hi - lo) && s < hi - 1e-3 * (hi - lo))) s = 0.5 * (lo + hi);
     Attempt a = at(s, false);  // the tangent only at the point kept (below)
-    if (!a.converged) {        // the piece's corrector at this step: bisect instead
+    if (!a.converged()) {        // the piece's corrector at this step: bisect instead
       s = 0.5 * (lo + hi);
       a = at(s, false);
-      if (!a.converged) break;
+      if (!a.converged()) break;
     }
     const Eigen::VectorXd e = events(a.z, piece);
     add_crossing(e);  // an entry that crosses and comes back within the step joins
