@@ -186,13 +186,14 @@ int main(int argc, char** argv) {
   // The claim of the foundation issue, checked: a near-rigid stop (k_c = a_c·α above 1000 E S/L)
   // stalls every basis.
   const double kc = 1e12 * c.exponent;
-  md << "\nNot converged cells are reported, never returned as solutions. Claim \"a near-rigid stop stalls "
-        "every basis\" (k_c = a_c·α = "
-     << reproduce::format("%.2g", kc) << " N/m = " << reproduce::format("%.2g", kc / rod_stiffness)
-     << " × E S/L at the base exponent): " << rigid_cells - rigid_converged << " of " << rigid_cells
-     << " near-rigid cells did not converge: "
-     << (rigid_cells > 0 && rigid_converged == 0 ? "agrees" : "disagrees")
-     << ". Exact contact (LL11's KKT form) is the tool for a rigid stop.\n\n"
+  md << "\nNot converged cells are reported, never returned as solutions. Exact contact (LL11's KKT form) is the "
+        "tool for a rigid stop.\n\n"
+     << reproduce::claims_markdown(
+            {{"a near-rigid stop stalls every basis (k_c = a_c·α = " + reproduce::format("%.2g", kc) + " N/m = " +
+                  reproduce::format("%.2g", kc / rod_stiffness) + " × E S/L at the base exponent)",
+              rigid_cells > 0 && rigid_converged == 0,
+              std::to_string(rigid_cells - rigid_converged) + " of " + std::to_string(rigid_cells) +
+                  " near-rigid cells did not converge"}})
      << "Diagnoses (a residual is at its rounding floor when it is within " << reproduce::format("%g", solvers::WeightedResidualSolution::kRoundingFloorFactor)
      << "× the change of the full residual when the contact unknowns move by their own rounding; a homotopy path "
         "ended when the continuation in the contact stiffness σ from the linear response turned back before σ = 1, "

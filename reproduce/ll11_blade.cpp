@@ -410,6 +410,7 @@ int main(int argc, char** argv) {
     // what does it hold at Fig. 8's levels compared with branch 0?
     std::ostringstream first_mode_text;
     bool b1_first_mode = false, b1_hardening = false;
+    std::vector<reproduce::Claim> b1_claims;  // branch 1's claims, listed with the others below
     if (up && down && !up->levels.empty() && !down->levels.empty()) {
       const auto& ul = up->levels;
       // The upward part is the tail of branch 1's columns.
@@ -419,6 +420,16 @@ int main(int argc, char** argv) {
       const double min_share = up_share.minCoeff(&weakest), min_share_energy = ul[static_cast<size_t>(weakest)].energy;
       b1_first_mode = min_share >= 0.5;
       b1_hardening = nu < 2 || ((up_ratio.tail(nu - 1) - up_ratio.head(nu - 1)).array() >= -1e-8).all();
+      b1_claims.push_back({"Fig. 7 is the first nonlinear mode: on branch 1, mode 1 at h = 1 holds at least half of m̂ at "
+                           "every level of the upward part",
+                           b1_first_mode,
+                           "minimum " + format("%.3f", min_share) + " at E = " + format("%.2f", min_share_energy)});
+      b1_claims.push_back({"Fig. 7: on branch 1 the frequency increases along the upward part (no step lowers it by more "
+                           "than 1e-8 f1)",
+                           b1_hardening,
+                           "f/f1 = " + format("%.5f", ul.front().frequency_hz / f1) + " at E = " +
+                               format("%.2f", ul.front().energy) + " to " + format("%.5f", ul.back().frequency_hz / f1) +
+                               " at E = " + format("%.2f", ul.back().energy)});
       const auto lowest = std::min_element(down->levels.begin(), down->levels.end(),
                                            [](const auto& a, const auto& c) { return a.energy < c.energy; });
       const auto down_end = nnm.modal_components(down->levels.back());
@@ -436,14 +447,6 @@ int main(int argc, char** argv) {
           << up->kinks << " corners, " << up->rejected_steps << " rejected steps, "
           << format("%.1f", up->wall_time_s) << " s; worst penetration " << format("%.1e", pen1)
           << " g0, worst complementarity " << format("%.1e", comp1) << " g0 over branch 1.\n\n"
-          << "Claim (Fig. 7 is \"the first nonlinear mode\"), on branch 1: mode 1 at h = 1 holds at least half of m̂ at "
-             "every level of the upward part: "
-          << (b1_first_mode ? "**agrees**" : "**disagrees**") << " (minimum " << format("%.3f", min_share) << " at E = "
-          << format("%.2f", min_share_energy) << ").\n\n"
-          << "Claim (Fig. 7), on branch 1: the frequency increases along the upward part (no step lowers it by more than 1e-8 f1): "
-          << (b1_hardening ? "**agrees**" : "**disagrees**") << " (f/f1 = " << format("%.5f", ul.front().frequency_hz / f1)
-          << " at E = " << format("%.2f", ul.front().energy) << " to " << format("%.5f", ul.back().frequency_hz / f1)
-          << " at E = " << format("%.2f", ul.back().energy) << ").\n\n"
           << "Going down from E = " << format("%g", start_energy) << ", branch 1 turns back at E = "
           << format("%.3f", lowest->energy) << " (f/f1 = " << format("%.5f", lowest->frequency_hz / f1)
           << ") and leaves through the tongue of mode " << down_end.mode << " at harmonic " << down_end.harmonic
@@ -513,18 +516,18 @@ int main(int argc, char** argv) {
          << format("%.1e", f_error(k)) << " | " << format("%.2f", f_ccx(k)) << " | " << format("%+.1e", ccx_error(k))
          << " |\n";
     }
-    md << "\nClaim: the full model's frequencies (Spectra) equal CalculiX's own to its printed 7 digits (relative 1e-6): "
-       << (ccx_ok ? "**agrees**" : "**disagrees**") << " (largest " << format("%.1e", ccx_error.cwiseAbs().maxCoeff())
-       << ").\n";
+    std::vector<reproduce::Claim> claims;
+    claims.push_back({"the full model's frequencies (Spectra) equal CalculiX's own to its printed 7 digits (relative 1e-6)",
+                      ccx_ok, "largest relative difference " + format("%.1e", ccx_error.cwiseAbs().maxCoeff())});
     md << "\n**Craig–Bampton convergence** (worst relative frequency error against the full model):\n\n"
        << "| normal modes | modes 1–5 | modes 1–10 |\n|---|---|---|\n";
     for (int k = 0; k < 4; ++k) {
       md << "| " << convergence_modes[static_cast<size_t>(k)] << " | " << format("%.1e", worst5(k)) << " | "
          << format("%.1e", worst10(k)) << " |\n";
     }
-    md << "\nClaim: the first 5 frequencies within 0.1 % with " << modes << " modes (issue #15): "
-       << (cb_ok ? "**agrees**" : "**disagrees**") << " (" << format("%.1e", worst5(3)) << ").\n\n"
-       << "**Nonlinear mode** (frequency normalized by the reduced model's first linear frequency f1 = "
+    claims.push_back({"the first 5 frequencies within 0.1 % with " + std::to_string(modes) + " modes (issue #15)", cb_ok,
+                      "worst relative error " + format("%.1e", worst5(3))});
+    md << "\n**Nonlinear mode** (frequency normalized by the reduced model's first linear frequency f1 = "
        << format("%.2f", f1) << " Hz; full model " << format("%.2f", f_full(0)) << " Hz):\n\n"
        << "| E | branch | f/f1 | f [Hz] | tip nodes in contact | max radial u/g0 | worst penetration [g0] | "
           "complementarity [g0] | share of mode 1 at h = 1 | largest other component |\n"
@@ -535,43 +538,51 @@ int main(int argc, char** argv) {
        << format("%.2f", e(nl - 1)) << ", " << b.folds.size() << " folds, " << b.kinks
        << " corners): worst penetration " << format("%.1e", worst_pen) << " g0, worst complementarity "
        << format("%.1e", worst_comp) << " g0. The paper gives Fig. 7 as a curve without numbers, so the values "
-          "are not compared one by one; the paper's blade is not ours.\n\n"
-       << "Claim (Fig. 7): the frequency increases with energy past contact onset and never drops below f1 (by more than 1e-8): "
-       << (hardening ? "**agrees**" : "**disagrees**") << " (f/f1 = " << format("%.4f", ratio(nl - 1)) << " at E = "
-       << format("%.2f", e(nl - 1)) << ", minimum " << format("%.10f", ratio.minCoeff())
-       << "; the largest f/f1 is " << format("%.4f", ratio.maxCoeff()) << " at E = " << format("%.2f", e(peak))
-       << (ratio(nl - 1) < ratio.maxCoeff() - 1e-6 ? ", after which it decreases: not monotone" : ": monotone") << ").\n\n"
-       << "Claim (Fig. 7 is \"the first nonlinear mode\"): along the whole branch the first linear mode at the "
-          "fundamental holds at least half of the energy m̂ (`NonlinearModes::modal_energy_shares`, columns of "
-          "backbone.csv): "
-       << (leaves < 0 ? "**agrees**" : "**disagrees**")
-       << (leaves >= 0 ? std::string(" (below ½ from E = ").append(format("%.2f", e(leaves))).append(")") : std::string())
-       << ". At E = " << format("%.2f", e(nl - 1)) << " it holds " << format("%.3f", first_share(nl - 1)) << ", and mode "
-       << end_mode << " at harmonic " << end_harmonic << " holds " << format("%.3f", other_share(nl - 1)) << " (f_"
+          "are not compared one by one; the paper's blade is not ours.\n\n";
+    claims.push_back({"Fig. 7: the frequency increases with energy past contact onset and never drops below f1 (by more "
+                      "than 1e-8)",
+                      hardening,
+                      "f/f1 = " + format("%.4f", ratio(nl - 1)) + " at E = " + format("%.2f", e(nl - 1)) + ", minimum " +
+                          format("%.10f", ratio.minCoeff()) + "; the largest f/f1 is " + format("%.4f", ratio.maxCoeff()) +
+                          " at E = " + format("%.2f", e(peak)) +
+                          (ratio(nl - 1) < ratio.maxCoeff() - 1e-6 ? ", after which it decreases: not monotone"
+                                                                   : ": monotone")});
+    claims.push_back({"Fig. 7 is the first nonlinear mode: along the whole of branch 0 the first linear mode at the "
+                      "fundamental holds at least half of the energy m̂ (NonlinearModes::modal_energy_shares, columns of "
+                      "backbone.csv)",
+                      leaves < 0,
+                      leaves >= 0 ? "below ½ from E = " + format("%.2f", e(leaves))
+                                  : "at least ½ up to E = " + format("%.2f", e(nl - 1))});
+    claims.push_back({"branch 0 ends in a " + std::to_string(end_harmonic) + ":1 internal resonance with mode " +
+                          std::to_string(end_mode) + " (more than half of m̂ and h f within 1 % of f_j)",
+                      end_resonant, "h f/f_j − 1 = " + format("%+.1e", end_detuning)});
+    claims.insert(claims.end(), b1_claims.begin(), b1_claims.end());
+    md << "On branch 0, at E = " << format("%.2f", e(nl - 1)) << " the first mode holds "
+       << format("%.3f", first_share(nl - 1)) << ", and mode " << end_mode << " at harmonic " << end_harmonic << " holds " << format("%.3f", other_share(nl - 1)) << " (f_"
        << end_mode << " = " << format("%.4f", end_fj / f1) << " f1 = " << end_harmonic << " × "
-       << format("%.5f", end_fj / (end_harmonic * f1)) << " f1). Claim: the branch ends in a " << end_harmonic
-       << ":1 internal resonance with mode " << end_mode << " (more than half of m̂ and h f within 1 % of f_j): "
-       << (end_resonant ? "**agrees**" : "**disagrees**") << " (h f/f_j − 1 = " << format("%+.1e", end_detuning) << ")"
+       << format("%.5f", end_fj / (end_harmonic * f1)) << " f1)"
        << (end_resonant && leaves >= 0
                ? std::string(". Past E = ").append(format("%.2f", e(leaves)))
-                     .append(" branch 0 is therefore the tongue of that internal resonance (its frequency tends to f_j/h), "
+                     .append(" branch 0 is the tongue of that internal resonance (its frequency tends to f_j/h), "
                              "not the first bending mode the paper draws; branch 1 below is that mode")
                : std::string())
        << ". The paper's blade is another geometry, whose frequency ratios we do not know.\n\n"
        << first_mode_text.str()
-       << "Claim (LL11 Sec. 5.2): the leading and trailing edges touch first. In the linear mode the first node "
-          "to reach the gap is #" << onset + 1 << " (chord " << format("%.2f", chord(onset)) << "); along the branch "
-          "the first contact forces appear at E = " << format("%.3f", first_energy) << " on " << first_nodes
-       << ": " << (edges ? "**agrees**" : "**disagrees**") << " (an edge: chord fraction < 0.25 or > 0.75). Order "
-          "of first contact: " << sequence << ".\n\n"
-       << "Claim (LL11 Sec. 5.2): contacts occur at both the leading and the trailing edge: "
-       << (leading && trailing ? "**agrees**" : "**disagrees**") << " (leading edge " << (leading ? "in contact" : "never in contact")
-       << ", trailing edge " << (trailing ? "in contact" : "never in contact") << " up to E = " << format("%.2f", e(nl - 1))
-       << "; the largest radial excursion of the trailing-edge node is " << format("%.2f", trailing_max)
-       << " g0 at E = " << format("%g", figure_levels.empty() ? std::nan("") : figure_levels.back().first->energy)
-       << "). Our blade's first mode moves the tip radially mostly near the leading edge (per-node excursions in "
-          "tip_E*.csv); the paper's blade is another geometry, and without it we cannot tell whether the difference "
-          "is only geometric.\n\n"
+       << "Order of first contact along branch 0: " << sequence << ". Our blade's first mode moves the tip radially "
+          "mostly near the leading edge (per-node excursions in tip_E*.csv); the paper's blade is another geometry, and "
+          "without it we cannot tell whether the difference is only geometric.\n\n";
+    claims.push_back({"LL11 Sec. 5.2: the leading and trailing edges touch first (an edge: chord fraction < 0.25 or > 0.75)",
+                      edges,
+                      "in the linear mode the first node to reach the gap is #" + std::to_string(onset + 1) + " (chord " +
+                          format("%.2f", chord(onset)) + "); along branch 0 the first contact forces appear at E = " +
+                          format("%.3f", first_energy) + " on " + first_nodes});
+    claims.push_back({"LL11 Sec. 5.2: contacts occur at both the leading and the trailing edge", leading && trailing,
+                      std::string("leading edge ") + (leading ? "in contact" : "never in contact") + ", trailing edge " +
+                          (trailing ? "in contact" : "never in contact") + " up to E = " + format("%.2f", e(nl - 1)) +
+                          "; the largest radial excursion of the trailing-edge node is " + format("%.2f", trailing_max) +
+                          " g0 at E = " +
+                          format("%g", figure_levels.empty() ? std::nan("") : figure_levels.back().first->energy)});
+    md << reproduce::claims_markdown(claims)
        << "Timings (one run, 2 cores): gmsh " << format("%.1f", timing["gmsh_s"].get<double>()) << " s, ccx + reading "
        << format("%.1f", timing["ccx_and_read_s"].get<double>()) << " s, Craig–Bampton "
        << format("%.1f", timing["craig_bampton_s"].get<double>()) << " s (Cholesky "

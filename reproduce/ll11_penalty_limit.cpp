@@ -113,12 +113,16 @@ int main(int argc, char** argv) {
     };
     const double order = observed_order(worst_by_k);
     const bool first_order = std::abs(order - 1.0) <= kOrderTolerance;
-    std::ostringstream by_probe;
+    std::vector<reproduce::Claim> claims = {
+        {"the penalty backbones approach the exact one at first order in 1/k (within " + format("%g", kOrderTolerance) +
+             "): least-squares order of the largest difference over E ≤ " + format("%g", kOrderEnergy) + ", over " +
+             std::to_string(stiffness.size()) + " springs",
+         first_order, "order " + (std::isfinite(order) ? format("%.2f", order) : std::string("—"))}};
     for (size_t i = 0; i < probes.size(); ++i) {
       const double o_i = observed_order(difference_by_probe[i]);
-      by_probe << "- E = " << format("%g", probes[i]) << ": order " << (std::isfinite(o_i) ? format("%.2f", o_i) : "—")
-               << ", " << (std::isfinite(o_i) && std::abs(o_i - 1.0) <= kOrderTolerance ? "agrees" : "disagrees")
-               << " with first order\n";
+      claims.push_back({"first order at E = " + format("%g", probes[i]),
+                        std::isfinite(o_i) && std::abs(o_i - 1.0) <= kOrderTolerance,
+                        "order " + (std::isfinite(o_i) ? format("%.2f", o_i) : std::string("—"))});
     }
     run.meta({{"check", "penalty limit of the exact-contact backbone"}, {"scene", s.path},
               {"harmonics", s.analysis.harmonics}, {"samples", s.analysis.samples}, {"energies", probes},
@@ -150,11 +154,8 @@ int main(int argc, char** argv) {
     for (const auto& l : exact.included) exact_pen = std::max(exact_pen, l.max_penetration);
     md << " " << format("%.1e", exact_pen) << " | " << format("%.1f", exact.wall_time_s) << " |\n\n"
        << "The penalty backbones approach the exact one as k grows (a penalty solution penetrates by O(1/k), so "
-          "first order is expected). Least-squares order of the largest difference over E ≤ "
-       << format("%g", kOrderEnergy) << ", over " << stiffness.size() << " springs: "
-       << (std::isfinite(order) ? format("%.2f", order) : std::string("—")) << "; claim \"first order\" (within "
-       << format("%g", kOrderTolerance) << "): " << (first_order ? "agrees" : "disagrees")
-       << ". At each probe energy:\n\n" << by_probe.str() << "\n";
+          "first order is expected).\n\n"
+       << reproduce::claims_markdown(claims);
     if (stall_hi > 0.0) {
       md << "Above E = " << format("%g", kOrderEnergy) << ", closer to the first cluster of corners, the stiffest spring "
          << "is still " << format("%.1e", stall_lo) << " to " << format("%.1e", stall_hi)

@@ -3,8 +3,8 @@
 
 Usage: report.py OUT_DIR. Written to a temporary name and renamed, like every result file.
 
-REPORT.md opens with the claims of every section counted (claims_summary): those checked through
-`Claim`, and the verdicts of the sentences still written by hand, with the claims that disagree.
+REPORT.md opens with the claims of every section counted (claims_summary), with the claims that
+disagree or were not checked, and any verdict written outside `Claim`.
 
 With the outcomes that run_one.py recorded in OUT_DIR/.runs/ (make reproduce), a run that failed
 is listed in a "Failed" section with its message, its section is left out (a folder out/<id>/
@@ -40,27 +40,27 @@ VERDICT = re.compile(r"\b(agrees|disagrees)\b")
 
 
 def claims_summary(fragments):
-    """The claims of every section, counted: a table (section; agree, disagree, not checked through
-    `Claim`; agree, disagree in sentences still written by hand; a total row) and the statements
-    of the `Claim`s that disagree or were not checked.
+    """The claims of every section, counted: a table (section; agree, disagree, not checked; a total
+    row), the statements of the claims that disagree or were not checked, and any verdict written
+    outside `Claim`.
 
-    `fragments` is [(id, report.md text)] in report order. The `Claim` counts come from the count
-    lines of claims_markdown; the hand-written ones are the words "agrees"/"disagrees" on the other
-    lines that contain "Claim" (issue #41: those are to go through `Claim`). A section with
-    neither has no row. Sections left out because their run failed are not counted (the Failed
-    section lists them).
+    `fragments` is [(id, report.md text)] in report order. The counts come from the count lines of
+    claims_markdown. Every verdict goes through `Claim` (issue #41): a line of a section that says
+    "agrees" or "disagrees" and is not one of claims_markdown's is listed under "Verdicts not through
+    `Claim`", so that a verdict typed into a sentence shows. A section without claims has no row.
+    Sections left out because their run failed are not counted (the Failed section lists them).
     """
-    rows, open_items = [], []
-    total = [0] * 5
+    rows, open_items, by_hand = [], [], []
+    total = [0] * 3
     for fid, text in fragments:
-        counts = [0] * 5
+        counts = [0] * 3
         for m in CLAIM_COUNT.finditer(text):
             for i in range(3):
                 counts[i] += int(m.group(i + 1))
         for line in text.splitlines():
-            if "Claim" in line and not CLAIM_LINE.match(line):
-                for v in VERDICT.findall(line):
-                    counts[3 if v == "agrees" else 4] += 1
+            if VERDICT.search(line) and not CLAIM_LINE.match(line):
+                line = line.strip()
+                by_hand.append(f"- {fid}: {line if len(line) <= 200 else line[:200] + ' …'}\n")
         if not any(counts):
             continue
         rows.append(f"| {fid} | " + " | ".join(str(c) for c in counts) + " |\n")
@@ -69,16 +69,18 @@ def claims_summary(fragments):
             if m.group(2) != "agrees":
                 open_items.append(f"- {fid}, {m.group(2)}: \"{m.group(1)}\"\n")
     out = ["## Claims against the papers\n\n",
-           "Every claim the sections below check, counted from them: through `Claim` (a list \"Against the "
-           "paper's text\" closed by its count), and, not yet through `Claim`, the verdicts of the sentences "
-           "that start \"Claim\" (their numbers are in the sentence).\n\n",
-           "| section | agree | disagree | not checked | agree (by hand) | disagree (by hand) |\n"
-           "|---|---|---|---|---|---|\n"]
+           "Every claim the sections below check, counted from their lists \"Against the paper's text\" "
+           "(each closed by its count; the numbers are in the section).\n\n",
+           "| section | agree | disagree | not checked |\n|---|---|---|---|\n"]
     out += rows
     out.append("| all | " + " | ".join(str(t) for t in total) + " |\n\n")
     if open_items:
-        out.append("Claims through `Claim` that disagree or were not checked (the section gives the numbers):\n\n")
+        out.append("Claims that disagree or were not checked (the section gives the numbers):\n\n")
         out += open_items
+        out.append("\n")
+    if by_hand:
+        out.append("Verdicts not through `Claim` (a sentence that says agrees or disagrees; to be made a `Claim`):\n\n")
+        out += by_hand
         out.append("\n")
     return "".join(out)
 

@@ -1,7 +1,7 @@
 """reproduce/report.py (issue #41, item 4): REPORT.md opens with the claims of every section,
 counted from the sections' own lines: the lists that claims_markdown writes (one line per Claim,
-closed by "a agree, d disagree, n not checked.") and the sentences still written by hand that
-start "Claim". Crafted fragments, counted by hand here.
+closed by "a agree, d disagree, n not checked."). A verdict typed into a sentence is not counted but
+listed, so that it shows. Crafted fragments, counted by hand here.
 """
 import importlib.util
 import json
@@ -38,20 +38,28 @@ Against the paper's text:
 BLADE = """## Blade
 
 Claim: the frequencies agree to 1e-6: **agrees** (3.1e-07). Claim (Sec. 5.2): both edges touch: **disagrees** (one).
-The word agrees outside a claim sentence is not a verdict.
+The two frequencies agree; "agree" is not a verdict word.
 """
 
 
 def test_the_summary_counts_every_section_and_lists_what_does_not_agree():
     report = load_report_module()
     summary = report.claims_summary([("fig_x", FIG), ("no_claims", "## Text\n\nNothing checked.\n"), ("blade", BLADE)])
-    assert "| fig_x | 2 | 1 | 1 | 0 | 0 |" in summary
-    assert "| blade | 0 | 0 | 0 | 1 | 1 |" in summary
+    assert "| fig_x | 2 | 1 | 1 |" in summary
+    assert "| blade |" not in summary  # its verdicts are typed, not claims: listed below, not counted
     assert "no_claims" not in summary
-    assert "| all | 2 | 1 | 1 | 1 | 1 |" in summary
+    assert "| all | 2 | 1 | 1 |" in summary
     assert '- fig_x, disagrees: "Haar is best (a: b)"' in summary
     assert '- fig_x, not checked: "the plateaus coincide"' in summary
     assert "the error decreases" not in summary  # agreeing claims are only counted
+    typed = summary[summary.index("Verdicts not through `Claim`"):]
+    assert typed.count("- blade: ") == 1 and "**disagrees**" in typed  # one line, both verdicts on it
+    assert "is not a verdict word" not in summary
+
+
+def test_claims_alone_leave_no_list_of_typed_verdicts():
+    report = load_report_module()
+    assert "Verdicts not through" not in report.claims_summary([("fig_x", FIG)])
 
 
 def test_report_md_opens_with_the_summary_and_leaves_failed_sections_out(tmp_path):
@@ -73,5 +81,6 @@ def test_report_md_opens_with_the_summary_and_leaves_failed_sections_out(tmp_pat
         sys.argv = argv
     text = (tmp_path / "REPORT.md").read_text()
     assert text.index("## Claims against the papers") < text.index("## Fig. X")
-    assert "| all | 2 | 1 | 1 | 0 | 0 |" in text  # the failed blade's fragment is not counted
+    assert "| all | 2 | 1 | 1 |" in text
+    assert "- ll11_blade: " not in text  # the failed blade's fragment is left out
     assert "## Failed" in text
