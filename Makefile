@@ -22,25 +22,31 @@ test: build
 
 # One instrumented build, $(SANITIZE_BUILD)/, serves check-sanitize and check-fuzz: clang-14
 # (scripts/install-deps fuzz), Debug (assertions on: Eigen's range and size checks are active) at
-# -O1 -g1, -fsanitize=address,undefined with -fno-sanitize-recover=all (any report fails the run),
-# and libFuzzer's coverage (fuzzer-no-link) so that the fuzz targets link against the same
-# libraries. Measured on 2 cores (stop 49), one sanitized test file (test_continuation.cpp):
-# g++ 95.6 s, clang 55.9 s, clang with the coverage 67.3 s; the separate g++ build for the tests
-# and clang build for the fuzzers took about 19 and 5.5 min. -g1 (functions and line tables: what
-# a sanitizer's stack trace prints) instead of -g. The libraries and tools are a unity build
-# (CMAKE_UNITY_BUILD: 8 sources a unit, each header parsed and each Eigen template instantiated
-# once per unit: wbm_solvers 261 s of CPU instead of 524 s); the tests are not (tests/CMakeLists.txt).
+# -O1 -g1, -fsanitize=address,undefined with -fno-sanitize-recover=all (any report fails the run);
+# libFuzzer's coverage on the parser libraries only (tests/fuzz/CMakeLists.txt), so that the fuzz
+# targets link against the same libraries. Executables link clang's shared ASan runtime
+# (-shared-libasan, found by rpath): the pytest suite preloads that runtime into the interpreter,
+# and the `wbm` it starts must use the same one ("incompatible ASan runtimes" otherwise). -g1
+# (functions and line tables: what a sanitizer's stack trace prints) instead of -g. The libraries
+# and tools are a unity build (CMAKE_UNITY_BUILD: 8 sources a unit, each header parsed and each
+# Eigen template instantiated once per unit: wbm_solvers 261 s of CPU instead of 524 s); the tests
+# are not (tests/CMakeLists.txt). No reproductions or benchmarks: they stay in `make test`.
+# Measured on 2 cores (stop 49), one sanitized test file (test_continuation.cpp): g++ 95.6 s,
+# clang 55.9 s, clang with libFuzzer's coverage 67.3 s. Before, a g++ build for the sanitizers
+# (about 19 min) and a clang build for the fuzzers (about 5.5 min).
 SANITIZE_BUILD ?= build-sanitize
 SANITIZE_CXX   ?= clang++-14
-SANITIZE_FLAGS  = -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-SANITIZE_LINK   = -fsanitize=address,undefined
+SANITIZE_FLAGS  = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+SANITIZE_LINK   = -fsanitize=address,undefined -shared-libasan
+SANITIZE_RT     = $$($(SANITIZE_CXX) -print-file-name=libclang_rt.asan-x86_64.so)
 sanitize-configure:
 	@./scripts/install-deps fuzz
 	@command -v $(SANITIZE_CXX) > /dev/null || { echo "check-sanitize: $(SANITIZE_CXX) not found: run scripts/install-deps fuzz"; exit 1; }
 	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_CXX_COMPILER=$(SANITIZE_CXX) -DCMAKE_BUILD_TYPE=Debug \
 	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCMAKE_UNITY_BUILD=ON -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS)" \
-	  -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_LINK)" -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_LINK)" -DWBM_BUILD_FUZZ=ON \
-	  -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
+	  -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_LINK) -Wl,-rpath,$$(dirname $(SANITIZE_RT))" \
+	  -DCMAKE_MODULE_LINKER_FLAGS="-fsanitize=address,undefined" -DWBM_BUILD_FUZZ=ON -DWBM_BUILD_REPRODUCE=OFF \
+	  -DWBM_BUILD_BENCH=OFF -DWBM_OUT_DIR=$(CURDIR)/$(SANITIZE_BUILD)/out > $(SANITIZE_BUILD).configure.log 2>&1 \
 	  || { cat $(SANITIZE_BUILD).configure.log; exit 1; }
 
 # Unit, scene and Python tests (tests/python, Hypothesis included, on the sanitized module with the
@@ -63,7 +69,7 @@ check-sanitize: sanitize-configure
 	@# The pytest suite (Hypothesis included) on the sanitized module: the interpreter is not
 	@# instrumented, so clang's shared ASan runtime (which holds UBSan's handlers) is preloaded;
 	@# CPython's own allocations at exit are not leaks of ours (detect_leaks=0).
-	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$$($(SANITIZE_CXX) -print-file-name=libclang_rt.asan-x86_64.so)" \
+	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$(SANITIZE_RT)" \
 	  ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  PYTHONPATH=$(CURDIR)/$(SANITIZE_BUILD)/python WBM_CLI=$(CURDIR)/$(SANITIZE_BUILD)/cli/wbm PYTHONDONTWRITEBYTECODE=1 \
 	  "$$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' CMakeCache.txt)" -m pytest -q -p no:cacheprovider $(CURDIR)/tests/python
