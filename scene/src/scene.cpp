@@ -264,12 +264,7 @@ Scene load_scene(const std::filesystem::path& path) {
 nlohmann::json to_json(const Scene& s) {
   nlohmann::json j;
   j["title"] = s.title;
-  nlohmann::json analysis = {{"type", std::string(to_string(s.analysis.kind))}};
-  for (const auto& k : analysis_keys()) {
-    if (!k.echo || !reads(k, s.analysis.kind)) continue;
-    if (nlohmann::json v = k.echo(s.analysis); !v.is_null()) analysis[k.key] = std::move(v);
-  }
-  j["analysis"] = analysis;
+  j["analysis"] = echo_keys(analysis_keys(), s.analysis, std::string(to_string(s.analysis.kind)));
   const bool rod = s.structure && s.structure->kind == StructureKind::Rod;
   auto where = [&](nlohmann::json& o, int dof) {
     if (rod) {
@@ -281,20 +276,10 @@ nlohmann::json to_json(const Scene& s) {
   if (s.structure) {
     const Structure& st = *s.structure;
     if (rod) {
-      j["structure"] = {{"type", "rod"},
-                        {"young_modulus", st.rod.young_modulus},
-                        {"density", st.rod.density},
-                        {"area", st.rod.area},
-                        {"length", st.rod.length},
-                        {"elements", st.rod.elements}};
+      j["structure"] = echo_keys(structure_keys(), st, "rod");  // type, E, ρ, S, L, elements
     } else if (st.deck) {  // the deck again (re-reduced when read back), not the reduced matrices
-      j["structure"] = {{"type", "deck"}, {"deck", st.deck->file}, {"interface", st.deck->interface},
-                        {"modes", st.deck->modes}, {"ccx", st.deck->ccx}, {"units", st.deck->units}};
-      if (st.deck->axis) {
-        const auto& [point, direction] = *st.deck->axis;
-        j["structure"]["axis"] = {{"point", {point(0), point(1), point(2)}},
-                                  {"direction", {direction(0), direction(1), direction(2)}}};
-      }
+      j["structure"] = echo_keys(deck_keys(), *st.deck);
+      j["structure"]["type"] = "deck";
     } else {
       j["structure"] = {{"type", "matrices"},
                         {"mass", matrix_json(st.mass, st.mass_file)},
@@ -302,7 +287,7 @@ nlohmann::json to_json(const Scene& s) {
                         {"dofs", st.dof_names}};
       if (st.damping.size() > 0) j["structure"]["damping"] = matrix_json(st.damping, st.damping_file);
     }
-    if (s.analysis.kind != AnalysisKind::NonlinearModes) j["damping"] = {{"alpha", s.damping.alpha}, {"beta", s.damping.beta}};
+    if (s.analysis.kind != AnalysisKind::NonlinearModes) j["damping"] = echo_keys(damping_keys(), s.damping);
   }
   if (s.forcing) {
     nlohmann::json f = {{"amplitude", s.forcing->amplitude}};
@@ -374,15 +359,12 @@ nlohmann::json to_json(const Scene& s) {
     j["basis"] = b;
   }
   if (s.analysis.kind == AnalysisKind::Solve || s.analysis.kind == AnalysisKind::Continuation) {
-    j["solver"] = detail::echo_keys(detail::solver_keys(), s.solver);
+    j["solver"] = echo_keys(solver_keys(), s.solver);
   }
   if (s.analysis.kind == AnalysisKind::Timestep) {
-    j["timestep"] = s.rigid() ? detail::echo_keys(detail::moreau_jean_keys(), s.moreau_jean)
-                              : detail::echo_keys(detail::bdf_keys(), s.timestep);
+    j["timestep"] = s.rigid() ? echo_keys(moreau_jean_keys(), s.moreau_jean) : echo_keys(bdf_keys(), s.timestep);
   }
-  nlohmann::json out = {{"samples", s.output.samples}};
-  if (s.output.harmonics > 0) out["harmonics"] = s.output.harmonics;
-  out["formats"] = s.output.formats;
+  nlohmann::json out = echo_keys(output_keys(), s.output);  // samples, formats, harmonics
   if (!s.output.observe.empty() && s.structure) {
     nlohmann::json list = nlohmann::json::array();
     for (int dof : s.output.observe) list.push_back(rod ? nlohmann::json(dof + 1) : nlohmann::json(s.structure->dof_name(dof)));

@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp), [basis]: the trial and weighting bases, their size, the
 // formulation, the operator and contact quadrature rules, and the harmonic selection.
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -21,9 +22,7 @@ void Parser::basis(const toml::table& root) {
     s_.basis.contact_quadrature = rigid ? solvers::ContactQuadrature::Midpoint : solvers::ContactQuadrature::CellAverage;
     return;
   }
-  r_.only(*t, "basis",
-          {"trial", "weighting", "dimension", "level", "harmonics", "formulation", "time_samples", "operators",
-           "contact_quadrature", "harmonic_selection"});
+  r_.only(*t, "basis", names(basis_keys()));
   Basis& b = s_.basis;
   const std::string trial = r_.text(*t, "basis", "trial", b.trial);
   const std::string weighting = r_.text(*t, "basis", "weighting", trial);
@@ -64,18 +63,12 @@ void Parser::basis(const toml::table& root) {
     b.harmonics = Basis::kDefaultHarmonics;
     b.dimension = 2 * b.harmonics + 1;
   }
-  const std::string form =
-      r_.choice(*t, "basis", "formulation", {"strong", "weak", "distributional"}, "distributional");
-  b.formulation = solvers::parse_formulation(form);
-  b.time_samples = static_cast<int>(r_.integer(*t, "basis", "time_samples", 0, 1 << 24, 0, " (0: max(256, 2M))"));
+  read_values(r_, *t, "basis", basis_keys(), b);  // formulation, time_samples, operators
   if (b.time_samples > 0 && b.time_samples < b.dimension) {
     r_.error(Reader::source_of(*t, "time_samples"), "basis.time_samples",
              "Q = " + std::to_string(b.time_samples) + " < M = " + std::to_string(b.dimension) +
                  ": the Q-point rule needs Q >= M (0 picks max(256, 2M))");
   }
-  b.operators = r_.choice(*t, "basis", "operators", {"automatic", "discrete"}, "automatic") == "discrete"
-                    ? solvers::OperatorRule::Discrete
-                    : solvers::OperatorRule::Automatic;
   const std::string quadrature =
       r_.choice(*t, "basis", "contact_quadrature", {"automatic", "midpoint", "cell-average"}, "automatic");
   // Names and M through the solvers' own parser, so the message lists every valid name.

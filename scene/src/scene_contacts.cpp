@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp), [[contact]]: the law, at a DOF, between two DOFs, or on
 // the nodes of a deck set with their directions.
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -58,15 +59,9 @@ void Parser::contacts(const toml::table& root) {
     if (modes && !s_.contacts.empty() && (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
       r_.error(t->source(), section, "mixes rigid and penalty stops; nnm takes all \"rigid\" or all \"linear\"");
     }
-    if (c.law == ContactLawKind::Rigid) {
-      r_.only(*t, section, {"law", "gap", "node", "dof", "against", "direction", "nodes"});
-    } else if (c.law == ContactLawKind::Exponential) {
-      r_.only(*t, section, {"law", "gap", "coefficient", "exponent", "node", "dof", "against", "direction", "nodes"});
-      c.coefficient = r_.number(*t, section, "coefficient", detail::positive("N"));
-      c.exponent = r_.number(*t, section, "exponent", detail::positive("1/m"));
-    } else if (c.law == ContactLawKind::Linear) {
-      r_.only(*t, section, {"law", "gap", "stiffness", "node", "dof", "against", "direction", "nodes"});
-      c.stiffness = r_.number(*t, section, "stiffness", detail::positive("N/m"));
+    // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
+    read_keys(r_, *t, section, contact_keys(), c, "", law);
+    if (c.law == ContactLawKind::Linear) {
       if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
           c.stiffness != s_.contacts.front().stiffness) {
         r_.error(Reader::source_of(*t, "stiffness"), section + ".stiffness",

@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp), [forcing]: the frequency or range, the loads and where
 // they act (a DOF, a named DOF or a deck node).
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -70,8 +71,7 @@ void Parser::forcing(const toml::table& root) {
   }
   const toml::table* t = r_.table(root, "forcing", true);
   if (t == nullptr) return;
-  r_.only(*t, "forcing", {"amplitude", "node", "dof", "frequency_hz", "frequency_rad_s", "frequencies_hz",
-                          "frequencies_rad_s", "points", "loads", "vector"});
+  r_.only(*t, "forcing", names(forcing_keys()));
   Forcing f;
   loads(*t, f);
   const bool more = !f.loads.empty();
@@ -171,19 +171,14 @@ void Parser::loads(const toml::table& t, Forcing& f) {
       for (size_t i = 0; i < a.size(); ++i) {
         const toml::table& l = *a[i].as_table();
         const std::string section = "forcing.loads[" + std::to_string(i) + "]";
-        r_.only(l, section, {"amplitude", "node", "dof", "phase_deg", "phase_rad", "harmonic"});
         solvers::HarmonicLoad load{0, 0.0};
-        load.amplitude = r_.number(l, section, "amplitude", detail::finite("N"));
+        read_keys(r_, l, section, load_keys(), load);  // amplitude, phase_rad, harmonic
         load.dof = location(l, section, default_location());
         if (l.contains("phase_deg") && l.contains("phase_rad")) {
           r_.error(Reader::source_of(l, "phase_rad"), section + ".phase_rad", "given beside phase_deg; give the phase once");
         } else if (l.contains("phase_deg")) {
           load.phase_rad = r_.number(l, section, "phase_deg", detail::finite("deg")) * std::numbers::pi / 180.0;
-        } else {
-          load.phase_rad = r_.number(l, section, "phase_rad", detail::finite("rad"), 0.0);
         }
-        load.harmonic = static_cast<int>(r_.integer(l, section, "harmonic", 0, 1000, 1,
-                                                    " (0: a constant load F cos(phase), h: h times the forcing frequency)"));
         f.loads.push_back(load);
         load_sources_.push_back(l.contains("harmonic") ? Reader::source_of(l, "harmonic") : l.source());
       }

@@ -6,8 +6,7 @@
 namespace wbm::scene::detail {
 
 Scene Parser::parse(const toml::table& root) {
-  r_.only(root, "", {"title", "structure", "damping", "forcing", "contact", "basis", "solver", "timestep",
-                     "analysis", "output"});
+  r_.only(root, "", names(top_keys()));
   if (const toml::node* t = root.get("title")) {
     if (t->is_string()) {
       s_.title = t->as_string()->get();
@@ -81,32 +80,24 @@ Scene Parser::parse(const toml::table& root) {
 bool Parser::analysis(const toml::table& root) {
   const toml::table* t = r_.table(root, "analysis", false);
   if (t == nullptr) return true;
-  std::vector<std::string> known;
-  for (const auto& k : analysis_keys()) known.emplace_back(k.key);
-  r_.only(*t, "analysis", known);
+  r_.only(*t, "analysis", names(analysis_keys()));
   const size_t errors = r_.error_count();
   const std::string type = r_.choice(*t, "analysis", "type", analysis_names(), "solve");
   if (r_.error_count() != errors && t->contains("type")) return false;
   s_.analysis.kind = value_of(analysis_table(), type);
-  for (const auto& k : analysis_keys()) {
-    const toml::node* n = t->get(k.key);
-    if (n == nullptr || reads(k, s_.analysis.kind)) continue;
+  const std::string kind(to_string(s_.analysis.kind));
+  for (const auto& key : names(analysis_keys())) {
+    const toml::node* n = t->get(key);
+    const std::vector<std::string> readers = variants_of(analysis_keys(), key);
+    if (n == nullptr || readers.empty() || std::find(readers.begin(), readers.end(), kind) != readers.end()) continue;
     std::string types;
-    for (size_t i = 0; i < k.kinds.size(); ++i) {
-      types += (i == 0 ? "" : " or ") + std::string("\"") + std::string(to_string(k.kinds[i])) + "\"";
-    }
-    r_.error(n->source(), std::string("analysis.") + k.key, "only used by type = " + types + "; remove it");
+    for (size_t i = 0; i < readers.size(); ++i) types += (i == 0 ? "\"" : " or \"") + readers[i] + "\"";
+    r_.error(n->source(), "analysis." + key, "only used by type = " + types + "; remove it");
   }
   if (s_.analysis.kind == AnalysisKind::NonlinearModes) nnm(*t);
   if (s_.analysis.kind == AnalysisKind::Continuation) {
     Analysis& a = s_.analysis;
-    a.max_step = r_.number(*t, "analysis", "max_step", {"in [1e-6, 1] (scaled arclength per step; below 1e-6 a branch takes millions of steps)",
-                            [](double v) { return v >= 1e-6 && v <= 1.0; }},
-                           a.max_step);
-    a.max_frequency_step_hz = r_.number(*t, "analysis", "max_frequency_step_hz", detail::non_negative("Hz"),
-                                        a.max_frequency_step_hz);
-    a.max_points = static_cast<int>(r_.integer(*t, "analysis", "max_points", 2, 1000000, a.max_points));
-    a.max_state = r_.number(*t, "analysis", "max_state", detail::non_negative("times s_r = max(gap, linear response); 0 = no bound"), a.max_state);
+    read_values(r_, *t, "analysis", analysis_keys(), a, kind);  // max_step, max_frequency_step_hz, max_points, max_state
     // Rigid stops have no stability (no saltation matrices): false unless asked for (then refused).
     bool rigid = false;
     auto rigid_law = [](const toml::table* c) {
@@ -141,25 +132,16 @@ void Parser::nnm(const toml::table& t) {
       energy_given = true;
     }
   }
-  // 256: the cost grows about as N^2.2 (2 DOFs: 0.3 s at N = 32, 7 s at N = 128; N = 512 ran
-  // for minutes, issue #40), docs/scenes.md "Sizes".
-  a.harmonics = static_cast<int>(r_.integer(t, "analysis", "harmonics", 1, 256, a.harmonics,
-                                            " (the cost grows about as N^2.2: N = 128 takes 7 s on 2 DOFs, "
-                                            "N = 512 minutes)"));
+  // harmonics (N <= 256: the cost grows about as N^2.2; 2 DOFs: 0.3 s at N = 32, 7 s at N = 128;
+  // N = 512 ran for minutes, issue #40, docs/scenes.md "Sizes"), algorithm, max_step,
+  // max_energy_step, max_points.
+  read_values(r_, t, "analysis", analysis_keys(), a, "nnm");
   a.samples = static_cast<int>(r_.integer(t, "analysis", "samples", 3, 1 << 16, std::max(a.samples, 8 * a.harmonics)));
   if (a.samples <= 2 * a.harmonics) {
     r_.error(Reader::source_of(t, "samples"), "analysis.samples",
              "m = " + std::to_string(a.samples) + " must exceed 2N = " + std::to_string(2 * a.harmonics) +
                  " (the contact conditions are imposed at m samples of a degree-N trigonometric polynomial)");
   }
-  a.algorithm = value_of(nnm_algorithm_table(), r_.choice(t, "analysis", "algorithm", names(nnm_algorithm_table()),
-                                                          std::string(to_string(a.algorithm))));
-  a.max_step = r_.number(t, "analysis", "max_step", {"in [1e-6, 1] (scaled arclength per step; below 1e-6 a branch takes millions of steps)",
-                            [](double v) { return v >= 1e-6 && v <= 1.0; }},
-                         5e-2);
-  a.max_energy_step = r_.number(t, "analysis", "max_energy_step", detail::positive("normalized energy"),
-                                a.max_energy_step);
-  a.max_points = static_cast<int>(r_.integer(t, "analysis", "max_points", 2, 1000000, a.max_points));
   if (const toml::node* l = t.get("levels")) {
     const toml::array* list = l->as_array();
     if (list == nullptr) {
@@ -181,9 +163,7 @@ void Parser::nnm(const toml::table& t) {
 void Parser::damping(const toml::table& root) {
   const toml::table* t = r_.table(root, "damping", false);
   if (t == nullptr) return;
-  r_.only(*t, "damping", {"alpha", "beta"});
-  s_.damping.alpha = r_.number(*t, "damping", "alpha", detail::non_negative("1/s"), 0.0);
-  s_.damping.beta = r_.number(*t, "damping", "beta", detail::non_negative("s"), 0.0);
+  read_keys(r_, *t, "damping", damping_keys(), s_.damping);
 }
 
 void Parser::basis_plot(const toml::table& root) {
@@ -208,8 +188,7 @@ void Parser::basis_plot(const toml::table& root) {
   }  // the name error is reported by basis()
   a.derivative = static_cast<int>(r_.integer(*t, "analysis", "derivative", 0, max_derivative, 0,
                                              max_derivative == 0 ? " (this basis has no pointwise derivative)" : ""));
-  a.unit_integral =
-      r_.choice(*t, "analysis", "normalization", {"orthonormal", "unit-integral"}, "orthonormal") == "unit-integral";
+  read_values(r_, *t, "analysis", analysis_keys(), a, "basis-plot");  // normalization
   if (a.unit_integral && s_.basis.trial == "fourier") {
     r_.error(Reader::source_of(*t, "normalization"), "analysis.normalization",
              "\"unit-integral\" is the wavelet normalization ∫₀¹ φ_{J,k} = 1 [JL14 Sec. 3.3]; Fourier functions "
@@ -224,7 +203,7 @@ void Parser::solver(const toml::table& root) {
     r_.warn(t->source(), "[solver] (Newton) is not used by analysis \"timestep\"; ignored ([timestep] sets the BDF)");
     return;
   }
-  detail::read_keys(r_, *t, "solver", detail::solver_keys(), s_.solver);
+  read_keys(r_, *t, "solver", solver_keys(), s_.solver);
   if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
       s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
     r_.warn(Reader::source_of(*t, "linear_solver"),
@@ -242,12 +221,12 @@ void Parser::timestep(const toml::table& root) {
   }
   const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
   if (rigid) {  // Moreau–Jean: fixed steps and an impact law instead of error control
-    detail::read_keys(r_, *t, "timestep", detail::moreau_jean_keys(), s_.moreau_jean,
+    read_keys(r_, *t, "timestep", moreau_jean_keys(), s_.moreau_jean,
                       "rigid stops are integrated by Moreau–Jean; relative_tolerance and absolute_tolerance are the "
                       "BDF's (penalty laws)");
     return;
   }
-  detail::read_keys(r_, *t, "timestep", detail::bdf_keys(), s_.timestep,
+  read_keys(r_, *t, "timestep", bdf_keys(), s_.timestep,
                     "steps_per_period and restitution are the Moreau–Jean scheme's, for law = \"rigid\"");
 }
 
@@ -258,8 +237,7 @@ void Parser::output(const toml::table& root) {
     s_.moreau_jean.samples_per_period = s_.output.samples;
     return;
   }
-  r_.only(*t, "output", {"samples", "nodes", "dofs", "harmonics", "formats", "observe"});
-  s_.output.samples = static_cast<int>(r_.integer(*t, "output", "samples", 4, 1 << 22, s_.output.samples));
+  read_keys(r_, *t, "output", output_keys(), s_.output);  // samples; the others below
   if (const toml::node* f = t->get("formats")) {
     const toml::array* a = f->as_array();
     std::vector<std::string> formats;

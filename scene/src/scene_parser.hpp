@@ -96,44 +96,6 @@ inline const std::vector<std::string>& analysis_names() {
 
 inline std::string linear_solver_name(solvers::LinearSolverPath p) { return std::string(name_of(linear_solver_table(), p)); }
 
-// Every [analysis] key, once: the analysis types that read it (empty: every type) and its value
-// in the JSON echo (null: not echoed as such). The parser's list of known keys, its "only used
-// by type = …" errors and to_json() all read this table.
-struct AnalysisKey {
-  const char* key;
-  std::vector<AnalysisKind> kinds;
-  std::function<nlohmann::json(const Analysis&)> echo;
-};
-
-inline const std::vector<AnalysisKey>& analysis_keys() {
-  using K = AnalysisKind;
-  static const std::vector<AnalysisKey> keys = {
-      {"type", {}, nullptr},
-      {"functions", {K::BasisPlot},
-       [](const Analysis& a) { return a.functions.empty() ? nlohmann::json() : nlohmann::json(a.functions); }},
-      {"derivative", {K::BasisPlot}, [](const Analysis& a) { return nlohmann::json(a.derivative); }},
-      {"normalization", {K::BasisPlot},
-       [](const Analysis& a) { return nlohmann::json(a.unit_integral ? "unit-integral" : "orthonormal"); }},
-      {"max_step", {K::Continuation, K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_step); }},
-      {"max_frequency_step_hz", {K::Continuation},
-       [](const Analysis& a) { return nlohmann::json(a.max_frequency_step_hz); }},
-      {"max_points", {K::Continuation, K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_points); }},
-      {"max_state", {K::Continuation}, [](const Analysis& a) { return nlohmann::json(a.max_state); }},
-      {"stability", {K::Continuation}, [](const Analysis& a) { return nlohmann::json(a.stability); }},
-      {"energy", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json({a.energy_min, a.energy_max}); }},
-      {"harmonics", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.harmonics); }},
-      {"samples", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.samples); }},
-      {"algorithm", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(std::string(to_string(a.algorithm))); }},
-      {"max_energy_step", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.max_energy_step); }},
-      {"levels", {K::NonlinearModes}, [](const Analysis& a) { return nlohmann::json(a.levels); }},
-  };
-  return keys;
-}
-
-inline bool reads(const AnalysisKey& k, AnalysisKind kind) {
-  return k.kinds.empty() || std::find(k.kinds.begin(), k.kinds.end(), kind) != k.kinds.end();
-}
-
 inline bool is_power_of_two(long long m) { return m >= 1 && (m & (m - 1)) == 0; }
 
 // Reads one scene table into a Scene, reporting into a Reader.

@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp), [structure]: the rod, matrices inline or in Matrix Market
 // files, CalculiX decks reduced by Craig–Bampton; DOF names, definiteness, static condensation.
+#include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
 namespace wbm::scene::detail {
@@ -19,16 +20,11 @@ void Parser::structure(const toml::table& root) {
   if (deck) {
     deck_structure(*t, st);
   } else if (!matrices) {
-    r_.only(*t, "structure", {"type", "young_modulus", "density", "area", "length", "elements"});
     st.kind = StructureKind::Rod;
-    st.rod.young_modulus = r_.number(*t, "structure", "young_modulus", detail::positive("Pa"));
-    st.rod.density = r_.number(*t, "structure", "density", detail::positive("kg/m^3"));
-    st.rod.area = r_.number(*t, "structure", "area", detail::positive("m^2"));
-    st.rod.length = r_.number(*t, "structure", "length", detail::positive("m"));
-    st.rod.elements = static_cast<int>(r_.integer(*t, "structure", "elements", 1, 100000));
+    read_keys(r_, *t, "structure", structure_keys(), st, "", "rod");  // E, ρ, S, L, elements
     for (int j = 1; j <= st.rod.elements; ++j) st.dof_names.push_back("node" + std::to_string(j));
   } else {
-    r_.only(*t, "structure", {"type", "mass", "stiffness", "damping", "dofs"});
+    r_.only(*t, "structure", names(structure_keys(), "matrices"));
     st.kind = StructureKind::Matrices;
     auto mass = matrix(*t, "mass", true, st.mass_file);
     auto stiffness = matrix(*t, "stiffness", true, st.stiffness_file);
@@ -46,7 +42,9 @@ void Parser::structure(const toml::table& root) {
 }
 
 void Parser::deck_structure(const toml::table& t, Structure& st) {
-  r_.only(t, "structure", {"type", "deck", "interface", "modes", "ccx", "axis", "units"});
+  std::vector<std::string> known = names(structure_keys(), "deck");  // type
+  for (const auto& k : names(deck_keys(), "deck")) known.push_back(k);
+  r_.only(t, "structure", known);
   const size_t errors = r_.error_count();
   DeckStructure d;
   const toml::node* file = t.get("deck");
@@ -70,9 +68,7 @@ void Parser::deck_structure(const toml::table& t, Structure& st) {
     r_.error(in->source(), "structure.interface", "expected a node set name or a non-empty list of node numbers");
     return;
   }
-  d.modes = static_cast<int>(r_.integer(t, "structure", "modes", 0, 100000, 40));
-  d.ccx = r_.text(t, "structure", "ccx", "ccx");
-  d.units = r_.choice(t, "structure", "units", deck_unit_names(), "SI");
+  read_values(r_, t, "structure", deck_keys(), d, "deck");  // modes, ccx, units
   if (const toml::node* a = t.get("axis")) {
     const toml::table* at = a->as_table();
     if (at == nullptr) {

@@ -128,7 +128,7 @@ TEST(Scene, EveryProblemOfAFileIsReportedWithLineAndKey) {
        p + ":10: forcing.frequency_hz: value 0 out of range: expected > 0 [Hz]",
        p + ":12: contact.law: \"quadratic\" is not one of \"exponential\", \"linear\"",
        p + ":16: basis.dimension: M = 48 is not a power of two",
-       p + ":17: colour: unknown key; allowed here: title, structure,"});
+       p + ":17: colour: unknown key; allowed here: title, analysis, structure,"});
 }
 
 // Refusals that need the solvers' knowledge: names, admissibility, locations, matrices.

@@ -273,10 +273,16 @@ struct Scene {
 [[nodiscard]] Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& file);
 
 /// The key table of a declared section as docs/scenes.md prints it, generated from the one
-/// declaration the parser and to_json read (| key | type | default | allowed | meaning |, one row
-/// per key in declaration order, defaults from the settings' default values). `section`:
-/// "solver", "timestep" (the BDF, penalty laws) or "timestep.rigid" (Moreau–Jean, law = "rigid").
+/// declaration the parser, its errors and to_json read (| key | type | default | allowed |
+/// meaning |, one row per key in declaration order; defaults from the settings' default values,
+/// or the declared text where a default depends on other keys; a key read by some variants only
+/// (analysis types, structure kinds, contact laws) says so first). `section`: one of
+/// declared_sections() ("top" is the top level; "timestep" the BDF of penalty laws and
+/// "timestep.rigid" Moreau–Jean; "forcing.loads" the [[forcing.loads]] tables).
 /// Throws std::invalid_argument for another section, naming the declared ones.
 [[nodiscard]] std::string key_table_markdown(const std::string& section);
+
+/// Every section key_table_markdown generates, in the order of docs/scenes.md.
+[[nodiscard]] std::vector<std::string> declared_sections();
 
 }  // namespace wbm::scene
