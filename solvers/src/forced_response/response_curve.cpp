@@ -152,6 +152,51 @@ void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch)
 
 }  // namespace
 
+void ResponseCurveOptions::validate() const {
+  const std::string field = "ResponseCurveOptions.";
+  if (threads < 0) {
+    throw std::invalid_argument(field + "threads = " + std::to_string(threads) +
+                                ": must be >= 0 (0: oneTBB's default, one per core this process may use; 1: serial)");
+  }
+  if (samples < 8) {
+    throw std::invalid_argument(field + "samples = " + std::to_string(samples) +
+                                ": must be >= 8 (P samples per period of max/min and of the monodromy steps; e.g. 512)");
+  }
+  if (!(max_parameter_step >= 0.0) || !std::isfinite(max_parameter_step)) {
+    throw std::invalid_argument(field + "max_parameter_step = " + format_number(max_parameter_step) +
+                                ": must be finite and >= 0 (0: no cap on |Δλ| per step)");
+  }
+  if (!(max_state >= 0.0) || !std::isfinite(max_state)) {
+    throw std::invalid_argument(field + "max_state = " + format_number(max_state) +
+                                ": must be finite and >= 0 (0: no bound on the contact unknowns)");
+  }
+  if (!(parameter_min < parameter_max) || !std::isfinite(parameter_min) || !std::isfinite(parameter_max)) {
+    throw std::invalid_argument(field + "parameter_min = " + format_number(parameter_min) + ", parameter_max = " +
+                                format_number(parameter_max) + ": need finite parameter_min < parameter_max (the "
+                                "range of λ; for a frequency, in Hz)");
+  }
+  if (!(min_step > 0.0 && min_step <= initial_step && initial_step <= max_step && std::isfinite(max_step))) {
+    throw std::invalid_argument(field + "min_step = " + format_number(min_step) + ", initial_step = " +
+                                format_number(initial_step) + ", max_step = " + format_number(max_step) +
+                                ": need 0 < min_step <= initial_step <= max_step (scaled arclength; defaults 1e-7, "
+                                "5e-3, 2e-2)");
+  }
+  if (max_points < 1) {
+    throw std::invalid_argument(field + "max_points = " + std::to_string(max_points) + ": must be >= 1 (e.g. 5000)");
+  }
+  if (max_corrector_iterations < 1) {
+    throw std::invalid_argument(field + "max_corrector_iterations = " + std::to_string(max_corrector_iterations) +
+                                ": must be >= 1 (e.g. 8)");
+  }
+  if (!(corrector_tolerance > 0.0) || !std::isfinite(corrector_tolerance)) {
+    throw std::invalid_argument(field + "corrector_tolerance = " + format_number(corrector_tolerance) +
+                                ": must be finite and > 0 (e.g. 1e-9)");
+  }
+  if (direction != 1 && direction != -1) {
+    throw std::invalid_argument(field + "direction = " + std::to_string(direction) + ": must be +1 or -1");
+  }
+}
+
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
   const bool rigid = base.rigid();
   if (rigid && o.stability) {
@@ -163,6 +208,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
                                 "(use frequency_response)");
   }
+  o.validate();  // after the refusals of the problem itself, which say more than the options
   const bool frequency = o.parameter == ContinuationParameter::Frequency;
   const double lambda0 = frequency ? base.frequency_hz() : base.forcing().amplitude;
   if (!(lambda0 >= o.parameter_min && lambda0 <= o.parameter_max)) {
@@ -180,22 +226,6 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       throw std::invalid_argument("trace_response: keep_dofs has DOF " + std::to_string(k) + " outside [0, " +
                                   std::to_string(base.dofs()) + ")");
     }
-  }
-  if (o.threads < 0) {
-    throw std::invalid_argument("trace_response: threads = " + std::to_string(o.threads) +
-                                ": must be >= 0 (0: oneTBB's default, one per core this process may use; 1: serial)");
-  }
-  if (o.samples < 8) {
-    throw std::invalid_argument("trace_response: samples = " + std::to_string(o.samples) +
-                                ": must be >= 8 (P samples per period of max/min and of the monodromy steps; e.g. 512)");
-  }
-  if (!(o.max_parameter_step >= 0.0) || !std::isfinite(o.max_parameter_step)) {
-    throw std::invalid_argument("trace_response: max_parameter_step = " + format_number(o.max_parameter_step) +
-                                ": must be finite and >= 0 (0: no cap on |Δλ| per step)");
-  }
-  if (!(o.max_state >= 0.0) || !std::isfinite(o.max_state)) {
-    throw std::invalid_argument("trace_response: max_state = " + format_number(o.max_state) +
-                                ": must be finite and >= 0 (0: no bound on the contact unknowns)");
   }
   const ForcedResponseFamily family(base, o.parameter);
   // The start, with load stepping if needed.

@@ -121,6 +121,22 @@ std::string inadmissibility(const TimeBasis& trial, const TimeBasis& weighting, 
 }
 
 
+void WeightedResidualOptions::validate(int dimension) const {
+  if (!(residual_tolerance > 0.0)) {
+    throw std::invalid_argument("WeightedResidualOptions.residual_tolerance = " + format_number(residual_tolerance) +
+                                ": must be > 0 (a relative bound on the full residual, e.g. 1e-8)");
+  }
+  if (homotopy_max_points < 2) {
+    throw std::invalid_argument("WeightedResidualOptions.homotopy_max_points = " + std::to_string(homotopy_max_points) +
+                                ": must be >= 2 (continuation points of the contact homotopy; e.g. 2000)");
+  }
+  if (time_samples < 0 || (time_samples > 0 && time_samples < dimension)) {
+    throw std::invalid_argument("WeightedResidualOptions.time_samples Q = " + std::to_string(time_samples) +
+                                ": must be 0 (automatic, max(256, 2M)) or >= M = " + std::to_string(dimension));
+  }
+  newton.validate();
+}
+
 WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<ContactPoint> c, TimeBasis tr, TimeBasis we,
                              WeightedResidualOptions o)
     : system(std::move(s)), forcing(f), contacts(std::move(c)), trial(std::move(tr)), weighting(std::move(we)),
@@ -136,20 +152,7 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
                                 " functions but weighting " + weighting.name() + " has " +
                                 std::to_string(weighting.dimension()) + "; use one dimension M for both");
   }
-  if (!(options.residual_tolerance > 0.0)) {
-    throw std::invalid_argument("WeightedResidualOptions.residual_tolerance = " +
-                                format_number(options.residual_tolerance) +
-                                ": must be > 0 (a relative bound on the full residual, e.g. 1e-8)");
-  }
-  if (options.homotopy_max_points < 2) {
-    throw std::invalid_argument("WeightedResidualOptions.homotopy_max_points = " +
-                                std::to_string(options.homotopy_max_points) +
-                                ": must be >= 2 (continuation points of the contact homotopy; e.g. 2000)");
-  }
-  if (options.time_samples < 0 || (options.time_samples > 0 && options.time_samples < m)) {
-    throw std::invalid_argument("WeightedResidualOptions.time_samples Q = " + std::to_string(options.time_samples) +
-                                ": must be 0 (automatic, max(256, 2M)) or >= M = " + std::to_string(m));
-  }
+  options.validate(m);
   q = options.time_samples > 0 ? options.time_samples : std::max(256, 2 * m);
   if (dynamic_stiffness_overflows(system, forcing.frequency_hz, highest_resolved_harmonic(m))) {
     throw std::invalid_argument("HarmonicForcing.frequency_hz = " + format_number(forcing.frequency_hz) + " Hz: " +

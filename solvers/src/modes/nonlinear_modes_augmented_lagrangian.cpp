@@ -199,25 +199,29 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
   return level;
 }
 
-Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (!(o.energy_min > 0.0 && o.energy_min < o.energy_max)) {
-    throw std::invalid_argument("BackboneOptions.energy_min = " + format_number(o.energy_min) + ", energy_max = " +
-                                format_number(o.energy_max) + ": need 0 < energy_min < energy_max (normalized "
+void BackboneOptions::validate() const {
+  if (!(energy_min > 0.0 && energy_min < energy_max)) {
+    throw std::invalid_argument("BackboneOptions.energy_min = " + format_number(energy_min) + ", energy_max = " +
+                                format_number(energy_max) + ": need 0 < energy_min < energy_max (normalized "
                                 "energies, 1 = contact onset; e.g. 0.5 and 10)");
   }
-  if (!(o.min_step > 0.0 && o.min_step <= o.initial_step && o.initial_step <= o.max_step)) {
-    throw std::invalid_argument("BackboneOptions.min_step = " + format_number(o.min_step) + ", initial_step = " +
-                                format_number(o.initial_step) + ", max_step = " + format_number(o.max_step) +
+  if (!(min_step > 0.0 && min_step <= initial_step && initial_step <= max_step)) {
+    throw std::invalid_argument("BackboneOptions.min_step = " + format_number(min_step) + ", initial_step = " +
+                                format_number(initial_step) + ", max_step = " + format_number(max_step) +
                                 ": need 0 < min_step <= initial_step <= max_step (energy steps; defaults 1e-4, "
                                 "0.05, 0.1)");
   }
-  std::vector<double> include = o.include;
-  std::sort(include.begin(), include.end());
-  if (!(o.max_wall_time_s >= 0.0)) {
-    throw std::invalid_argument("BackboneOptions.max_wall_time_s = " + format_number(o.max_wall_time_s) +
+  if (!(max_wall_time_s >= 0.0)) {
+    throw std::invalid_argument("BackboneOptions.max_wall_time_s = " + format_number(max_wall_time_s) +
                                 ": must be >= 0 (0: no budget)");
   }
+}
+
+Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  o.validate();
+  std::vector<double> include = o.include;
+  std::sort(include.begin(), include.end());
   // Natural-parameter continuation in E (natural_parameter.hpp): the state is a level's
   // unknowns packed as [vec Y, f, λ, μ], so that the layer's secant predictor is LL11's; the
   // corrector is Powell's augmented Lagrangian at fixed E (solve); the step grows ×1.5 after a

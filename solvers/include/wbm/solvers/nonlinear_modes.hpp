@@ -226,6 +226,9 @@ struct BackboneOptions {
   /// the backbone then ends incomplete with StopReason::TimeBudget and the energy reached.
   /// 0: no budget. Throws std::invalid_argument (backbone) if negative or NaN.
   double max_wall_time_s = 0.0;
+  /// 0 < energy_min < energy_max, 0 < min_step <= initial_step <= max_step, max_wall_time_s >= 0.
+  /// Throws std::invalid_argument naming the field, its value, the range and a value to use.
+  void validate() const;
 };
 
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.

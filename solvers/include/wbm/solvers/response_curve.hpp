@@ -127,6 +127,13 @@ struct ResponseCurveOptions {
   std::vector<int> keep_dofs = {};
   /// Called after each accepted point (index, point: λ, step h), e.g. for progress; may be empty.
   std::function<void(size_t index, const BranchPoint& point)> on_point = nullptr;
+  /// The checks of the fields alone: threads >= 0, samples >= 8, max_parameter_step and
+  /// max_state finite and >= 0, parameter_min < parameter_max, 0 < min_step <= initial_step <=
+  /// max_step, max_points >= 1, max_corrector_iterations >= 1, corrector_tolerance > 0,
+  /// direction ±1 (trace_response checks the rest against the problem: the start inside the
+  /// range, the observed and kept DOFs, stability with rigid stops). Throws std::invalid_argument
+  /// naming the field, its value, the range and a value to use.
+  void validate() const;
 };
 
 /// Traces the response of `base` (its frequency and amplitude are the start) over the range of

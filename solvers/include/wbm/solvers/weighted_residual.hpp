@@ -152,6 +152,12 @@ struct WeightedResidualOptions {
   /// (their M collocation instants need every function). (G's block-diagonal structure is
   /// checked at construction; std::logic_error if it ever fails.)
   std::vector<int> harmonics = {};
+  /// The checks of the fields alone, for a basis of M functions: residual_tolerance > 0,
+  /// homotopy_max_points >= 2, time_samples 0 or >= M, and newton.validate(). The harmonic
+  /// selection, the contact quadrature and the formulation are checked against the problem at
+  /// construction. Throws std::invalid_argument naming the field, its value, the range and a
+  /// value to use.
+  void validate(int dimension) const;
 };
 
 /// The three time operators (M × M, dense; row = weighting j, column = trial k), including the
