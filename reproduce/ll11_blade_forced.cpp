@@ -36,6 +36,7 @@
 
 #include "blade.hpp"
 #include "combinations.hpp"
+#include "parameters.hpp"
 #include "run.hpp"
 
 namespace {
@@ -102,23 +103,25 @@ int main(int argc, char** argv) {
   return run.execute([](reproduce::Run& run) {
     using reproduce::format;
     const bool quick = run.quick();
-    const double mesh_size = quick ? 0.005 : 0.0025;  // m, as ll11_blade
-    const double gap = 1e-4;                          // m, uniform radial gap
-    const double zeta = 0.005;                        // ζ₁, C = β K_r
-    const double overload = 4.0;                      // linear resonance peak of the first stop to touch [gaps]
-    const double stiffness_ratio = 10.0;              // k = ratio × the static radial stiffness at that node
-    const int modes = 40, harmonics = quick ? 4 : 12, wavelet_m = quick ? 16 : 32;
-    const int mode_harmonics = quick ? 3 : 8, mode_samples = quick ? 24 : 96;
-    const double from = 0.98, to = quick ? 1.04 : 1.10;  // f/f1
-    // ‖G a − b + n(a)‖ ≤ tol ‖b‖: the reduced model spans ω² from 1e7 to 1e12 s⁻², and even in
-    // scaled coordinates (below) rounding alone leaves about 1.2e-8 ‖b‖ in a linear solve near
-    // f1 (measured), just above the default 1e-8; 1e-7 is used and reported.
-    const double residual_tolerance = 1e-7;
+    // Every model and run parameter from reproduce/scenes/ll11_blade_forced.toml ([quick] with --quick).
+    const auto parameters = reproduce::Parameters::load("ll11_blade_forced", quick);
+    const double mesh_size = parameters.number("mesh.size_m");   // m, as ll11_blade
+    const double gap = parameters.number("contact.gap_m");       // m, uniform radial gap
+    const double zeta = parameters.number("damping.zeta");       // ζ₁, C = β K_r
+    const double overload = parameters.number("forcing.overload_gaps");  // linear resonance peak of the first stop to touch [gaps]
+    const double stiffness_ratio = parameters.number("contact.stiffness_ratio");  // k = ratio × the static radial stiffness there
+    const int n_tip = parameters.integer("interface.tip_nodes"), modes = parameters.integer("interface.modes");
+    const int harmonics = parameters.integer("response.harmonics");
+    const int wavelet_m = parameters.integer("response.wavelet_dimension");
+    const int mode_harmonics = parameters.integer("nnm.harmonics"), mode_samples = parameters.integer("nnm.samples");
+    const double from = parameters.number("response.from_f1"), to = parameters.number("response.to_f1");  // f/f1
+    // ‖G a − b + n(a)‖ ≤ tol ‖b‖ (the file says why it is not the default).
+    const double residual_tolerance = parameters.number("response.residual_tolerance");
     const models::ScratchFolder scratch("wbm_ll11_blade_forced");
     nlohmann::json timing;
 
     // The blade and its Craig–Bampton model, exactly as ll11_blade.
-    const auto blade = models::build_blade(scratch.dir, mesh_size, 24);
+    const auto blade = models::build_blade(scratch.dir, mesh_size, n_tip);
     timing["gmsh_s"] = blade.gmsh_s;
     timing["ccx_and_read_s"] = blade.ccx_s;
     auto t = std::chrono::steady_clock::now();
@@ -190,7 +193,7 @@ int main(int argc, char** argv) {
       o.max_parameter_step = max_step * f1;
       o.observed_dof = observed;
       o.stability = false;
-      o.max_state = 50.0;
+      o.max_state = parameters.number("response.max_state");
       if (keep_all) {  // every DOF's trial coefficients: the peak's orbit starts a backbone below
         for (Eigen::Index j = 0; j < n; ++j) o.keep_dofs.push_back(static_cast<int>(j));
       }
@@ -205,18 +208,18 @@ int main(int argc, char** argv) {
     };
     // Harmonic balance densely; the wavelet pair (about 4 times the cost per point) with larger steps.
     trace("Fourier:Fourier", "fourier_fourier", solvers::TimeBasis::fourier_harmonics(harmonics),
-          solvers::TimeBasis::fourier_harmonics(harmonics), quick ? 4e-3 : 1e-3, true);
+          solvers::TimeBasis::fourier_harmonics(harmonics), parameters.number("response.max_step_fourier_f1"), true);
     trace("B-spline:B-spline", "bspline_bspline", solvers::TimeBasis::from_name("bspline", wavelet_m),
-          solvers::TimeBasis::from_name("bspline", wavelet_m), quick ? 4e-3 : 2e-3, false);
+          solvers::TimeBasis::from_name("bspline", wavelet_m), parameters.number("response.max_step_bspline_f1"), false);
 
     // The backbone of the same stops (damping and load ignored) from the linear mode, and the
     // branch through harmonic balance's resonance peak: its orbit (every DOF's coefficients),
     // corrected by Newton without damping and load, continued down and up in energy.
     t = std::chrono::steady_clock::now();
     solvers::BackboneContinuationOptions co;
-    co.energy_min = 0.5;
-    co.energy_max = quick ? 3.0 : overload * overload;  // the linear peak's energy
-    co.max_energy_step = 0.2;
+    co.energy_min = parameters.number("nnm.energy_min");
+    co.energy_max = parameters.number_or("nnm.energy_max", overload * overload);  // default: the linear peak's energy
+    co.max_energy_step = parameters.number("nnm.max_energy_step");
     co.penalty_stiffness = k_pen;
     const auto b = nnm.continue_backbone(co);
     if (!b.complete()) run.fail("backbone incomplete: " + b.message);
@@ -232,9 +235,10 @@ int main(int argc, char** argv) {
     solvers::BackboneContinuationOptions cp = co;
     cp.start = solvers::PeriodicOrbit{ff_peak->kept_coefficients, ff_peak->frequency_hz};
     const double peak_energy = nnm.energy(ff_peak->kept_coefficients);
-    // Twice the peak's energy: enough to see where the branch goes on both sides of the peak.
-    cp.energy_min = 0.5 * peak_energy;
-    cp.energy_max = 2.0 * peak_energy;
+    // From half to twice the peak's energy (the file's peak_branch_from, peak_branch_to): enough to
+    // see where the branch goes on both sides of the peak.
+    cp.energy_min = parameters.number("nnm.peak_branch_from") * peak_energy;
+    cp.energy_max = parameters.number("nnm.peak_branch_to") * peak_energy;
     std::vector<solvers::ModeLevel> through;
     std::string through_stop;
     bool through_complete = true;
@@ -300,7 +304,7 @@ int main(int argc, char** argv) {
                                  "first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"},
                 cols);
     }
-    const int nlin = quick ? 26 : 201;
+    const int nlin = parameters.integer("response.linear_points");
     Eigen::VectorXd lf(nlin), lr(nlin), la(nlin);
     for (int i = 0; i < nlin; ++i) {
       lr(i) = from + (to - from) * i / (nlin - 1);
@@ -410,7 +414,7 @@ int main(int argc, char** argv) {
     timing["backbone_s"] = backbone.time_s;
     timing["backbone_through_peak_s"] = peak_branch.time_s;
     for (const auto& tr : traced) timing[tr.key + "_s"] = tr.time_s;
-    run.meta({{"figure", "LL11 blade, forced response (beyond the paper)"}, {"mesh_size_m", mesh_size},
+    run.meta({{"figure", "LL11 blade, forced response (beyond the paper)"}, {"parameters", parameters.used()}, {"mesh_size_m", mesh_size},
               {"dofs", blade.model.dofs.size()}, {"reduced_dofs", n}, {"gap_m", gap}, {"zeta", zeta}, {"beta_s", beta},
               {"load_scale", s}, {"overload_gaps", overload}, {"penalty_stiffness_n_per_m", k_pen},
               {"radial_static_stiffness_n_per_m", radial_stiffness}, {"harmonics", harmonics}, {"wavelet_dimension", wavelet_m},
@@ -431,7 +435,7 @@ int main(int argc, char** argv) {
        << " DOFs), damping C = βK_r with ζ₁ = " << format("%.3f", zeta) << ", load F(t) = s M_r φ₁ cos 2πft (the "
           "first mode's own inertia shape: in the linear regime it excites mode 1 only), s = "
        << format("%.4g", s) << " so that the linear resonance of the first node to touch (#" << onset + 1
-       << ") reaches " << format("%g", overload) << " gaps. Casing: 24 radial stops at g0 = "
+       << ") reaches " << format("%g", overload) << " gaps. Casing: " << n_tip << " radial stops at g0 = "
        << format("%g", gap * 1e3) << " mm, as penalty springs k = " << format("%.3g", k_pen) << " N/m ("
        << format("%g", stiffness_ratio) << " × the static radial stiffness " << format("%.3g", radial_stiffness)
        << " N/m at that node). Continuation in f from "
@@ -441,10 +445,11 @@ int main(int argc, char** argv) {
           "of node #" << onset + 1 << ", in gaps (the linear peak: " << format("%.3f", linear_peak)
        << "). Linear equations verified to ‖R‖ ≤ " << format("%g", residual_tolerance)
        << " ‖b‖ (the default " << format("%g", solvers::WeightedResidualOptions{}.residual_tolerance)
-       << " is below the rounding of this G). Figure: `forced_response.png`. Not computed: "
+       << " is below the rounding of this G). Parameters: `reproduce/scenes/ll11_blade_forced.toml`. Figure: "
+          "`forced_response.png`. Not computed: "
           "stability (cost) and rigid stops (the continuation stalls on this blade; notes of issue #15).\n\n"
        << "Two backbone branches of the same stops (undamped, unforced; KKT continuation, N = " << mode_harmonics
-       << ", m = " << mode_samples << "): (0) from the linear first mode, E = 0.5 to " << format("%g", co.energy_max)
+       << ", m = " << mode_samples << "): (0) from the linear first mode, E = " << format("%g", co.energy_min) << " to " << format("%g", co.energy_max)
        << " (" << nl << " levels); (1) through harmonic balance's resonance peak: the peak's orbit (every DOF's "
           "coefficients, E = " << format("%.3f", peak_energy) << ") corrected by Newton without damping and load, "
           "then continued down and up in energy (" << np << " levels, E = " << format("%.2f", peak_branch.energy.minCoeff())

@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
       std::string levels;
       for (const auto& l : d["included"]) {
         levels += (levels.empty() ? "" : ", ") + std::string("E = ") + format("%g", l["energy"].get<double>()) + ": " +
-                  (l.value("converged", false) ? format("%.5f", l["frequency_hz"].get<double>()) + " Hz" : "failed");
+                  (l.value("converged", false) ? format("%.5f", l["frequency_hz"].get<double>()) + " Hz"
+                                                : l.value("status", std::string("no status")));
       }
       rows << "| " << name << " | " << s.analysis.harmonics << " / " << s.analysis.samples << " | "
            << format("%g", s.contacts.front().gap) << " | " << format("%g", s.analysis.energy_max) << " | "

@@ -338,7 +338,8 @@ int main(int argc, char** argv) {
                   << ", " << outs.size() << " runs in " << format("%.1f", seconds) << " s, largest difference "
                   << format("%.1e", diff) << "\n";
         const std::string outcome =
-            !valid ? "not run: " + ref.message : (ref.complete() ? "range reached" : ref.message);
+            !valid ? "not run: " + ref.message
+                   : (ref.complete() ? std::string(solvers::to_string(solvers::StopReason::RangeReached)) : ref.message);
         rows << "| " << n_h << " | " << m << " | " << outcome << " | " << (valid ? std::to_string(ref.levels) : "")
              << " | " << (valid ? std::to_string(ref.corners) : "") << " | " << (valid ? std::to_string(ref.folds.size()) : "")
              << " | " << format("%.5f", ref.f_check) << " | " << format("%.5f", ref.f_end) << " | "
@@ -419,7 +420,7 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < ref.folds.size(); ++i) {
         folds_text += (i ? ", " : "") + format("%.4f", ref.folds[i]) + " Hz (" + format("%.3f", 1e6 * ref.fold_amplitudes[i]) + " µm)";
       }
-      stiff_rows << "| " << label << " | " << (ref.converged() ? std::string("range reached") : ref.message) << " | "
+      stiff_rows << "| " << label << " | " << (ref.converged() ? std::string(solvers::to_string(solvers::StopReason::RangeReached)) : ref.message) << " | "
                  << ref.points << " | " << (folds_text.empty() ? std::string("none") : folds_text) << " | "
                  << format("%.1e", diff) << " | " << (agree ? "agree" : "DISAGREE") << " | " << format("%.1f", seconds) << " |\n";
       const nlohmann::json stop = ref.stop ? nlohmann::json(std::string(solvers::to_string(*ref.stop))) : nlohmann::json();

@@ -1,23 +1,31 @@
 #!/usr/bin/env python3
-"""Renders every known figure of out/ to PNG and PDF beside its CSV. The only plotting code.
+"""Renders every figure of out/ that reproductions.txt names to PNG and PDF beside its CSV.
 
-Usage: plot.py OUT_DIR. Each figure id maps to a short function that reads the CSV, labels the
-axes from its header (units in brackets) and applies one shared style. Figures whose folder is
-missing are skipped with a note (a failed run writes no folder).
+Usage: plot.py OUT_DIR. Each figure id maps (reproductions.txt) to a short function here that
+reads the CSV, labels the axes from its header (units in brackets) and applies the shared style.
+Figures whose folder is missing are skipped with a note (a failed run writes no folder).
+
+One plotting module: the CSV reader and the style are those of `wbm run`'s pictures
+(cli/wbm_plot.py, loaded from the source tree); this file holds only the papers' figures.
 """
-import csv
+import importlib.util
 import json
 import math
 import sys
 from pathlib import Path
 
-import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+def _load(name, path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
-STYLE = {"figure.figsize": (6.4, 4.0), "axes.grid": True, "grid.alpha": 0.3, "font.size": 10,
-         "legend.fontsize": 8, "savefig.dpi": 150}
+
+# matplotlib with the Agg backend, the CSV reader and the style (it exits 3 without matplotlib).
+wbm_plot = _load("wbm_plot", Path(__file__).resolve().parents[1] / "cli" / "wbm_plot.py")
+plt = wbm_plot.plt
+STYLE = wbm_plot.STYLE
 LABELS = {"bdf": "time stepping (BDF)", "fourier_fourier": "Fourier:Fourier", "bspline_bspline": "B-spline:B-spline",
           "db6_db6": "DB6:DB6", "haar_fourier": "Haar:Fourier", "db6_fourier": "DB6:Fourier",
           "haar_bspline": "Haar:B-spline"}
@@ -27,24 +35,17 @@ MARKERS = ["o", "s", "^", "v", "D", "<", "x"]
 
 
 def read_csv(path):
-    """Numeric columns of a result CSV; an empty cell (a missing value) reads as NaN, and the
-    text column "status", which says why a value is missing, is left out (read_status)."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    header = rows[0]
-    keep = [i for i, h in enumerate(header) if h != "status"]
-    data = [[float(r[i]) if r[i] != "" else float("nan") for i in keep] for r in rows[1:]]
-    return [header[i] for i in keep], [list(col) for col in zip(*data)]
+    """Numeric columns of a result CSV (wbm_plot.read_csv) as (header, columns); an empty cell (a
+    missing value) reads as NaN, and the text column "status", which says why a value is missing,
+    is left out (read_status)."""
+    table = wbm_plot.read_csv(path)
+    header = [name for name in table if name != "status"]
+    return header, [table[name] for name in header]
 
 
 def read_status(path):
     """The "status" column of a result CSV (empty list if it has none)."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    if "status" not in rows[0]:
-        return []
-    i = rows[0].index("status")
-    return [r[i] for r in rows[1:]]
+    return wbm_plot.read_csv(path).get("status", [])
 
 
 def save(fig, folder, stem):
@@ -577,19 +578,16 @@ def blade_forced(folder):
     save(fig, folder, "forced_response")
 
 
-FIGURES = {"jl14_fig02": basis_functions, "jl14_fig03": basis_functions, "jl14_fig04": basis_functions,
-           "jl14_fig05": basis_functions, "jl14_fig06": history, "jl14_fig07": history, "jl14_fig08": history,
-           "jl14_fig09": history, "jl14_fig10": sweep, "jl14_fig11": sweep, "jl14_fig12": frequency_response,
-           "jl14_speed_accuracy": speed_accuracy, "ll11_fig03": frequency_energy, "ll11_fig04": phase_space,
-           "ll11_fig05": space_time, "ll11_penalty_limit": penalty_limit, "ll11_free_vibration": free_vibration,
-           "jl14_rigid_stop": rigid_stop, "ll11_blade": blade,
-           "ll11_blade_forced": blade_forced}
+def figures():
+    """{id: drawing function} from reproductions.txt, the one list of the reproductions."""
+    report = _load("report", Path(__file__).with_name("report.py"))
+    return {fid: globals()[figure] for _, fid, figure in report.reproductions() if figure is not None}
 
 
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "out")
     plt.rcParams.update(STYLE)
-    for fid, fn in FIGURES.items():
+    for fid, fn in figures().items():
         folder = out / fid
         if not (folder / "meta.json").exists():
             print(f"plot.py: {fid}: no results in {folder}, skipped")

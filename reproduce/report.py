@@ -16,10 +16,21 @@ import re
 import sys
 from pathlib import Path
 
-ORDER = ["jl14_table1", "jl14_fig02", "jl14_fig03", "jl14_fig04", "jl14_fig05", "jl14_connection_coefficients",
-         "jl14_fig06", "jl14_fig07", "jl14_fig08", "jl14_fig09", "jl14_fig10", "jl14_fig11", "jl14_fig12", "jl14_table2",
-         "jl14_speed_accuracy", "jl14_extremes", "jl14_rigid_stop", "ll11_fig03", "ll11_fig04", "ll11_fig05", "ll11_penalty_limit",
-         "ll11_free_vibration", "ll11_extremes", "ll11_robustness", "ll11_blade", "ll11_blade_forced"]
+def reproductions(path=Path(__file__).with_name("reproductions.txt")):
+    """[(executable, id, figure function or None)] of reproductions.txt, the one list of the
+    reproductions (CMake builds and runs its executables; plot.py draws its figures), in report order."""
+    rows = []
+    for line in path.read_text().splitlines():
+        if not line.strip() or line.startswith("#"):
+            continue
+        executable, fid, figure = line.split()
+        rows.append((executable, fid, None if figure == "-" else figure))
+    return rows
+
+
+ORDER = [fid for _, fid, _ in reproductions()]
+SECTION = {executable: fid for executable, fid, _ in reproductions()}
+
 
 HEADER = """# wbm reproduction report
 
@@ -86,9 +97,8 @@ def claims_summary(fragments):
 
 
 def report_id(executable):
-    """The id (out/<id>/) of an executable: the longest id of ORDER that starts its name."""
-    ids = [fid for fid in ORDER if executable == fid or executable.startswith(fid + "_")]
-    return max(ids, key=len) if ids else executable
+    """The id (out/<id>/) of an executable, as reproductions.txt lists it (itself if unlisted)."""
+    return SECTION.get(executable, executable)
 
 
 def failed_runs(out):

@@ -84,3 +84,27 @@ def test_report_md_opens_with_the_summary_and_leaves_failed_sections_out(tmp_pat
     assert "| all | 2 | 1 | 1 |" in text
     assert "- ll11_blade: " not in text  # the failed blade's fragment is left out
     assert "## Failed" in text
+
+
+def test_reproductions_list_matches_the_sources():
+    """reproductions.txt is the one list (issue #41, item 4): every executable it names has its
+    source reproduce/<executable>.cpp writing the section id of the list (the id its
+    reproduce::Run::from_args call gives), every source with a main is listed once, and every figure
+    function it names is a function of plot.py."""
+    import re
+
+    report = load_report_module()
+    rows = report.reproductions()
+    root = SCRIPT.parent
+    listed = [exe for exe, _, _ in rows]
+    assert len(listed) == len(set(listed)), "an executable is listed twice"
+    for exe, fid, figure in rows:
+        source = (root / f"{exe}.cpp").read_text()
+        ids = re.findall(r'from_args\(argc, argv, "([a-z0-9_]+)"\)', source)
+        assert ids == [fid], f"{exe}.cpp writes {ids}, reproductions.txt says {fid}"
+        if figure is not None:
+            assert re.search(rf"^def {figure}\(folder\)", (root / "plot.py").read_text(), re.M), figure
+    with_main = {p.stem for p in root.glob("*.cpp") if "int main(" in p.read_text()}
+    assert with_main - {"bench_scaling"} == set(listed), with_main ^ set(listed)
+    assert report.report_id("jl14_extremes_penalty") == "jl14_extremes"
+    assert report.report_id("not_listed") == "not_listed"
