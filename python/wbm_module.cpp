@@ -338,7 +338,7 @@ Non-convergence is returned, not raised; bad input raises ValueError.)");
         for (const auto& fold : curve.folds) folds.push_back(fold.parameter);
         for (const auto& fold : curve.fold_points) fold_amplitudes.push_back(fold.amplitude);
         py::dict out;
-        out["converged"] = curve.stop == solvers::StopReason::RangeReached;
+        out["converged"] = curve.converged();  // the one definition (solvers::branch_status), as wbm run
         out["stop"] = std::string(solvers::to_string(curve.stop));
         out["message"] = curve.message;
         out["frequency_hz"] = py::cast(f);

@@ -296,7 +296,7 @@ int main(int argc, char** argv) {
                 << "approximate branch, not a hysteresis of the dynamics).\n";
         }
       }
-      if (c.stop != solvers::StopReason::RangeReached) {
+      if (!c.converged()) {
         notes << "- " << t.combination.label() << ": stopped, " << solvers::to_string(c.stop) << " (" << c.message
               << "); a branch of the truncated penalty system that leaves the physics, reported, not plotted as a "
                  "response (see docs/design.md).\n";

@@ -201,7 +201,7 @@ int main(int argc, char** argv) {
       traced.back().time_s = models::seconds_since(t);
       traced.back().condition = base.condition_number();
       const auto& c = traced.back().curve;
-      if (c.stop != solvers::StopReason::RangeReached) {
+      if (!c.converged()) {
         run.fail(label + ": continuation stopped: " + std::string(solvers::to_string(c.stop)) + ", " + c.message);
       }
       std::printf("%s: %zu points, %.1f s, %s\n", label.c_str(), c.points.size(), traced.back().time_s, c.message.c_str());

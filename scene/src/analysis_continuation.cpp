@@ -158,7 +158,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     out.tables.push_back({"folds.csv", header, columns});
   }
   out.stop = curve.stop;
-  out.status = curve.stop == solvers::StopReason::RangeReached ? solvers::SolveStatus::Converged : solvers::SolveStatus::PathEnded;
+  out.status = curve.status();
   out.diagnostics["continuation"] = {{"points", curve.points.size()},
                                      {"folds", folds},
                                      {"stop", std::string(solvers::to_string(curve.stop))},

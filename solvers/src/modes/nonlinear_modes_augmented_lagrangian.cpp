@@ -286,7 +286,7 @@ Backbone NonlinearModes::backbone(const BackboneOptions& o) const {
   const Branch branch = natural_parameter(correct, Eigen::VectorXd(), o.energy_min, np);
   b.stop = branch.stop;
   b.rejected_steps = branch.rejected_steps;
-  b.status = branch.stop == StopReason::RangeReached ? SolveStatus::Converged : SolveStatus::PathEnded;
+  b.status = branch_status(branch.stop);
   if (branch.stop == StopReason::InitialPointFailed) {
     b.message = "the first level E = " + format_number(o.energy_min) + " did not converge: " + branch.message;
   } else if (branch.stop == StopReason::TimeBudget) {

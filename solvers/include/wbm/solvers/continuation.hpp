@@ -146,6 +146,15 @@ struct Branch {
   int switches = 0;         // entries flipped at them (simultaneous crossings count each entry)
   long corrector_iterations = 0;
   double wall_time_s = 0.0;
+  /// branch_status(stop): Converged when the range (or the goal) was reached.
+  [[nodiscard]] SolveStatus status() const { return branch_status(stop); }
+  [[nodiscard]] bool converged() const { return status() == SolveStatus::Converged; }
+  /// One line: "range reached: 212 points, 2 folds, 14 events, 3 rejected steps, 0.41 s".
+  [[nodiscard]] std::string brief() const {
+    return std::string(to_string(stop)) + ": " + std::to_string(points.size()) + " points, " +
+           std::to_string(folds.size()) + " folds, " + std::to_string(events) + " events, " +
+           std::to_string(rejected_steps) + " rejected steps, " + format_number(wall_time_s) + " s";
+  }
 };
 
 inline void PseudoArclengthOptions::validate() const {

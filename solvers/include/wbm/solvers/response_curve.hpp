@@ -97,6 +97,15 @@ struct ResponseCurve {
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
   double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
   int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
+  /// branch_status(stop): Converged when the range was reached (its last point on the range end).
+  [[nodiscard]] SolveStatus status() const { return branch_status(stop); }
+  [[nodiscard]] bool converged() const { return status() == SolveStatus::Converged; }
+  /// One line: "range reached: 163 points, 2 folds, 0 rejected steps, 0.22 s (stability 0.5 s)".
+  [[nodiscard]] std::string brief() const {
+    return std::string(to_string(stop)) + ": " + std::to_string(points.size()) + " points, " +
+           std::to_string(folds.size()) + " folds, " + std::to_string(rejected_steps) + " rejected steps, " +
+           format_number(wall_time_s) + " s (stability " + format_number(stability_time_s) + " s)";
+  }
 };
 
 struct ResponseCurveOptions {

@@ -83,6 +83,16 @@ enum class StopReason {
   return "?";
 }
 
+/// The outcome of a branch (a continuation, a response curve, a backbone) from why it stopped:
+/// Converged when it reached what it was asked for (the end of its range, or the caller's goal),
+/// PathEnded otherwise (the stop and the message say why). The one definition of a converged
+/// branch, read by Branch, ResponseCurve, Backbone, `wbm run`, the Python module and the
+/// reproductions.
+[[nodiscard]] constexpr SolveStatus branch_status(StopReason stop) noexcept {
+  return stop == StopReason::RangeReached || stop == StopReason::GoalReached ? SolveStatus::Converged
+                                                                             : SolveStatus::PathEnded;
+}
+
 /// A number for a message: 4 significant digits, scientific notation when small or large
 /// ("3.2e-11", "1298", "0.0125"), "nan"/"inf" spelled out. Never "0.000000" for 3e-11.
 [[nodiscard]] inline std::string format_number(double v) {

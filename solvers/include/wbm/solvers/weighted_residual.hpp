@@ -211,6 +211,11 @@ struct WeightedResidualSolution {
   double collocation_penetration = std::numeric_limits<double>::quiet_NaN();
   double complementarity = std::numeric_limits<double>::quiet_NaN();
   [[nodiscard]] bool converged() const { return report.converged(); }
+  /// One line: the status, the verified full residual against its tolerance, and Newton's brief().
+  [[nodiscard]] std::string brief() const {
+    return std::string(to_string(report.status)) + ": ‖G a − b + n(a)‖/‖b‖ = " + format_number(relative_residual) +
+           " (tolerance " + format_number(residual_tolerance) + "); Newton " + report.brief();
+  }
 };
 
 /// Weighted residual of M ü + C u̇ + K u = F cos(2πτ) e_f − Σ_c e_c f_c(u_c) in τ = f t with
