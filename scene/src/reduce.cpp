@@ -18,12 +18,12 @@
 #include <wbm/fem/matrix_market.hpp>
 #include <wbm/scene/build_information.hpp>
 
+#include "analysis_detail.hpp"
+
 namespace wbm::scene {
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
+using detail::seconds_since;  // analysis_detail.hpp (one definition: a unity build put two in one unit)
 
 // Node numbers of `interface`: a list of integers, or a node set of the deck.
 std::vector<int> interface_nodes(const fem::CalculixDeck& deck, const std::string& interface) {
