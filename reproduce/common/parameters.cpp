@@ -58,15 +58,19 @@ Parameters Parameters::load(const std::string& name, bool quick) {
   return {file, std::move(values)};
 }
 
-const nlohmann::json& Parameters::at(const std::string& key, const char* expected) const {
+const nlohmann::json* Parameters::find(const std::string& key) const {
   const nlohmann::json* j = &values_;
   std::istringstream parts(key);
   for (std::string part; std::getline(parts, part, '.');) {
-    if (!j->is_object() || !j->contains(part)) {
-      throw std::invalid_argument(file_ + ": " + key + ": missing; expected " + expected);
-    }
+    if (!j->is_object() || !j->contains(part)) return nullptr;
     j = &(*j)[part];
   }
+  return j;
+}
+
+const nlohmann::json& Parameters::at(const std::string& key, const char* expected) const {
+  const nlohmann::json* j = find(key);
+  if (j == nullptr) throw std::invalid_argument(file_ + ": " + key + ": missing; expected " + expected);
   return *j;
 }
 
@@ -78,16 +82,9 @@ double Parameters::number(const std::string& key) const {
 }
 
 double Parameters::number_or(const std::string& key, double fallback) const {
-  const nlohmann::json* j = &values_;
-  std::istringstream parts(key);
-  for (std::string part; std::getline(parts, part, '.');) {
-    if (!j->is_object() || !j->contains(part)) {
-      used_[key] = fallback;
-      return fallback;
-    }
-    j = &(*j)[part];
-  }
-  return number(key);
+  if (find(key) != nullptr) return number(key);
+  used_[key] = fallback;
+  return fallback;
 }
 
 int Parameters::integer(const std::string& key) const {

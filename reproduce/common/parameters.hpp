@@ -40,6 +40,7 @@ class Parameters {
 
  private:
   Parameters(std::string file, nlohmann::json values) : file_(std::move(file)), values_(std::move(values)) {}
+  [[nodiscard]] const nlohmann::json* find(const std::string& key) const;  // nullptr if absent
   [[nodiscard]] const nlohmann::json& at(const std::string& key, const char* expected) const;
   std::string file_;
   nlohmann::json values_;          // the file's values, [quick] merged in when quick
