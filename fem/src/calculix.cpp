@@ -268,6 +268,18 @@ AssembledModel parse_calculix_matrices(const std::string& stiffness, const std::
   return m;
 }
 
+void CalculixOptions::validate() const {
+  if (executable.empty()) {
+    throw std::invalid_argument("CalculixOptions.executable is empty: give \"ccx\" (install calculix-ccx) or a path to it");
+  }
+  std::error_code ec;
+  if (!work_directory.empty() && std::filesystem::exists(work_directory, ec) &&
+      !std::filesystem::is_directory(work_directory, ec)) {
+    throw std::invalid_argument("CalculixOptions.work_directory = " + work_directory.string() +
+                                ": exists and is not a folder; give a folder, or leave it empty for a scratch folder");
+  }
+}
+
 namespace {
 
 // Runs ccx on the driver deck "model data + `step`" in a scratch folder (or options.work_directory)
@@ -276,6 +288,7 @@ namespace {
 std::vector<std::string> run_calculix(const CalculixDeck& deck, const std::string& step, const CalculixOptions& options,
                                       const std::vector<std::string>& files, const std::string& what) {
   namespace fs = std::filesystem;
+  options.validate();
   const std::string name = deck.file.string();
   static int counter = 0;
   const bool scratch = options.work_directory.empty();

@@ -1,5 +1,7 @@
 #include <wbm/fem/gmsh.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -10,23 +12,39 @@
 
 namespace wbm::fem {
 
+void GmshOptions::validate() const {
+  if (executable.empty()) throw std::invalid_argument("GmshOptions.executable is empty: give \"gmsh\" or a path to it");
+  if (dimension < 1 || dimension > 3) {
+    throw std::invalid_argument(
+        std::string("GmshOptions.dimension = ").append(std::to_string(dimension)).append(": must be 1, 2 or 3"));
+  }
+  for (const auto& [name, value] : numbers) {
+    const bool identifier = !name.empty() && (std::isalpha(static_cast<unsigned char>(name[0])) != 0 || name[0] == '_') &&
+                            std::all_of(name.begin(), name.end(), [](char c) {
+                              return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+                            });
+    if (!identifier) {
+      throw std::invalid_argument("GmshOptions.numbers: name '" + name +
+                                  "' is not a gmsh identifier ([A-Za-z_][A-Za-z0-9_]*); use the name the script reads");
+    }
+    if (!std::isfinite(value)) {
+      throw std::invalid_argument("GmshOptions.numbers[" + name + "] = " + std::to_string(value) +
+                                  ": must be finite");
+    }
+  }
+}
+
 int mesh_with_gmsh(const std::filesystem::path& geo, const std::filesystem::path& output, const GmshOptions& options) {
   namespace fs = std::filesystem;
   if (!fs::is_regular_file(geo)) {
     throw std::invalid_argument("mesh_with_gmsh: geometry script " + geo.string() + " does not exist");
   }
-  if (options.dimension < 1 || options.dimension > 3) {
-    throw std::invalid_argument(
-        std::string("GmshOptions.dimension = ").append(std::to_string(options.dimension)).append(": must be 1, 2 or 3"));
-  }
+  options.validate();
   const fs::path script = fs::absolute(geo), mesh = fs::absolute(output), dir = mesh.parent_path();
   fs::create_directories(dir);
   // std::string(...).append, not "lit" + std::to_string: GCC 12's -Wrestrict false positive.
   std::vector<std::string> args{std::string("-").append(std::to_string(options.dimension)), script.string()};
   for (const auto& [name, value] : options.numbers) {
-    if (!std::isfinite(value)) {
-      throw std::invalid_argument("GmshOptions.numbers[" + name + "] is not finite");
-    }
     std::ostringstream v;
     v.precision(17);
     v << value;

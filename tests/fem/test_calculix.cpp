@@ -195,6 +195,21 @@ TEST(Calculix, ReportsCalculixErrorsWithTheDeckNameAndAMissingExecutable) {
       {"m.sti:2: expected 'row col value' with 1 <= row, col <= 2"});
 }
 
+// The options are checked before ccx is started: no executable, or a work folder that is a file.
+TEST(Calculix, OptionsValidateNamingTheField) {
+  write_bar_mesh();
+  const auto deck = wbm::fem::read_calculix_deck(
+      write("valid_options.inp", "*INCLUDE, INPUT=mesh/bar.inp\n"));
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::assemble_with_calculix(deck, {.executable = ""}); },
+      {"CalculixOptions.executable is empty", "calculix-ccx"});
+  const fs::path file = write("not_a_folder", "x\n");
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::calculix_frequencies(deck, 1, {.executable = "ccx", .work_directory = file}); },
+      {"CalculixOptions.work_directory = ", "not_a_folder: exists and is not a folder"});
+  EXPECT_NO_THROW(wbm::fem::CalculixOptions{}.validate());
+}
+
 namespace {
 
 // K as a Matrix Market symmetric file (lower triangle, 17 significant digits).

@@ -137,3 +137,21 @@ TEST(Gmsh, ReportsGmshsOwnErrorsAndAMissingExecutable) {
       [&] { (void)wbm::fem::mesh_with_gmsh(write("ok2.geo", kBox), work() / "m.inp", {.executable = "gmsh", .dimension = 4, .numbers = {}}); },
       {"GmshOptions.dimension = 4: must be 1, 2 or 3"});
 }
+
+// The options are checked before gmsh is started, each error naming the field.
+TEST(Gmsh, OptionsValidateNamingTheField) {
+  using wbm::fem::GmshOptions;
+  EXPECT_NO_THROW(GmshOptions{}.validate());
+  EXPECT_NO_THROW((GmshOptions{.executable = "gmsh", .dimension = 2, .numbers = {{"lc_2", 0.1}}}.validate()));
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { GmshOptions{.executable = "", .dimension = 3, .numbers = {}}.validate(); }, {"GmshOptions.executable is empty"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { GmshOptions{.executable = "gmsh", .dimension = 0, .numbers = {}}.validate(); },
+      {"GmshOptions.dimension = 0: must be 1, 2 or 3"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { GmshOptions{.executable = "gmsh", .dimension = 3, .numbers = {{"2lc", 0.1}}}.validate(); },
+      {"name '2lc' is not a gmsh identifier"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { GmshOptions{.executable = "gmsh", .dimension = 3, .numbers = {{"lc", std::nan("")}}}.validate(); },
+      {"GmshOptions.numbers[lc] = nan: must be finite"});
+}

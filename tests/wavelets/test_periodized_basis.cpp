@@ -163,7 +163,14 @@ TEST(PeriodizedBasis, RefusesBadLevelsAndMissingDerivatives) {
   wbm::testing::expect_throw_with<std::invalid_argument>([] { (void)ww::PeriodizedBasis(ww::Family::haar(), -1); },
                                                          {"level J = -1", "[0, 20]"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [] { (void)ww::PeriodizedBasis(ww::Family::haar(), 5, {.grid_level = 3}); }, {"grid_level = 3"});
+      [] { (void)ww::PeriodizedBasis(ww::Family::haar(), 5, {.grid_level = 3}); },
+      {"PeriodizedBasisOptions.grid_level = 3", "[J, J + 20] = [5, 25]"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { (void)ww::PeriodizedBasis(ww::Family::haar(), 2, {.grid_level = 23}); }, {"grid_level = 23", "[2, 22]"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { (void)ww::PeriodizedBasis(ww::Family::haar(), 2, {.grid_level = -2}); }, {"grid_level = -2", "must be -1"});
+  EXPECT_EQ(ww::PeriodizedBasisOptions{}.grid_level_at(3), 12);   // the default: max(J, 12)
+  EXPECT_EQ(ww::PeriodizedBasisOptions{}.grid_level_at(14), 14);
   const ww::PeriodizedBasis haar(ww::Family::haar(), 3);
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)haar.sampled(256, 1); }, {"Haar", "order 1"});
   EXPECT_THROW((void)haar.value(8, 0.1), std::out_of_range);

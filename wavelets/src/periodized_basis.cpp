@@ -9,17 +9,30 @@
 
 namespace wbm::wavelets {
 
+int PeriodizedBasisOptions::grid_level_at(int level) const { return grid_level < 0 ? std::max(level, 12) : grid_level; }
+
+void PeriodizedBasisOptions::validate(int level) const {
+  if (normalization != Normalization::Orthonormal && normalization != Normalization::UnitIntegral) {
+    throw std::invalid_argument("PeriodizedBasisOptions.normalization = " +
+                                std::to_string(static_cast<int>(normalization)) +
+                                ": must be Orthonormal or UnitIntegral");
+  }
+  const int grid = grid_level_at(level);
+  if (grid_level < -1 || grid < level || grid - level > 20) {
+    throw std::invalid_argument("PeriodizedBasisOptions.grid_level = " + std::to_string(grid_level) +
+                                ": must be -1 (max(J, 12)) or in [J, J + 20] = [" + std::to_string(level) + ", " +
+                                std::to_string(level + 20) + "]");
+  }
+}
+
 PeriodizedBasis::PeriodizedBasis(const Family& family, int level, PeriodizedBasisOptions options)
     : level_(level), dimension_(0), normalization_(options.normalization), scale_(1.0) {
   if (level < 0 || level > 20) {
     throw std::invalid_argument("PeriodizedBasis: level J = " + std::to_string(level) +
                                 " must be in [0, 20] (M = 2^J basis functions)");
   }
-  const int grid = options.grid_level < 0 ? std::max(level, 12) : options.grid_level;
-  if (grid < level || grid - level > 20) {
-    throw std::invalid_argument("PeriodizedBasis: grid_level = " + std::to_string(grid) + " must be in [J, J + 20] = [" +
-                                std::to_string(level) + ", " + std::to_string(level + 20) + "]");
-  }
+  options.validate(level);
+  const int grid = options.grid_level_at(level);
   dimension_ = 1 << level;
   if (normalization_ == Normalization::UnitIntegral) scale_ = std::sqrt(std::ldexp(1.0, level));  // 2^{J/2}
   function_ = std::make_shared<const ScalingFunction>(family, grid - level);

@@ -154,7 +154,7 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
     level.equality_measure = contact::AugmentedLagrangian::equality_measure(e.h);
     // A level converges only on a verified stationarity residual (‖∇L_κ‖∞ ≤ tolerance).
     const bool stationary = e.gradient.lpNorm<Eigen::Infinity>() <= options_.stationarity_tolerance;
-    if (al.update(e.g, e.h) && omega_settled && stationary) {
+    if (al.update(e.g, e.h).measures_met && omega_settled && stationary) {
       level.status = SolveStatus::Converged;
       why = "converged";
       break;

@@ -33,6 +33,17 @@ struct PowellParameters {
   void validate() const;
 };
 
+/// What one pass of Alg. 3 found and did. Meeting Powell's measures is necessary, not sufficient,
+/// for a converged level: the caller also verifies its own stationarity residual (LL11 Alg. 2).
+struct PowellUpdate {
+  double inequality_measure = 0.0;  // G_i of Eq. (25a) at the given g
+  double equality_measure = 0.0;    // G_e of Eq. (25b) at the given h
+  bool measures_met = false;        // G_i < ε and G_e < ε (Alg. 3 l. 6): nothing was changed
+  int multiplier_updates = 0;       // groups (inequalities, equality) whose θ moved by Eq. (21): 0, 1 or 2
+  int penalties_raised = 0;         // penalties multiplied by β (Eq. 26), inequalities and equality
+  int penalties_capped = 0;         // raises refused because κβ would exceed max_penalty
+};
+
 class AugmentedLagrangian {
  public:
   /// `inequalities` constraints g_k ≤ 0 and one equality; multipliers start at zero.
@@ -54,9 +65,10 @@ class AugmentedLagrangian {
   /// Powell's measures (25).
   [[nodiscard]] double inequality_measure(const Eigen::VectorXd& g) const;
   [[nodiscard]] static double equality_measure(double h) { return h < 0 ? -h : h; }
-  /// One pass of Alg. 3 lines 4–33 at the primal solution's (g, h); returns true if converged
-  /// (both measures < ε), in which case nothing is changed.
-  bool update(const Eigen::VectorXd& g, double h);
+  /// One pass of Alg. 3 lines 4–33 at the primal solution's (g, h). When both measures are below
+  /// ε (measures_met) nothing is changed; otherwise the multipliers and penalties of the group(s)
+  /// still violated are updated as described above. The report says which of these happened.
+  PowellUpdate update(const Eigen::VectorXd& g, double h);
 
   [[nodiscard]] const Eigen::VectorXd& inequality_penalties() const { return kappa_; }
   [[nodiscard]] double equality_penalty() const { return kappa_e_; }

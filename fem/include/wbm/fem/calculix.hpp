@@ -49,6 +49,9 @@ struct CalculixOptions {
   /// Scratch folder for the driver deck and ccx's files; empty: a fresh folder under the system
   /// temporary directory, removed afterwards.
   std::filesystem::path work_directory = {};
+  /// Throws std::invalid_argument naming the field: an empty executable, or a work_directory that
+  /// exists and is not a folder.
+  void validate() const;
 };
 
 /// Stiffness and mass of the model as CalculiX assembles them, after its *BOUNDARY conditions:
@@ -62,8 +65,9 @@ struct AssembledModel {
 /// Runs `ccx` on a driver deck = the model data + "*STEP / *FREQUENCY, SOLVER=MATRIXSTORAGE /
 /// *END STEP" in a scratch folder and reads the .sti, .mas (1-based "row col value", upper
 /// triangle) and .dof ("node.direction" per row) files it writes, with std::from_chars.
-/// Throws std::runtime_error naming the deck: ccx not found (install calculix-ccx), ccx failing
-/// (its "*ERROR" lines quoted), or files missing or malformed.
+/// Throws std::invalid_argument if the options are invalid (validate()), and std::runtime_error
+/// naming the deck: ccx not found (install calculix-ccx), ccx failing (its "*ERROR" lines
+/// quoted), or files missing or malformed.
 [[nodiscard]] AssembledModel assemble_with_calculix(const CalculixDeck& deck, const CalculixOptions& options = {});
 
 /// Parses ccx's matrix files (also usable on files from another run): `stiffness` and `mass`

@@ -23,13 +23,18 @@ struct PeriodizedBasisOptions {
   /// Daubechies values are exact on the grid τ = n / 2^R, R = grid_level (table level R − J of
   /// the scaling function) and linearly interpolated between; −1 means R = max(J, 12).
   int grid_level = -1;
+  /// The grid level used at basis level J: grid_level, or max(J, 12) for −1.
+  [[nodiscard]] int grid_level_at(int level) const;
+  /// Throws std::invalid_argument naming the field, its value and the range for level J:
+  /// grid_level = −1 or in [J, J + 20]; normalization one of the two enumerators.
+  void validate(int level) const;
 };
 
 /// Basis {φ_{J,k}, k = 0 … M − 1} of V_J on the circle, ordered by shift k; function k is the
 /// periodized φ(2^J τ − k), so it starts at τ = k/M (Haar, Daubechies). At J = 0 every family
 /// reduces to the constant 1 (partition of unity). Immutable and cheap to copy (the tabulated
 /// scaling function is shared).
-/// Throws std::invalid_argument if level < 0 or level > 20 or grid_level < level.
+/// Throws std::invalid_argument if level < 0 or level > 20, or as options.validate(level).
 class PeriodizedBasis {
  public:
   PeriodizedBasis(const Family& family, int level, PeriodizedBasisOptions options = {});
