@@ -3,7 +3,9 @@
 // operators, modal factorization of G, condensation H = P G⁻¹ Pᵀ), one condensed residual +
 // Jacobian, and a full solve (assembly + Newton + recovery). Goal (issue #4): every
 // combination's Case 1 solve at M = 64 in < 20 ms on one core. The full solve with a rigid stop
-// against the penalty law at M = 64 and 256 (issue #16).
+// against the penalty law at M = 64 and 256 (issue #16). The assembly on the assembled-G path
+// (LinearSolverPath::SparseLU: one sparse LU of the n·M Kronecker sum, the path of non-Rayleigh
+// damping), whose factorization is the SparseLu policy (KLU) since issue #41.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -27,11 +29,16 @@ const std::vector<std::pair<std::string, std::string>> kPairs = {
     {"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
     {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
 
-wbm::solvers::WeightedResidual build(int m, int pair) {
+wbm::solvers::WeightedResidual build(int m, int pair,
+                                     wbm::solvers::LinearSolverPath path = wbm::solvers::LinearSolverPath::Automatic) {
   const auto& s = case1();
   const auto& p = kPairs[static_cast<size_t>(pair)];
-  return {s.system(), s.harmonic_forcing(), s.contact_points(), wbm::solvers::TimeBasis::from_name(p.first, m),
-          wbm::solvers::TimeBasis::from_name(p.second, m)};
+  return {s.system(),
+          s.harmonic_forcing(),
+          s.contact_points(),
+          wbm::solvers::TimeBasis::from_name(p.first, m),
+          wbm::solvers::TimeBasis::from_name(p.second, m),
+          {.linear_solver = path}};
 }
 
 void label(benchmark::State& state) {
@@ -42,6 +49,21 @@ void label(benchmark::State& state) {
 void BM_WeightedResidual_Assembly(benchmark::State& state) {
   const int m = static_cast<int>(state.range(0));
   for (auto _ : state) benchmark::DoNotOptimize(build(m, static_cast<int>(state.range(1))));
+  label(state);
+}
+
+// Assembly with G factorized as one sparse LU of the assembled Kronecker sum instead of modal
+// blocks: the factorization and the n_c·M solves of H = P G⁻¹ Pᵀ dominate.
+// Counter: nonzeros per row of the time operators' joint pattern (A_M, A_C, A_K), which sets G's
+// fill: about 2 for Fourier:Fourier, the support width for Galerkin wavelet pairs, M when dense.
+void BM_WeightedResidual_AssemblySparseLu(benchmark::State& state) {
+  const int m = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(build(m, static_cast<int>(state.range(1)), wbm::solvers::LinearSolverPath::SparseLU));
+  }
+  const auto& ops = build(m, static_cast<int>(state.range(1))).time_operators();
+  const auto joint = (ops.mass.array() != 0.0 || ops.damping.array() != 0.0 || ops.stiffness.array() != 0.0);
+  state.counters["time_nnz_per_row"] = static_cast<double>(joint.count()) / m;
   label(state);
 }
 
@@ -118,6 +140,13 @@ void rigid_arguments(benchmark::internal::Benchmark* b) {
   b->Unit(benchmark::kMillisecond);
 }
 
+void sparse_lu_arguments(benchmark::internal::Benchmark* b) {
+  for (int pair = 0; pair < 6; ++pair) {
+    for (int m : {16, 64, 256}) b->Args({m, pair});
+  }
+  b->Unit(benchmark::kMillisecond);
+}
+
 void arguments(benchmark::internal::Benchmark* b) {
   for (int pair = 0; pair < 6; ++pair) {
     for (int m : {16, 32, 64, 128, 256}) b->Args({m, pair});
@@ -129,6 +158,7 @@ void arguments(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 BENCHMARK(BM_WeightedResidual_Assembly)->Apply(arguments);
+BENCHMARK(BM_WeightedResidual_AssemblySparseLu)->Apply(sparse_lu_arguments);
 BENCHMARK(BM_WeightedResidual_Residual)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);

@@ -1,5 +1,6 @@
 // SparseLu (newton.hpp): KLU through Eigen's wrapper, with the symbolic analysis kept while the
-// sparsity pattern is unchanged.
+// sparsity pattern is unchanged; solves with J and Jᵀ (klu_solve, klu_tsolve) on its factors.
+// SupernodalLu: Eigen's SparseLU (COLAMD), for matrices whose factors fill in densely.
 #include <wbm/solvers/newton.hpp>
 
 #include <algorithm>
@@ -7,11 +8,29 @@
 #include <vector>
 
 #include <Eigen/KLUSupport>
+#include <Eigen/SparseLU>
 
 namespace wbm::solvers {
 
+namespace {
+
+// Eigen's KLU wrapper solves with J only; its KLU objects are protected members, which klu_tsolve
+// needs for Jᵀ. B is overwritten by the solution, column by column (KLU's own convention).
+class Klu : public Eigen::KLU<Eigen::SparseMatrix<double>> {
+ public:
+  [[nodiscard]] bool solve_in_place(Eigen::MatrixXd& b, bool transposed) const {
+    auto* common = const_cast<klu_common*>(&m_common);  // KLU's API is not const-correct
+    const int n = static_cast<int>(b.rows()), columns = static_cast<int>(b.cols());
+    const int ok = transposed ? klu_tsolve(m_symbolic, m_numeric, n, columns, b.data(), common)
+                              : klu_solve(m_symbolic, m_numeric, n, columns, b.data(), common);
+    return ok != 0;
+  }
+};
+
+}  // namespace
+
 struct SparseLu::Impl {
-  Eigen::KLU<Eigen::SparseMatrix<double>> lu;
+  Klu lu;
   std::vector<int> outer, inner;  // the analysed pattern
   Eigen::Index rows = 0;
   int analyses = 0;
@@ -49,11 +68,56 @@ bool SparseLu::factorize(const Eigen::SparseMatrix<double>& jacobian) {
   return p.factorized;
 }
 
-Eigen::VectorXd SparseLu::solve(const Eigen::VectorXd& rhs) const {
-  if (!impl_->factorized) return Eigen::VectorXd::Constant(rhs.size(), std::numeric_limits<double>::quiet_NaN());
-  return impl_->lu.solve(rhs);
+Eigen::MatrixXd SparseLu::solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const {
+  Eigen::MatrixXd x = rhs;
+  if (!impl_->factorized || rhs.rows() != impl_->rows || rhs.cols() == 0 || !impl_->lu.solve_in_place(x, transposed)) {
+    x.setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return x;
 }
 
+Eigen::VectorXd SparseLu::solve(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, false); }
+
+Eigen::VectorXd SparseLu::solve_transposed(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, true); }
+
 int SparseLu::symbolic_analyses() const { return impl_->analyses; }
+
+struct SupernodalLu::Impl {
+  // SparseLU::transpose() is not const in Eigen 3.4 (it only stores a pointer to the factors).
+  mutable Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
+  Eigen::Index rows = 0;
+  bool factorized = false;
+};
+
+SupernodalLu::SupernodalLu() : impl_(std::make_unique<Impl>()) {}
+SupernodalLu::~SupernodalLu() = default;
+SupernodalLu::SupernodalLu(SupernodalLu&&) noexcept = default;
+SupernodalLu& SupernodalLu::operator=(SupernodalLu&&) noexcept = default;
+
+bool SupernodalLu::factorize(const Eigen::SparseMatrix<double>& matrix) {
+  Impl& p = *impl_;
+  p.factorized = false;
+  Eigen::SparseMatrix<double> a = matrix;
+  a.makeCompressed();
+  if (a.rows() != a.cols() || a.rows() == 0) return false;
+  if (!Eigen::Map<const Eigen::VectorXd>(a.valuePtr(), a.nonZeros()).allFinite()) return false;
+  p.lu.analyzePattern(a);
+  p.lu.factorize(a);
+  p.rows = a.rows();
+  p.factorized = p.lu.info() == Eigen::Success;
+  return p.factorized;
+}
+
+Eigen::MatrixXd SupernodalLu::solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const {
+  const Impl& p = *impl_;
+  if (!p.factorized || rhs.rows() != p.rows) {
+    return Eigen::MatrixXd::Constant(rhs.rows(), rhs.cols(), std::numeric_limits<double>::quiet_NaN());
+  }
+  return transposed ? Eigen::MatrixXd(p.lu.transpose().solve(rhs)) : Eigen::MatrixXd(p.lu.solve(rhs));
+}
+
+Eigen::VectorXd SupernodalLu::solve(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, false); }
+
+Eigen::VectorXd SupernodalLu::solve_transposed(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, true); }
 
 }  // namespace wbm::solvers

@@ -1,11 +1,13 @@
 #include "kronecker_factorization.hpp"
 #include "fourier_weighting_factor.hpp"
+#include "core/one_norm_estimate.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
 #include <iterator>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -202,10 +204,7 @@ class KroneckerFactorization::ModeBlock {
     sparse_ = block.rows() > 8 && density <= 0.25;
     if (sparse_) {
       sparse_lu_ = std::make_unique<SparseLu>();
-      const Eigen::SparseMatrix<double> s = block.sparseView();
-      sparse_lu_->analyzePattern(s);
-      sparse_lu_->factorize(s);
-      ok_ = sparse_lu_->info() == Eigen::Success;
+      ok_ = sparse_lu_->factorize(Eigen::SparseMatrix<double>(block.sparseView()));
     } else {
       dense_lu_.compute(block);
       const double rc = dense_lu_.rcond();
@@ -252,7 +251,7 @@ class KroneckerFactorization::ModeBlock {
       }
       return out;
     }
-    if (sparse_) return transposed ? Eigen::MatrixXd(sparse_lu_->transpose().solve(r)) : Eigen::MatrixXd(sparse_lu_->solve(r));
+    if (sparse_) return sparse_lu_->solve_columns(r, transposed);
     return transposed ? Eigen::MatrixXd(dense_lu_.transpose().solve(r)) : Eigen::MatrixXd(dense_lu_.solve(r));
   }
   /// The inverse, M × M (dense).
@@ -271,7 +270,6 @@ class KroneckerFactorization::ModeBlock {
   }
 
  private:
-  using SparseLu = Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>;
   Eigen::Index m_;
   bool sparse_ = false, ok_ = false;
   const Components* component_;
@@ -280,7 +278,7 @@ class KroneckerFactorization::ModeBlock {
   const Eigen::MatrixXd* left_ = nullptr;  // factored: A_K⁻¹ (shared) ...
   std::optional<FourierCore> core_;        // ... and S, the block's inverse being A_K⁻¹ S
   std::optional<spectral::Circulant> circulant_inverse_;
-  std::unique_ptr<SparseLu> sparse_lu_;  // SparseLU::transpose() is not const; held by pointer
+  std::unique_ptr<SparseLu> sparse_lu_;  // the SparseLu policy (KLU) of newton.hpp
   Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu_;
 };
 
@@ -293,6 +291,7 @@ struct KroneckerFactorization::Setup {
   Eigen::VectorXd lambda;
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
   bool circulant = false;                             // all three time operators circulant
+  bool supernodal = false;  // assembled path: the time operators' joint pattern is over ¼ full
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
 };
 
@@ -338,16 +337,30 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
                        spectral::Circulant::is_circulant(ops.mass) && spectral::Circulant::is_circulant(ops.damping) &&
                        spectral::Circulant::is_circulant(ops.stiffness);
   }
+  // Nonzeros of the joint pattern of (A_M, A_C, A_K) against M²: above ¼, G's factors fill in
+  // densely and the supernodal LU is faster (bench_weighted_residual, newton.hpp SupernodalLu).
+  const auto joint = (ops.mass.array() != 0.0 || ops.damping.array() != 0.0 || ops.stiffness.array() != 0.0);
+  setup->supernodal = 4 * joint.count() > ops.mass.size();
   setup_ = std::move(setup);
+}
+
+const char* KroneckerFactorization::assembled_policy() const {
+  if (setup_->modal) return "";
+  return setup_->supernodal ? "supernodal" : "klu";
 }
 
 KroneckerFactorization KroneckerFactorization::unfactorized() const { return KroneckerFactorization(setup_); }
 
 bool KroneckerFactorization::modal() const { return setup_->modal; }
 
-bool KroneckerFactorization::factorize(const MechanicalSystem& system, const TimeOperators& ops, double fr) {
+static_assert(wbm::solvers::LinearSolverPolicy<KroneckerFactorization, KroneckerOperator>);
+
+bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
+  const MechanicalSystem& system = *g.system;
+  const TimeOperators& ops = *g.ops;
+  const double fr = g.frequency_hz;
   const Setup& su = *setup_;
-  frequency_hz_ = fr;
+  operator_ = g;
   norm1_ = -1.0;
   compliance_structure_.reset();
   factorized_ = false;
@@ -377,15 +390,37 @@ bool KroneckerFactorization::factorize(const MechanicalSystem& system, const Tim
   g_ += Eigen::kroneckerProduct(Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()), system.damping).eval();
   g_ += Eigen::kroneckerProduct(Eigen::SparseMatrix<double>(ops.stiffness.sparseView()), system.stiffness).eval();
   g_.makeCompressed();
-  lu_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>>();
-  lu_->analyzePattern(g_);
-  lu_->factorize(g_);
-  factorized_ = lu_->info() == Eigen::Success;
+  lu_.reset();
+  supernodal_lu_.reset();
+  if (su.supernodal) {
+    supernodal_lu_ = std::make_shared<SupernodalLu>();
+    factorized_ = supernodal_lu_->factorize(g_);
+  } else {
+    lu_ = std::make_shared<SparseLu>();
+    factorized_ = lu_->factorize(g_);
+  }
   return factorized_;
 }
 
+Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v) const { return solve(v, false); }
+
+Eigen::VectorXd KroneckerFactorization::solve_transposed(const Eigen::VectorXd& v) const { return solve(v, true); }
+
+double KroneckerFactorization::condition_estimate() const {
+  if (!factorized_) return std::numeric_limits<double>::infinity();
+  const double inverse_norm = inverse_one_norm_estimate(
+      static_cast<Eigen::Index>(operator_.system->mass.rows()) * operator_.ops->mass.rows(),
+      [&](const Eigen::VectorXd& v, bool transposed) { return solve(v, transposed); });
+  return norm1() * inverse_norm;
+}
+
+std::optional<double> KroneckerFactorization::rcond() const { return 1.0 / condition_estimate(); }
+
 Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool transposed) const {
-  if (!setup_->modal) return transposed ? Eigen::VectorXd(lu_->transpose().solve(v)) : Eigen::VectorXd(lu_->solve(v));
+  if (!setup_->modal) {
+    if (supernodal_lu_) return transposed ? supernodal_lu_->solve_transposed(v) : supernodal_lu_->solve(v);
+    return transposed ? lu_->solve_transposed(v) : lu_->solve(v);
+  }
   const auto n = setup_->phi.rows();
   const auto m = v.size() / n;
   const Eigen::MatrixXd modal_rhs = setup_->phi.transpose() * spectral::as_coefficients(v, n);  // n × M
@@ -496,7 +531,8 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
   for (Eigen::Index j = 0; j < nc * m; ++j) {
     for (const auto& [row, w] : rows[static_cast<size_t>(j)]) selection(row, j) = w;
   }
-  const Eigen::MatrixXd z = lu_->solve(selection);
+  const Eigen::MatrixXd z =
+      supernodal_lu_ ? supernodal_lu_->solve_columns(selection, false) : lu_->solve_columns(selection, false);
   for (Eigen::Index i = 0; i < nc * m; ++i) {  // P z
     for (const auto& [row, w] : rows[static_cast<size_t>(i)]) h.row(i) += w * z.row(row);
   }
@@ -530,10 +566,12 @@ Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd
   return out;
 }
 
-double KroneckerFactorization::norm1(const MechanicalSystem& system, const TimeOperators& ops) const {
+double KroneckerFactorization::norm1() const {
   if (norm1_ >= 0.0) return norm1_;
   if (setup_->modal) {
-    const double fr = frequency_hz_;
+    const MechanicalSystem& system = *operator_.system;
+    const TimeOperators& ops = *operator_.ops;
+    const double fr = operator_.frequency_hz;
     norm1_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass).sparseView()),
                               Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()),
                               Eigen::SparseMatrix<double>(ops.stiffness.sparseView())},

@@ -5,6 +5,10 @@
 // the modal path — n independent M × M blocks A + λ_i B — with the block structures it exploits
 // (components of the time operators' sparsity graph; the factored Fourier-weighting form).
 // Solves with G and Gᵀ, the condensed compliance H = P G⁻¹ Pᵀ on contact rows, and ‖G‖₁.
+// A linear-solver policy (newton.hpp, LinearSolverPolicy) for the operator G(f): factorize(G),
+// solve(rhs), rcond(). The assembled path factorizes with the SparseLu policy (KLU) when the time
+// operators' joint pattern holds at most a quarter of its entries (Fourier:Fourier, Galerkin DB6),
+// with SupernodalLu otherwise (dense or wide time operators fill G's factors densely).
 
 #include <memory>
 #include <optional>
@@ -13,15 +17,24 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/newton.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 namespace wbm::solvers::detail {
 
 /// The nonzeros (stacked row, weight) of one row of the contact selection P.
 using StackedTerms = std::vector<std::pair<Eigen::Index, double>>;
+
+/// The operator G(f) = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K described by its factors, not assembled:
+/// the "Jacobian" type of the KroneckerFactorization policy. It refers to `system` and `ops`,
+/// which must outlive the factorization of it.
+struct KroneckerOperator {
+  const MechanicalSystem* system = nullptr;
+  const TimeOperators* ops = nullptr;
+  double frequency_hz = 0.0;
+};
 
 class KroneckerFactorization {
  public:
@@ -36,12 +49,22 @@ class KroneckerFactorization {
   /// The same set-up (shared, not recomputed), not factorized: for another frequency.
   [[nodiscard]] KroneckerFactorization unfactorized() const;
 
-  /// Factorizes G(f). Returns false (and factorized() is false) if G is singular.
-  bool factorize(const MechanicalSystem& system, const TimeOperators& ops, double frequency_hz);
+  /// Factorizes G(f) (modal blocks, or SparseLu / SupernodalLu on the assembled Kronecker sum).
+  /// Returns false (and factorized() is false) if G is singular or not finite.
+  bool factorize(const KroneckerOperator& g);
   [[nodiscard]] bool factorized() const { return factorized_; }
   [[nodiscard]] bool modal() const;
-  /// G⁻¹ v, or G⁻ᵀ v, for a stacked v of length n·M. Requires factorized().
-  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
+  /// The assembled path's policy: "klu" (SparseLu), "supernodal" (SupernodalLu); "" when modal.
+  [[nodiscard]] const char* assembled_policy() const;
+  /// G⁻¹ v for a stacked v of length n·M. Requires factorized().
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v) const;
+  /// G⁻ᵀ v for a stacked v of length n·M. Requires factorized().
+  [[nodiscard]] Eigen::VectorXd solve_transposed(const Eigen::VectorXd& v) const;
+  /// κ₁(G) estimate ‖G‖₁ · est(‖G⁻¹‖₁), the latter by Hager–Higham from a few solves with G and
+  /// Gᵀ (a lower bound, exact in most cases); +inf if not factorized.
+  [[nodiscard]] double condition_estimate() const;
+  /// 1 / condition_estimate(): the policy's reciprocal condition estimate (0 if not factorized).
+  [[nodiscard]] std::optional<double> rcond() const;
   /// H = P G⁻¹ Pᵀ, n_c·M square in the contact ordering x(k·n_c + c): contact c has direction
   /// e_c = Σ w e_dof over directions[c] (DOF, weight), and row j = k·n_c + c of P has the
   /// nonzeros rows[j] (stacked row, weight). Also keeps,
@@ -57,21 +80,23 @@ class KroneckerFactorization {
   /// circulant H_cd by FFT, or A_K⁻¹ (Σ_d S_cd v_d) by one inverse real DFT per column.
   /// Requires fast_compliance_product().
   [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v) const;
-  /// ‖G(f)‖₁: from the assembled G (sparse LU path) or from the Kronecker factors (modal path,
-  /// computed on first use).
-  [[nodiscard]] double norm1(const MechanicalSystem& system, const TimeOperators& ops) const;
+  /// ‖G(f)‖₁ of the last factorized operator: from the assembled G (sparse LU path) or from the
+  /// Kronecker factors (modal path, computed on first use).
+  [[nodiscard]] double norm1() const;
 
  private:
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
   struct Setup;
   class ModeBlock;
   struct ComplianceStructure;
   explicit KroneckerFactorization(std::shared_ptr<const Setup> setup);
   std::shared_ptr<const Setup> setup_;
-  double frequency_hz_ = 0.0;
+  KroneckerOperator operator_;  // the last one given to factorize()
   bool factorized_ = false;
-  Eigen::SparseMatrix<double> g_;  // SparseLU path only
-  // SparseLU::transpose() is not const in Eigen 3.4 (it only stores a pointer): held by pointer.
-  std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>>> lu_;
+  Eigen::SparseMatrix<double> g_;  // assembled path only
+  // Assembled path only, one of the two (shared by copies: the policies are move-only).
+  std::shared_ptr<SparseLu> lu_;
+  std::shared_ptr<SupernodalLu> supernodal_lu_;
   std::vector<std::shared_ptr<const ModeBlock>> blocks_;
   mutable double norm1_ = -1.0;  // < 0: not computed yet
   std::shared_ptr<const ComplianceStructure> compliance_structure_;  // set by compliance(), reset by factorize()

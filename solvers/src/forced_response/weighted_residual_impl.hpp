@@ -240,6 +240,9 @@ struct WeightedResidual::Impl {
   // The same problem at another frequency: every frequency-independent member is copied (time
   // operators, samples, b, modal basis, residual scale); only G is factorized again.
   Impl(const Impl& base, double frequency_hz);
+  // g's factorization refers to this Impl's system and ops (KroneckerOperator): no plain copies.
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
 
   // Y (M·n_c × k, rows j·n_c + c) ↦ (T ⊗ I_{n_c}) Y for an M × M time matrix T.
   [[nodiscard]] Eigen::MatrixXd per_contact(const Eigen::MatrixXd& t, const Eigen::MatrixXd& y) const {
@@ -321,7 +324,7 @@ struct WeightedResidual::Impl {
 
   // G⁻¹ v (or G⁻ᵀ v) for a stacked v of length n·M.
   [[nodiscard]] Eigen::VectorXd solve_stacked(const Eigen::VectorXd& v, bool transposed) const {
-    return g->solve(v, transposed);
+    return transposed ? g->solve_transposed(v) : g->solve(v);
   }
 
   void set_operator_products();

@@ -232,9 +232,9 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
     collocation = col;
   }
 
-  factorized = g->factorize(system, ops, forcing.frequency_hz);
+  factorized = g->factorize({&system, &ops, forcing.frequency_hz});
   if (!factorized) return;
-  a_lin = g->solve(b, false);
+  a_lin = g->solve(b);
   x_lin = gather(a_lin);
   if (nc > 0) {
     set_compliance();
@@ -258,9 +258,9 @@ WeightedResidual::Impl::Impl(const Impl& base, double frequency_hz)
       contact_terms(base.contact_terms), rigid(base.rigid), collocation(base.collocation) {
   forcing.frequency_hz = frequency_hz;
   forcing.validate(n);
-  factorized = g->factorize(system, ops, forcing.frequency_hz);
+  factorized = g->factorize({&system, &ops, forcing.frequency_hz});
   if (!factorized) return;
-  a_lin = g->solve(b, false);
+  a_lin = g->solve(b);
   x_lin = gather(a_lin);
   if (nc > 0) set_compliance();
   force_compliance = base.force_compliance;  // like s_r: residuals at different f comparable

@@ -153,8 +153,11 @@ class DenseLu {
 /// iterations and, when the same object is passed again, across solves (e.g. the steps of a
 /// continuation). A pattern that changes (an active-set change in a semismooth Newton)
 /// triggers a new analysis. symbolic_analyses() counts them. factorize() returns false for a
-/// numerically singular J (KLU's zero pivot) or a non-finite one. Implemented in
-/// solvers/src/core/sparse_lu.cpp, so that KLU stays a private dependency of wbm::solvers.
+/// numerically singular J (KLU's zero pivot) or a non-finite one. The same factors solve with
+/// Jᵀ (klu_tsolve) and several right-hand sides at once. It is also the factorization of the
+/// assembled weighted-residual operator G (LinearSolverPath::SparseLU; Eigen's SparseLU before
+/// issue #41). Implemented in solvers/src/core/sparse_lu.cpp, so that KLU stays a private
+/// dependency of wbm::solvers.
 class SparseLu {
  public:
   SparseLu();
@@ -162,9 +165,45 @@ class SparseLu {
   SparseLu(SparseLu&&) noexcept;
   SparseLu& operator=(SparseLu&&) noexcept;
   bool factorize(const Eigen::SparseMatrix<double>& jacobian);
+  /// J⁻¹ rhs; NaN everywhere if the last factorize() failed.
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  /// J⁻ᵀ rhs from the same factors; NaN everywhere if the last factorize() failed.
+  [[nodiscard]] Eigen::VectorXd solve_transposed(const Eigen::VectorXd& rhs) const;
+  /// J⁻¹ B (or J⁻ᵀ B) for the columns of B (rows = J's size) in one KLU call.
+  [[nodiscard]] Eigen::MatrixXd solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const;
   [[nodiscard]] static std::optional<double> rcond() { return std::nullopt; }
   [[nodiscard]] int symbolic_analyses() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Linear-solver policy for sparse matrices whose factors fill in densely: Eigen's SparseLU
+/// (COLAMD column ordering, supernodal panels factorized with dense kernels, after SuperLU
+/// [Demmel et al. 1999, SIAM J. Matrix Anal. Appl. 20(3) 720–755]). Where the L and U factors
+/// are nearly dense blocks its panels beat KLU's column-by-column left-looking LU: on the
+/// assembled weighted-residual operator of Case 1 (25 DOFs) with dense time operators (Haar,
+/// DB6 or B-spline trial against Fourier or B-spline weighting) at M = 256 it factorizes and
+/// solves H in 1.2–1.6 s where KLU takes 2.2–2.8 s, while KLU wins where the time operators
+/// are sparse (Fourier:Fourier 18.7 against 40.4 ms, DB6:DB6 0.62 against 1.36 s;
+/// bench_weighted_residual, BM_WeightedResidual_AssemblySparseLu). The same interface as
+/// SparseLu, without reuse of the symbolic analysis. factorize() returns false for a singular
+/// or non-finite matrix. Implemented in solvers/src/core/sparse_lu.cpp.
+class SupernodalLu {
+ public:
+  SupernodalLu();
+  ~SupernodalLu();
+  SupernodalLu(SupernodalLu&&) noexcept;
+  SupernodalLu& operator=(SupernodalLu&&) noexcept;
+  bool factorize(const Eigen::SparseMatrix<double>& matrix);
+  /// A⁻¹ rhs; NaN everywhere if the last factorize() failed.
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  /// A⁻ᵀ rhs from the same factors; NaN everywhere if the last factorize() failed.
+  [[nodiscard]] Eigen::VectorXd solve_transposed(const Eigen::VectorXd& rhs) const;
+  /// A⁻¹ B (or A⁻ᵀ B) for the columns of B (rows = A's size).
+  [[nodiscard]] Eigen::MatrixXd solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const;
+  [[nodiscard]] static std::optional<double> rcond() { return std::nullopt; }
 
  private:
   struct Impl;
@@ -188,6 +227,22 @@ class WoodburyLu {
   LowRankJacobian j_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
+
+/// What a linear-solver policy provides for Jacobians (or operators) of type J: factorize(j) →
+/// false if it cannot be factorized, solve(rhs) → J⁻¹ rhs, rcond() → a reciprocal condition
+/// estimate when the policy has one. DenseLu, SparseLu, SupernodalLu and WoodburyLu are policies for their
+/// Jacobian types; the weighted-residual operator's factorization is one for G(f)
+/// (solvers/src/forced_response/kronecker_factorization.hpp).
+template <class P, class J>
+concept LinearSolverPolicy = requires(P& p, const P& cp, const J& j, const Eigen::VectorXd& v) {
+  { p.factorize(j) } -> std::convertible_to<bool>;
+  { cp.solve(v) } -> std::convertible_to<Eigen::VectorXd>;
+  { cp.rcond() } -> std::convertible_to<std::optional<double>>;
+};
+static_assert(LinearSolverPolicy<DenseLu, Eigen::MatrixXd>);
+static_assert(LinearSolverPolicy<SparseLu, Eigen::SparseMatrix<double>>);
+static_assert(LinearSolverPolicy<SupernodalLu, Eigen::SparseMatrix<double>>);
+static_assert(LinearSolverPolicy<WoodburyLu, LowRankJacobian>);
 
 namespace detail {
 template <class S>
@@ -235,7 +290,7 @@ using DefaultLinearSolver =
 /// first step length that reduces ‖R‖₂ by the factor (1 − 10⁻⁴ t) (Armijo), or t = 1 without
 /// line search; with levenberg_marquardt, a failed line search switches to LM steps.
 /// `solver` is the linear-solver policy (DenseLu, SparseLu, WoodburyLu or any type with
-/// factorize(J) → bool, solve(rhs) and rcond() → optional<double>); pass the same object to
+/// factorize(J) → bool, solve(rhs) and rcond() → optional<double>: LinearSolverPolicy); pass the same object to
 /// successive calls to keep what it caches (SparseLu's symbolic analysis).
 /// Stops with Converged (‖R‖ ≤ tolerance, verified on the returned x), MaxIterations,
 /// Stagnated (no acceptable step), SingularJacobian (factorization failed, e.g. DenseLu's factors
