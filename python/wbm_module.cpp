@@ -24,6 +24,7 @@
 #include <wbm/contact/signorini.hpp>
 #include <wbm/fem/rod.hpp>
 #include <wbm/scene/analysis.hpp>
+#include <wbm/scene/json.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/model_checks.hpp>
@@ -262,19 +263,11 @@ order the family does not have.)");
         options.contact_quadrature = quadrature(contact_quadrature);
         const auto s = solvers::solve_weighted_residual(system, forcing(dof, amplitude, frequency_hz, loads),
                                                         points(contacts), trial, weighting, options);
-        py::dict out;
-        out["converged"] = s.converged();
-        out["status"] = std::string(solvers::to_string(s.report.status));
-        out["message"] = s.report.message;
-        out["iterations"] = s.report.iterations;
-        out["relative_residual"] = s.relative_residual;
-        out["residual_tolerance"] = s.residual_tolerance;
+        // The solution's one JSON form (wbm/scene/json.hpp, as result.json's diagnostics.solution),
+        // plus its arrays.
+        py::dict out = to_python(nlohmann::json(s));
         out["coefficients"] = py::cast(s.coefficients);
-        out["max_penetration"] = s.max_penetration;
-        out["max_contact_force"] = s.max_contact_force;
         if (s.contact_force_samples.size() > 0) out["contact_force_samples"] = py::cast(s.contact_force_samples);
-        if (!harmonics.empty()) out["dropped_harmonics_residual"] = s.dropped_harmonics_residual;
-        out["wall_time_s"] = s.wall_time_s;
         return out;
       },
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
@@ -287,14 +280,17 @@ loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
 RigidStop or all penalty). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
 (empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
-dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖.
+dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖ (None without a
+selection).
 contact_quadrature: "midpoint" (the paper's f_c(u(τ_q))) or "cell-average" (the law integrated
 over each cell: C¹ in the unknowns, so a law with a corner such as LinearPenalty gives a smooth
-residual; needs a trial with a slope). Returns a dict:
-converged (verified residual), status, message, iterations, relative_residual, residual_tolerance,
-coefficients (n × M array: row = DOF, column = trial function), max_penetration [m],
-max_contact_force [N], contact_force_samples (n_c × M, rigid stops only) and wall_time_s.
-Non-convergence is returned, not raised; bad input raises ValueError.)");
+residual; needs a trial with a slope). Returns a dict with the keys of result.json's
+diagnostics.solution (docs/scenes.md; one serializer, wbm/scene/json.hpp): converged (verified
+residual), status, message, newton (iterations, residual_norms, tolerance, ...), path,
+relative_residual, residual_tolerance, max_penetration_m, max_contact_force_N, condition_number,
+dropped_harmonics_residual, wall_time_s, ... (None for a value that is not finite); and the
+arrays coefficients (n × M: row = DOF, column = trial function) and contact_force_samples
+(n_c × M, rigid stops only). Non-convergence is returned, not raised; bad input raises ValueError.)");
   m.def(
       "trace_response",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,

@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <wbm/scene/json.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 #include "combinations.hpp"
@@ -170,14 +171,10 @@ int main(int argc, char** argv) {
       }
       cell += ", κ " + reproduce::format("%.0e", sol.condition_number) + ", " + reproduce::format("%.0f", ms) + " ms |";
       md << cell;
-      auto json_value = [](double x) { return std::isnan(x) ? nlohmann::json(nullptr) : nlohmann::json(x); };
+      // The solve as its serializer writes it (wbm/scene/json.hpp), and this study's labels.
       reports.push_back({{"variation", label(v, dim)}, {"combination", combos[j].label()}, {"dimension", dim},
                          {"status", std::string(solvers::to_string(sol.report.status))},
-                         {"diagnosis", diagnosis}, {"path", std::string(solvers::to_string(sol.path))},
-                         {"rounding_floor", json_value(floor(k))}, {"sigma_reached", json_value(sigma(k))},
-                         {"message", sol.report.message},
-                         {"iterations", sol.report.iterations}, {"relative_residual", json_value(residual(k))},
-                         {"condition_number", json_value(cond(k))}, {"linear_solver", sol.linear_solver},
+                         {"diagnosis", diagnosis}, {"solution", sol},
                          {"coefficients_finite", sol.coefficients.allFinite()}});
       if (!sol.coefficients.allFinite()) run.fail(v.what + ": non-finite coefficients");
     }

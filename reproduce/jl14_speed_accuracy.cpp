@@ -10,6 +10,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <wbm/scene/json.hpp>
+
 #include "combinations.hpp"
 
 namespace {
@@ -72,9 +74,10 @@ int main(int argc, char** argv) {
                               : NAN;  // no error for a run that did not reach a periodic state
         points.push_back({"BDF, rtol = " + reproduce::format("%.0e", tol), 6, 0, tol, bdf.report.status, err,
                           bdf.report.wall_time_s, static_cast<int>(bdf.report.steps)});
-        solves.push_back({{"method", points.back().method}, {"status", std::string(solvers::to_string(bdf.report.status))},
-                          {"periods", bdf.report.periods}, {"steps", bdf.report.steps},
-                          {"wall_time_s", bdf.report.wall_time_s}, {"tip_error", err}});
+        nlohmann::json solve = bdf.report;  // the integrator's report (wbm/scene/json.hpp)
+        solve["method"] = points.back().method;
+        solve["tip_error"] = scene::finite_or_null(err);
+        solves.push_back(solve);
       }
       for (auto& p : points) {
         p.pareto = p.converged() && std::none_of(points.begin(), points.end(), [&](const Point& o) {

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include <wbm/contact/signorini.hpp>
+#include <wbm/scene/json.hpp>
 
 namespace wbm::reproduce {
 
@@ -106,46 +107,32 @@ CombinationResult solve_combination(const Reference& ref, const Combination& c, 
   return out;
 }
 
-namespace {
-// JSON null for a value that does not exist (NaN, inf): never 0 or −1.
-nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-}  // namespace
-
 nlohmann::json to_json(const CombinationResult& r) {
-  const auto& s = r.solution;
+  using scene::finite_or_null;
+  // The solve as the solver's own serializer writes it (wbm/scene/json.hpp), and what this
+  // study adds: the combination, the figure's formulation, the median time and the errors
+  // against the reference (null when the solve did not converge: never 0 or −1).
   return {{"combination", r.combination.label()},
           {"dimension", r.dimension},
           {"formulation", std::string(solvers::to_string(kFigureFormulation))},
-          {"status", std::string(solvers::to_string(s.report.status))},
-          {"message", s.report.message},
-          {"path", std::string(solvers::to_string(s.path))},
-          {"newton_iterations", s.report.iterations},
-          {"relative_residual", finite_or_null(s.relative_residual)},
-          {"condition_number", finite_or_null(s.condition_number)},
-          {"linear_solver", s.linear_solver},
-          {"operators", s.operator_rule},
+          {"status", std::string(solvers::to_string(r.solution.report.status))},
+          {"solution", r.solution},
           {"median_solve_time_s", r.median_time_s},
           {"tip_error", r.converged() ? finite_or_null(r.tip_error) : nlohmann::json(nullptr)},
-          {"energy_norm", r.converged() ? finite_or_null(r.energy_norm) : nlohmann::json(nullptr)},
-          {"max_penetration_m", r.converged() ? finite_or_null(s.max_penetration) : nlohmann::json(nullptr)}};
+          {"energy_norm", r.converged() ? finite_or_null(r.energy_norm) : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json to_json(const Reference& r) {
   const auto& s = r.scene;
-  const auto& rep = r.response.report;
+  nlohmann::json reference = r.response.report;  // the integrator's report (wbm/scene/json.hpp)
+  reference["method"] = r.method;
+  reference["samples"] = r.response.tau.size();
   return {{"scene", {{"name", s.name}, {"file", s.path}, {"title", s.title}, {"E_Pa", s.structure->rod.young_modulus},
                      {"rho_kg_m3", s.structure->rod.density}, {"S_m2", s.structure->rod.area}, {"L_m", s.structure->rod.length},
                      {"elements", s.structure->rod.elements}, {"beta_s", s.damping.beta}, {"F_N", s.forcing->amplitude},
                      {"frequency_hz", s.forcing->frequency_hz}, {"contact", r.contacts.front().law->describe()},
                      {"gap_m", s.contacts.front().gap}}},
-          {"reference", {{"method", r.method},
-                         {"status", std::string(solvers::to_string(rep.status))},
-                         {"periods", rep.periods},
-                         {"steps", rep.steps},
-                         {"periodicity", rep.periodicity.empty() ? nlohmann::json(nullptr)
-                                                                 : finite_or_null(rep.periodicity.back())},
-                         {"wall_time_s", rep.wall_time_s},
-                         {"samples", r.response.tau.size()}}}};
+          {"reference", reference}};
 }
 
 void write_sweep(Run& run, const std::string& file, const std::vector<CombinationResult>& results) {

@@ -1,5 +1,5 @@
 // Private to wbm_scene: the pieces of run_analysis (analysis.hpp), one file each:
-//   analysis_tables.cpp        JSON of the solver reports, the period and harmonic tables
+//   analysis_tables.cpp        the period and harmonic tables (JSON of the reports: json.cpp)
 //   analysis_forced.cpp        [analysis] type = solve, sweep, timestep, basis-plot
 //   analysis_continuation.cpp  type = continuation (the frequency-response curve)
 //   analysis_modes.cpp         type = nnm (nonlinear normal modes)
@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <wbm/scene/analysis.hpp>
+#include <wbm/scene/json.hpp>
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
@@ -21,13 +22,8 @@ namespace wbm::scene::detail {
 // Wall time since `start` [s].
 double seconds_since(std::chrono::steady_clock::time_point start);
 
-// JSON has no NaN/inf: a non-finite diagnostic is written as null.
-nlohmann::json finite_or_null(double v);
-
-// The solver reports as written to result.json (non-finite numbers as null).
-nlohmann::json to_json(const solvers::NewtonReport& r);
-nlohmann::json to_json(const solvers::HomotopyReport& h);
-nlohmann::json to_json(const solvers::WeightedResidualSolution& s);
+// The solver reports go to result.json through their serializers (wbm/scene/json.hpp), e.g.
+// `nlohmann::json(solution)`; finite_or_null (same header) writes a non-finite number as null.
 
 // One number in printf notation (`spec`, e.g. "%.6g").
 std::string format(const char* spec, double v);

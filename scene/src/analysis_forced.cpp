@@ -24,7 +24,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
   const auto solution =
       solvers::solve_weighted_residual(system, forcing, contacts, trial, weighting, scene.weighted_residual_options());
   out.status = solution.report.status;
-  out.diagnostics["solution"] = to_json(solution);
+  out.diagnostics["solution"] = solution;
   out.summary = trial.name() + ":" + weighting.name() + ", M = " + std::to_string(trial.dimension()) + ", " +
                 std::string(solvers::to_string(scene.basis.formulation)) + ", f = " +
                 format("%g", forcing.frequency_hz) + " Hz: " + solution.report.message + ", relative residual " +
@@ -106,7 +106,7 @@ void solve_sweep(const Scene& scene, const Progress& progress, AnalysisResult& o
       solution = wr.solve();  // from the linear response: contact homotopy, then load stepping
       restarted = true;
     }
-    nlohmann::json point = to_json(solution);
+    nlohmann::json point = solution;
     point["restarted_from_linear"] = restarted;
     points.push_back(point);
     if (progress) {
@@ -225,15 +225,8 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
   const std::string method = rigid ? "Moreau–Jean (theta = 0.5, restitution " + format("%g", mj.restitution) + ", " +
                                          std::to_string(mj.steps_per_period) + " steps per period)"
                                    : "GSL msbdf (variable-order BDF)";
-  out.diagnostics["timestep"] = {{"method", method},
-                                 {"status", std::string(solvers::to_string(rep.status))},
-                                 {"converged", rep.converged()},
-                                 {"periods", rep.periods},
-                                 {"steps", rep.steps},
-                                 {"periodicity", rep.periodicity.empty() ? nlohmann::json(nullptr)
-                                                                         : finite_or_null(rep.periodicity.back())},
-                                 {"message", rep.message},
-                                 {"wall_time_s", rep.wall_time_s}};
+  out.diagnostics["timestep"] = rep;
+  out.diagnostics["timestep"]["method"] = method;
   out.summary = (rigid ? "Moreau–Jean at " : "BDF at ") + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
                 std::to_string(rep.steps) + " steps, " + format("%.3f", rep.wall_time_s) + " s";
   if (!out.converged()) return;

@@ -15,30 +15,6 @@
 
 namespace wbm::scene::detail {
 
-namespace {
-
-nlohmann::json to_json(const solvers::ModeLevel& l) {
-  return {{"energy", l.energy},
-          {"converged", l.converged()},
-          {"status", std::string(solvers::to_string(l.status))},
-          {"residual_norm", finite_or_null(l.residual_norm)},
-          {"tolerance", l.tolerance},
-          {"frequency_hz", finite_or_null(l.frequency_hz)},
-          {"rayleigh_frequency_hz", finite_or_null(l.rayleigh_frequency_hz)},
-          {"equality_multiplier", finite_or_null(l.equality_multiplier)},
-          {"max_penetration_gaps", finite_or_null(l.max_penetration)},
-          {"complementarity_gaps", finite_or_null(l.complementarity)},
-          {"normalization_error", finite_or_null(l.normalization_error)},
-          {"powell_iterations", l.powell_iterations},
-          {"newton_iterations", l.newton_iterations},
-          {"inequality_measure", finite_or_null(l.inequality_measure)},
-          {"equality_measure", finite_or_null(l.equality_measure)},
-          {"message", l.message},
-          {"wall_time_s", l.wall_time_s}};
-}
-
-}  // namespace
-
 void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const ModeProblem problem = mode_problem(scene);
   const Analysis& a = scene.analysis;
@@ -131,7 +107,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
                           {"message", it == nullptr ? "not reached by the backbone" : it->message}});
       continue;
     }
-    included.push_back(to_json(*it));
+    included.push_back(nlohmann::json(*it));
     const Eigen::MatrixXd u = modes.displacement(*it, p), v = modes.velocity(*it, p);
     const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
     Table t{"mode_E" + format("%g", energy) + ".csv", {"tau [-]", "time [s]"}, {tau, tau / it->frequency_hz}};

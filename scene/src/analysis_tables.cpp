@@ -19,46 +19,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// JSON has no NaN/inf: a non-finite diagnostic is written as null.
-nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
-nlohmann::json to_json(const solvers::NewtonReport& r) {
-  nlohmann::json norms = nlohmann::json::array();
-  for (double v : r.residual_norms) norms.push_back(finite_or_null(v));
-  return {{"status", std::string(solvers::to_string(r.status))},
-          {"converged", r.converged()},
-          {"iterations", r.iterations},
-          {"residual_norms", norms},
-          {"message", r.message}};
-}
-
-nlohmann::json to_json(const solvers::HomotopyReport& h) {
-  if (!h.tried()) return nullptr;
-  return {{"reached", h.reached()},          {"sigma_reached", h.sigma_reached}, {"lambda_start", h.lambda_start},
-          {"points", h.points},            {"folds", h.folds},                 {"corrector_iterations", h.corrector_iterations},
-          {"stop", std::string(solvers::to_string(*h.stop)) + ": " + h.message}};
-}
-
-nlohmann::json to_json(const solvers::WeightedResidualSolution& s) {
-  return {{"frequency_hz", s.frequency_hz},
-          {"newton", to_json(s.report)},
-          {"path", std::string(solvers::to_string(s.path))},
-          {"contact_homotopy", to_json(s.homotopy)},
-          {"rounding_floor", finite_or_null(s.rounding_floor)},
-          {"relative_residual", finite_or_null(s.relative_residual)},
-          {"residual_tolerance", s.residual_tolerance},
-          {"max_penetration_m", finite_or_null(s.max_penetration)},
-          {"max_contact_force_N", finite_or_null(s.max_contact_force)},
-          {"collocation_penetration_m", finite_or_null(s.collocation_penetration)},
-          {"complementarity_m", finite_or_null(s.complementarity)},
-          {"contact_unknowns", s.contact_unknowns},
-          {"condition_number", finite_or_null(s.condition_number)},
-          {"dropped_harmonics_residual", finite_or_null(s.dropped_harmonics_residual)},
-          {"linear_solver", s.linear_solver},
-          {"operators", s.operator_rule},
-          {"wall_time_s", s.wall_time_s}};
-}
-
 std::string format(const char* spec, double v) {
   char b[64];
   std::snprintf(b, sizeof b, spec, v);

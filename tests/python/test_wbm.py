@@ -42,6 +42,10 @@ def test_linear_oscillator_matches_the_closed_form_amplitude():
     basis = wbm.TimeBasis("fourier", 8)
     s = wbm.solve(system, 0, force, f, [], basis, basis)
     assert s["converged"] and s["status"] == "converged"
+    # The keys of result.json's diagnostics.solution (one serializer), plus the arrays.
+    assert {"message", "newton", "path", "relative_residual", "max_penetration_m", "condition_number"} <= s.keys()
+    assert s["newton"]["status"] == "converged" and s["newton"]["tolerance"] > 0.0
+    assert s["dropped_harmonics_residual"] is None  # no harmonic selection: not finite, written as null
     w = 2 * math.pi * f
     exact = force / abs(complex(k - m * w * w, w * c))
     a = s["coefficients"]
@@ -253,7 +257,7 @@ def test_harmonic_selection_keeps_only_the_listed_harmonics():
     stop = wbm.LinearPenalty(1e6, 1e-4)
     s = wbm.solve(system, 0, force, 32.0, [(0, stop)], basis, basis, harmonics=[1, 3])
     assert s["converged"], s["message"]
-    assert s["max_contact_force"] > 0.0
+    assert s["max_contact_force_N"] > 0.0
     np.testing.assert_array_equal(s["coefficients"][0, [0, 3, 4, 7]], 0.0)
     assert s["dropped_harmonics_residual"] > 1e-3
     with pytest.raises(ValueError, match=r"harmonic 5 is outside \[0, 4\]"):

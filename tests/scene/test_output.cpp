@@ -1,5 +1,6 @@
 // Result files (wbm::scene output): a missing value is an empty cell beside a status; a failed
-// write throws; non-finite columns and runs that did not commit write nothing.
+// write throws; non-finite columns and runs that did not commit write nothing. The solver
+// reports' one JSON form (wbm/scene/json.hpp): null for what is not finite or was not run.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 #include <wbm/scene/analysis.hpp>
+#include <wbm/scene/json.hpp>
 #include <wbm/scene/output.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/post_processing.hpp>
@@ -94,4 +96,56 @@ TEST(Output, NonFiniteColumnsAndUncommittedRunsWriteNothing) {
   EXPECT_TRUE(std::filesystem::exists(dir / "a.csv"));
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 2);  // no staging folder left
   std::filesystem::remove_all(dir);
+}
+
+// Each report's serializer on values set by hand: the status word of the protocol, null for a
+// NaN, an inf, a homotopy that was not tried and a periodicity before two periods, and no field
+// lost on the way (the verified solution's own status beside its Newton report's).
+TEST(Output, ReportsSerializeWithTheirStatusAndNullForWhatIsNotFinite) {
+  namespace solvers = wbm::solvers;
+  solvers::NewtonReport newton;
+  newton.status = solvers::SolveStatus::Stagnated;
+  newton.iterations = 3;
+  newton.residual_norms = {1.0, std::numeric_limits<double>::infinity(), 0.25};
+  newton.tolerance = 1e-10;
+  newton.message = "no acceptable step";
+  const nlohmann::json n = newton;
+  EXPECT_EQ(n["status"], "stagnated");
+  EXPECT_FALSE(n["converged"].get<bool>());
+  EXPECT_EQ(n["iterations"], 3);
+  EXPECT_EQ(n["residual_norms"], nlohmann::json::parse("[1.0, null, 0.25]"));
+  EXPECT_EQ(n["tolerance"], 1e-10);
+  EXPECT_TRUE(n["jacobian_rcond"].is_null());  // sparse LU: no estimate
+  EXPECT_EQ(n["message"], "no acceptable step");
+  EXPECT_TRUE(nlohmann::json(solvers::HomotopyReport{}).is_null());  // not tried
+
+  solvers::WeightedResidualSolution s;
+  s.report.status = solvers::SolveStatus::ResidualNotVerified;
+  s.relative_residual = 3e-8;
+  s.max_penetration = std::nan("");
+  const nlohmann::json j = s;
+  EXPECT_EQ(j["status"], "residual-not-verified");
+  EXPECT_EQ(j["newton"]["status"], "residual-not-verified");
+  EXPECT_FALSE(j["converged"].get<bool>());
+  EXPECT_EQ(j["relative_residual"], 3e-8);
+  EXPECT_TRUE(j["max_penetration_m"].is_null());
+  EXPECT_FALSE(j.contains("coefficients"));  // arrays go to the tables, not the JSON
+
+  solvers::TimeIntegrationReport t;
+  t.status = solvers::SolveStatus::IntegratorFailed;
+  t.periods = 1;
+  const nlohmann::json tj = t;
+  EXPECT_EQ(tj["status"], "integrator-failed");
+  EXPECT_TRUE(tj["periodicity"].is_null());  // no δ before two periods
+  t.periodicity = {0.5, 2e-7};
+  EXPECT_EQ(nlohmann::json(t)["periodicity"], 2e-7);  // the last one
+
+  solvers::ModeLevel level;
+  level.status = solvers::SolveStatus::Converged;
+  level.energy = 1.8;
+  level.frequency_hz = std::numeric_limits<double>::quiet_NaN();
+  const nlohmann::json lj = level;
+  EXPECT_TRUE(lj["converged"].get<bool>());
+  EXPECT_EQ(lj["energy"], 1.8);
+  EXPECT_TRUE(lj["frequency_hz"].is_null());
 }

@@ -256,7 +256,10 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
   s.coefficients = spectral::as_coefficients(a, p.n);
   const double bnorm = p.b.norm();
   s.relative_residual = residual(a).norm() / (bnorm > 0.0 ? bnorm : 1.0);
-  if (p.nc == 0) s.report.residual_norms = {s.relative_residual};  // the one solve's, relative to ‖b‖
+  if (p.nc == 0) {  // the one solve's residual, relative to ‖b‖, and the tolerance it is held to
+    s.report.residual_norms = {s.relative_residual};
+    s.report.tolerance = p.options.residual_tolerance;
+  }
   if (p.nc > 0) {
     const Eigen::MatrixXd u = p.contact_samples(x);
     s.max_penetration = -std::numeric_limits<double>::infinity();
