@@ -27,10 +27,7 @@ const std::vector<Combination>& table2_combinations() {
 }
 
 std::string format(const char* spec, double value) {
-  if (std::isnan(value)) return "—";  // a missing value, never printed as a number
-  char b[64];
-  std::snprintf(b, sizeof b, spec, value);
-  return b;
+  return std::isnan(value) ? "—" : solvers::format(spec, value);  // a missing value, never printed as a number
 }
 
 Reference solve_reference(Run& run, const std::string& scene_name, double relative_tolerance) {

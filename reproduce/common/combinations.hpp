@@ -129,7 +129,8 @@ struct Claim {
 [[nodiscard]] double rms_relative_error_on(const Eigen::VectorXd& v, const Eigen::VectorXd& reference,
                                            const std::vector<bool>& mask);
 
-/// Printf-style formatting of one number, for report tables; NaN (a missing value) prints "—".
+/// One number for report tables through the solvers' one formatter (solvers::format); NaN (a
+/// missing value) prints "—".
 [[nodiscard]] std::string format(const char* spec, double value);
 
 }  // namespace wbm::reproduce

@@ -25,8 +25,8 @@ double seconds_since(std::chrono::steady_clock::time_point start);
 // The solver reports go to result.json through their serializers (wbm/scene/json.hpp), e.g.
 // `nlohmann::json(solution)`; finite_or_null (same header) writes a non-finite number as null.
 
-// One number in printf notation (`spec`, e.g. "%.6g").
-std::string format(const char* spec, double v);
+// One number in printf notation (`spec`, e.g. "%.6g"): the solvers' one formatter.
+using solvers::format;
 
 // How to get past a stop that is not a computed outcome, as "; way out: …" naming the scene key
 // to change and a value to try (issue #35, item 4), for type = "continuation" and "nnm": the

@@ -19,12 +19,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string format(const char* spec, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, spec, v);
-  return b;
-}
-
 std::string way_out(const Scene& scene, solvers::StopReason stop) {
   using solvers::StopReason;
   const Analysis& a = scene.analysis;

@@ -16,6 +16,8 @@
 
 #include <toml++/toml.h>
 
+#include <wbm/solvers/status.hpp>
+
 namespace wbm::scene::detail {
 
 struct Range {
@@ -33,12 +35,8 @@ inline Range finite(const std::string& unit) {
   return {"finite" + (unit.empty() ? "" : " [" + unit + "]"), [](double v) { return std::isfinite(v); }};
 }
 
-// A number as the messages print it ("%g"-like, shortest of <<).
-inline std::string number_text(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+// A number as the messages print it: "%g" (6 significant digits, what << printed before).
+inline std::string number_text(double v) { return solvers::format("%g", v); }
 
 class Reader {
  public:

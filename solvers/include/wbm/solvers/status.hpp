@@ -93,12 +93,19 @@ enum class StopReason {
                                                                              : SolveStatus::PathEnded;
 }
 
-/// A number for a message: 4 significant digits, scientific notation when small or large
-/// ("3.2e-11", "1298", "0.0125"), "nan"/"inf" spelled out. Never "0.000000" for 3e-11.
-[[nodiscard]] inline std::string format_number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+/// One number through a printf conversion for one double, `spec` such as "%.4g", "%.3f" or
+/// "%.1e" (it must convert exactly one double; the result is cut at 63 characters). The one
+/// number formatter of the project: format_number, the scene's messages and tables and the
+/// reproductions' tables go through it. (std::format needs GCC 13's libstdc++; Debian 12 has
+/// GCC 12, and fmt's libfmt-dev is not on the CI image, so this is printf.)
+[[nodiscard]] inline std::string format(const char* spec, double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, spec, v);
   return buffer;
 }
+
+/// A number for a message: 4 significant digits, scientific notation when small or large
+/// ("3.2e-11", "1298", "0.0125"), "nan"/"inf" spelled out. Never "0.000000" for 3e-11.
+[[nodiscard]] inline std::string format_number(double v) { return format("%.4g", v); }
 
 }  // namespace wbm::solvers
