@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include <Eigen/KLUSupport>
@@ -26,6 +27,16 @@ class Klu : public Eigen::KLU<Eigen::SparseMatrix<double>> {
     return ok != 0;
   }
 };
+
+// A compressed copy of m if it is square, not empty and finite (what both policies factorize);
+// nullopt otherwise, which factorize() reports as false.
+std::optional<Eigen::SparseMatrix<double>> factorizable(const Eigen::SparseMatrix<double>& m) {
+  Eigen::SparseMatrix<double> a = m;
+  a.makeCompressed();
+  if (a.rows() != a.cols() || a.rows() == 0) return std::nullopt;
+  if (!Eigen::Map<const Eigen::VectorXd>(a.valuePtr(), a.nonZeros()).allFinite()) return std::nullopt;
+  return a;
+}
 
 }  // namespace
 
@@ -51,10 +62,9 @@ SparseLu& SparseLu::operator=(SparseLu&&) noexcept = default;
 bool SparseLu::factorize(const Eigen::SparseMatrix<double>& jacobian) {
   Impl& p = *impl_;
   p.factorized = false;
-  Eigen::SparseMatrix<double> j = jacobian;
-  j.makeCompressed();
-  if (j.rows() != j.cols() || j.rows() == 0) return false;
-  if (!Eigen::Map<const Eigen::VectorXd>(j.valuePtr(), j.nonZeros()).allFinite()) return false;
+  const auto prepared = factorizable(jacobian);
+  if (!prepared) return false;
+  const Eigen::SparseMatrix<double>& j = *prepared;
   if (!p.same_pattern(j)) {
     p.lu.analyzePattern(j);
     if (p.lu.info() != Eigen::Success) return false;
@@ -97,10 +107,9 @@ SupernodalLu& SupernodalLu::operator=(SupernodalLu&&) noexcept = default;
 bool SupernodalLu::factorize(const Eigen::SparseMatrix<double>& matrix) {
   Impl& p = *impl_;
   p.factorized = false;
-  Eigen::SparseMatrix<double> a = matrix;
-  a.makeCompressed();
-  if (a.rows() != a.cols() || a.rows() == 0) return false;
-  if (!Eigen::Map<const Eigen::VectorXd>(a.valuePtr(), a.nonZeros()).allFinite()) return false;
+  const auto prepared = factorizable(matrix);
+  if (!prepared) return false;
+  const Eigen::SparseMatrix<double>& a = *prepared;
   p.lu.analyzePattern(a);
   p.lu.factorize(a);
   p.rows = a.rows();
