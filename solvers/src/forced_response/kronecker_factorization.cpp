@@ -344,11 +344,6 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
   setup_ = std::move(setup);
 }
 
-const char* KroneckerFactorization::assembled_policy() const {
-  if (setup_->modal) return "";
-  return setup_->supernodal ? "supernodal" : "klu";
-}
-
 KroneckerFactorization KroneckerFactorization::unfactorized() const { return KroneckerFactorization(setup_); }
 
 bool KroneckerFactorization::modal() const { return setup_->modal; }

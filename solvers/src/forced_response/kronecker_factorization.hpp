@@ -54,8 +54,6 @@ class KroneckerFactorization {
   bool factorize(const KroneckerOperator& g);
   [[nodiscard]] bool factorized() const { return factorized_; }
   [[nodiscard]] bool modal() const;
-  /// The assembled path's policy: "klu" (SparseLu), "supernodal" (SupernodalLu); "" when modal.
-  [[nodiscard]] const char* assembled_policy() const;
   /// G⁻¹ v for a stacked v of length n·M. Requires factorized().
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v) const;
   /// G⁻ᵀ v for a stacked v of length n·M. Requires factorized().
