@@ -3,7 +3,8 @@
 //                                      solve; CSV (and MAT) files and result.json in DIR, then
 //                                      PNG pictures of them (wbm_plot.py, matplotlib)
 //   wbm plot DIR [--quiet]             draw the PNG pictures of a result folder again
-//   wbm check SCENE [--json]           validate only; print the resolved scene
+//   wbm check SCENE [--json]           validate only (runs no tool: a deck is read, not reduced);
+//                                      print the resolved scene
 //   wbm bases [-M M]                   bases and the formulations each admits
 //   wbm --version
 // Exit status: 0 converged (or valid, for check); 1 not converged, a failed write, or a tool that
@@ -207,8 +208,23 @@ int run(const std::string& scene_path, std::string out, bool out_given, bool qui
     return kBadInput;
   }
   int status = kBadInput;
-  const auto scene = load(scene_path, status);
+  auto scene = load(scene_path, status);
   if (!scene) return status;
+  if (scene->structure && scene->structure->awaiting_reduction()) {  // CalculiX and Craig–Bampton, before -o exists
+    if (!quiet) std::cerr << "wbm: reducing " << scene->structure->deck->file << " (CalculiX, Craig-Bampton)\n";
+    const size_t known = scene->warnings.size();
+    try {
+      wbm::scene::reduce_structure(*scene);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "wbm: " << e.what() << "\nwbm: " << scene_path << ": not run; nothing written\n";
+      return kBadInput;
+    } catch (const std::exception& e) {
+      std::cerr << "wbm: " << e.what() << "\nwbm: a tool the scene runs failed (above)\nwbm: " << scene_path
+                << ": not run; nothing written\n";
+      return kNotConverged;
+    }
+    for (size_t i = known; i < scene->warnings.size(); ++i) std::cerr << scene->warnings[i] << "\n";
+  }
   if (out.empty()) out = (std::filesystem::path("wbm-out") / scene->name).string();
   std::optional<wbm::scene::StagedOutput> staged;
   try {
@@ -311,6 +327,9 @@ int check(const std::string& scene_path, bool json) {
       std::cout << ", M = " << scene->basis.dimension;
     }
     if (scene->structure) std::cout << ", " << scene->structure->dofs() << " DOFs, " << scene->contacts.size() << " contact(s)";
+    if (scene->structure && scene->structure->awaiting_reduction()) {
+      std::cout << " (the deck's interface DOFs predicted from its text; CalculiX and the reduction run with `wbm run`)";
+    }
     std::cout << "\n";
   }
   return kConverged;

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -123,6 +124,9 @@ class DeckReader {
           continue;
         }
         d_.model_data += line + "\n";
+        static const std::set<std::string> constraints = {"EQUATION", "MPC", "RIGIDBODY", "TIE", "COUPLING",
+                                                          "DISTRIBUTING", "KINEMATIC", "TRANSFORM", "NODALTHICKNESS"};
+        if (constraints.count(current.name) != 0) d_.constraint_keywords.insert(current.name);
         if (current.name == "ELEMENT") {
           element_type_ = upper(current.parameters.count("TYPE") ? current.parameters.at("TYPE") : "");
           if (element_type_.empty()) fail(number, "*ELEMENT without TYPE= (e.g. TYPE=C3D10)");
@@ -149,9 +153,17 @@ class DeckReader {
         int id = 0;
         const auto f = split(pending);
         if (f.size() < 2 || !parse_number(f[0], id)) fail(pending_line, "*ELEMENT data: expected 'number, node, node, …'");
+        for (size_t i = 1; i < f.size(); ++i) {
+          int node = 0;
+          if (f[i].empty()) continue;
+          if (!parse_number(f[i], node)) fail(pending_line, "*ELEMENT " + std::to_string(id) + ": node '" + f[i] + "' is not a number");
+          d_.element_types_at[node].insert(element_type_);
+        }
         ++d_.element_types[element_type_];
         pending.clear();
         pending_line = 0;
+      } else if (current.name == "BOUNDARY") {
+        boundary(split(t), number, fail);
       } else if (current.name == "NSET") {
         const auto name = current.parameters.find("NSET");
         if (name == current.parameters.end() || name->second.empty()) fail(number, "*NSET without NSET=name");
@@ -185,6 +197,31 @@ class DeckReader {
   }
 
  private:
+  // "node or set, first[, last[, value]]": directions first … last fixed at the nodes.
+  template <typename Fail>
+  void boundary(const std::vector<std::string>& f, int number, const Fail& fail) {
+    int first = 0, last = 0;
+    if (f.size() < 2 || !parse_number(f[1], first) || first < 1) {
+      fail(number, "*BOUNDARY data: expected 'node or node set, first direction[, last direction[, value]]'");
+    }
+    last = first;
+    if (f.size() > 2 && !f[2].empty() && (!parse_number(f[2], last) || last < first)) {
+      fail(number, "*BOUNDARY data: the last direction '" + f[2] + "' is not a number >= the first (" + std::to_string(first) + ")");
+    }
+    std::vector<int> nodes;
+    int node = 0;
+    if (parse_number(f[0], node)) {
+      nodes.push_back(node);
+    } else if (const auto set = d_.node_sets.find(upper(f[0])); set != d_.node_sets.end()) {
+      nodes = set->second;
+    } else {
+      fail(number, "*BOUNDARY: '" + f[0] + "' is neither a node number nor a node set defined before");
+    }
+    for (int n : nodes) {
+      for (int k = first; k <= std::min(last, 6); ++k) d_.fixed_directions[n].insert(k);
+    }
+  }
+
   CalculixDeck& d_;
   std::string element_type_;
 };
@@ -247,6 +284,28 @@ const std::vector<int>& CalculixDeck::node_set(const std::string& name) const {
   for (const auto& [k, v] : node_sets) known += (known.empty() ? "" : ", ") + k;
   throw std::invalid_argument(file.string() + ": no node set '" + name + "'; the deck defines: " +
                               (known.empty() ? "none" : known));
+}
+
+std::vector<int> free_directions(const CalculixDeck& deck, int node) {
+  const auto types = deck.element_types_at.find(node);
+  if (types == deck.element_types_at.end()) return {};
+  std::string expanded;
+  for (const auto& type : types->second) {
+    const bool kept = type.rfind("C3D", 0) == 0 || type.rfind("SPRING", 0) == 0 || type.rfind("DASHPOT", 0) == 0 ||
+                      type == "MASS" || type.rfind("GAP", 0) == 0;
+    if (!kept) expanded += (expanded.empty() ? "" : ", ") + type;
+  }
+  if (!expanded.empty()) {
+    throw std::invalid_argument("node " + std::to_string(node) + " of " + deck.file.string() + " lies on " + expanded +
+                                " elements, which CalculiX expands into new 3D nodes: its DOFs are not the node's; "
+                                "choose interface nodes of 3D solid elements (C3D…)");
+  }
+  const auto fixed = deck.fixed_directions.find(node);
+  std::vector<int> free;
+  for (int k = 1; k <= 3; ++k) {
+    if (fixed == deck.fixed_directions.end() || fixed->second.count(k) == 0) free.push_back(k);
+  }
+  return free;
 }
 
 CalculixDeck read_calculix_deck(const std::filesystem::path& path) {

@@ -36,9 +36,16 @@ ModeProblem mode_problem(const Scene& scene) {
   return p;
 }
 
-AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
+AnalysisResult run_analysis(const Scene& given, const Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
   AnalysisResult out;
+  std::optional<Scene> reduced;  // a deck is reduced here, not when the scene is read
+  if (given.structure && given.structure->awaiting_reduction()) {
+    reduced = given;
+    reduce_structure(*reduced);
+    for (size_t i = given.warnings.size(); i < reduced->warnings.size(); ++i) out.warnings.push_back(reduced->warnings[i]);
+  }
+  const Scene& scene = reduced ? *reduced : given;
   const bool unforced = scene.analysis.kind == AnalysisKind::BasisPlot || scene.analysis.kind == AnalysisKind::NonlinearModes;
   if (scene.analysis.kind != AnalysisKind::BasisPlot && (!scene.structure || (!unforced && !scene.forcing))) {
     throw std::logic_error("run_analysis: scene \"" + scene.name + "\" lacks [structure] or [forcing]; load it "
@@ -63,6 +70,7 @@ AnalysisResult run_analysis(const Scene& scene, const Progress& progress) {
     for (const auto& c : scene.condensation->contacts) laws.push_back(c.law->describe());
     out.diagnostics["condensation"] = {{"massless_dofs", massless}, {"contact_laws_on_the_structure", laws}};
   }
+  if (scene.structure && scene.structure->deck) out.diagnostics["reduction"] = scene.structure->deck->reduction;
   out.diagnostics["analysis"] = std::string(to_string(scene.analysis.kind));
   out.diagnostics["converged"] = out.converged();
   out.diagnostics["status"] = std::string(solvers::to_string(out.status));

@@ -55,6 +55,18 @@ std::vector<int> interface_nodes(const fem::CalculixDeck& deck, const std::strin
   return nodes;
 }
 
+std::string no_free_dof(const fem::CalculixDeck& deck, int node) {
+  return std::string("interface: node ").append(std::to_string(node)) + " has no free DOF in " + deck.file.string() +
+         " (fixed by *BOUNDARY, or on no element); remove it from the interface";
+}
+
+fem::CalculixDeck read_deck(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) {
+    throw std::invalid_argument("deck: no file " + path.string() + " (give the path of a CalculiX/Abaqus .inp deck)");
+  }
+  return fem::read_calculix_deck(path);
+}
+
 std::string direction_name(int direction) {
   static const char* names[] = {"x", "y", "z", "rx", "ry", "rz"};
   return direction >= 1 && direction <= 6 ? names[direction - 1] : std::string("d").append(std::to_string(direction));
@@ -103,6 +115,25 @@ DeckUnits deck_units(const std::string& name) {
                               " (the deck's consistent units, converted to SI)");
 }
 
+DeckInterface predict_interface(const std::filesystem::path& deck, const std::string& interface) {
+  DeckInterface out;
+  out.deck = read_deck(deck);
+  out.nodes = interface_nodes(out.deck, interface);
+  for (int node : out.nodes) {
+    const std::vector<int> free = fem::free_directions(out.deck, node);  // throws for an expanded element's node
+    if (free.empty()) throw std::invalid_argument(no_free_dof(out.deck, node));
+    for (int direction : free) out.names.push_back(std::string("n").append(std::to_string(node)) + "_" + direction_name(direction));
+  }
+  int count = 0;
+  try {
+    for (const auto& [node, types] : out.deck.element_types_at) count += static_cast<int>(fem::free_directions(out.deck, node).size());
+    out.free_dofs = count;
+  } catch (const std::invalid_argument&) {  // an element ccx expands elsewhere in the model: not predictable
+    out.free_dofs = -1;
+  }
+  return out;
+}
+
 ReducedModel reduce_model(const ReductionRequest& request) {
   namespace fs = std::filesystem;
   if (request.modes < 0) {
@@ -113,13 +144,9 @@ ReducedModel reduce_model(const ReductionRequest& request) {
     throw std::invalid_argument(std::string("check = ").append(std::to_string(request.check_modes)) +
                                 ": must be >= 0 (0: no full-model reference; e.g. 10)");
   }
-  if (!fs::is_regular_file(request.deck)) {
-    throw std::invalid_argument("deck: no file " + request.deck.string() +
-                                " (give the path of a CalculiX/Abaqus .inp deck)");
-  }
   const std::optional<DeckUnits> units = request.units.empty() ? std::nullopt : std::optional(deck_units(request.units));
   const auto start = std::chrono::steady_clock::now();
-  const fem::CalculixDeck deck = fem::read_calculix_deck(request.deck);
+  const fem::CalculixDeck deck = read_deck(request.deck);
   const std::vector<int> nodes = interface_nodes(deck, request.interface);
   auto t = std::chrono::steady_clock::now();
   fem::AssembledModel model = fem::assemble_with_calculix(deck, {.executable = request.ccx});
@@ -138,10 +165,7 @@ ReducedModel reduce_model(const ReductionRequest& request) {
   ReducedModel out;
   for (int node : nodes) {
     auto it = rows_of.find(node);
-    if (it == rows_of.end()) {
-      throw std::invalid_argument(std::string("interface: node ").append(std::to_string(node)) + " has no free DOF in " + deck.file.string() +
-                                  " (fixed by *BOUNDARY, or on no element); remove it from the interface");
-    }
+    if (it == rows_of.end()) throw std::invalid_argument(no_free_dof(deck, node));
     std::sort(it->second.begin(), it->second.end());
     for (const auto& [direction, row] : it->second) {
       boundary.push_back(row);

@@ -100,7 +100,10 @@ std::string_view to_string(AnalysisKind kind) noexcept { return name_of(analysis
 std::string_view to_string(ContactLawKind law) noexcept { return name_of(law_table(), law); }
 std::string_view to_string(NnmAlgorithm algorithm) noexcept { return name_of(nnm_algorithm_table(), algorithm); }
 
-int Structure::dofs() const { return kind == StructureKind::Rod ? rod.elements : static_cast<int>(mass.rows()); }
+int Structure::dofs() const {
+  if (kind == StructureKind::Rod) return rod.elements;
+  return deck ? static_cast<int>(dof_names.size()) : static_cast<int>(mass.rows());
+}
 
 std::string Structure::dof_name(int dof) const {
   if (dof < 0 || dof >= dofs()) throw std::out_of_range("Structure::dof_name: DOF " + std::to_string(dof) + " outside [0, " + std::to_string(dofs()) + ")");
@@ -119,6 +122,10 @@ std::vector<double> Forcing::frequencies_hz() const {
 
 solvers::MechanicalSystem Scene::system() const {
   if (!structure) throw std::logic_error("Scene::system: scene \"" + name + "\" has no [structure]");
+  if (structure->awaiting_reduction()) {
+    throw std::logic_error("Scene::system: the [structure] deck of scene \"" + name + "\" is not reduced yet; call "
+                           "reduce_structure first (run_analysis does)");
+  }
   solvers::MechanicalSystem sys;
   if (condensation) {  // C = C_mm + αM_mm + βK̃ (Rayleigh damping of the condensed model)
     sys = condensation->system;
@@ -277,7 +284,7 @@ nlohmann::json to_json(const Scene& s) {
     const Structure& st = *s.structure;
     if (rod) {
       j["structure"] = echo_keys(structure_keys(), st, "rod");  // type, E, ρ, S, L, elements
-    } else if (st.deck) {  // the deck again (re-reduced when read back), not the reduced matrices
+    } else if (st.deck) {  // the deck again (read and predicted again when read back), not the reduced matrices
       j["structure"] = echo_keys(deck_keys(), *st.deck);
       j["structure"]["type"] = "deck";
     } else {

@@ -1,5 +1,6 @@
 // The scene parser (scene_parser.hpp), [structure]: the rod, matrices inline or in Matrix Market
-// files, CalculiX decks reduced by Craig–Bampton; DOF names, definiteness, static condensation.
+// files, CalculiX decks (interface DOFs predicted when read, reduced by Craig–Bampton when an analysis
+// runs: reduce_structure); DOF names, definiteness, static condensation.
 #include "scene_keys.hpp"
 #include "scene_parser.hpp"
 
@@ -86,25 +87,28 @@ void Parser::deck_structure(const toml::table& t, Structure& st) {
     }
   }
   if (r_.error_count() != errors) return;
+  // The interface DOFs are predicted from the deck's text; CalculiX and the reduction run with the
+  // analysis (reduce_structure), which checks the prediction against the DOFs ccx keeps.
   try {
-    ReductionRequest request;
-    request.deck = d.file;
-    request.interface = d.interface;
-    request.modes = d.modes;
-    request.ccx = d.ccx;
-    request.units = d.units;
-    ReducedModel reduced = reduce_model(request);
-    d.node_sets = std::move(reduced.node_sets);
-    d.coordinates = reduced.coordinates;
-    d.reduction = std::move(reduced.summary);
+    const DeckInterface in = predict_interface(d.file, d.interface);
+    const int interior = in.free_dofs - static_cast<int>(in.names.size());
+    if (in.free_dofs >= 0 && d.modes >= interior) {
+      r_.error(Reader::source_of(t, t.contains("modes") ? "modes" : "deck"), "structure.modes",
+               "modes = " + std::to_string(d.modes) + ": the interior has only " + std::to_string(interior) +
+                   " DOFs; ask for fewer modes (< " + std::to_string(interior) + ")");
+      return;
+    }
+    const double length = deck_units(d.units).length;
+    for (int node : in.nodes) d.coordinates[node] = in.deck.nodes.at(node) * length;
+    d.node_sets = in.deck.node_sets;
+    d.constraint_keywords.assign(in.deck.constraint_keywords.begin(), in.deck.constraint_keywords.end());
     st.kind = StructureKind::Matrices;
-    st.stiffness = reduced.stiffness.sparseView();
-    st.mass = reduced.mass.sparseView();
-    st.dof_names = std::move(reduced.names);
+    st.dof_names = in.names;
+    for (int k = 1; k <= d.modes; ++k) st.dof_names.push_back(std::string("mode").append(std::to_string(k)));
     st.deck = std::move(d);
   } catch (const std::invalid_argument& e) {
     r_.error(file->source(), "structure.deck", e.what());
-  } catch (const std::exception& e) {  // CalculiX or the reduction failed: a tool, not the scene
+  } catch (const std::exception& e) {  // the deck cannot be read: a file system problem, not the scene's text
     r_.tool_error(file->source(), "structure.deck", e.what());
   }
 }
@@ -298,38 +302,55 @@ void Parser::dof_names(const toml::table& t, Structure& st) {
   }
 }
 
+namespace {
+
+// What K's inertia means for the analysis: an error, else a warning, else nothing ({"", ""}).
+std::pair<std::string, std::string> stiffness_verdict(const solvers::StiffnessInertia& inertia, AnalysisKind kind,
+                                                      bool contacts) {
+  const std::string rigid = std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0)";
+  if (inertia.factorized && inertia.negative > 0) {
+    return {"K is not positive semidefinite: K φ = ω² M φ has " + std::to_string(inertia.negative) +
+                " eigenvalue(s) ω² < 0 (a negative stiffness: the equilibrium is unstable and no periodic response "
+                "exists around it); check the sign of K and of every spring",
+            ""};
+  }
+  if (inertia.rigid_body > 0 && kind == AnalysisKind::NonlinearModes) {
+    return {"K has " + rigid + ": analysis \"nnm\" continues the first mode from its linear frequency, which must be "
+                "> 0; clamp a DOF or add a spring to ground",
+            ""};
+  }
+  if (inertia.rigid_body > 0 && !contacts) {
+    return {"K has " + rigid + " and no [[contact]] holds them: the mean position is undetermined (G's harmonic-0 "
+                "block K is singular); clamp a DOF, add a spring to ground, or add the stop that holds the structure",
+            ""};
+  }
+  if (inertia.rigid_body > 0) {
+    return {"", "K has " + rigid + ": only the contacts hold the structure, and a state where every stop is open has "
+                "no unique mean position (docs/scenes.md, [structure])"};
+  }
+  return {"", ""};
+}
+
+solvers::StiffnessInertia inertia_of(const Structure& st) {
+  return solvers::stiffness_inertia({st.mass, Eigen::SparseMatrix<double>(st.mass.rows(), st.mass.cols()), st.stiffness});
+}
+
+}  // namespace
+
 void Parser::stiffness_definiteness(const toml::table& root) {
   if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
-  const Structure& st = *s_.structure;
-  const solvers::StiffnessInertia inertia =
-      solvers::stiffness_inertia({st.mass, Eigen::SparseMatrix<double>(st.mass.rows(), st.mass.cols()), st.stiffness});
+  if (s_.structure->awaiting_reduction()) return;  // K_r exists after the reduction: reduce_structure checks it
   const toml::table* t = root.get_as<toml::table>("structure");
   const toml::source_region where = t != nullptr && t->contains("stiffness") ? Reader::source_of(*t, "stiffness")
                                                                               : root.source();
-  if (inertia.factorized && inertia.negative > 0) {
-    r_.error(where, "structure.stiffness",
-             "K is not positive semidefinite: K φ = ω² M φ has " + std::to_string(inertia.negative) +
-                 " eigenvalue(s) ω² < 0 (a negative stiffness: the equilibrium is unstable and no periodic response "
-                 "exists around it); check the sign of K and of every spring");
-  } else if (inertia.rigid_body > 0 && s_.analysis.kind == AnalysisKind::NonlinearModes) {
-    r_.error(where, "structure.stiffness",
-             "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0): analysis \"nnm\" "
-                 "continues the first mode from its linear frequency, which must be > 0; clamp a DOF or add a "
-                 "spring to ground");
-  } else if (inertia.rigid_body > 0 && s_.contacts.empty()) {
-    r_.error(where, "structure.stiffness",
-             "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0) and no [[contact]] holds "
-                 "them: the mean position is undetermined (G's harmonic-0 block K is singular); clamp a DOF, add a "
-                 "spring to ground, or add the stop that holds the structure");
-  } else if (inertia.rigid_body > 0) {
-    r_.warn(where, "K has " + std::to_string(inertia.rigid_body) + " rigid-body mode(s) (ω² = 0): only the contacts "
-                   "hold the structure, and a state where every stop is open has no unique mean position "
-                   "(docs/scenes.md, [structure])");
-  }
+  const auto [error, warning] = stiffness_verdict(inertia_of(*s_.structure), s_.analysis.kind, !s_.contacts.empty());
+  if (!error.empty()) r_.error(where, "structure.stiffness", error);
+  if (!warning.empty()) r_.warn(where, warning);
 }
 
 void Parser::condense(const toml::table& root) {
   if (!s_.structure || s_.structure->kind != StructureKind::Matrices || r_.error_count() > 0) return;
+  if (s_.structure->awaiting_reduction()) return;  // M_r of Craig–Bampton is positive definite: nothing is massless
   const std::vector<int> massless = solvers::massless_dofs(s_.structure->mass);
   if (massless.empty()) return;
   const toml::node* where = root.get("structure");
@@ -362,3 +383,43 @@ void Parser::condense(const toml::table& root) {
 }
 
 }  // namespace wbm::scene::detail
+
+namespace wbm::scene {
+
+void reduce_structure(Scene& scene) {
+  if (!scene.structure || !scene.structure->awaiting_reduction()) return;
+  Structure& st = *scene.structure;
+  DeckStructure& d = *st.deck;
+  ReductionRequest request;
+  request.deck = d.file;
+  request.interface = d.interface;
+  request.modes = d.modes;
+  request.ccx = d.ccx;
+  request.units = d.units;
+  ReducedModel reduced = reduce_model(request);  // CalculiX, then Craig–Bampton
+  if (reduced.names != st.dof_names) {
+    const auto differ = [](const std::vector<std::string>& a, const std::vector<std::string>& b) {
+      std::string out;
+      for (const auto& n : a) {
+        if (std::find(b.begin(), b.end(), n) == b.end()) out += (out.empty() ? "" : ", ") + n;
+      }
+      return out.empty() ? std::string("none") : out;
+    };
+    std::string keywords;
+    for (const auto& k : d.constraint_keywords) keywords += (keywords.empty() ? "*" : ", *") + k;
+    throw std::invalid_argument(
+        "structure.deck: CalculiX keeps other interface DOFs than the deck's *BOUNDARY lines predict (missing: " +
+        differ(st.dof_names, reduced.names) + "; unexpected: " + differ(reduced.names, st.dof_names) + ")" +
+        (keywords.empty() ? std::string() : "; the deck has " + keywords + ", which can remove DOFs") +
+        ". The scene's contacts and loads were resolved against the predicted names, so it is not run: constrain "
+        "no interface DOF by an equation, or reduce the deck with `wbm reduce` and give its matrices and dofs.txt");
+  }
+  st.stiffness = reduced.stiffness.sparseView();
+  st.mass = reduced.mass.sparseView();
+  d.reduction = std::move(reduced.summary);
+  const auto [error, warning] = detail::stiffness_verdict(detail::inertia_of(st), scene.analysis.kind, !scene.contacts.empty());
+  if (!error.empty()) throw std::invalid_argument("structure.deck: the reduced stiffness K_r of " + d.file + ": " + error);
+  if (!warning.empty()) scene.warnings.push_back("structure.deck: " + warning);
+}
+
+}  // namespace wbm::scene

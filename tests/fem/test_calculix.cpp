@@ -7,7 +7,10 @@
 #include <wbm/fem/matrix_market.hpp>
 
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <fstream>
 #include <numbers>
 #include <regex>
@@ -193,6 +196,47 @@ TEST(Calculix, ReportsCalculixErrorsWithTheDeckNameAndAMissingExecutable) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)wbm::fem::parse_calculix_matrices("1 1 2.0\n1 3 1.0\n", "1 1 1.0\n", "5.1\n5.2\n", "m"); },
       {"m.sti:2: expected 'row col value' with 1 <= row, col <= 2"});
+}
+
+// The DOFs CalculiX keeps, predicted from the deck's text (free_directions), equal the .dof list
+// ccx itself writes, node by node: *BOUNDARY by set over a range (the root), by node over one
+// direction (17, y) and by set over one direction given as "first," with an empty last (TIP, z);
+// a node on no element keeps none. An *EQUATION is recorded as a constraint keyword (ccx then
+// drops its dependent DOF, which only ccx's own list shows). Shell nodes and malformed *BOUNDARY
+// lines are refused with the line.
+TEST(Calculix, PredictedFreeDirectionsEqualTheDofsCalculixKeeps) {
+  write_bar_mesh();
+  const std::string model = "*INCLUDE, INPUT=mesh/bar.inp\n*NODE\n99, 5.0, 0.0, 0.0\n" + kMaterial +
+                            "*BOUNDARY\nROOT, 1, 3\n17, 2\n*boundary\nTIP, 3, , 0.0\n";
+  const auto deck = wbm::fem::read_calculix_deck(write("partial.inp", model));
+  const auto assembled = wbm::fem::assemble_with_calculix(deck);
+  std::map<int, std::vector<int>> kept;
+  for (const auto& [node, direction] : assembled.dofs) kept[node].push_back(direction);
+  for (auto& [node, directions] : kept) std::sort(directions.begin(), directions.end());
+  for (const auto& [node, x] : deck.nodes) {
+    const auto it = kept.find(node);
+    EXPECT_EQ(wbm::fem::free_directions(deck, node), it == kept.end() ? std::vector<int>{} : it->second) << node;
+  }
+  EXPECT_EQ(wbm::fem::free_directions(deck, 17), (std::vector<int>{1}));  // y by node, z by TIP
+  EXPECT_EQ(wbm::fem::free_directions(deck, 99), std::vector<int>{});      // on no element
+  EXPECT_TRUE(deck.constraint_keywords.empty());
+
+  const auto tied = wbm::fem::read_calculix_deck(write("tied.inp", model + "*EQUATION\n2\n18, 2, 1.0, 17, 1, -1.0\n"));
+  EXPECT_EQ(tied.constraint_keywords, (std::set<std::string>{"EQUATION"}));
+  const auto shell = wbm::fem::read_calculix_deck(
+      write("shell.inp", "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n*ELEMENT, TYPE=S4\n1, 1, 2, 3, 4\n"));
+  using wbm::testing::expect_throw_with;
+  expect_throw_with<std::invalid_argument>([&] { (void)wbm::fem::free_directions(shell, 3); },
+                                           {"node 3 of", "lies on S4 elements", "choose interface nodes of 3D solid elements"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_calculix_deck(write("b5.inp", "*NODE\n1, 0, 0, 0\n*BOUNDARY\nCASING, 1, 3\n")); },
+      {"b5.inp:4: *BOUNDARY: 'CASING' is neither a node number nor a node set defined before"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_calculix_deck(write("b6.inp", "*NODE\n1, 0, 0, 0\n*BOUNDARY\n1, 3, 1\n")); },
+      {"b6.inp:4: *BOUNDARY data: the last direction '1' is not a number >= the first (3)"});
+  expect_throw_with<std::invalid_argument>(
+      [&] { (void)wbm::fem::read_calculix_deck(write("b7.inp", "*NODE\n1, 0, 0, 0\n*BOUNDARY\n1\n")); },
+      {"b7.inp:4: *BOUNDARY data: expected 'node or node set, first direction[, last direction[, value]]'"});
 }
 
 // The options are checked before ccx is started: no executable, or a work folder that is a file.

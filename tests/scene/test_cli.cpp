@@ -23,6 +23,8 @@
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/scene.hpp>
 
 #include "shipped_scenes.hpp"  // models/: the shipped scene directory
 
@@ -355,14 +357,17 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
 }
 
 // A scene whose structure is the deck itself ([structure] deck = "bar.inp", interface, modes):
-// the scene reduces it when read, and its harmonic tip response equals the full model's
+// the scene is reduced when it runs, and its harmonic tip response equals the full model's
 // (K − ω²M + iωC)⁻¹ f (CalculiX's matrices, dense), as the scene on wbm reduce's files does; the
 // same bar written in N-mm-t-s with units = "N-mm-t-s" gives the same response in metres (1e-9).
 // [[contact]] nodes = "TIP" with direction = "radial" about structure.axis (the bar's centre
 // line) places one contact per tip node along the closed-form radial unit vector: the corners
 // of the 0.1 m square at ±1/√2 in y and z. The resolved scene (check --json) names the deck, not
-// matrices, and reads back to the same contacts. Refusals name the key and the way out.
-TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
+// matrices, and reads back to the same contacts. `wbm check` runs no tool: with ccx pointing
+// nowhere it passes and `wbm run` exits 1 naming ccx. An *EQUATION that ties an interface DOF
+// passes check (the names are predicted from *BOUNDARY) and `wbm run` refuses it with exit 2,
+// naming the DOF CalculiX dropped. Refusals name the key and the way out.
+TEST(Cli, ADeckSceneIsReducedWhenRunNotWhenCheckedAndTakesRadialContactsOnANodeSet) {
   const fs::path deck = write_reduce_bar(), dir = deck.parent_path();
   const auto full = wbm::fem::assemble_with_calculix(wbm::fem::read_calculix_deck(deck));
   const Eigen::MatrixXd k = Eigen::MatrixXd(full.stiffness), m = Eigen::MatrixXd(full.mass);
@@ -392,6 +397,47 @@ TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
   const auto amplitude = csv_column(result / "harmonics.csv", "A_n36_y [m]");
   ASSERT_EQ(amplitude.size(), 3u);
   EXPECT_NEAR(std::stod(amplitude[1]), expected, 1e-5 * expected);
+  const auto reduction = nlohmann::json::parse(slurp(result / "result.json"))["diagnostics"]["reduction"];
+  EXPECT_EQ(reduction["full_dofs"], 96);
+  EXPECT_EQ(reduction["reduced_dofs"], 24);  // 4 tip nodes × 3 + 12 modes
+
+  // The library alike: load_scene leaves the deck unreduced, run_analysis reduces it (same response).
+  const wbm::scene::Scene parsed = wbm::scene::load_scene(scene);
+  ASSERT_TRUE(parsed.structure && parsed.structure->awaiting_reduction());
+  EXPECT_EQ(parsed.structure->dofs(), 24);
+  EXPECT_THROW((void)parsed.system(), std::logic_error);
+  const wbm::scene::AnalysisResult direct = wbm::scene::run_analysis(parsed);
+  EXPECT_TRUE(direct.converged());
+  EXPECT_EQ(direct.diagnostics["reduction"]["reduced_dofs"], 24);
+
+  // `wbm check` runs no tool; `wbm run` does.
+  const fs::path nowhere = dir / "deck_no_ccx.toml";
+  std::ofstream(nowhere) << structure << "ccx = \"" << (dir / "no-ccx").string() << "\"\n" << rest << freq.str() << "\n";
+  const Outcome checked_only = run_wbm("check " + nowhere.string());
+  EXPECT_EQ(checked_only.status, 0) << checked_only.err;
+  EXPECT_NE(checked_only.out.find("24 DOFs"), std::string::npos) << checked_only.out;
+  EXPECT_NE(checked_only.out.find("CalculiX and the reduction run with `wbm run`"), std::string::npos) << checked_only.out;
+  const Outcome no_ccx = run_wbm("run --no-plots -q " + nowhere.string() + " -o " + (dir / "deck_no_ccx").string());
+  EXPECT_EQ(no_ccx.status, 1);
+  EXPECT_NE(no_ccx.err.find("cannot run"), std::string::npos) << no_ccx.err;
+  EXPECT_NE(no_ccx.err.find("a tool the scene runs failed"), std::string::npos) << no_ccx.err;
+  EXPECT_FALSE(fs::exists(dir / "deck_no_ccx"));
+
+  // An *EQUATION making n36_y dependent: predicted, then dropped by CalculiX; refused at run.
+  std::string tied = slurp(deck);
+  tied.insert(tied.find("*STEP"), "*EQUATION\n2\n36, 2, 1.0, 35, 2, -1.0\n");
+  std::ofstream(dir / "bar_tied.inp") << tied;
+  const fs::path tied_scene = dir / "deck_tied.toml";
+  std::ofstream(tied_scene) << "[structure]\ndeck = \"bar_tied.inp\"\ninterface = \"tip\"\nmodes = 12\n" << rest
+                            << freq.str() << "\n";
+  EXPECT_EQ(run_wbm("check " + tied_scene.string()).status, 0);
+  const Outcome tied_run = run_wbm("run --no-plots -q " + tied_scene.string() + " -o " + (dir / "deck_tied").string());
+  EXPECT_EQ(tied_run.status, 2);
+  for (const char* part : {"structure.deck: CalculiX keeps other interface DOFs than the deck's *BOUNDARY lines predict",
+                           "(missing: n36_y; unexpected: none)", "the deck has *EQUATION", "`wbm reduce`"}) {
+    EXPECT_NE(tied_run.err.find(part), std::string::npos) << part << "\n" << tied_run.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "deck_tied"));
 
   // The same bar written in N-mm-t-s, with units = "N-mm-t-s": converted to SI, the same response.
   write_reduce_bar(true);
@@ -459,6 +505,10 @@ TEST(Cli, ADeckSceneIsReducedWhenReadAndTakesRadialContactsOnANodeSet) {
   refused("[structure]\ndeck = \"bar.inp\"\n[forcing]\namplitude = 1.0\ndof = 0\nfrequency_hz = 1.0\n",
           "structure.interface: missing");
   refused(structure + "units = \"mm\"\n" + rest + "100.0\n", "structure.units");
+  refused("[structure]\ndeck = \"bar.inp\"\ninterface = \"tip\"\nmodes = 84\n" + rest + "100.0\n",
+          "structure.modes: modes = 84: the interior has only 84 DOFs; ask for fewer modes (< 84)");
+  refused("[structure]\ndeck = \"bar.inp\"\ninterface = [1, 33]\n" + rest + "100.0\n",
+          "node 1 has no free DOF");
 }
 
 // `wbm reduce` refuses bad input with exit 2, says why and how out, and creates nothing; a deck

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +29,13 @@ struct CalculixDeck {
   std::map<int, Eigen::Vector3d> nodes;                // node number → (x, y, z) [deck units]
   std::map<std::string, std::vector<int>> node_sets;   // NSET name (upper case) → node numbers, in order
   std::map<std::string, int> element_types;            // TYPE (upper case) → number of elements
+  /// node number → the element TYPEs (upper case) it is a node of; nodes on no element absent
+  std::map<int, std::set<std::string>> element_types_at;
+  /// node number → the directions (1 … 6) the model data's *BOUNDARY fixes at it
+  std::map<int, std::set<int>> fixed_directions;
+  /// Keywords of the model data that can remove or rotate DOFs beyond *BOUNDARY (*EQUATION,
+  /// *MPC, *RIGID BODY, *TIE, *COUPLING, *TRANSFORM, …), upper case, as met.
+  std::set<std::string> constraint_keywords;
   [[nodiscard]] int elements() const;
   /// The node numbers of a set, by name (case-insensitive). Throws std::invalid_argument naming
   /// the set and the sets the deck defines.
@@ -35,14 +43,26 @@ struct CalculixDeck {
 };
 
 /// Reads a deck: *NODE (id, x[, y[, z]], NSET= adds the nodes to a set), *ELEMENT (TYPE=; data
-/// lines may continue after a trailing comma), *NSET (NSET=, GENERATE for first, last[, step];
+/// lines "number, node, node, …" may continue after a trailing comma), *BOUNDARY in the model data
+/// ("node or set, first direction[, last direction[, value]]"), *NSET (NSET=, GENERATE for first, last[, step];
 /// entries are node numbers or names of sets defined before), *INCLUDE (INPUT= relative to the
 /// including file; nested at most 16 deep). Other keywords are kept in model_data untouched.
 /// Throws std::runtime_error naming the path for a file that cannot be read, and
 /// std::invalid_argument with "file:line: what was expected" for a malformed keyword or data line
 /// (a node without coordinates, a non-numeric field, an *INCLUDE without INPUT=, a node set
-/// entry that is neither a number nor a known set, a repeated node number, too deep includes).
+/// entry that is neither a number nor a known set, a repeated node number, too deep includes, a
+/// *BOUNDARY line whose directions are not 1 ≤ first ≤ last or whose node set is unknown).
 [[nodiscard]] CalculixDeck read_calculix_deck(const std::filesystem::path& path);
+
+/// The directions (1 = x, 2 = y, 3 = z, ascending) CalculiX keeps at `node` in the matrices of
+/// assemble_with_calculix, predicted from the deck's text without running ccx: the translations
+/// of a node of 3D continuum (C3D…), spring (SPRING…), dashpot (DASHPOT…), mass (MASS) or gap
+/// (GAP…) elements, less those *BOUNDARY fixes; empty for a node on no element or fixed in all
+/// three. Exact for such decks; a constraint keyword (constraint_keywords) can remove more, which
+/// only ccx's own DOF list (AssembledModel::dofs) shows. Throws std::invalid_argument naming the
+/// node and its element types for a node of an element ccx expands into new 3D nodes (shells
+/// S…/M3D…, beams B3…, plane CPS…/CPE…/CAX…, or another type): its DOFs are not the node's.
+[[nodiscard]] std::vector<int> free_directions(const CalculixDeck& deck, int node);
 
 struct CalculixOptions {
   std::string executable = "ccx";  // the CalculiX solver, searched on PATH

@@ -72,8 +72,11 @@ struct AnalysisResult {
 ///    analysis.levels energy E: mode_E<E>.csv (u and du/dt of the output DOFs over one period,
 ///    [output] samples) and mode_E<E>_contact.csv (contact force samples). Converged = the
 ///    energy range was covered and every level converged.
-/// Bad scenes are refused by load_scene; this throws only std::logic_error for a scene that
-/// bypassed it. Non-convergence is reported (converged = false), never thrown.
+/// A [structure] deck not reduced yet is reduced first (reduce_structure, on a copy of the scene;
+/// its summary is diagnostics["reduction"], its warnings join `warnings`), and throws as
+/// reduce_structure does. Other bad scenes are refused by load_scene; this throws only
+/// std::logic_error for a scene that bypassed it. Non-convergence is reported (converged =
+/// false), never thrown.
 [[nodiscard]] AnalysisResult run_analysis(const Scene& scene, const Progress& progress = {});
 
 /// The modal problem of an nnm scene: M and K of [structure] (damping ignored), one stop per

@@ -16,6 +16,8 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <wbm/fem/calculix.hpp>
+
 namespace wbm::scene {
 
 struct ReductionRequest {
@@ -59,6 +61,25 @@ struct ReducedModel {
   std::string deck_name;                    // the deck's file name
   int interface_dofs = 0;                   // |b|
 };
+
+/// The interface of a deck as reduce_model retains it, predicted from the deck's text without
+/// running CalculiX (fem::free_directions: translations of continuum nodes less *BOUNDARY): what
+/// a scene resolves its contacts and loads against when it is read, before the reduction runs.
+struct DeckInterface {
+  fem::CalculixDeck deck;          // the deck as read (text only)
+  std::vector<int> nodes;          // the interface nodes, in the order given
+  /// "n<node>_<x|y|z>" per retained DOF, nodes in the order given and each node's directions
+  /// ascending: the first names of dofs.txt (the "mode<k>" names follow them)
+  std::vector<std::string> names;
+  /// The DOFs CalculiX keeps in the whole model (every node on an element), or −1 when a node lies
+  /// on an element type fem::free_directions cannot predict
+  int free_dofs = -1;
+};
+/// Reads the deck and its interface. Throws std::invalid_argument as reduce_deck does for a deck
+/// that is not a file, a syntax error, an empty interface, an unknown node or node set, an
+/// interface node listed twice or with no free DOF, or one on an element ccx expands (naming the
+/// node and its types); std::runtime_error for an unreadable deck.
+[[nodiscard]] DeckInterface predict_interface(const std::filesystem::path& deck, const std::string& interface);
 
 /// The reduction of reduce_deck, computed without writing anything. Throws as reduce_deck.
 [[nodiscard]] ReducedModel reduce_model(const ReductionRequest& request);

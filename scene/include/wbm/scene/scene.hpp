@@ -35,8 +35,8 @@
 /// Errors: load_scene collects every problem of a file and throws one std::invalid_argument whose
 /// message has one line per problem, "file:line: key: what was expected" (line omitted for JSON
 /// input); so does a missing or unreadable file, or a directory given as one (bad input, `wbm`
-/// exit 2). When CalculiX or the reduction of a [structure] deck fails (a tool, not the scene)
-/// the same message comes as std::runtime_error (`wbm` exit 1, as `wbm reduce`).
+/// exit 2). A [structure] deck is read as text only (an unreadable deck file: std::runtime_error);
+/// CalculiX and the reduction run later, in reduce_structure.
 
 #include <filesystem>
 #include <map>
@@ -64,22 +64,26 @@ enum class AnalysisKind { Solve, Timestep, BasisPlot, Continuation, NonlinearMod
 /// "solve", "timestep", "basis-plot", "continuation", "nnm".
 [[nodiscard]] std::string_view to_string(AnalysisKind kind) noexcept;
 
-/// A structure given as a CalculiX/Abaqus deck ([structure] deck = …, docs/scenes.md): assembled
-/// by ccx and reduced by Craig–Bampton onto the interface nodes when the scene is read
-/// (scene/reduce.hpp), so that Structure::mass/stiffness are M_r, K_r and the DOF names those of
-/// `wbm reduce`'s dofs.txt ("n<node>_x", …, "mode<k>"). Units: SI, converted from the deck's
-/// `units` (coordinates in m).
+/// A structure given as a CalculiX/Abaqus deck ([structure] deck = …, docs/scenes.md). Reading
+/// the scene runs no tool: it reads the deck's text and predicts the interface DOFs CalculiX will
+/// keep (scene::predict_interface), so Structure::dof_names are those of `wbm reduce`'s dofs.txt
+/// ("n<node>_x", …, "mode<k>") and contacts and loads resolve against them, while mass and
+/// stiffness stay empty. reduce_structure (run by run_analysis) assembles the deck with ccx,
+/// reduces it by Craig–Bampton onto the interface nodes, checks the names and fills M_r, K_r.
+/// Units: SI, converted from the deck's `units` (coordinates in m).
 struct DeckStructure {
   std::string file;                              // absolute path of the deck
   std::string interface;                         // node set name or node numbers, as given
   int modes = 40;                                // fixed-interface normal modes
   std::string ccx = "ccx";                       // the CalculiX executable
   std::string units = "SI";                      // the deck's unit system, converted to SI (scene::deck_units)
-  std::map<int, Eigen::Vector3d> coordinates;    // of the interface nodes
+  std::map<int, Eigen::Vector3d> coordinates;    // of the interface nodes [m]
   std::map<std::string, std::vector<int>> node_sets;  // the deck's node sets (names upper-case)
   /// structure.axis: a point on the rotation axis and its direction, for radial contacts.
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> axis;
-  nlohmann::json reduction;                      // the reduction's summary (reduction.json)
+  /// The deck's keywords that can remove DOFs beyond *BOUNDARY (fem::CalculixDeck::constraint_keywords)
+  std::vector<std::string> constraint_keywords;
+  nlohmann::json reduction;                      // the reduction's summary (reduction.json), once reduced
 };
 
 /// The structure: FE rod [JL14 Sec. 2] or explicit symmetric matrices (n × n, sparse).
@@ -93,6 +97,9 @@ struct Structure {
   std::optional<DeckStructure> deck;   // Matrices reduced from a deck
 
   [[nodiscard]] int dofs() const;
+  /// A deck whose reduction has not run yet (reduce_structure): dof_names are the predicted ones,
+  /// mass and stiffness are empty.
+  [[nodiscard]] bool awaiting_reduction() const { return deck.has_value() && mass.rows() == 0; }
   /// Rod: "node<j>"; matrices: the DOF's name.
   [[nodiscard]] std::string dof_name(int dof) const;
 };
@@ -241,7 +248,7 @@ struct Scene {
   std::optional<solvers::MasslessCondensation> condensation;
 
   /// M, C = C_given + αM + βK, K (condensed: M_mm, C_mm + αM_mm + βK̃, K̃). Throws
-  /// std::logic_error without a structure.
+  /// std::logic_error without a structure, or for a deck not reduced yet (reduce_structure).
   [[nodiscard]] solvers::MechanicalSystem system() const;
   /// F cos 2πft on the forced DOF and the further loads, at f (default: the single frequency).
   [[nodiscard]] solvers::HarmonicForcing harmonic_forcing(std::optional<double> frequency_hz = std::nullopt) const;
@@ -271,6 +278,18 @@ struct Scene {
 /// inverse of scene_from_json: scene_from_json(to_json(s)) == s up to `path` and `warnings`.
 [[nodiscard]] nlohmann::json to_json(const Scene& scene);
 [[nodiscard]] Scene scene_from_json(const nlohmann::json& json, const std::filesystem::path& file);
+
+/// Reduces a [structure] deck: CalculiX assembles it and Craig–Bampton reduces it onto the
+/// interface nodes and `modes` fixed-interface modes (scene/reduce.hpp, LL11 Sec. 5.2), filling
+/// Structure::mass and stiffness with M_r, K_r [kg, N/m] and DeckStructure::reduction with the
+/// summary; then K_r's inertia is checked as the parser checks given matrices (a warning is
+/// appended to scene.warnings). Does nothing for another structure or a deck reduced already.
+/// run_analysis calls it; `wbm check` does not. Throws std::invalid_argument (bad input) when the
+/// DOFs CalculiX keeps at the interface differ from the names predicted when the scene was read
+/// (an *EQUATION on an interface DOF, say; both lists and the way out named), when K_r is not
+/// positive semidefinite or has rigid-body modes nothing holds, and as reduce_deck for bad
+/// options; std::runtime_error when ccx or the reduction fails (a tool, `wbm` exit 1).
+void reduce_structure(Scene& scene);
 
 /// The key table of a declared section as docs/scenes.md prints it, generated from the one
 /// declaration the parser, its errors and to_json read (| key | type | default | allowed |
