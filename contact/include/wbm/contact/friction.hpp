@@ -1,0 +1,67 @@
+#pragma once
+/// Dry friction along one tangent over one period of samples: the Jenkins element [J62; G80], a
+/// tangential spring k_t in series with a Coulomb slider. Units: m, N, N/m, J.
+///
+/// With w the tangential displacement of the contact point relative to the counter-surface and s
+/// the slider's position, the element's force is f = k_t (w − s) with |f| ≤ F_s, the slip force
+/// (μ N for a friction coefficient μ and a normal load N ≥ 0). f opposes w as a contact law's
+/// force does: M ü + C u̇ + K u = f_ext − e_t f. The element is rate independent, so its state
+/// over the samples w_q of one period (q = 0 … Q−1, uniform in time) follows the return map, an
+/// elastic predictor projected on |f| ≤ F_s,q:
+///   f* = f_{q−1} + k_t (w_q − w_{q−1}),
+///   f_q = f*                 if |f*| ≤ F_s,q   (stick: the slider holds),
+///   f_q = σ_q F_s,q          otherwise        (slip, σ_q = sign f*).
+/// The periodic steady state (Masing's rules) starts from the unstretched spring at w = 0 (f = 0
+/// before sample 0), runs the period, and runs it again from the force it ended with until that
+/// force repeats bit for bit. Each period's map f_start ↦ f_end is monotone and 1-Lipschitz, and
+/// constant once a slip is met, so the second period repeats the first as soon as the first
+/// slips with a constant slip force; a varying one may need a third. A period without slip is full
+/// stick: the slider stays where it started, at the origin, and f_q = k_t w_q (the convention of
+/// harmonic-balance codes for a stuck joint, whose mean force is otherwise undetermined).
+///
+/// The force is piecewise linear in the samples. After the last slip at sample a (of this period,
+/// or of the previous one, cyclically), a stick sample has f_q = σ_a F_s,a + k_t (w_q − w_a); a
+/// slip sample has f_q = σ_q F_s,q; full stick has f_q = k_t w_q. Hence
+///   ∂f_q/∂w_q = k_t (stick) or 0 (slip),  ∂f_q/∂w_a = −k_t,  ∂f_q/∂F_s,a = σ_a,
+/// at most two entries in a row of ∂f/∂w: only the stick samples carry rank. The derivatives are
+/// exact away from the samples where the state switches (a set of measure zero in w).
+///
+/// [J62] Jenkins, G.M. (1962). Analysis of the stress–strain relationships in reactor grade
+/// graphite. Br. J. Appl. Phys. 13, 30–32. [G80] Griffin, J.H. (1980). Friction damping of
+/// resonant stresses in gas turbine engine airfoils. J. Eng. Power 102, 329–333.
+
+#include <Eigen/Core>
+
+namespace wbm::contact {
+
+/// The periodic steady state of a Jenkins element over one period (jenkins_loop). Vectors have
+/// one entry per sample q = 0 … Q−1.
+struct JenkinsLoop {
+  Eigen::VectorXd force;      // f_q [N]
+  /// ∂f_q/∂w_q [N/m]: k_t in stick, 0 in slip.
+  Eigen::VectorXd stiffness;
+  /// The sample a of the last slip before a stick sample q (∂f_q/∂w_a = −k_t, cyclically: a > q
+  /// is a slip of the previous period); −1 in slip and in full stick.
+  Eigen::VectorXi anchor;
+  /// ∂f_q/∂F_s,r [-]: σ_a at r = anchor(q) in stick after a slip, σ_q at r = q in slip, 0 in full
+  /// stick (σ = ±1, the slip direction).
+  Eigen::VectorXd slip_sensitivity;
+  int slipping_samples = 0;   // samples in slip
+  int periods = 0;            // periods run until the end force repeated (≥ 2)
+  /// The work of the slider over the period, Σ_q f_q Δs_q ≥ 0 [J], with the slider increment
+  /// Δs_q = (w_q − w_{q−1}) − (f_q − f_{q−1})/k_t (zero in stick): the energy the element
+  /// dissipates per cycle, ∮ f dw.
+  double dissipated_energy = 0.0;
+};
+
+/// The periodic force of a Jenkins element of stiffness k_t [N/m] driven by the tangential
+/// displacements w [m] and the slip forces F_s [N] at the Q samples of one period (the return
+/// map above). Throws std::invalid_argument naming the argument for an empty w, sizes that
+/// differ, a k_t that is not finite and > 0, a w or F_s that is not finite, or a negative F_s;
+/// std::runtime_error when the force at the period's end has not repeated after max_periods
+/// periods (both last values named; raise max_periods), which the proof above excludes for a
+/// constant slip force.
+[[nodiscard]] JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
+                                       const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods = 8);
+
+}  // namespace wbm::contact

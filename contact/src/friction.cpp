@@ -1,0 +1,88 @@
+#include <wbm/contact/friction.hpp>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace wbm::contact {
+
+JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
+                         const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods) {
+  const double kt = tangential_stiffness;
+  if (!(kt > 0.0) || !std::isfinite(kt)) {
+    std::ostringstream m;
+    m << "jenkins_loop: tangential_stiffness (k_t) = " << kt << " must be finite and > 0 [N/m]";
+    throw std::invalid_argument(m.str());
+  }
+  if (w.size() == 0) throw std::invalid_argument("jenkins_loop: w is empty; give the Q > 0 samples of one period");
+  if (slip_force.size() != w.size()) {
+    throw std::invalid_argument("jenkins_loop: slip_force has " + std::to_string(slip_force.size()) + " samples, w " +
+                                std::to_string(w.size()) + "; give one slip force per sample (a constant load repeated)");
+  }
+  if (max_periods < 2) throw std::invalid_argument("jenkins_loop: max_periods = " + std::to_string(max_periods) + " must be >= 2");
+  for (Eigen::Index q = 0; q < w.size(); ++q) {
+    if (!std::isfinite(w(q))) throw std::invalid_argument("jenkins_loop: w[" + std::to_string(q) + "] is not finite");
+    if (!(slip_force(q) >= 0.0) || !std::isfinite(slip_force(q))) {
+      std::ostringstream m;
+      m << "jenkins_loop: slip_force[" << q << "] = " << slip_force(q) << " must be finite and >= 0 [N] (mu N, N >= 0)";
+      throw std::invalid_argument(m.str());
+    }
+  }
+  const Eigen::Index n = w.size();
+  JenkinsLoop out;
+  out.force.resize(n);
+  out.stiffness.resize(n);
+  out.anchor.resize(n);
+  out.slip_sensitivity.resize(n);
+  double f_prev = 0.0, w_prev = 0.0;  // the unstretched spring at w = 0 before sample 0
+  int last_slip = -1;
+  double sigma_last = 0.0;
+  double previous_end = 0.0, before = 0.0;
+  for (int period = 1; period <= max_periods; ++period) {
+    int first_slip = -1;
+    out.slipping_samples = 0;
+    out.dissipated_energy = 0.0;
+    for (Eigen::Index q = 0; q < n; ++q) {
+      const double trial = f_prev + kt * (w(q) - w_prev);  // the elastic predictor
+      double f = trial;
+      if (std::abs(trial) <= slip_force(q)) {  // stick
+        out.stiffness(q) = kt;
+        out.anchor(q) = last_slip;
+        out.slip_sensitivity(q) = last_slip >= 0 ? sigma_last : 0.0;
+      } else {  // slip: the projection on |f| <= F_s
+        const double sigma = trial > 0.0 ? 1.0 : -1.0;
+        f = sigma * slip_force(q);
+        out.stiffness(q) = 0.0;
+        out.anchor(q) = -1;
+        out.slip_sensitivity(q) = sigma;
+        out.dissipated_energy += f * ((w(q) - w_prev) - (f - f_prev) / kt);  // f Δs, Δs the slider's increment
+        last_slip = static_cast<int>(q);
+        sigma_last = sigma;
+        if (first_slip < 0) first_slip = static_cast<int>(q);
+        ++out.slipping_samples;
+      }
+      out.force(q) = f;
+      f_prev = f;
+      w_prev = w(q);
+    }
+    out.periods = period;
+    if (period >= 2 && f_prev == previous_end) {
+      // Periodic: the stick samples before this period's first slip hang on its last slip.
+      for (int q = 0; q < first_slip; ++q) {
+        out.anchor(q) = last_slip;
+        out.slip_sensitivity(q) = sigma_last;
+      }
+      return out;
+    }
+    before = previous_end;
+    previous_end = f_prev;
+  }
+  std::ostringstream m;
+  m.precision(17);
+  m << "jenkins_loop: the force at the period's end has not repeated after max_periods = " << max_periods
+    << " periods (the last two ends: " << before << " N and " << previous_end << " N); raise max_periods";
+  throw std::runtime_error(m.str());
+}
+
+}  // namespace wbm::contact
