@@ -85,4 +85,57 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   throw std::runtime_error(m.str());
 }
 
+void JenkinsParameters::validate() const {
+  const auto bad = [](const char* field, double value, const char* range) {
+    std::ostringstream m;
+    m << "JenkinsParameters." << field << " = " << value << ": " << range;
+    throw std::invalid_argument(m.str());
+  };
+  if (!(tangential_stiffness > 0.0) || !std::isfinite(tangential_stiffness)) {
+    bad("tangential_stiffness (k_t)", tangential_stiffness, "must be finite and > 0 [N/m]");
+  }
+  if (!(friction_coefficient >= 0.0) || !std::isfinite(friction_coefficient)) {
+    bad("friction_coefficient (mu)", friction_coefficient, "must be finite and >= 0 (0: no friction)");
+  }
+  if (!(normal_load >= 0.0) || !std::isfinite(normal_load)) {
+    bad("normal_load (N)", normal_load, "must be finite and >= 0 [N] (a compressive preload)");
+  }
+}
+
+JenkinsLaw::JenkinsLaw(const JenkinsParameters& parameters) : p_(parameters) { p_.validate(); }
+
+namespace {
+[[noreturn]] void no_function(const char* what) {
+  throw std::logic_error(std::string("JenkinsLaw::") + what + ": a Jenkins element is hysteretic; its force depends on the "
+                         "history over the period, not on u alone: use evaluate_period()");
+}
+}  // namespace
+
+double JenkinsLaw::force(double /*u*/) const { no_function("force"); }
+double JenkinsLaw::stiffness(double /*u*/) const { no_function("stiffness"); }
+double JenkinsLaw::potential(double /*u*/) const { no_function("potential"); }
+
+std::string JenkinsLaw::describe() const {
+  std::ostringstream d;
+  d << "Jenkins element k_t = " << p_.tangential_stiffness << " N/m, mu = " << p_.friction_coefficient
+    << ", N = " << p_.normal_load << " N";
+  return d.str();
+}
+
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()));
+}
+
+void JenkinsLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
+                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const {
+  if (force.size() != u.size() || stiffness.size() != u.size() || anchor.size() != u.size()) {
+    throw std::invalid_argument("JenkinsLaw::evaluate_period: force, stiffness and anchor must have the " +
+                                std::to_string(u.size()) + " samples of u");
+  }
+  const JenkinsLoop l = loop(u);
+  force = l.force;
+  stiffness = l.stiffness;
+  anchor = l.anchor;
+}
+
 }  // namespace wbm::contact

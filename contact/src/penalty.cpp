@@ -32,6 +32,12 @@ void ContactLaw::evaluate(const Eigen::Ref<const Eigen::VectorXd>& u,
   }
 }
 
+void ContactLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
+                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const {
+  evaluate(u, force, stiffness);
+  anchor.setConstant(-1);
+}
+
 void ExponentialPenaltyParameters::validate() const {
   const char* law = "ExponentialPenalty";
   if (!(coefficient > 0.0) || !std::isfinite(coefficient)) bad(law, "coefficient (a_c)", coefficient, "must be finite and > 0 [N]");

@@ -146,6 +146,10 @@ MasslessCondensation condense_massless(const MechanicalSystem& system, const std
       out.contact_sign.push_back(0.0);
       continue;
     }
+    if (c.law->hysteretic()) {
+      fail("the contact at the massless DOF " + name(c.dof) + " is a " + c.law->describe() + ": a friction law behind "
+           "a spring is not condensed (its slider state would need a local solve); give the DOF a mass");
+    }
     const auto terms = c.terms();
     if (terms.size() != 1) {
       fail("the contact at " + name(c.dof) + " involves the massless DOF " + name(out.massless[static_cast<size_t>(row)]) +

@@ -154,6 +154,11 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
   system.validate();
   ContactPoint::validate(contacts, system.dofs());
   for (const auto& c : contacts) {
+    if (c.law->hysteretic()) {
+      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + "; its monodromy matrix needs the slider's stick/slip state "
+                                  "along the orbit, which is not implemented: stability is not computed for friction");
+    }
     if (c.law->rigid()) {
       throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
                                   c.law->describe() + "; the monodromy matrix of an impacting orbit needs a saltation "

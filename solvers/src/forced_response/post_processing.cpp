@@ -63,6 +63,11 @@ PeriodicFields evaluate_fields(const TimeBasis& trial, const Eigen::MatrixXd& co
 Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& displacement) {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(displacement.cols());
   if (contacts.empty()) return f;
+  if (contacts.front().law->hysteretic()) {
+    throw std::invalid_argument("contact_force: the contact at DOF " + std::to_string(contacts.front().dof) + " is a " +
+                                contacts.front().law->describe() + ", whose force depends on the history over the "
+                                "period: read WeightedResidualSolution::contact_force_samples instead");
+  }
   if (contacts.front().law->rigid()) {
     throw std::invalid_argument("contact_force: the contact at DOF " + std::to_string(contacts.front().dof) +
                                 " is a rigid stop, whose force is not a function of the displacement: read "
@@ -80,6 +85,13 @@ Eigen::VectorXd system_energy(const MechanicalSystem& system, const std::vector<
                                 std::to_string(displacement.cols()) + " and velocity " +
                                 std::to_string(velocity.rows()) + " x " + std::to_string(velocity.cols()) +
                                 " must both be n x P with n = " + std::to_string(system.dofs()));
+  }
+  for (const auto& c : contacts) {
+    if (c.law->hysteretic()) {
+      throw std::invalid_argument("system_energy: the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + ", which stores k_t-spring energy that depends on the history "
+                                  "and dissipates by slip: no energy function of u exists");
+    }
   }
   const Eigen::MatrixXd mv = system.mass * velocity;
   const Eigen::MatrixXd ku = system.stiffness * displacement;

@@ -321,6 +321,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     }
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(x, nc).transpose();  // P × n_c
     for (int c = 0; c < nc; ++c) {
+      if (contacts[c].law->hysteretic()) {  // the periodic loop over the P samples; |f| (friction)
+        Eigen::VectorXd f(uc.rows()), k(uc.rows());
+        Eigen::VectorXi anchor(uc.rows());
+        contacts[c].law->evaluate_period(uc.col(c), f, k, anchor);
+        r.max_contact_force = std::max(r.max_contact_force, f.cwiseAbs().maxCoeff());
+        continue;
+      }
       for (Eigen::Index k = 0; k < uc.rows(); ++k) {
         r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
       }

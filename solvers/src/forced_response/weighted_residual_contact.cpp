@@ -175,8 +175,17 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
   Eigen::MatrixXd force(nc, q);
   if (tangents != nullptr) tangents->assign(static_cast<size_t>(nc), {});
   Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
+  Eigen::VectorXi anchor = Eigen::VectorXi::Constant(q, -1);     // a hysteretic law's last slip
   for (int c = 0; c < nc; ++c) {
-    if (cell_average_rule) {
+    if (contacts[c].law->hysteretic()) {
+      if (cell_average_rule) {
+        throw std::invalid_argument("WeightedResidual: contact_quadrature = CellAverage averages a law f(u) over each "
+                                    "sample's cell; the contact at DOF " + std::to_string(contacts[c].dof) + " is a " +
+                                    contacts[c].law->describe() + ", whose force depends on the history: use "
+                                    "contact_quadrature = Midpoint");
+      }
+      contacts[c].law->evaluate_period(u.row(c).transpose(), fc, kc, anchor);
+    } else if (cell_average_rule) {
       for (int r = 0; r < q; ++r) detail::cell_average(*contacts[c].law, u(c, r), slope(c, r), fc(r), kc(r), kd(r));
     } else {
       contacts[c].law->evaluate(u.row(c).transpose(), fc, kc);
@@ -187,9 +196,12 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
     for (int r = 0; r < q; ++r) {
       if (kc(r) != 0.0) t.active.push_back(r);
       if (kd(r) != 0.0) t.sloped.push_back(r);
+      if (kc(r) != 0.0 && anchor(r) >= 0) t.anchored.push_back(r);
     }
     t.kc = kc;
     t.kd = kd;
+    t.anchor = anchor;
+    anchor.setConstant(-1);
   }
   return force;
 }
@@ -205,6 +217,19 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
       // law's kink (a few per crossing): their rows are evaluated here.
       const auto [ts, ks] = sloped_samples(t);
       block.noalias() += (ks.asDiagonal() * weighting_values(ts)).transpose() * trial.values(ts, 1);
+    }
+    if (!t.anchored.empty()) {
+      // A hysteretic law: − Σ_q p_j(τ_q) κ_q/Q q_k(τ_a(q)) over the stick samples q hanging on
+      // the slip sample a(q) (∂f_q/∂u_a = −κ_q).
+      const auto na = static_cast<Eigen::Index>(t.anchored.size());
+      Eigen::VectorXd tq(na), ta(na), kq(na);
+      for (Eigen::Index i = 0; i < na; ++i) {
+        const int r = t.anchored[static_cast<size_t>(i)];
+        tq(i) = sampling->tau(r);
+        ta(i) = sampling->tau(t.anchor(r));
+        kq(i) = t.kc(r) / q;
+      }
+      block.noalias() -= (kq.asDiagonal() * weighting_values(tq)).transpose() * trial.values(ta, 0);
     }
     for (int k = 0; k < m; ++k) {
       for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
@@ -237,10 +262,14 @@ LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::V
   LowRankJacobian jac;
   jac.scale = scale;
   Eigen::Index rank = 0;
-  for (const auto& t : tangents) rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
+  bool anchored = false;  // a hysteretic law's samples hang on earlier ones: W V is not diagonal in the samples
+  for (const auto& t : tangents) {
+    rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
+    anchored = anchored || !t.anchored.empty();
+  }
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   jac.rows = size;
-  if (4 * rank > 3 * size) {
+  if (4 * rank > 3 * size || anchored) {
     jac.capacitance = identity_plus_hn(tangents);
     return jac;
   }

@@ -383,9 +383,13 @@ struct WeightedResidual::Impl {
 
   // The contact law's derivatives at the samples of one contact: ∂f/∂u (kc) and, for
   // CellAverage, ∂f̄/∂δ (kd), with the samples where each is nonzero.
+  // The law's derivatives at the samples of one contact: ∂f_q/∂u_q = kc(q) (active: kc ≠ 0),
+  // the CellAverage kink terms kd (sloped), and for a hysteretic law ∂f_q/∂u_r = −kc(q) at
+  // r = anchor(q) (anchored: the samples with an anchor; ContactLaw::evaluate_period).
   struct ContactTangent {
     Eigen::VectorXd kc, kd;
-    std::vector<int> active, sloped;
+    std::vector<int> active, sloped, anchored;
+    Eigen::VectorXi anchor;
   };
 
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally

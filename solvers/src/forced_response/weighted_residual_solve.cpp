@@ -262,11 +262,13 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
   }
   if (p.nc > 0) {
     const Eigen::MatrixXd u = p.contact_samples(x);
+    const Eigen::MatrixXd f = p.contact_force_samples(x, nullptr);
     s.max_penetration = -std::numeric_limits<double>::infinity();
     for (int c = 0; c < p.nc; ++c) {
+      const bool tangential = p.contacts[c].law->hysteretic();  // friction: |f| ≤ μN, no gap to penetrate
       for (int k = 0; k < p.q; ++k) {
-        s.max_penetration = std::max(s.max_penetration, u(c, k) - p.contacts[c].law->gap());
-        s.max_contact_force = std::max(s.max_contact_force, p.contacts[c].law->force(u(c, k)));
+        if (!tangential) s.max_penetration = std::max(s.max_penetration, u(c, k) - p.contacts[c].law->gap());
+        s.max_contact_force = std::max(s.max_contact_force, tangential ? std::abs(f(c, k)) : f(c, k));
       }
     }
   }

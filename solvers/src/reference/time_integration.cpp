@@ -118,6 +118,11 @@ Ode make_ode(const MechanicalSystem& system, const std::vector<HarmonicLoad>& lo
 
 void refuse_rigid_stops(const std::vector<ContactPoint>& contacts, const char* where) {
   for (const auto& c : contacts) {
+    if (c.law->hysteretic()) {
+      throw std::invalid_argument(std::string(where) + ": the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + ", a hysteretic law with a slider state that this integrator "
+                                  "does not carry: friction has no time-stepping reference here yet");
+    }
     if (c.law->rigid()) {
       throw std::invalid_argument(std::string(where) + ": the contact at DOF " + std::to_string(c.dof) + " is a " +
                                   c.law->describe() + ", which has no force law for an ODE integrator: use "

@@ -30,7 +30,11 @@
 /// graphite. Br. J. Appl. Phys. 13, 30–32. [G80] Griffin, J.H. (1980). Friction damping of
 /// resonant stresses in gas turbine engine airfoils. J. Eng. Power 102, 329–333.
 
+#include <string>
+
 #include <Eigen/Core>
+
+#include <wbm/contact/penalty.hpp>
 
 namespace wbm::contact {
 
@@ -63,5 +67,39 @@ struct JenkinsLoop {
 /// constant slip force.
 [[nodiscard]] JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
                                        const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods = 8);
+
+/// A Jenkins element under a constant normal load, as a contact law along one tangent.
+struct JenkinsParameters {
+  double tangential_stiffness;  // k_t [N/m], finite and > 0
+  double friction_coefficient;  // μ [-], finite and >= 0
+  double normal_load;           // N [N], finite and >= 0: a preload; the slip force is μ N
+  /// Throws std::invalid_argument naming the field, its value and the allowed range.
+  void validate() const;
+};
+
+/// The Jenkins element of JenkinsParameters as a ContactLaw on the tangential displacement u of a
+/// contact point (ContactPoint::along the tangent): hysteretic() is true and evaluate_period() is
+/// jenkins_loop with F_s = μ N at every sample (stiffness, anchor as documented there); force(),
+/// stiffness() and potential() throw std::logic_error (no f(u) exists), and gap() is 0 (a
+/// tangential law has no gap). evaluate_period throws as jenkins_loop does for sizes that differ.
+class JenkinsLaw final : public ContactLaw {
+ public:
+  explicit JenkinsLaw(const JenkinsParameters& parameters);
+  [[nodiscard]] double force(double u) const override;
+  [[nodiscard]] double stiffness(double u) const override;
+  [[nodiscard]] double potential(double u) const override;
+  [[nodiscard]] double gap() const override { return 0.0; }
+  [[nodiscard]] std::string describe() const override;
+  [[nodiscard]] bool hysteretic() const override { return true; }
+  void evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
+                       Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const override;
+  /// The whole loop at the samples u (jenkins_loop), with its slip sensitivities and energy.
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  [[nodiscard]] const JenkinsParameters& parameters() const { return p_; }
+  [[nodiscard]] double slip_force() const { return p_.friction_coefficient * p_.normal_load; }
+
+ private:
+  JenkinsParameters p_;
+};
 
 }  // namespace wbm::contact

@@ -30,10 +30,22 @@ class ContactLaw {
   /// std::logic_error; solvers that sample a law as a function of u refuse it by name.
   [[nodiscard]] virtual bool rigid() const { return false; }
 
+  /// True for a hysteretic law (JenkinsLaw, friction.hpp): its force at a sample depends on the
+  /// history over the period, not on u alone, so force(), stiffness() and potential() throw
+  /// std::logic_error and solvers call evaluate_period(); solvers that need f(u) refuse it by name.
+  [[nodiscard]] virtual bool hysteretic() const { return false; }
+
   /// Batched evaluation over samples: force(q) = f_c(u(q)), stiffness(q) = f_c'(u(q)).
   /// Writes into `force` and `stiffness`, which must have the size of `u`.
   void evaluate(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
                 Eigen::Ref<Eigen::VectorXd> stiffness) const;
+
+  /// Evaluation over the Q uniform samples u(q) of one period, for memoryless and hysteretic laws
+  /// alike: force(q) = f_q, stiffness(q) = ∂f_q/∂u_q, and anchor(q) = r ≥ 0 when f_q also
+  /// depends on one earlier sample, ∂f_q/∂u_r = −stiffness(q) (a Jenkins element's last slip),
+  /// else −1. The default is evaluate() with every anchor −1. All four have the size of u.
+  virtual void evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
+                               Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const;
 };
 
 /// Exponential penalty [JL14 Eq. (5)]:

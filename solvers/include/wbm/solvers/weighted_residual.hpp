@@ -175,8 +175,8 @@ struct WeightedResidualSolution {
   NewtonReport report;             // Newton on the contact unknowns (scaled residual)
   double relative_residual = 0.0;  // ‖G a − b + n(a)‖₂ / ‖b‖₂ of the full system, recomputed
   double residual_tolerance = 0.0; // the bound relative_residual was verified against
-  double max_penetration = 0.0;    // max over contacts and samples of u_c − g0 [m]
-  double max_contact_force = 0.0;  // max over contacts and samples of f_c [N]
+  double max_penetration = 0.0;    // max over normal contacts and samples of u_c − g0 [m]
+  double max_contact_force = 0.0;  // max over contacts and samples of f_c [N] (|f| for a friction law)
   int contact_unknowns = 0;        // n_c · M
   double condition_number = 0.0;   // 1-norm condition estimate of G (Hager–Higham), inf if G is singular
   std::string linear_solver;       // "sparse-lu" or "modal"
