@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/aft.hpp>
@@ -113,13 +114,30 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
   if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    nlohmann::json friction = nlohmann::json::array();
     for (size_t k = 0; k < contacts.size(); ++k) {
       const auto& c = contacts[k];
       Eigen::VectorXd force(tau.size());
-      for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(solver_displacement.col(p)));
+      if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
+        // The element's periodic loop over the P output samples (tau uniform over one period).
+        Eigen::VectorXd w(tau.size());
+        for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = c.displacement(solver_displacement.col(p));
+        const contact::JenkinsLoop loop = jenkins->loop(w);
+        force = loop.force;
+        const Eigen::VectorXd slider = w - force / jenkins->parameters().tangential_stiffness;
+        friction.push_back({{"contact", contact_label(scene, k)},
+                            {"stick_fraction", 1.0 - static_cast<double>(loop.slipping_samples) / static_cast<double>(tau.size())},
+                            {"slip_amplitude_m", 0.5 * (slider.maxCoeff() - slider.minCoeff())},
+                            {"dissipated_energy_per_cycle_J", loop.dissipated_energy},
+                            {"dissipated_power_W", loop.dissipated_energy * frequency_hz},
+                            {"output_samples", tau.size()}});
+      } else {
+        for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(solver_displacement.col(p)));
+      }
       f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
       f.columns.push_back(force);
     }
+    if (!friction.empty()) out.diagnostics["friction"] = friction;
     out.tables.push_back(std::move(f));
   }
   if (scene.output.harmonics > 0) {  // A_h, φ_h of u = Σ A_h cos(2πhτ + φ_h) from the P samples
@@ -140,7 +158,10 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
     }
     out.tables.push_back(std::move(t));
   }
-  if (velocity != nullptr) {
+  if (velocity != nullptr && scene.friction()) {
+    out.diagnostics["energy"] = "not written: a friction law's energy depends on the history (diagnostics.friction "
+                                "gives the energy it dissipates per cycle)";
+  } else if (velocity != nullptr) {
     out.tables.push_back({"energy.csv",
                           {"tau [-]", "time [s]", "energy [J]"},
                           {tau, time, solvers::system_energy(system, contacts, solver_displacement, *solver_velocity)}});

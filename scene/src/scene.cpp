@@ -17,6 +17,7 @@
 #include <utility>
 
 #include <Eigen/SparseCholesky>
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/signorini.hpp>
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
@@ -179,6 +180,9 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else if (c.law == ContactLawKind::Exponential) {
       law = std::make_shared<contact::ExponentialPenalty>(
           contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
+    } else if (c.law == ContactLawKind::Jenkins) {
+      law = std::make_shared<contact::JenkinsLaw>(
+          contact::JenkinsParameters{c.tangential_stiffness, c.friction_coefficient, c.normal_load});
     } else {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
@@ -321,8 +325,13 @@ nlohmann::json to_json(const Scene& s) {
   if (!s.contacts.empty()) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& c : s.contacts) {
-      nlohmann::json o = {{"law", std::string(to_string(c.law))}, {"gap", c.gap}};
-      if (c.law == ContactLawKind::Exponential) {
+      nlohmann::json o = {{"law", std::string(to_string(c.law))}};
+      if (c.law != ContactLawKind::Jenkins) o["gap"] = c.gap;
+      if (c.law == ContactLawKind::Jenkins) {
+        o["tangential_stiffness"] = c.tangential_stiffness;
+        o["friction_coefficient"] = c.friction_coefficient;
+        o["normal_load"] = c.normal_load;
+      } else if (c.law == ContactLawKind::Exponential) {
         o["coefficient"] = c.coefficient;
         o["exponent"] = c.exponent;
       } else if (c.law == ContactLawKind::Linear) {

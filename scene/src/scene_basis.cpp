@@ -19,7 +19,8 @@ void Parser::basis(const toml::table& root) {
     s_.basis.harmonics = Basis::kDefaultHarmonics;
     s_.basis.dimension = 2 * s_.basis.harmonics + 1;
     const bool rigid = !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Rigid;
-    s_.basis.contact_quadrature = rigid ? solvers::ContactQuadrature::Midpoint : solvers::ContactQuadrature::CellAverage;
+    s_.basis.contact_quadrature = rigid || s_.friction() ? solvers::ContactQuadrature::Midpoint
+                                                          : solvers::ContactQuadrature::CellAverage;
     return;
   }
   r_.only(*t, "basis", names(basis_keys()));
@@ -88,14 +89,20 @@ void Parser::basis(const toml::table& root) {
   const bool corner = std::any_of(s_.contacts.begin(), s_.contacts.end(),
                                   [](const Contact& k) { return k.law == ContactLawKind::Linear; });
   const bool sloped = tb && tb->max_derivative() >= 1;
-  b.contact_quadrature = quadrature == "cell-average" ||
-                                 (quadrature == "automatic" && !rigid && (b.harmonics > 0 || (corner && sloped)))
+  // A friction law has no f(u) to average: midpoint for every contact of the scene.
+  b.contact_quadrature = quadrature == "cell-average" || (quadrature == "automatic" && !rigid && !s_.friction() &&
+                                                           (b.harmonics > 0 || (corner && sloped)))
                              ? solvers::ContactQuadrature::CellAverage
                              : solvers::ContactQuadrature::Midpoint;
   if (rigid && quadrature == "cell-average") {
     r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",
              "\"cell-average\" integrates a penalty law over each cell; rigid stops impose the Signorini "
              "conditions at the instants (k + 1/2)/M instead: use \"automatic\" or \"midpoint\"");
+  }
+  if (s_.friction() && quadrature == "cell-average") {
+    r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",
+             "\"cell-average\" averages a law f(u) over each cell; a \"jenkins\" contact's force depends on the "
+             "history over the period: use \"automatic\" or \"midpoint\"");
   }
   if (tb && quadrature == "cell-average" && tb->max_derivative() < 1) {
     r_.error(Reader::source_of(*t, "contact_quadrature"), "basis.contact_quadrature",

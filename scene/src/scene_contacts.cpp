@@ -40,8 +40,23 @@ void Parser::contacts(const toml::table& root) {
       continue;  // the law decides the other keys: checking them against a guess would mislead
     }
     c.law = value_of(law_table(), law);
-    c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
-                                                : detail::finite("m"));
+    const bool friction = c.law == ContactLawKind::Jenkins;
+    if (!friction) {
+      c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
+                                                  : detail::finite("m"));
+    }
+    if (friction && (modes || s_.analysis.kind == AnalysisKind::Timestep)) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"jenkins\" (friction) is for the weighted residual: solve, sweep and continuation; analysis \"" +
+                   std::string(to_string(s_.analysis.kind)) + "\" has no friction law (" +
+                   (modes ? "nonlinear modes are conservative" : "the time-stepping reference carries no slider state") +
+                   ")");
+    }
+    if (friction && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"jenkins\" with analysis.stability = true: the monodromy matrix of a stick/slip orbit is not computed; "
+               "set stability = false");
+    }
     if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
                "\"rigid\" (exact contact) with analysis.stability = true: the stability of impacting orbits "

@@ -144,14 +144,17 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
   static const std::vector<DeclaredKey<C>> keys = {
       choice_key<C>("law", names(law_table()), [](const C& c) { return to_string(c.law); },
                     [](C& c, const std::string& v) { c.law = value_of(law_table(), v); },
-                    "exponential penalty [JL14 Eq. (5)], linear penalty f = k max(u − g0, 0), or a rigid stop with "
+                    "exponential penalty [JL14 Eq. (5)], linear penalty f = k max(u − g0, 0), a rigid stop with "
                     "exact contact (Signorini conditions; solve, sweep, continuation without stability, timestep and "
-                    "nnm; all contacts of a forced response rigid or none)")
+                    "nnm; all contacts of a forced response rigid or none), or a Jenkins element: dry friction along "
+                    "the contact's direction, a spring k_t in series with a Coulomb slider of slip force μN (solve, "
+                    "sweep, continuation without stability; Midpoint quadrature)")
           .is_required()
           .read_by_section(),
       number_key<C>("gap", [](auto& c) -> auto& { return c.gap; }, finite("m"), "g0 [m]; < 0 is a prestress")
           .is_required()
           .documented_allowed("finite; > 0 for nnm")
+          .only_in({"exponential", "linear", "rigid"})
           .read_by_section(),
       number_key<C>("coefficient", [](auto& c) -> auto& { return c.coefficient; }, positive("N"), "a_c [N]")
           .is_required()
@@ -162,6 +165,18 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
       number_key<C>("stiffness", [](auto& c) -> auto& { return c.stiffness; }, positive("N/m"), "k [N/m]")
           .is_required()
           .only_in({"linear"}),
+      number_key<C>("tangential_stiffness", [](auto& c) -> auto& { return c.tangential_stiffness; }, positive("N/m"),
+                    "k_t [N/m], the stiffness while the contact sticks")
+          .is_required()
+          .only_in({"jenkins"}),
+      number_key<C>("friction_coefficient", [](auto& c) -> auto& { return c.friction_coefficient; }, non_negative(""),
+                    "μ [-]")
+          .is_required()
+          .only_in({"jenkins"}),
+      number_key<C>("normal_load", [](auto& c) -> auto& { return c.normal_load; }, non_negative("N"),
+                    "N [N], a constant normal preload: the slip force is μN")
+          .is_required()
+          .only_in({"jenkins"}),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),
       compound_key<C>("dof", kLocation, "1-DOF matrices: `0`", "see Locations", "matrices only: the contact DOF"),
       compound_key<C>("nodes", "node set name or list of node numbers", "none",
@@ -225,7 +240,8 @@ const std::vector<DeclaredKey<Basis>>& basis_keys() {
                     "needs a trial basis with a slope, not Haar); `automatic`, cell-average for `harmonics = H` (and "
                     "with no `[basis]` table) and for a `\"linear\"` law (its corner at the gap) on a trial with a "
                     "slope whatever M, midpoint otherwise (the smooth exponential law of the paper with M = 2^J, "
-                    "rigid stops, Haar). result.json echoes the resolved rule")
+                    "rigid stops, Haar, and any scene with a `\"jenkins\"` contact, whose force has no f(u) to "
+                    "average). result.json echoes the resolved rule")
           .documented_default("`\"automatic\"`")
           .read_by_section(),
       compound_key<B>("harmonic_selection", "string or list", "`\"all\"`",

@@ -129,9 +129,10 @@ struct Forcing {
   [[nodiscard]] std::vector<double> frequencies_hz() const;
 };
 
-/// The law of a [contact] entry: "exponential" [JL14 Eq. (5)], "linear" (penalty spring) or
-/// "rigid" (exact Signorini contact, nnm only).
-enum class ContactLawKind { Exponential, Linear, Rigid };
+/// The law of a [contact] entry: "exponential" [JL14 Eq. (5)], "linear" (penalty spring),
+/// "rigid" (exact Signorini contact) or "jenkins" (friction along the contact's direction: a
+/// Jenkins element, contact/friction.hpp).
+enum class ContactLawKind { Exponential, Linear, Rigid, Jenkins };
 [[nodiscard]] std::string_view to_string(ContactLawKind law) noexcept;
 
 /// The outer algorithm of type = "nnm": "continuation" (pseudo-arclength on the KKT
@@ -144,7 +145,10 @@ struct Contact {
   double coefficient = 0.0;  // a_c [N] (exponential)
   double exponent = 0.0;     // α [1/m] (exponential)
   double stiffness = 0.0;    // k [N/m] (linear)
-  double gap = 0.0;          // g0 [m]
+  double tangential_stiffness = 0.0;  // k_t [N/m] (jenkins)
+  double friction_coefficient = 0.0;  // μ [-] (jenkins)
+  double normal_load = 0.0;           // N [N] (jenkins): a constant preload; slip force μ N
+  double gap = 0.0;          // g0 [m] (not jenkins)
   int dof = 0;               // 0-based
   /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
   /// g0 − (u[dof] − u[against]) and the force pushes the two apart. −1: a fixed obstacle.
@@ -240,6 +244,13 @@ struct Scene {
   solvers::TimeIntegrationOptions timestep{};  // BDF, penalty laws
   solvers::MoreauJeanOptions moreau_jean{};    // type = "timestep" with law = "rigid"
   [[nodiscard]] bool rigid() const { return !contacts.empty() && contacts.front().law == ContactLawKind::Rigid; }
+  /// True when a contact is a friction law ("jenkins").
+  [[nodiscard]] bool friction() const {
+    for (const auto& c : contacts) {
+      if (c.law == ContactLawKind::Jenkins) return true;
+    }
+    return false;
+  }
   Output output;
   std::vector<std::string> warnings;   // sections given but unused by the analysis ("file:line: ...")
   /// Set when the matrices have massless DOFs (rows of zeros of M): their static condensation

@@ -1,0 +1,127 @@
+// Friction scenes (law = "jenkins", issue #36). Truths not produced by this code: the first-
+// harmonic energy balance at resonance, where the slipping slider's fundamental 4μN/π opposes the
+// velocity and the viscous force c ω X takes the rest of the load, X = (P − 4μN/π)/(c ω); the
+// energy balance over a cycle, work of the load = viscous dissipation + friction dissipation
+// (Parseval on the samples); the slip force as the largest friction force.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <wbm/scene/analysis.hpp>
+#include <wbm/scene/scene.hpp>
+
+#include "scene_fixtures.hpp"
+#include "testing.hpp"
+
+using wbm::scene::Scene;
+using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+const std::string kDamper = std::string(WBM_EXAMPLES) + "/friction_damper.toml";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+// The shipped friction damper (examples/scenes/friction_damper.toml): m = 1 kg, f_n = 10 Hz,
+// ζ = 0.5 %, P = 1 N, μN = 0.2 N, k_t = 1000 k. Its resonance peak is the closed form
+// (P − 4μN/π)/(c ω_n) = 74.5 static deflections to 1e-3 (Coulomb friction alone cannot bound it:
+// 4μN/π < P), and the largest friction force along the branch is μN.
+TEST(SceneFriction, TheDamperPeakIsTheFirstHarmonicEnergyBalance) {
+  const Scene s = wbm::scene::load_scene(kDamper);
+  ASSERT_EQ(s.contacts.size(), 1u);
+  EXPECT_EQ(s.basis.contact_quadrature, wbm::solvers::ContactQuadrature::Midpoint);  // automatic, for friction
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
+  const Eigen::VectorXd& force = column(r, "branch.csv", 4);
+  const double m = 1.0, k = 3947.8417604357433, c = 0.6283185307179586 * m, p = 1.0, slip = 0.2;
+  const double omega = std::sqrt(k / m);
+  EXPECT_NEAR(amplitude.maxCoeff() / ((p - 4.0 * slip / kPi) / (c * omega)), 1.0, 1e-3);
+  EXPECT_NEAR(force.maxCoeff(), slip, 1e-12);
+}
+
+// One solve at 8 Hz: over a cycle the load's work equals the viscous dissipation plus the
+// friction element's (diagnostics.friction), from the written samples; the slider slips over
+// most of the cycle and its dissipation is 4 μN × (its slip amplitude), as for any Jenkins loop
+// with two reversals a cycle; the friction force stays within ±μN.
+TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
+  std::string text = slurp(kDamper);
+  text.replace(text.find("frequency_hz = [5.0, 20.0]"), 26, "frequency_hz = 8.0");
+  text.replace(text.find("type = \"continuation\", stability = false"), 40, "type = \"solve\"");
+  const Scene s = parse(text);
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
+  const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
+  const Eigen::VectorXd& f = column(r, "contact_force.csv", 2);
+  const double hz = 8.0, period = 1.0 / hz, c = 0.6283185307179586, slip = 0.2;
+  const auto samples = static_cast<double>(time.size());
+  double load = 0.0, viscous = 0.0;
+  for (Eigen::Index i = 0; i < time.size(); ++i) {
+    load += std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;  // ∮ P cos ωt u̇ dt, P = 1 N
+    viscous += c * v(i) * v(i) * period / samples;
+  }
+  const auto& friction = r.diagnostics.at("friction").at(0);
+  const double dissipated = friction.at("dissipated_energy_per_cycle_J").get<double>();
+  EXPECT_NEAR(viscous + dissipated, load, 1e-3 * load);
+  EXPECT_NEAR(dissipated, 4.0 * slip * friction.at("slip_amplitude_m").get<double>(), 1e-9 * dissipated);
+  EXPECT_LT(friction.at("stick_fraction").get<double>(), 0.05);
+  EXPECT_LE(f.cwiseAbs().maxCoeff(), slip * (1.0 + 1e-15));
+  EXPECT_EQ(r.diagnostics.at("energy").get<std::string>().rfind("not written", 0), 0u);
+}
+
+// The keys of a friction contact, their echo and round trip, and what friction is refused for.
+TEST(SceneFriction, KeysAreReadEchoedAndRefusedWhereFrictionIsNotComputed) {
+  const std::string base = "structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = 8.0 }\n";
+  const std::string law = "contact = { law = \"jenkins\", tangential_stiffness = 4e7, friction_coefficient = 0.3, "
+                          "normal_load = 2.0";
+  const Scene s = parse(base + law + " }\n");
+  ASSERT_EQ(s.contacts.size(), 1u);
+  EXPECT_EQ(s.contacts[0].law, wbm::scene::ContactLawKind::Jenkins);
+  EXPECT_EQ(s.contacts[0].tangential_stiffness, 4e7);
+  EXPECT_EQ(s.contacts[0].friction_coefficient, 0.3);
+  EXPECT_EQ(s.contacts[0].normal_load, 2.0);
+  EXPECT_TRUE(s.friction());
+  const nlohmann::json echo = wbm::scene::to_json(s)["contact"][0];
+  EXPECT_EQ(echo["law"], "jenkins");
+  EXPECT_FALSE(echo.contains("gap"));
+  EXPECT_EQ(echo["normal_load"], 2.0);
+  const Scene again = wbm::scene::scene_from_json(wbm::scene::to_json(s), temp("again.json"));
+  EXPECT_EQ(wbm::scene::to_json(again), wbm::scene::to_json(s));
+  const auto law_ptr = s.contact_points().at(0).law;
+  EXPECT_TRUE(law_ptr->hysteretic());
+  EXPECT_EQ(law_ptr->describe(), "Jenkins element k_t = 4e+07 N/m, mu = 0.3, N = 2 N");
+
+  const auto refused = [](const std::string& text, std::vector<std::string> fragments) {
+    expect_throw_with<std::invalid_argument>([&] { (void)parse(text); }, fragments);
+  };
+  refused(base + law + ", gap = 1e-3 }\n", {"contact.gap: unknown key"});
+  refused(base + "contact = { law = \"jenkins\", tangential_stiffness = 4e7, normal_load = 2.0 }\n",
+          {"contact.friction_coefficient"});
+  refused(base + "contact = { law = \"jenkins\", tangential_stiffness = 4e7, friction_coefficient = 0.3, "
+                 "normal_load = -1.0 }\n",
+          {"contact.normal_load", ">= 0 [N]"});
+  refused("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 20.0] }\n" +
+              law + " }\nanalysis = { type = \"continuation\" }\n",
+          {"contact.law", "stability = true", "set stability = false"});
+  refused(base + law + " }\nanalysis = { type = \"timestep\" }\n", {"contact.law", "analysis \"timestep\" has no friction law"});
+  refused(base + law + " }\nbasis = { harmonics = 8, contact_quadrature = \"cell-average\" }\n",
+          {"basis.contact_quadrature", "\"jenkins\"", "\"midpoint\""});
+}
