@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <limits>
 #include <stdexcept>
 
@@ -262,13 +263,17 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
   }
   if (p.nc > 0) {
     const Eigen::MatrixXd u = p.contact_samples(x);
-    const Eigen::MatrixXd f = p.contact_force_samples(x, nullptr);
     s.max_penetration = -std::numeric_limits<double>::infinity();
+    std::optional<Eigen::MatrixXd> loops;  // a friction law's force at the samples (its periodic loop)
     for (int c = 0; c < p.nc; ++c) {
-      const bool tangential = p.contacts[c].law->hysteretic();  // friction: |f| ≤ μN, no gap to penetrate
+      if (p.contacts[c].law->hysteretic()) {  // |f| ≤ μN; no gap to penetrate
+        if (!loops) loops = p.contact_force_samples(x, nullptr);
+        s.max_contact_force = std::max(s.max_contact_force, loops->row(c).cwiseAbs().maxCoeff());
+        continue;
+      }
       for (int k = 0; k < p.q; ++k) {
-        if (!tangential) s.max_penetration = std::max(s.max_penetration, u(c, k) - p.contacts[c].law->gap());
-        s.max_contact_force = std::max(s.max_contact_force, tangential ? std::abs(f(c, k)) : f(c, k));
+        s.max_penetration = std::max(s.max_penetration, u(c, k) - p.contacts[c].law->gap());
+        s.max_contact_force = std::max(s.max_contact_force, p.contacts[c].law->force(u(c, k)));
       }
     }
   }
