@@ -381,8 +381,6 @@ struct WeightedResidual::Impl {
   // bases by their sparse rows (O(active · support²)).
   [[nodiscard]] Eigen::MatrixXd contact_block(const Eigen::VectorXd& kc, const std::vector<int>& active) const;
 
-  // The contact law's derivatives at the samples of one contact: ∂f/∂u (kc) and, for
-  // CellAverage, ∂f̄/∂δ (kd), with the samples where each is nonzero.
   // The law's derivatives at the samples of one contact: ∂f_q/∂u_q = kc(q) (active: kc ≠ 0),
   // the CellAverage kink terms kd (sloped), and for a hysteretic law ∂f_q/∂u_r = −kc(q) at
   // r = anchor(q) (anchored: the samples with an anchor; ContactLaw::evaluate_period).

@@ -7,8 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace wbm::solvers {
