@@ -135,7 +135,6 @@ DeckInterface predict_interface(const std::filesystem::path& deck, const std::st
 }
 
 ReducedModel reduce_model(const ReductionRequest& request) {
-  namespace fs = std::filesystem;
   if (request.modes < 0) {
     throw std::invalid_argument(std::string("modes = ").append(std::to_string(request.modes)) +
                                 ": must be >= 0 (fixed-interface normal modes; LL11's blade uses 40)");

@@ -51,7 +51,10 @@ TEST(SceneFriction, TheDamperPeakIsTheFirstHarmonicEnergyBalance) {
   ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
   const Eigen::VectorXd& amplitude = column(r, "branch.csv", 3);
   const Eigen::VectorXd& force = column(r, "branch.csv", 4);
-  const double m = 1.0, k = 3947.8417604357433, c = 0.6283185307179586 * m, p = 1.0, slip = 0.2;
+  // The parameters as the scene gives them (M, C, K of 1 DOF; the load; μN).
+  const wbm::solvers::MechanicalSystem sys = s.system();
+  const double m = sys.mass.coeff(0, 0), k = sys.stiffness.coeff(0, 0), c = sys.damping.coeff(0, 0);
+  const double p = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
   const double omega = std::sqrt(k / m);
   EXPECT_NEAR(amplitude.maxCoeff() / ((p - 4.0 * slip / kPi) / (c * omega)), 1.0, 1e-3);
   EXPECT_NEAR(force.maxCoeff(), slip, 1e-12);
@@ -71,11 +74,12 @@ TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
   const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
   const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
   const Eigen::VectorXd& f = column(r, "contact_force.csv", 2);
-  const double hz = 8.0, period = 1.0 / hz, c = 0.6283185307179586, slip = 0.2;
+  const double hz = s.forcing->frequency_hz, period = 1.0 / hz, c = s.system().damping.coeff(0, 0),
+               amplitude = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
   const auto samples = static_cast<double>(time.size());
   double load = 0.0, viscous = 0.0;
   for (Eigen::Index i = 0; i < time.size(); ++i) {
-    load += std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;  // ∮ P cos ωt u̇ dt, P = 1 N
+    load += amplitude * std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;  // ∮ P cos ωt u̇ dt
     viscous += c * v(i) * v(i) * period / samples;
   }
   const auto& friction = r.diagnostics.at("friction").at(0);
@@ -108,6 +112,13 @@ TEST(SceneFriction, KeysAreReadEchoedAndRefusedWhereFrictionIsNotComputed) {
   const auto law_ptr = s.contact_points().at(0).law;
   EXPECT_TRUE(law_ptr->hysteretic());
   EXPECT_EQ(law_ptr->describe(), "Jenkins element k_t = 4e+07 N/m, mu = 0.3, N = 2 N");
+  // Its loop saturates at μN = 0.6 N (not μ, not N): a sinusoid far past the slip threshold.
+  const Eigen::VectorXd w = 1e-6 * Eigen::VectorXd::LinSpaced(64, 0.0, 2.0 * kPi * 63.0 / 64.0).array().cos();
+  Eigen::VectorXd f(64), kq(64);
+  Eigen::VectorXi anchor(64);
+  law_ptr->evaluate_period(w, f, kq, anchor);
+  EXPECT_DOUBLE_EQ(f.maxCoeff(), 0.6);
+  EXPECT_DOUBLE_EQ(f.minCoeff(), -0.6);
 
   const auto refused = [](const std::string& text, std::vector<std::string> fragments) {
     expect_throw_with<std::invalid_argument>([&] { (void)parse(text); }, fragments);
