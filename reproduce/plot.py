@@ -578,6 +578,54 @@ def blade_forced(folder):
     save(fig, folder, "forced_response")
 
 
+def friction_den_hartog(folder):
+    """Issue #36: (a) the damper's amplitude against r, Den Hartog's closed form and every pair at
+    the stiffest k_t; (b) one period of the stick-slip motion, the exact motions and each pair."""
+    meta = json.loads((folder / "meta.json").read_text())
+    labels = meta["combinations"]
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    ax = axes[0]
+    table = wbm_plot.read_csv(folder / "frf.csv")
+    top = max(meta["kt_over_k"])
+    rows = [i for i, kt in enumerate(table["kt_over_k [-]"]) if kt == top and table["combination [-]"][i] == 0]
+    r = [table["r [-]"][i] for i in rows]
+    static = meta["force_N"] / meta["stiffness_N_per_m"]
+    for side in (lambda x: x < 1.0, lambda x: x > 1.0):
+        pts = [(x, table["den_hartog [m]"][i] / static) for x, i in zip(r, rows) if side(x)]
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], "k-", lw=1.4,
+                label="Den Hartog (closed form, at the r computed)" if side(0.5) else None)
+    for c, label in enumerate(labels):
+        idx = [i for i, kt in enumerate(table["kt_over_k [-]"]) if kt == top and table["combination [-]"][i] == c
+               and math.isfinite(table["amplitude [m]"][i])]
+        if not idx:
+            continue  # not solved (its status is in frf.csv and the report)
+        ax.plot([table["r [-]"][i] for i in idx], [table["amplitude [m]"][i] / static for i in idx], MARKERS[c],
+                ms=5, mfc="none", label=f"{label}, k_t = {top:g} k")
+    ax.set_yscale("log")
+    ax.set_xlabel("r = ω/ω_n [-]")
+    ax.set_ylabel("amplitude / (P/k) [-]")
+    ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, M = {meta['a']['dimension']}",
+                 fontsize=9)
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    hist = wbm_plot.read_csv(folder / "history.csv")
+    tau = hist["tau [-]"]
+    ax.plot(tau, hist["coulomb [m]"], "k-", lw=1.6, label="Coulomb, event-driven")
+    for name in hist:
+        if name.startswith("jenkins_exact_kt"):
+            ax.plot(tau, hist[name], "--", lw=0.9, label=f"exact Jenkins, k_t = {name[16:].split(' ')[0]} k")
+    for name in hist:
+        if "_kt" in name and not name.startswith("jenkins"):
+            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", "").replace("_kt", ", k_t = ") + " k")
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("x [m]")
+    ax.set_title(f"(b) stick–slip, ζ = {meta['b']['zeta']:g}, r = {meta['b']['r']:g}, "
+                 f"M = {meta['b']['history_dimension']}", fontsize=9)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    save(fig, folder, "friction")
+
+
 def figures():
     """{id: drawing function} from reproductions.txt, the one list of the reproductions."""
     report = _load("report", Path(__file__).with_name("report.py"))

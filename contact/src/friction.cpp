@@ -1,6 +1,8 @@
 #include <wbm/contact/friction.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -36,15 +38,26 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   out.anchor.resize(n);
   out.slip_sensitivity.resize(n);
   double f_prev = 0.0, w_prev = 0.0;  // the unstretched spring at w = 0 before sample 0
+  // The elastic predictor from the last slip (or from the start), f_a + k_t (w_q − w_a), not
+  // accumulated sample by sample, so that rounding does not drift along a long stick.
+  double f_anchor = 0.0, w_anchor = 0.0;
   int last_slip = -1;
   double sigma_last = 0.0;
   double previous_end = 0.0, before = 0.0;
+  // The end force repeats when it is within kUlps roundings of the force scale. In exact
+  // arithmetic the period map is monotone, so it has no cycle of two periods; in floating point a
+  // stick sample whose predictor lies within rounding of F_s can slip in one period and not in the
+  // next, and the ends then alternate between two values a few ulps apart (seen on a stick–slip
+  // oscillator with DB6: 1.9102933194927472e-06 and 1.9102933194927468e-06 N). Either period is
+  // the steady state to rounding; the last one is returned.
+  constexpr double kUlps = 16.0;
+  const double scale = std::max(slip_force.maxCoeff(), kt * w.cwiseAbs().maxCoeff());
   for (int period = 1; period <= max_periods; ++period) {
     int first_slip = -1;
     out.slipping_samples = 0;
     out.dissipated_energy = 0.0;
     for (Eigen::Index q = 0; q < n; ++q) {
-      const double trial = f_prev + kt * (w(q) - w_prev);  // the elastic predictor
+      const double trial = f_anchor + kt * (w(q) - w_anchor);  // the elastic predictor
       double f = trial;
       if (std::abs(trial) <= slip_force(q)) {  // stick
         out.stiffness(q) = kt;
@@ -59,6 +72,8 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
         out.dissipated_energy += f * ((w(q) - w_prev) - (f - f_prev) / kt);  // f Δs, Δs the slider's increment
         last_slip = static_cast<int>(q);
         sigma_last = sigma;
+        f_anchor = f;
+        w_anchor = w(q);
         if (first_slip < 0) first_slip = static_cast<int>(q);
         ++out.slipping_samples;
       }
@@ -67,7 +82,7 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
       w_prev = w(q);
     }
     out.periods = period;
-    if (period >= 2 && f_prev == previous_end) {
+    if (period >= 2 && std::abs(f_prev - previous_end) <= kUlps * std::numeric_limits<double>::epsilon() * scale) {
       // Periodic: the stick samples before this period's first slip hang on its last slip.
       for (int q = 0; q < first_slip; ++q) {
         out.anchor(q) = last_slip;

@@ -8,14 +8,21 @@
 /// force does: M ü + C u̇ + K u = f_ext − e_t f. The element is rate independent, so its state
 /// over the samples w_q of one period (q = 0 … Q−1, uniform in time) follows the return map, an
 /// elastic predictor projected on |f| ≤ F_s,q:
-///   f* = f_{q−1} + k_t (w_q − w_{q−1}),
+///   f* = f_a + k_t (w_q − w_a)   (= f_{q−1} + k_t (w_q − w_{q−1}) in exact arithmetic),
 ///   f_q = f*                 if |f*| ≤ F_s,q   (stick: the slider holds),
-///   f_q = σ_q F_s,q          otherwise        (slip, σ_q = sign f*).
+///   f_q = σ_q F_s,q          otherwise        (slip, σ_q = sign f*),
+/// a the last slip before q (f_a = σ_a F_s,a), or the start (f = 0 at w = 0) before any. The
+/// predictor is evaluated from a, never by accumulating increments: sums along different paths
+/// round differently, and a stick sample within rounding of F_s would then slip in one period
+/// and not in the next, a two-period cycle of the ends at the rounding level.
 /// The periodic steady state (Masing's rules) starts from the unstretched spring at w = 0 (f = 0
 /// before sample 0), runs the period, and runs it again from the force it ended with until that
-/// force repeats bit for bit. Each period's map f_start ↦ f_end is monotone and 1-Lipschitz, and
-/// constant once a slip is met, so the second period repeats the first as soon as the first
-/// slips with a constant slip force; a varying one may need a third. A period without slip is full
+/// force repeats, to 16 roundings of max(F_s, k_t max|w|) (the predictor's rounding). Each
+/// period's map f_start ↦ f_end is monotone and 1-Lipschitz, and constant once a slip is met, so
+/// the second period repeats the first as soon as the first slips with a constant slip force; a
+/// varying one may need a third. (In floating point a stick sample within rounding of F_s may slip
+/// in one period and not the next, so the ends may alternate a few ulps apart; hence the
+/// tolerance. The last period is returned.) A period without slip is full
 /// stick: the slider stays where it started, at the origin, and f_q = k_t w_q (the convention of
 /// harmonic-balance codes for a stuck joint, whose mean force is otherwise undetermined).
 ///
