@@ -9,6 +9,9 @@ the title (e.g. a backbone stopped at E = 2.48 of 10). The names of the pictures
 to result.json under "pictures" (rewritten atomically), so that the next run into DIR removes
 them with the rest of the old result. Figures (each only when its CSV is listed):
   time_histories.png   displacement, velocity, contact force and energy over one period
+  hysteresis.png       friction force against tangential displacement per friction contact
+                       (its w_c_ column of contact_force.csv): the loop whose area is the
+                       energy dissipated per cycle
   harmonics.png        amplitudes A_h of harmonics.csv (log scale)
   frequency_response.png  max/min displacement per output DOF of a sweep (restarts marked)
   response_curve.png   amplitude along a continuation branch, stable solid, unstable dashed,
@@ -115,6 +118,28 @@ def time_histories(folder, title, written):
     axes[-1, 0].set_xlabel("time [s]")
     mark(axes[0, 0], title, NOTE)
     save(fig, folder / "time_histories.png", written)
+
+
+def hysteresis(folder, title, written):
+    """Each friction contact's loop f_c(w_c) over one period, closed (the period's last sample
+    joined to its first), with the energy it encloses, the sum of trapezoids of f dw."""
+    if not listed(folder, "contact_force.csv"):
+        return
+    table = read_csv(folder / "contact_force.csv")
+    labels = [(name, name[4:].removesuffix(" [m]")) for name, _ in columns(table, "w_c_")]
+    loops = [(label, table[f"f_c_{label} [N]"], table[name]) for name, label in labels if f"f_c_{label} [N]" in table]
+    if not loops:
+        return
+    fig, ax = plt.subplots()
+    for label, f, w in loops:
+        f, w = list(f) + [f[0]], list(w) + [w[0]]
+        area = sum(0.5 * (f[i] + f[i + 1]) * (w[i + 1] - w[i]) for i in range(len(w) - 1))
+        ax.plot(w, f, label=f"{label}: loop area {area:.4g} J")
+    ax.set_xlabel("tangential displacement w_c [m]")
+    ax.set_ylabel("friction force f_c [N]")
+    ax.legend(loc="best")
+    mark(ax, title, NOTE)
+    save(fig, folder / "hysteresis.png", written)
 
 
 def harmonics(folder, title, written):
@@ -266,7 +291,7 @@ def main(argv):
     title = "\n".join(textwrap.wrap(scene.get("title") or Path(result.get("scene_file", str(folder))).stem, 70))
     plt.rcParams.update(STYLE)
     written = []
-    for draw in (time_histories, harmonics, frequency_response, response_curve, backbone, modes, basis_functions):
+    for draw in (time_histories, hysteresis, harmonics, frequency_response, response_curve, backbone, modes, basis_functions):
         draw(folder, title, written)
     result["pictures"] = written
     staged = folder / ".result.json.pictures"

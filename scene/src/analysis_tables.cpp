@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <wbm/contact/friction.hpp>
 #include <wbm/solvers/post_processing.hpp>
@@ -115,6 +117,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
     nlohmann::json friction = nlohmann::json::array();
+    std::vector<std::pair<size_t, Eigen::VectorXd>> slip_displacements;  // (contact, w) of friction contacts
     for (size_t k = 0; k < contacts.size(); ++k) {
       const auto& c = contacts[k];
       Eigen::VectorXd force(tau.size());
@@ -124,6 +127,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
         for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = c.displacement(solver_displacement.col(p));
         const contact::JenkinsLoop loop = jenkins->loop(w);
         force = loop.force;
+        slip_displacements.emplace_back(k, w);
         const Eigen::VectorXd slider = w - force / jenkins->parameters().tangential_stiffness;
         friction.push_back({{"contact", contact_label(scene, k)},
                             {"stick_fraction", 1.0 - static_cast<double>(loop.slipping_samples) / static_cast<double>(tau.size())},
@@ -136,6 +140,11 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
       }
       f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
       f.columns.push_back(force);
+      if (!slip_displacements.empty() && slip_displacements.back().first == k) {
+        // A friction contact's tangential displacement beside its force: the hysteresis loop f(w).
+        f.header.push_back("w_c_" + contact_label(scene, k) + " [m]");
+        f.columns.push_back(slip_displacements.back().second);
+      }
     }
     if (!friction.empty()) out.diagnostics["friction"] = friction;
     out.tables.push_back(std::move(f));

@@ -4,6 +4,7 @@ pictures drawn are recorded in result.json so that the next run into the folder 
 """
 import importlib.util
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -57,3 +58,31 @@ def test_a_converged_result_carries_no_mark(tmp_path):
     assert plot.incomplete(result) == ""
     assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
     assert json.loads((tmp_path / "result.json").read_text())["pictures"] == ["backbone.png"]
+
+
+def test_a_friction_contact_draws_its_hysteresis_loop_with_its_area(tmp_path):
+    # An elliptic loop w = A cos θ, f = −F sin θ over one period: ∮ f dw = π A F (closed form);
+    # 400 samples and closed trapezoids give it to 4 digits.
+    a, f0, n = 2e-4, 0.3, 400
+    rows = []
+    for q in range(n):
+        theta = 2.0 * math.pi * (q + 0.5) / n
+        rows.append(((q + 0.5) / n, 0.1 * (q + 0.5) / n, -f0 * math.sin(theta), a * math.cos(theta)))
+    write_csv(tmp_path / "contact_force.csv", ["tau [-]", "time [s]", "f_c_x [N]", "w_c_x [m]"], rows)
+    result = {"converged": True, "files": ["contact_force.csv"], "scene": {"title": "damper"}, "diagnostics": {}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    legends = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        legend = fig.axes[0].get_legend()
+        legends[path.name] = [t.get_text() for t in legend.get_texts()] if legend else []
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    assert "hysteresis.png" in legends
+    (text,) = legends["hysteresis.png"]
+    assert text.startswith("x: loop area ")
+    assert float(text.split("loop area ")[1].split(" J")[0]) == pytest.approx(math.pi * a * f0, rel=1e-4)

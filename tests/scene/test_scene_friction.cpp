@@ -89,6 +89,23 @@ TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
   EXPECT_LT(friction.at("stick_fraction").get<double>(), 0.05);
   EXPECT_LE(f.cwiseAbs().maxCoeff(), slip * (1.0 + 1e-15));
   EXPECT_EQ(r.diagnostics.at("energy").get<std::string>().rfind("not written", 0), 0u);
+  // The hysteresis loop beside the force: w_c is the contact DOF's displacement (the only DOF),
+  // and the loop's area ∮ f dw (closed trapezoids) is the energy the element dissipates, which the
+  // loop computes instead from the slider's increments, Σ f Δs.
+  const auto& files = r.tables;
+  const auto table = std::find_if(files.begin(), files.end(), [](const auto& t) { return t.file == "contact_force.csv"; });
+  ASSERT_NE(table, files.end());
+  ASSERT_EQ(table->header.size(), 4u);
+  const std::string& force_name = table->header[2];  // "f_c_<label> [N]"
+  EXPECT_EQ(table->header[3], "w_c_" + force_name.substr(4, force_name.size() - 8) + " [m]");
+  const Eigen::VectorXd& w = table->columns[3];
+  EXPECT_LT((w - column(r, "displacement.csv", 2)).cwiseAbs().maxCoeff(), 1e-15 * w.cwiseAbs().maxCoeff());
+  double area = 0.0;
+  for (Eigen::Index i = 0; i < w.size(); ++i) {
+    const Eigen::Index j = (i + 1) % w.size();
+    area += 0.5 * (f(i) + f(j)) * (w(j) - w(i));
+  }
+  EXPECT_NEAR(area, dissipated, 1e-3 * dissipated);
 }
 
 // The keys of a friction contact, their echo and round trip, and what friction is refused for.
