@@ -20,6 +20,7 @@
 #include <pybind11/stl.h>
 
 #include <nlohmann/json.hpp>
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
 #include <wbm/fem/rod.hpp>
@@ -250,6 +251,39 @@ order the family does not have.)");
   py::class_<contact::RigidStop, contact::ContactLaw, std::shared_ptr<contact::RigidStop>>(
       m, "RigidStop", "Exact unilateral contact at g0 (Signorini conditions; force() and stiffness() raise).")
       .def(py::init([](double gap) { return std::make_shared<contact::RigidStop>(gap); }), py::arg("gap"));
+  py::class_<contact::JenkinsLaw, contact::ContactLaw, std::shared_ptr<contact::JenkinsLaw>>(
+      m, "JenkinsLaw",
+      "Dry friction along the contact's direction: a spring k_t [N/m] in series with a Coulomb slider of slip force "
+      "mu N [N] (contact/friction.hpp). Hysteretic: force() and stiffness() raise; wbm.solve evaluates its periodic "
+      "loop.")
+      .def(py::init([](double tangential_stiffness, double friction_coefficient, double normal_load) {
+             return std::make_shared<contact::JenkinsLaw>(
+                 contact::JenkinsParameters{tangential_stiffness, friction_coefficient, normal_load});
+           }),
+           py::arg("tangential_stiffness"), py::arg("friction_coefficient"), py::arg("normal_load"));
+  m.def(
+      "jenkins_loop",
+      [](double tangential_stiffness, const py::object& w, const py::object& slip_force) {
+        const Eigen::VectorXd wv = python::vector(w, "jenkins_loop: w", -1, "a 1-D array of finite displacements [m]");
+        const Eigen::VectorXd fs = python::vector(slip_force, "jenkins_loop: slip_force", wv.size(),
+                                                  "a 1-D array of finite slip forces [N], one per sample of w");
+        const contact::JenkinsLoop l = contact::jenkins_loop(tangential_stiffness, wv, fs);
+        py::dict out;
+        out["force"] = py::cast(l.force);
+        out["stiffness"] = py::cast(l.stiffness);
+        out["slipping_samples"] = l.slipping_samples;
+        out["periods"] = l.periods;
+        out["dissipated_energy"] = l.dissipated_energy;
+        return out;
+      },
+      py::arg("tangential_stiffness"), py::arg("w"), py::arg("slip_force"),
+      R"(The periodic steady state of a Jenkins element (contact::jenkins_loop): the return map
+f*_q = f_a + k_t (w_q − w_a), f_q = f*_q if |f*_q| ≤ F_s,q else ±F_s,q, run over the period until
+its end force repeats. tangential_stiffness k_t [N/m] > 0; w: the Q tangential displacements of one
+period, uniform in time [m]; slip_force: Q slip forces F_s = mu N ≥ 0 [N]. Returns a dict: force (Q,
+[N]), stiffness (Q, ∂f_q/∂w_q: k_t in stick, 0 in slip [N/m]), slipping_samples, periods (run until
+the end repeated) and dissipated_energy (the slider's work over the period, ∮ f dw [J]). Raises
+ValueError for bad input.)");
 
   m.def(
       "solve",
@@ -278,7 +312,7 @@ order the family does not have.)");
 
 loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
-RigidStop or all penalty). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
+RigidStop, or penalty and JenkinsLaw ones; a JenkinsLaw needs contact_quadrature "midpoint"). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
 (empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
 dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖ (None without a
 selection).

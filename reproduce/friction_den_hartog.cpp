@@ -214,9 +214,10 @@ int main(int argc, char** argv) {
             worst_disc[ci] = std::max(worst_disc[ci], ok ? frf_disc.back() : INFINITY);
           }
         }
+        // A missing order (a solve that failed) makes the pair's range missing (NaN, printed —).
         const double order = -slope(kts, errs);
-        order_lo[ci] = std::min(order_lo[ci], std::isfinite(order) ? order : -INFINITY);
-        order_hi[ci] = std::max(order_hi[ci], std::isfinite(order) ? order : INFINITY);
+        order_lo[ci] = std::isfinite(order) ? std::min(order_lo[ci], order) : NAN;
+        order_hi[ci] = std::isfinite(order) ? std::max(order_hi[ci], order) : NAN;
       }
     }
     run.table("frf.csv", {"combination [-]", "r [-]", "kt_over_k [-]", "amplitude [m]", "den_hartog [m]",
@@ -325,7 +326,12 @@ int main(int argc, char** argv) {
                  ref_order_hi = *std::max_element(reference_orders.begin(), reference_orders.end());
     double pair_order_lo = INFINITY, pair_order_hi = -INFINITY;
     for (size_t ci = 0; ci < combos.size(); ++ci) {
-      if (!singular[ci]) pair_order_lo = std::min(pair_order_lo, order_lo[ci]), pair_order_hi = std::max(pair_order_hi, order_hi[ci]);
+      if (singular[ci]) continue;
+      if (std::isnan(order_lo[ci]) || std::isnan(pair_order_lo)) {  // a failed solve: no order to claim
+        pair_order_lo = pair_order_hi = NAN;
+      } else {
+        pair_order_lo = std::min(pair_order_lo, order_lo[ci]), pair_order_hi = std::max(pair_order_hi, order_hi[ci]);
+      }
     }
     auto near_half = [&](double o) { return std::isfinite(o) && std::abs(o - 0.5) <= kOrderTolerance; };
     // The smallest error of the exact Jenkins motion itself against Den Hartog at the stiffest k_t.

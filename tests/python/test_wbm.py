@@ -262,3 +262,43 @@ def test_harmonic_selection_keeps_only_the_listed_harmonics():
     assert s["dropped_harmonics_residual"] > 1e-3
     with pytest.raises(ValueError, match=r"harmonic 5 is outside \[0, 4\]"):
         wbm.solve(system, 0, force, f, [], basis, basis, harmonics=[1, 5])
+
+
+def test_jenkins_loop_gives_griffins_loop_and_its_energy():
+    # w = A cos θ drives a Jenkins element (k_t, F_s) with A > F_s/k_t: the slider slips once
+    # the spring has travelled 2F_s/k_t after each reversal, and the loop encloses
+    # 4 F_s (A − F_s/k_t) per cycle [Griffin 1980].
+    kt, fs, a, n = 1e6, 0.5, 2e-6, 4096
+    theta = 2.0 * np.pi * (np.arange(n) + 0.5) / n
+    loop = wbm.jenkins_loop(kt, a * np.cos(theta), np.full(n, fs))
+    assert loop["dissipated_energy"] == pytest.approx(4.0 * fs * (a - fs / kt), rel=1e-3)
+    assert np.max(np.abs(loop["force"])) == pytest.approx(fs, rel=1e-15)
+    assert loop["periods"] >= 2
+    # The stick samples: from the reversal at θ = π, w = −A cos φ (θ = π + φ) travels A(1 − cos φ)
+    # and the spring holds until that reaches 2F_s/k_t, φ < arccos(1 − 2F_s/(k_t A)): a third of
+    # each half period here (2F_s/(k_t A) = 1/2).
+    stick = np.arccos(1.0 - 2.0 * fs / (kt * a)) / np.pi
+    assert stick == pytest.approx(1.0 / 3.0, rel=1e-12)
+    assert loop["slipping_samples"] / n == pytest.approx(1.0 - stick, abs=3.0 / n)
+    with pytest.raises(ValueError, match="slip_force"):
+        wbm.jenkins_loop(kt, np.zeros(4), np.full(3, fs))
+
+
+def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
+    # m ẍ + k x + F0 sign ẋ = P cos ωt without stops [Den Hartog 1930]: the amplitude is
+    # (P/k) √((1/(1 − r²))² − (F0 U/P)²), U = tan(π/(2r))/r; the Jenkins element with
+    # k_t = 1e4 k is within 3.5e-3 of it (its stick at each reversal, tests/solvers/test_friction.cpp).
+    m, k, p, f0, r = 1.0, (2.0 * math.pi * 10.0) ** 2, 1.0, 0.2, 1.5
+    u = math.tan(math.pi / (2.0 * r)) / r
+    exact = p / k * math.sqrt((1.0 / (1.0 - r * r)) ** 2 - (f0 * u / p) ** 2)
+    system = wbm.MechanicalSystem([[m]], [[0.0]], [[k]])
+    law = wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=f0, normal_load=1.0)
+    basis = wbm.TimeBasis("fourier", 256)
+    s = wbm.solve(system, 0, p, 10.0 * r, [(0, law)], basis, basis)
+    assert s["converged"], s["message"]
+    tau = np.arange(4096) / 4096
+    amplitude = np.max(np.abs(basis.values(tau) @ s["coefficients"][0]))
+    assert amplitude / exact == pytest.approx(1.0, abs=3.5e-3)
+    assert s["max_contact_force_N"] == pytest.approx(f0, rel=1e-12)
+    with pytest.raises(ValueError, match="friction_coefficient"):
+        wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=-0.1, normal_load=1.0)
