@@ -82,17 +82,9 @@ Row time_solve(const wbm::solvers::MechanicalSystem& system, const wbm::solvers:
 // Least-squares slope of log t against log x over the last `tail` rows of a series.
 double fitted_exponent(const std::vector<Row>& rows, size_t tail) {
   const size_t first = rows.size() > tail ? rows.size() - tail : 0;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
-  for (size_t i = first; i < rows.size(); ++i) {
-    const double x = std::log(rows[i].x), y = std::log(rows[i].total_s);
-    sx += x;
-    sy += y;
-    sxx += x * x;
-    sxy += x * y;
-    n += 1;
-  }
-  const double d = n * sxx - sx * sx;
-  return d > 0 ? (n * sxy - sx * sy) / d : std::nan("");
+  std::vector<double> x, t;
+  for (size_t i = first; i < rows.size(); ++i) x.push_back(rows[i].x), t.push_back(rows[i].total_s);
+  return wbm::reproduce::loglog_slope(x, t);
 }
 
 // Fixed-free chain: mass i tied to i − 1 (mass 0 to the ground) by k.

@@ -36,14 +36,7 @@ double order(const std::vector<CombinationResult>& results, const std::string& k
       e.push_back(r.tip_error);
     }
   }
-  if (h.size() < 2) return NAN;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const auto n = static_cast<double>(h.size());
-  for (size_t i = 0; i < h.size(); ++i) {
-    const double x = std::log(h[i]), y = std::log(e[i]);
-    sx += x, sy += y, sxx += x * x, sxy += x * y;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return loglog_slope(h, e);
 }
 
 // Best Haar-trial error over the median of the four other combinations at M (NaN if missing):

@@ -103,16 +103,7 @@ int main(int argc, char** argv) {
               {column(col_k), column(col_e), column(col_fp), column(col_fe), column(col_pen)}, col_status);
     // Observed order in 1/k: least-squares slope of log|Δf| against log k over every spring (not two
     // points), for the largest difference over E ≤ kOrderEnergy and at each probe energy.
-    auto observed_order = [&](const std::vector<double>& d) {
-      double sx = 0, sy = 0, sxx = 0, sxy = 0;
-      int n = 0;
-      for (size_t j = 0; j < d.size(); ++j) {
-        if (!(d[j] > 0.0) || !std::isfinite(d[j])) continue;
-        const double x = std::log(stiffness[j]), y = std::log(d[j]);
-        sx += x; sy += y; sxx += x * x; sxy += x * y; ++n;
-      }
-      return n >= 2 ? -(n * sxy - sx * sy) / (n * sxx - sx * sx) : NAN;
-    };
+    auto observed_order = [&](const std::vector<double>& d) { return -reproduce::loglog_slope(stiffness, d); };
     const double order = observed_order(worst_by_k);
     const bool first_order = std::abs(order - 1.0) <= kOrderTolerance;
     std::vector<reproduce::Claim> claims = {

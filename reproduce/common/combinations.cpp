@@ -212,6 +212,22 @@ double rms_relative_error_on(const Eigen::VectorXd& v, const Eigen::VectorXd& re
   return count == 0 || den == 0.0 ? NAN : std::sqrt(num / den);
 }
 
+double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  if (x.size() != y.size()) {
+    throw std::invalid_argument("loglog_slope: x has " + std::to_string(x.size()) + " values, y " +
+                                std::to_string(y.size()) + "; give one y per x");
+  }
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    if (!(x[i] > 0.0) || !(y[i] > 0.0) || !std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
+    const double lx = std::log(x[i]), ly = std::log(y[i]);
+    sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly, ++n;
+  }
+  const double d = n * sxx - sx * sx;
+  return n >= 2 && d > 0.0 ? (n * sxy - sx * sy) / d : NAN;
+}
+
 std::string claims_markdown(const std::vector<Claim>& claims) {
   std::ostringstream md;
   int agree = 0, disagree = 0, unchecked = 0;

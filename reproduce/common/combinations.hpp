@@ -129,6 +129,12 @@ struct Claim {
 [[nodiscard]] double rms_relative_error_on(const Eigen::VectorXd& v, const Eigen::VectorXd& reference,
                                            const std::vector<bool>& mask);
 
+/// Least-squares slope of log y against log x over the pairs with x > 0 and y > 0 finite (an
+/// observed order of convergence or a cost exponent): (n Σxy − Σx Σy)/(n Σx² − (Σx)²) in the logs;
+/// NaN with fewer than two such pairs or all x equal. Throws std::invalid_argument if the sizes
+/// differ.
+[[nodiscard]] double loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
+
 /// One number for report tables through the solvers' one formatter (solvers::format); NaN (a
 /// missing value) prints "—".
 [[nodiscard]] std::string format(const char* spec, double value);
