@@ -153,4 +153,35 @@ void JenkinsLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   anchor = l.anchor;
 }
 
+void CoulombParameters::validate() const {
+  const auto bad = [](const char* field, double value, const char* range) {
+    std::ostringstream m;
+    m << "CoulombParameters." << field << " = " << value << ": " << range;
+    throw std::invalid_argument(m.str());
+  };
+  if (!(friction_coefficient >= 0.0) || !std::isfinite(friction_coefficient)) {
+    bad("friction_coefficient (mu)", friction_coefficient, "must be finite and >= 0 (0: no friction)");
+  }
+  if (!(normal_load >= 0.0) || !std::isfinite(normal_load)) {
+    bad("normal_load (N)", normal_load, "must be finite and >= 0 [N] (a compressive preload)");
+  }
+}
+
+CoulombFriction::CoulombFriction(const CoulombParameters& parameters) : p_(parameters) { p_.validate(); }
+
+double CoulombFriction::force(double /*u*/) const {
+  throw std::logic_error("CoulombFriction::force: exact Coulomb friction has no force law f(u); its force is the "
+                         "multiplier of the projection equation, computed by the solver (check ContactLaw::rigid() first)");
+}
+
+double CoulombFriction::stiffness(double /*u*/) const {
+  throw std::logic_error("CoulombFriction::stiffness: exact Coulomb friction has no stiffness (check ContactLaw::rigid() first)");
+}
+
+std::string CoulombFriction::describe() const {
+  std::ostringstream d;
+  d << "Coulomb friction (exact) mu = " << p_.friction_coefficient << ", N = " << p_.normal_load << " N";
+  return d.str();
+}
+
 }  // namespace wbm::contact

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/aft.hpp>
@@ -53,14 +54,30 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
   period_tables(scene, contacts, system, forcing.frequency_hz, tau, displacement, fields ? &fields->velocity : nullptr,
                 out);
   if (scene.rigid()) {
-    // The multipliers at their instants τ_k = (k + ½)/M: the mean force over each cell.
+    // The multipliers at their instants τ_k: the mean force over each cell.
     const int m = trial.dimension();
-    const Eigen::VectorXd tk = (Eigen::VectorXd::LinSpaced(m, 0.0, m - 1.0).array() + 0.5) / m;
+    const Eigen::VectorXd& tk = solution.collocation_times;
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tk, tk / forcing.frequency_hz}};
-    for (size_t c = 0; c < contacts.size(); ++c) {
-      f.header.push_back("f_c_" + contact_label(scene, c) + " [N]");
-      f.columns.push_back(solution.contact_force_samples.row(static_cast<Eigen::Index>(c)).transpose());
+    Eigen::MatrixXd at_instants(a.rows(), m);  // the displacements at τ_k, for friction contacts
+    if (scene.friction()) {
+      for (Eigen::Index i = 0; i < a.rows(); ++i) {
+        at_instants.row(i) = solvers::evaluate_trial(trial, a, static_cast<int>(i), tk, forcing.frequency_hz).transpose();
+      }
     }
+    nlohmann::json friction = nlohmann::json::array();
+    for (size_t c = 0; c < contacts.size(); ++c) {
+      const Eigen::VectorXd force = solution.contact_force_samples.row(static_cast<Eigen::Index>(c)).transpose();
+      f.header.push_back("f_c_" + contact_label(scene, c) + " [N]");
+      f.columns.push_back(force);
+      if (const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get())) {
+        Eigen::VectorXd w(m);
+        for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k));
+        f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
+        f.columns.push_back(w);
+        friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, coulomb->slip_force(), forcing.frequency_hz));
+      }
+    }
+    if (!friction.empty()) out.diagnostics["friction"] = friction;
     out.tables.push_back(std::move(f));
   }
   Table c{"coefficients.csv", {"k [-]"}, {Eigen::VectorXd::LinSpaced(a.cols(), 0.0, static_cast<double>(a.cols() - 1))}};

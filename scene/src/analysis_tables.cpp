@@ -177,6 +177,23 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
 }
 
+nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
+                                   double slip_force, double frequency_hz) {
+  const Eigen::Index m = force.size();
+  int stuck = 0;
+  double energy = 0.0;
+  for (Eigen::Index k = 0; k < m; ++k) {
+    if (std::abs(force(k)) < slip_force * (1.0 - 1e-9)) ++stuck;
+    energy += force(k) * (w((k + 1) % m) - w(k));
+  }
+  return {{"contact", label},
+          {"stick_fraction", static_cast<double>(stuck) / static_cast<double>(m)},
+          {"slip_amplitude_m", 0.5 * (w.maxCoeff() - w.minCoeff())},
+          {"dissipated_energy_per_cycle_J", energy},
+          {"dissipated_power_W", energy * frequency_hz},
+          {"collocation_instants", m}};
+}
+
 // Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `samples[i]` is
 // the observed DOFs' samples (k × P) at frequency `hz[i]`.
 Table point_harmonics(const Scene& scene, const std::string& file, const std::vector<int>& observed,

@@ -183,6 +183,8 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else if (c.law == ContactLawKind::Jenkins) {
       law = std::make_shared<contact::JenkinsLaw>(
           contact::JenkinsParameters{c.tangential_stiffness, c.friction_coefficient, c.normal_load});
+    } else if (c.law == ContactLawKind::Coulomb) {
+      law = std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{c.friction_coefficient, c.normal_load});
     } else {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
@@ -326,9 +328,9 @@ nlohmann::json to_json(const Scene& s) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& c : s.contacts) {
       nlohmann::json o = {{"law", std::string(to_string(c.law))}};
-      if (c.law != ContactLawKind::Jenkins) o["gap"] = c.gap;
-      if (c.law == ContactLawKind::Jenkins) {
-        o["tangential_stiffness"] = c.tangential_stiffness;
+      if (c.law != ContactLawKind::Jenkins && c.law != ContactLawKind::Coulomb) o["gap"] = c.gap;
+      if (c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb) {
+        if (c.law == ContactLawKind::Jenkins) o["tangential_stiffness"] = c.tangential_stiffness;
         o["friction_coefficient"] = c.friction_coefficient;
         o["normal_load"] = c.normal_load;
       } else if (c.law == ContactLawKind::Exponential) {

@@ -40,21 +40,21 @@ void Parser::contacts(const toml::table& root) {
       continue;  // the law decides the other keys: checking them against a guess would mislead
     }
     c.law = value_of(law_table(), law);
-    const bool friction = c.law == ContactLawKind::Jenkins;
+    const bool friction = c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb;
     if (!friction) {
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
     }
     if (friction && (modes || s_.analysis.kind == AnalysisKind::Timestep)) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"jenkins\" (friction) is for the weighted residual: solve, sweep and continuation; analysis \"" +
+               "\"" + law + "\" (friction) is for the weighted residual: solve, sweep and continuation; analysis \"" +
                    std::string(to_string(s_.analysis.kind)) + "\" has no friction law (" +
                    (modes ? "nonlinear modes are conservative" : "the time-stepping reference carries no slider state") +
                    ")");
     }
     if (friction && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"jenkins\" with analysis.stability = true: the monodromy matrix of a stick/slip orbit is not computed; "
+               "\"" + law + "\" with analysis.stability = true: the monodromy matrix of a stick/slip orbit is not computed; "
                "set stability = false");
     }
     if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
@@ -62,10 +62,10 @@ void Parser::contacts(const toml::table& root) {
                "\"rigid\" (exact contact) with analysis.stability = true: the stability of impacting orbits "
                "(saltation matrices) is not computed; set stability = false, or use a stiff \"linear\" penalty");
     }
-    if (!modes && !s_.contacts.empty() &&
-        (c.law == ContactLawKind::Rigid) != (s_.contacts.front().law == ContactLawKind::Rigid)) {
-      r_.error(t->source(), section, "mixes rigid and penalty contacts; a forced response takes all \"rigid\" or "
-                                     "all penalty laws (give the rigid ones a stiff \"linear\" law)");
+    if (!modes && !s_.contacts.empty() && exact(c.law) != exact(s_.contacts.front().law)) {
+      r_.error(t->source(), section, "mixes exact contacts (\"rigid\", \"coulomb\") with penalty or \"jenkins\" laws; a "
+                                     "forced response takes all exact or none (give the rigid ones a stiff \"linear\" "
+                                     "law and the \"coulomb\" ones a stiff \"jenkins\" law)");
     }
     if (c.law == ContactLawKind::Exponential && modes) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",

@@ -148,7 +148,10 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                     "exact contact (Signorini conditions; solve, sweep, continuation without stability, timestep and "
                     "nnm; all contacts of a forced response rigid or none), or a Jenkins element: dry friction along "
                     "the contact's direction, a spring k_t in series with a Coulomb slider of slip force μN (solve, "
-                    "sweep, continuation without stability; Midpoint quadrature)")
+                    "sweep, continuation without stability; Midpoint quadrature), or exact Coulomb friction along it "
+                    "(\"coulomb\": the k_t → ∞ limit, its force a multiplier at the collocation instants as a rigid "
+                    "stop's, first order in 1/M; solve, sweep, continuation without stability; all contacts of the "
+                    "forced response \"rigid\" or \"coulomb\", or none)")
           .is_required()
           .read_by_section(),
       number_key<C>("gap", [](auto& c) -> auto& { return c.gap; }, finite("m"), "g0 [m]; < 0 is a prestress")
@@ -172,11 +175,11 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
       number_key<C>("friction_coefficient", [](auto& c) -> auto& { return c.friction_coefficient; }, non_negative(""),
                     "μ [-]")
           .is_required()
-          .only_in({"jenkins"}),
+          .only_in({"jenkins", "coulomb"}),
       number_key<C>("normal_load", [](auto& c) -> auto& { return c.normal_load; }, non_negative("N"),
                     "N [N], a constant normal preload: the slip force is μN")
           .is_required()
-          .only_in({"jenkins"}),
+          .only_in({"jenkins", "coulomb"}),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),
       compound_key<C>("dof", kLocation, "1-DOF matrices: `0`", "see Locations", "matrices only: the contact DOF"),
       compound_key<C>("nodes", "node set name or list of node numbers", "none",

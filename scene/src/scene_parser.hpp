@@ -51,7 +51,7 @@ inline const NameTable<AnalysisKind>& analysis_table() {
 inline const NameTable<ContactLawKind>& law_table() {
   static const NameTable<ContactLawKind> t = {
       {ContactLawKind::Exponential, "exponential"}, {ContactLawKind::Linear, "linear"}, {ContactLawKind::Rigid, "rigid"},
-      {ContactLawKind::Jenkins, "jenkins"}};
+      {ContactLawKind::Jenkins, "jenkins"}, {ContactLawKind::Coulomb, "coulomb"}};
   return t;
 }
 inline const NameTable<NnmAlgorithm>& nnm_algorithm_table() {

@@ -3,13 +3,18 @@
 // its dissipated energy 4 F_s (A − F_s/k_t) per cycle and first-harmonic stiffness
 // (k_t/π)(β − sin 2β / 2), cos β = 1 − 2 F_s/(k_t A), with the rectangle rule's second order;
 // full stick f = k_t w; the Coulomb limit k_t → ∞ (energy 4 F_s A); central differences of the
-// force in every sample of w and of the slip force; invariance under a shift of the period.
+// force in every sample of w and of the slip force; invariance under a shift of the period. Exact
+// Coulomb friction (CoulombProjection): the roots of the projection equation are the normal-cone
+// inclusion of the discrete Coulomb law, whatever the compliance.
 #include <wbm/contact/friction.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -202,4 +207,56 @@ TEST(JenkinsLoop, RefusesBadInputNamingTheArgument) {
   nan(1) = std::nan("");
   expect_throw_with<std::invalid_argument>([&] { (void)jenkins_loop(1e6, nan, fs); }, {"w[1] is not finite"});
   expect_throw_with<std::invalid_argument>([&] { (void)jenkins_loop(1e6, w, fs, 1); }, {"max_periods = 1 must be >= 2"});
+}
+
+// The projection equation's roots are exactly the discrete Coulomb law Δ ∈ N_[−F, F](λ) — stick
+// (|λ| ≤ F, Δ = 0), or slip at the bound in the direction of the slip (λ = ±F, ±Δ > 0) — for any
+// compliance c, and its branch derivatives equal central differences off the switching set.
+TEST(CoulombProjection, RootsAreTheNormalConeInclusionAndDerivativesMatchDifferences) {
+  using wbm::contact::coulomb_projection;
+  const double f = 0.3;
+  for (double c : {1e-6, 1.0, 1e3}) {
+    for (double lambda : {-0.5, -0.3, -0.1, 0.0, 0.2, 0.3, 0.4}) {
+      for (double delta : {-1e-3, -1e-9, 0.0, 1e-9, 1e-3}) {
+        const bool law = (std::abs(lambda) <= f && delta == 0.0) || (lambda == f && delta > 0.0) ||
+                         (lambda == -f && delta < 0.0);
+        EXPECT_EQ(coulomb_projection(c * lambda, delta, c * f).value == 0.0, law)
+            << "c = " << c << " lambda = " << lambda << " delta = " << delta;
+      }
+    }
+  }
+  // Derivatives: stick ∂φ/∂Δ = −1, ∂φ/∂a = 0; slip ∂φ/∂a = 1, ∂φ/∂b = −σ.
+  const double h = 1e-8;
+  for (const auto& [a, delta] : std::vector<std::pair<double, double>>{{0.1, 0.05}, {0.25, 0.2}, {-0.2, -0.3}}) {
+    const double b = 0.3;
+    const auto p = coulomb_projection(a, delta, b);
+    const double da = (coulomb_projection(a + h, delta, b).value - coulomb_projection(a - h, delta, b).value) / (2 * h);
+    const double dd = (coulomb_projection(a, delta + h, b).value - coulomb_projection(a, delta - h, b).value) / (2 * h);
+    const double db = (coulomb_projection(a, delta, b + h).value - coulomb_projection(a, delta, b - h).value) / (2 * h);
+    EXPECT_NEAR(da, p.stick ? 0.0 : 1.0, 1e-7);
+    EXPECT_NEAR(dd, p.stick ? -1.0 : 0.0, 1e-7);
+    EXPECT_NEAR(db, p.stick ? 0.0 : -p.sigma, 1e-7);
+  }
+  EXPECT_TRUE(coulomb_projection(0.1, 0.05, 0.3).stick);
+  EXPECT_FALSE(coulomb_projection(0.25, 0.2, 0.3).stick);
+}
+
+// CoulombFriction is an exact (multiplier) law that is also hysteretic, has no f(u), and refuses
+// a bad μ or N naming the field.
+TEST(CoulombFriction, IsAMultiplierLawAndRefusesBadParameters) {
+  using wbm::contact::CoulombFriction;
+  using wbm::testing::expect_throw_with;
+  const CoulombFriction law({0.3, 2.0});
+  EXPECT_TRUE(law.rigid());
+  EXPECT_TRUE(law.hysteretic());
+  EXPECT_DOUBLE_EQ(law.slip_force(), 0.6);
+  EXPECT_EQ(law.gap(), 0.0);
+  EXPECT_EQ(law.potential(1.0), 0.0);
+  EXPECT_THROW((void)law.force(0.0), std::logic_error);
+  EXPECT_THROW((void)law.stiffness(0.0), std::logic_error);
+  EXPECT_NE(law.describe().find("mu = 0.3, N = 2 N"), std::string::npos) << law.describe();
+  expect_throw_with<std::invalid_argument>([] { (void)CoulombFriction({-0.1, 1.0}); },
+                                           {"CoulombParameters.friction_coefficient (mu) = -0.1", ">= 0"});
+  expect_throw_with<std::invalid_argument>([] { (void)CoulombFriction({0.1, std::nan("")}); },
+                                           {"CoulombParameters.normal_load (N) = nan", "finite and >= 0 [N]"});
 }

@@ -1,4 +1,4 @@
-// Friction scenes (law = "jenkins", issue #36). Truths not produced by this code: the first-
+// Friction scenes (law = "jenkins" and "coulomb", issue #36). Truths not produced by this code: the first-
 // harmonic energy balance at resonance, where the slipping slider's fundamental 4μN/π opposes the
 // velocity and the viscous force c ω X takes the rest of the load, X = (P − 4μN/π)/(c ω); the
 // energy balance over a cycle, work of the load = viscous dissipation + friction dissipation
@@ -29,6 +29,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 const std::string kDamper = std::string(WBM_EXAMPLES) + "/friction_damper.toml";
+const std::string kCoulombDamper = std::string(WBM_EXAMPLES) + "/friction_damper_coulomb.toml";
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path);
@@ -152,4 +153,99 @@ TEST(SceneFriction, KeysAreReadEchoedAndRefusedWhereFrictionIsNotComputed) {
   refused(base + law + " }\nanalysis = { type = \"timestep\" }\n", {"contact.law", "analysis \"timestep\" has no friction law"});
   refused(base + law + " }\nbasis = { harmonics = 8, contact_quadrature = \"cell-average\" }\n",
           {"basis.contact_quadrature", "\"jenkins\"", "\"midpoint\""});
+}
+
+// The damper with exact Coulomb friction (examples/scenes/friction_damper_coulomb.toml, M = 129,
+// steps of 0.002 Hz):
+// its peak is the first-harmonic balance (P − 4μN/π)/(c ω_n) to 1e-3 (measured 2.1e-4; first order
+// in 1/M), every friction impulse is within ±μN, and the impulses are the branch's unknowns.
+TEST(SceneFriction, TheExactCoulombDamperPeakIsTheFirstHarmonicEnergyBalance) {
+  const Scene s = wbm::scene::load_scene(kCoulombDamper);
+  ASSERT_TRUE(s.rigid());
+  ASSERT_TRUE(s.friction());
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  const wbm::solvers::MechanicalSystem sys = s.system();
+  const double m = sys.mass.coeff(0, 0), k = sys.stiffness.coeff(0, 0), c = sys.damping.coeff(0, 0);
+  const double p = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
+  EXPECT_NEAR(column(r, "branch.csv", 3).maxCoeff() / ((p - 4.0 * slip / kPi) / (c * std::sqrt(k / m))), 1.0, 1e-3);
+  EXPECT_LE(column(r, "branch.csv", 4).maxCoeff(), slip * (1.0 + 1e-12));
+}
+
+// One solve at 8 Hz with exact Coulomb friction: the load's work over a cycle equals the viscous
+// dissipation plus the friction's, Σ λ_k (w_{k+1} − w_k) from the impulses and the written w
+// (1e-2: the impulses' M-point rule against the load's P-point one); with two reversals a cycle
+// and every instant slipping or still, that is 4 μN × the slip amplitude; w_c is the contact
+// DOF's displacement at the instants, beside the impulses in contact_force.csv.
+TEST(SceneFriction, AnExactCoulombSolveBalancesTheEnergyOfLoadViscosityAndFriction) {
+  std::string text = slurp(kCoulombDamper);
+  const auto replace = [&text](const std::string& from, const std::string& to) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  };
+  replace("frequency_hz = [9.5, 10.5]", "frequency_hz = 8.0");
+  replace("type = \"continuation\", stability = false, max_frequency_step_hz = 0.002", "type = \"solve\"");
+  const Scene s = parse(text);
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
+  const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
+  const double hz = s.forcing->frequency_hz, period = 1.0 / hz, c = s.system().damping.coeff(0, 0),
+               amplitude = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
+  const auto samples = static_cast<double>(time.size());
+  double load = 0.0, viscous = 0.0;
+  for (Eigen::Index i = 0; i < time.size(); ++i) {
+    load += amplitude * std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;
+    viscous += c * v(i) * v(i) * period / samples;
+  }
+  const auto& friction = r.diagnostics.at("friction").at(0);
+  const double dissipated = friction.at("dissipated_energy_per_cycle_J").get<double>();
+  EXPECT_NEAR(viscous + dissipated, load, 1e-2 * load);
+  EXPECT_NEAR(dissipated, 4.0 * slip * friction.at("slip_amplitude_m").get<double>(), 1e-9 * dissipated);
+  EXPECT_LT(friction.at("stick_fraction").get<double>(), 0.05);
+  const auto& files = r.tables;
+  const auto table = std::find_if(files.begin(), files.end(), [](const auto& t) { return t.file == "contact_force.csv"; });
+  ASSERT_NE(table, files.end());
+  ASSERT_EQ(table->header.size(), 4u);
+  EXPECT_EQ(table->header[3].rfind("w_c_", 0), 0u);
+  const Eigen::VectorXd& tk = table->columns[0];
+  const Eigen::VectorXd& f = table->columns[2];
+  const Eigen::VectorXd& w = table->columns[3];
+  EXPECT_EQ(tk.size(), s.trial().dimension());
+  EXPECT_LE(f.cwiseAbs().maxCoeff(), slip * (1.0 + 1e-12));
+  // w at the instants from the written coefficients: u(τ) = Σ_k a_k q_k(τ).
+  const Eigen::VectorXd& a = column(r, "coefficients.csv", 1);
+  const Eigen::VectorXd at_instants = s.trial().values(tk, 0) * a;
+  EXPECT_LT((w - at_instants).cwiseAbs().maxCoeff(), 1e-12 * w.cwiseAbs().maxCoeff());
+}
+
+// law = "coulomb": its keys, echo and round trip; mixing it with a penalty or Jenkins contact, the
+// time-stepping reference and stability are refused by name.
+TEST(SceneFriction, CoulombKeysAreReadEchoedAndRefusedWhereNotComputed) {
+  const std::string base = "structure = { mass = [[1.0, 0.0], [0.0, 1.0]], stiffness = [[4e4, -1e4], [-1e4, 4e4]] }\n"
+                           "forcing = { amplitude = 1.0, frequency_hz = 8.0, dof = 0 }\n";
+  const std::string law = "[[contact]]\nlaw = \"coulomb\"\ndof = 0\nfriction_coefficient = 0.3\nnormal_load = 2.0\n";
+  const Scene s = parse(base + law);
+  ASSERT_EQ(s.contacts.size(), 1u);
+  EXPECT_EQ(s.contacts[0].law, wbm::scene::ContactLawKind::Coulomb);
+  EXPECT_TRUE(s.friction());
+  EXPECT_TRUE(s.rigid());
+  const nlohmann::json echo = wbm::scene::to_json(s)["contact"][0];
+  EXPECT_EQ(echo["law"], "coulomb");
+  EXPECT_FALSE(echo.contains("gap"));
+  EXPECT_FALSE(echo.contains("tangential_stiffness"));
+  EXPECT_EQ(echo["friction_coefficient"], 0.3);
+  const Scene again = wbm::scene::scene_from_json(wbm::scene::to_json(s), temp("again_coulomb.json"));
+  EXPECT_EQ(wbm::scene::to_json(again), wbm::scene::to_json(s));
+  EXPECT_EQ(s.contact_points().at(0).law->describe(), "Coulomb friction (exact) mu = 0.3, N = 2 N");
+  // With a rigid stop on the other DOF (both exact) it is accepted.
+  (void)parse(base + law + "[[contact]]\nlaw = \"rigid\"\ndof = 1\ngap = 1e-4\n");
+  const auto refused = [](const std::string& text, std::vector<std::string> fragments) {
+    expect_throw_with<std::invalid_argument>([&] { (void)parse(text); }, fragments);
+  };
+  refused(base + law + "tangential_stiffness = 1e6\n", {"contact[0].tangential_stiffness: unknown key"});
+  refused(base + law + "[[contact]]\nlaw = \"jenkins\"\ndof = 1\ntangential_stiffness = 4e7\nfriction_coefficient = 0.3\n"
+                       "normal_load = 2.0\n",
+          {"mixes exact contacts", "\"coulomb\" ones a stiff \"jenkins\" law"});
+  refused(base + "analysis = { type = \"timestep\" }\n" + law, {"\"coulomb\" (friction)", "analysis \"timestep\" has no friction law"});
 }

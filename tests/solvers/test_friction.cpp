@@ -1,7 +1,10 @@
-// Friction in the weighted residual (contact::JenkinsLaw through ContactLaw::evaluate_period).
-// Truths not produced by this code: Den Hartog's (1931) exact steady state of an undamped 1-DOF
-// oscillator with Coulomb friction and a harmonic force, for continuous motion, which the Jenkins
-// element tends to as k_t → ∞; central differences of the residual.
+// Friction in the weighted residual: the Jenkins element (contact::JenkinsLaw through
+// ContactLaw::evaluate_period) and exact Coulomb friction (contact::CoulombFriction, multipliers at
+// the collocation instants). Truths not produced by this code: Den Hartog's (1931) exact steady
+// state of an undamped 1-DOF oscillator with Coulomb friction and a harmonic force, for
+// continuous motion, which the Jenkins element tends to as k_t → ∞ and exact Coulomb friction as
+// M grows; full stick, where friction carries the whole load P cos ωt and the mass stays put;
+// central differences of the residuals in the unknowns, the frequency and the load.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -13,7 +16,10 @@
 #include <gtest/gtest.h>
 
 #include <wbm/contact/friction.hpp>
+#include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/time_integration.hpp>
+#include <wbm/spectral/layout.hpp>
 #include <wbm/solvers/time_basis.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
@@ -42,6 +48,9 @@ struct DenHartog {
   }
   [[nodiscard]] std::shared_ptr<const contact::JenkinsLaw> jenkins(double kt) const {
     return std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{kt, f0, 1.0});  // μ N = F0
+  }
+  [[nodiscard]] std::shared_ptr<const contact::CoulombFriction> coulomb() const {
+    return std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{f0, 1.0});  // μ N = F0
   }
   // The amplitude x0 of the continuous motion at r = ω/ω_n. Over the half period from x0 down to
   // −x0 (friction +F0), x = F0/k + A cos(τ/r) + B sin(τ/r) + D cos(τ + φ), D = (P0/k)/(1 − r²);
@@ -130,4 +139,124 @@ TEST(Friction, RefusesTheCellAverageQuadrature) {
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)w.solve(); },
                                                          {"contact_quadrature = CellAverage", "Jenkins element",
                                                           "use contact_quadrature = Midpoint"});
+}
+
+// Exact Coulomb friction tends to Den Hartog's steady state at first order in 1/M: the friction
+// force switches at a collocation instant, within one cell of the reversal. Largest error over six
+// frequency ratios of continuous motion, Fourier with M = 2H + 1 (measured 2.5e-2, 1.0e-2, 7.3e-3,
+// 3.9e-3 for M = 33 … 257: a fitted order of 0.9); the friction force is ±μN at every instant.
+TEST(Friction, ExactCoulombTendsToDenHartogAtFirstOrder) {
+  const DenHartog d;
+  std::vector<double> sizes, worst;
+  for (int h : {16, 32, 64, 128}) {
+    const TimeBasis basis = TimeBasis::fourier_harmonics(h);
+    double largest = 0.0;
+    for (double r : {0.6, 0.75, 0.9, 1.25, 1.5, 2.0}) {
+      const solvers::WeightedResidual w(d.system(), {0, d.p0, 10.0 * r}, {{0, d.coulomb()}}, basis, basis);
+      ASSERT_TRUE(w.rigid());
+      const auto s = w.solve();
+      ASSERT_TRUE(s.converged()) << "H = " << h << " r = " << r << ": " << s.brief();
+      // Continuous motion: at most one instant per reversal can hold (a reversal between τ_k and
+      // τ_{k+1} may leave Δ_k = 0); the others slip at exactly μN.
+      int stuck = 0;
+      for (double f : s.contact_force_samples.row(0)) stuck += std::abs(f) < d.f0 * (1.0 - 1e-12) ? 1 : 0;
+      EXPECT_LE(stuck, 2) << "H = " << h << " r = " << r;
+      EXPECT_NEAR(s.max_contact_force, d.f0, 1e-12 * d.f0);
+      EXPECT_LT(s.complementarity, 1e-9 * w.residual_scale());
+      largest = std::max(largest, std::abs(peak(basis, s.coefficients) / d.amplitude(r) - 1.0));
+    }
+    sizes.push_back(basis.dimension());
+    worst.push_back(largest);
+  }
+  const double order = -std::log(worst.back() / worst.front()) / std::log(sizes.back() / sizes.front());
+  EXPECT_GT(order, 0.7);
+  EXPECT_LT(order, 1.4);
+  EXPECT_LT(worst.back(), 5e-3);
+}
+
+// Full stick: with a load below the slip force, friction carries the whole load and the mass
+// stays put: u = 0 and λ_k = P cos 2πτ_k at the instants (the pinned position u(τ_1) = 0 is the
+// Jenkins convention's k_t → ∞ limit). For Fourier the instants' quadrature is exact (with even
+// M the instants are k/M: the top function vanishes at the midpoints, and so does the B-splines'
+// sum against (−1)^k). Wavelet pairs project the load with the Q-point rule, the impulses with
+// the M-point one: λ agrees to 1e-3 P there.
+TEST(Friction, ExactCoulombInFullStickCarriesTheWholeLoad) {
+  DenHartog d;
+  d.p0 = 0.1;  // < F0 = 0.2 N
+  for (const std::string pair : {"fourier-odd", "fourier", "db6", "bspline"}) {
+    const TimeBasis basis = pair == "fourier-odd" ? TimeBasis::fourier_harmonics(16) : TimeBasis::from_name(pair, 32);
+    const solvers::WeightedResidual w(d.system(), {0, d.p0, 6.0}, {{0, d.coulomb()}}, basis, basis);
+    const auto s = w.solve();
+    ASSERT_TRUE(s.converged()) << pair << ": " << s.brief();
+    EXPECT_LT(s.coefficients.cwiseAbs().maxCoeff(), 1e-12 * d.p0 / d.k) << pair;
+    const Eigen::VectorXd tau = w.collocation_times();
+    const double tolerance = pair.starts_with("fourier") ? 1e-12 : 1e-3;
+    for (Eigen::Index k = 0; k < tau.size(); ++k) {
+      EXPECT_NEAR(s.contact_force_samples(0, k), d.p0 * std::cos(2.0 * kPi * tau(k)), tolerance * d.p0) << pair << " k = " << k;
+    }
+    EXPECT_LT(s.max_contact_force, d.f0) << pair << ": every instant sticks";
+  }
+}
+
+// The friction rows' generalized Jacobian, frequency and load derivatives equal central
+// differences away from a switch, in stick–slip (ζ = 2 %, μN/P = 0.5, r = 0.4: the Den Hartog
+// oscillator stops at its reversals), for Fourier and DB6.
+TEST(Friction, ExactCoulombDerivativesMatchCentralDifferences) {
+  DenHartog d;
+  d.f0 = 0.5;
+  solvers::MechanicalSystem sys = d.system();
+  sys.damping.insert(0, 0) = 2.0 * 0.02 * std::sqrt(d.k * d.m);
+  for (const std::string pair : {"fourier", "db6"}) {
+    const TimeBasis basis = TimeBasis::from_name(pair, 64);
+    const solvers::WeightedResidual w(sys, {0, d.p0, 4.0}, {{0, d.coulomb()}}, basis, basis);
+    const auto s = w.solve();
+    ASSERT_TRUE(s.converged()) << pair << ": " << s.brief();
+    const Eigen::VectorXd lambda = wbm::spectral::stacked(s.contact_force_samples);
+    int stuck = 0;
+    for (Eigen::Index k = 0; k < lambda.size(); ++k) stuck += std::abs(lambda(k)) < d.f0 * (1.0 - 1e-9) ? 1 : 0;
+    ASSERT_GT(stuck, 0) << pair;
+    ASSERT_LT(stuck, lambda.size()) << pair;
+    // A point near the solution, with every row strictly on its branch: the slips off their bound.
+    Eigen::VectorXd x = lambda;
+    for (Eigen::Index k = 0; k < x.size(); ++k) x(k) *= std::abs(x(k)) < d.f0 * (1.0 - 1e-9) ? 1.0 : 1.001;
+    const Eigen::MatrixXd j = w.signorini_jacobian(x).dense();
+    const double h = 1e-7 * d.f0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp(i) += h;
+      xm(i) -= h;
+      const Eigen::VectorXd fd = (w.signorini_residual(xp) - w.signorini_residual(xm)) / (2.0 * h);
+      EXPECT_LT((fd - j.col(i)).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << pair << " column " << i;
+    }
+    const double df = 1e-6 * w.frequency_hz();
+    const Eigen::VectorXd by_f = (w.at_frequency(w.frequency_hz() + df).signorini_residual(x) -
+                                  w.at_frequency(w.frequency_hz() - df).signorini_residual(x)) / (2.0 * df);
+    const Eigen::VectorXd exact_f = w.signorini_frequency_derivative(x);
+    EXPECT_LT((by_f - exact_f).cwiseAbs().maxCoeff(), 1e-5 * exact_f.cwiseAbs().maxCoeff()) << pair;
+    const Eigen::VectorXd by_load = (w.signorini_residual(x, 1.0 + 1e-6) - w.signorini_residual(x, 1.0 - 1e-6)) / 2e-6;
+    const Eigen::VectorXd exact_load = w.signorini_load_derivative(x);
+    EXPECT_LT((by_load - exact_load).cwiseAbs().maxCoeff(), 1e-6 * exact_load.cwiseAbs().maxCoeff()) << pair;
+  }
+}
+
+// Exact contacts are not mixed with penalty or Jenkins laws in one problem, and the integrators
+// that need f(u) or a slider state refuse Coulomb friction by name.
+TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
+  const DenHartog d;
+  const TimeBasis fourier = TimeBasis::fourier_harmonics(8);
+  solvers::MechanicalSystem two;
+  two.mass = Eigen::MatrixXd::Identity(2, 2).sparseView();
+  two.stiffness = (d.k * Eigen::MatrixXd::Identity(2, 2)).sparseView();
+  two.damping.resize(2, 2);
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::WeightedResidual(two, {0, d.p0, 15.0}, {{0, d.coulomb()}, {1, d.jenkins(1e3 * d.k)}}, fourier, fourier);
+      },
+      {"1 of the 2 contacts are exact", "Coulomb ones a stiff JenkinsLaw"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::integrate_moreau_jean_to_periodic(d.system(), {0, d.p0, 15.0}, {{0, d.coulomb()}}, {}); },
+      {"Coulomb friction (exact)", "rigid stops (contact::RigidStop) only"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)solvers::floquet_multipliers(d.system(), {{0, d.coulomb()}}, Eigen::MatrixXd::Zero(1, 64), 15.0); },
+      {"Coulomb friction (exact)", "stability is not computed for friction"});
 }

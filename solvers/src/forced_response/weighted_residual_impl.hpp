@@ -223,15 +223,32 @@ struct WeightedResidual::Impl {
   // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
   // τ_k = (k + ½)/M over M (M × M, row j = function, column k), frequency independent and
   // shared; per frequency the Delassus operator D = V H W, u_lin = V x_lin, and c = mean |D_ii|.
+  // Exact Coulomb friction (contact::CoulombFriction, also rigid()): impulse k is paired with the
+  // slip over the cell, Δ_k = u(τ_{k+1}) − u(τ_k), so its rows of V, D and u_lin are those of
+  // V(τ_{k+1}) − V(τ_k) ("kinematic" rows: a gap's displacement or a slip). The instants are the
+  // midpoints τ_k = (k + ½)/M unless W is singular there (Fourier of even M, B-splines), then the
+  // cell ends k/M (W invertible: every impulse pattern moves the structure). In full stick the
+  // slips leave the contact's position free (the slips of a constant vanish): a contact whose
+  // every instant sticks has its row k = 0 replaced by the position u(τ_1) = 0 (the k_t → ∞
+  // limit of the Jenkins convention): the stuck rows (stuck_*), one entry per friction contact.
   bool rigid = false;
   struct Collocation {
     Eigen::VectorXd tau;
     Eigen::MatrixXd trial_values, weights;
-    Eigen::VectorXd gaps;  // g0 of contact c at row k·n_c + c
+    Eigen::MatrixXd increments;  // V(τ_{k+1}) − V(τ_k) (M × M), friction rows
+    Eigen::VectorXd gaps;        // g0 of contact c at row k·n_c + c
+    std::vector<char> coulomb;   // per contact: exact Coulomb friction (1) or a rigid stop (0)
+    Eigen::VectorXd slip_forces; // μ N of contact c (0 for a stop)
+    bool any_coulomb = false;
   };
   std::shared_ptr<const Collocation> collocation;
   Eigen::MatrixXd delassus;
   Eigen::VectorXd u_lin;
+  Eigen::MatrixXd stuck_rows;     // R × n_c·M: ∂φ/∂λ of each replaced row [m/N]
+  Eigen::VectorXd stuck_lin;      // R: its value at λ = 0 and load 1, negated (φ = d λ − s lin)
+  std::vector<int> stuck_row_of;  // R: the row i = k·n_c + c it replaces
+  std::vector<int> stuck_contact; // R: c
+
   double force_compliance = 1.0;
 
   Impl(MechanicalSystem s, HarmonicForcing f, std::vector<ContactPoint> c, TimeBasis tr, TimeBasis we,
@@ -274,8 +291,20 @@ struct WeightedResidual::Impl {
     }
   }
 
-  // φ(λ) = min(c λ, g0 − u(λ)) [m] at load s, with the gap samples u(λ) = s u_lin − D λ.
-  [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows) const;
+  // The kinematic rows of y (n_c·M rows, ordering k·n_c + c): V(τ_{k+1}) y_c for a stop,
+  // (V(τ_{k+1}) − V(τ_k)) y_c for a friction contact.
+  [[nodiscard]] Eigen::MatrixXd kinematic(const Eigen::MatrixXd& y) const;
+
+  // φ(λ) [m] at load s, row by row: min(c λ, g0 − u(λ)) for a stop, with u(λ) = s u_lin − D λ;
+  // c λ − proj_[−c μN, c μN](c λ + Δ(λ)) for friction (contact::coulomb_projection), with
+  // Δ(λ) = s u_lin − D λ; a friction contact that sticks at every instant has its row c replaced
+  // by −u(τ_1) (`pinned` lists the stuck_* entries used).
+  // gap_rows: the rows on the branch that depends on D (the gap of a stop, the stick of friction,
+  // pinned rows included).
+  [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
+                                          std::vector<int>* pinned = nullptr) const;
+  // ∂φ/∂λ rows of the gap rows: D_i, or stuck_rows(r) for a pinned entry r.
+  [[nodiscard]] Eigen::MatrixXd constraint_rows(const std::vector<int>& rows, const std::vector<int>& pinned) const;
 
   // n(λ) = (W ⊗ I_{n_c}) λ, stacked like x: the weighted residual of the collocation impulses.
   [[nodiscard]] Eigen::VectorXd collocation_forces(const Eigen::VectorXd& lambda) const {

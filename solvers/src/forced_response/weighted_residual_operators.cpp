@@ -8,6 +8,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+#include <wbm/contact/friction.hpp>
 #include <wbm/solvers/model_checks.hpp>
 #include <wbm/wavelets/connection_coefficients.hpp>
 
@@ -168,9 +172,10 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
   rigid = rigid_count > 0;
   if (rigid && rigid_count < nc) {
     throw std::invalid_argument("weighted residual: " + std::to_string(rigid_count) + " of the " + std::to_string(nc) +
-                                " contacts are rigid stops and the others penalty laws; mixing them in one problem "
-                                "is not supported: make every contact rigid, or give the rigid ones a stiff "
-                                "LinearPenalty");
+                                " contacts are exact (rigid stops or Coulomb friction, whose forces are multipliers) "
+                                "and the others penalty or Jenkins laws; mixing them in one problem is not supported: "
+                                "make every contact exact, or give the rigid ones a stiff LinearPenalty and the "
+                                "Coulomb ones a stiff JenkinsLaw");
   }
   if (rigid && options.contact_quadrature == ContactQuadrature::CellAverage) {
     throw std::invalid_argument("WeightedResidualOptions.contact_quadrature = cell-average integrates a penalty law over "
@@ -228,6 +233,42 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
     col->gaps.resize(static_cast<Eigen::Index>(nc) * m);
     for (int k = 0; k < m; ++k) {
       for (int c = 0; c < nc; ++c) col->gaps(static_cast<Eigen::Index>(k) * nc + c) = contacts[c].law->gap();
+    }
+    col->coulomb.assign(static_cast<size_t>(nc), 0);
+    col->slip_forces = Eigen::VectorXd::Zero(nc);
+    for (int c = 0; c < nc; ++c) {
+      if (const auto* f = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get())) {
+        col->coulomb[static_cast<size_t>(c)] = 1;
+        col->slip_forces(c) = f->slip_force();
+        col->any_coulomb = true;
+      }
+    }
+    if (col->any_coulomb) {
+      // Friction needs every impulse pattern to move the structure: in full stick the slips do
+      // not fix the impulses W cannot see, and with one slip row the stick rows become singular.
+      // At the midpoints the top function of Fourier with even M vanishes, and the symmetric
+      // B-splines sum to zero against (−1)^k: there the impulses move to the cell ends k/M.
+      const auto singular = [](const Eigen::MatrixXd& weights) {
+        Eigen::FullPivLU<Eigen::MatrixXd> lu(weights);
+        lu.setThreshold(1e-10);
+        return lu.dimensionOfKernel() > 0;
+      };
+      if (singular(col->weights)) {
+        for (int k = 0; k < m; ++k) {
+          col->tau(k) = static_cast<double>(k) / m;
+          next(k) = static_cast<double>((k + 1) % m) / m;
+        }
+        col->trial_values = trial.values(next, 0);
+        col->weights = weighting.values(col->tau, 0).transpose() / static_cast<double>(m);
+        if (singular(col->weights)) {
+          throw std::invalid_argument("exact Coulomb friction (law \"coulomb\"): the weighting basis " + weighting.name() +
+                                      " of M = " + std::to_string(m) + " functions does not see every pattern of M "
+                                      "impulses, at the midpoints (k + 1/2)/M nor at the instants k/M, so the friction "
+                                      "forces in stick are not determined: use another weighting basis or M, or a "
+                                      "Jenkins element (law \"jenkins\")");
+        }
+      }
+      col->increments = col->trial_values - trial.values(col->tau, 0);
     }
     collocation = col;
   }

@@ -3,12 +3,27 @@
 // (weighted_residual_impl.hpp).
 #include "weighted_residual_impl.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/signorini.hpp>
 
 namespace wbm::solvers {
+
+
+Eigen::MatrixXd WeightedResidual::Impl::kinematic(const Eigen::MatrixXd& y) const {
+  const Collocation& col = *collocation;
+  if (!col.any_coulomb) return per_contact(col.trial_values, y);
+  Eigen::MatrixXd out(y.rows(), y.cols());
+  for (int c = 0; c < nc; ++c) {
+    const Eigen::MatrixXd& t = col.coulomb[static_cast<size_t>(c)] != 0 ? col.increments : col.trial_values;
+    const Eigen::MatrixXd y_c = y(Eigen::seq(c, Eigen::last, nc), Eigen::all);
+    out(Eigen::seq(c, Eigen::last, nc), Eigen::all) = t * y_c;
+  }
+  return out;
+}
 
 
 void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
@@ -16,25 +31,79 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, size);  // W ⊗ I_{n_c}
   for (int c = 0; c < nc; ++c) w(Eigen::seq(c, Eigen::last, nc), Eigen::seq(c, Eigen::last, nc)) = col.weights;
-  delassus = per_contact(col.trial_values, compliance_times(w));
-  u_lin = per_contact(col.trial_values, x_lin);
-  if (!set_force_compliance) return;
-  force_compliance = delassus.diagonal().cwiseAbs().mean();
-  if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+  const Eigen::MatrixXd hw = compliance_times(w);
+  delassus = kinematic(hw);
+  u_lin = kinematic(x_lin);
+  if (set_force_compliance) {
+    force_compliance = delassus.diagonal().cwiseAbs().mean();
+    if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+  }
+  if (!col.any_coulomb) return;
+  // The row that replaces a stuck contact's first: its position u_c(τ_1) (row c of
+  // V(τ_{k+1}) H W and of V x_lin).
+  stuck_rows = Eigen::MatrixXd::Zero(nc, size);
+  stuck_lin = Eigen::VectorXd::Zero(nc);
+  stuck_row_of.clear();
+  stuck_contact.clear();
+  for (int c = 0; c < nc; ++c) {
+    if (col.coulomb[static_cast<size_t>(c)] == 0) continue;
+    const auto rows_c = Eigen::seq(c, Eigen::last, nc);
+    const Eigen::MatrixXd hw_c = hw(rows_c, Eigen::all);
+    const Eigen::VectorXd x_c = x_lin(rows_c);
+    const auto e = static_cast<Eigen::Index>(stuck_row_of.size());
+    stuck_rows.row(e) = col.trial_values.row(0) * hw_c;
+    stuck_lin(e) = col.trial_values.row(0).dot(x_c);
+    stuck_row_of.push_back(c);
+    stuck_contact.push_back(c);
+  }
+  stuck_rows.conservativeResize(static_cast<Eigen::Index>(stuck_row_of.size()), Eigen::NoChange);
+  stuck_lin.conservativeResize(stuck_rows.rows());
 }
 
 
-Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows) const {
+Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
+                                                  std::vector<int>* pinned) const {
   require_factorized();
-  const Eigen::VectorXd gap = collocation->gaps - (load * u_lin - delassus * lambda);
-  Eigen::VectorXd phi(gap.size());
+  const Collocation& col = *collocation;
+  const Eigen::VectorXd u = load * u_lin - delassus * lambda;  // a stop's displacement, or a slip Δ
+  Eigen::VectorXd phi(u.size());
   if (gap_rows != nullptr) gap_rows->clear();
-  for (Eigen::Index i = 0; i < gap.size(); ++i) {
-    const auto cp = contact::signorini_min(force_compliance * lambda(i), gap(i));
-    phi(i) = cp.value;
-    if (cp.gap_branch && gap_rows != nullptr) gap_rows->push_back(static_cast<int>(i));
+  if (pinned != nullptr) pinned->clear();
+  std::vector<char> slips(static_cast<size_t>(nc), 0);
+  for (Eigen::Index i = 0; i < u.size(); ++i) {
+    const auto c = static_cast<size_t>(i % nc);
+    bool d_branch = false;
+    if (col.coulomb[c] != 0) {
+      const auto cp = contact::coulomb_projection(force_compliance * lambda(i), u(i), force_compliance * col.slip_forces(static_cast<Eigen::Index>(c)));
+      phi(i) = cp.value;
+      d_branch = cp.stick;
+      if (!cp.stick) slips[c] = 1;
+    } else {
+      const auto cp = contact::signorini_min(force_compliance * lambda(i), col.gaps(i) - u(i));
+      phi(i) = cp.value;
+      d_branch = cp.gap_branch;
+    }
+    if (d_branch && gap_rows != nullptr) gap_rows->push_back(static_cast<int>(i));
+  }
+  for (size_t e = 0; e < stuck_row_of.size(); ++e) {
+    if (slips[static_cast<size_t>(stuck_contact[e])] != 0) continue;
+    // Full stick: the slips Δ_k sum to zero over the period, so the rows leave the contact's
+    // position free: pinned at u(τ_1) = 0, the Jenkins convention as k_t → ∞.
+    const auto ee = static_cast<Eigen::Index>(e);
+    phi(stuck_row_of[e]) = stuck_rows.row(ee).dot(lambda) - load * stuck_lin(ee);
+    if (pinned != nullptr) pinned->push_back(static_cast<int>(e));
   }
   return phi;
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::constraint_rows(const std::vector<int>& rows, const std::vector<int>& pinned) const {
+  Eigen::MatrixXd out = delassus(rows, Eigen::all);
+  for (int e : pinned) {
+    const auto at = std::find(rows.begin(), rows.end(), stuck_row_of[static_cast<size_t>(e)]);
+    if (at != rows.end()) out.row(at - rows.begin()) = stuck_rows.row(e);
+  }
+  return out;
 }
 bool WeightedResidual::rigid() const { return impl_->rigid; }
 
@@ -68,24 +137,25 @@ Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lamb
 LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_jacobian");
-  std::vector<int> active;
-  (void)p.signorini(lambda, 1.0, &active);
+  std::vector<int> active, pinned;
+  (void)p.signorini(lambda, 1.0, &active, &pinned);
   const Eigen::Index size = lambda.size();
   const auto rank = static_cast<Eigen::Index>(active.size());
   const double c = p.force_compliance;
   LowRankJacobian jac;
   jac.scale = p.scale / c;  // J = (c/s_r)(I + P_A (D/c − I)_A)
   jac.rows = size;
+  const Eigen::MatrixXd d_rows = p.constraint_rows(active, pinned) / c;  // (D/c)_A, r × n
   if (4 * rank > 3 * size) {  // dense form: s J = I with the gap rows replaced by D/c
     jac.capacitance = Eigen::MatrixXd::Identity(size, size);
-    for (int i : active) jac.capacitance.row(i) = p.delassus.row(i) / c;
+    for (Eigen::Index i = 0; i < rank; ++i) jac.capacitance.row(active[static_cast<size_t>(i)]) = d_rows.row(i);
     return jac;
   }
   jac.u = Eigen::MatrixXd::Zero(size, rank);
   for (Eigen::Index i = 0; i < rank; ++i) jac.u(active[static_cast<size_t>(i)], i) = 1.0;
-  auto rows = std::make_shared<Eigen::MatrixXd>(p.delassus(active, Eigen::all) / c);  // (D/c)_A, r × n
+  auto rows = std::make_shared<Eigen::MatrixXd>(d_rows);
   for (Eigen::Index i = 0; i < rank; ++i) (*rows)(i, active[static_cast<size_t>(i)]) -= 1.0;
-  jac.capacitance = p.delassus(active, active) / c;  // I + (D/c − I)_AA
+  jac.capacitance = d_rows(Eigen::all, active);  // I + (D/c − I)_AA
   jac.times_v = [rows](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(*rows * y); };
   return jac;
 }
@@ -93,24 +163,30 @@ LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lamb
 Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_frequency_derivative");
-  std::vector<int> gap_rows;
-  (void)p.signorini(lambda, load, &gap_rows);
+  std::vector<int> gap_rows, pinned;
+  (void)p.signorini(lambda, load, &gap_rows, &pinned);
   const Eigen::MatrixXd a = spectral::as_coefficients(expand_forces(lambda, load), p.n);  // n × M
-  // G′ a, then P G⁻¹, then the trial values at τ_{k+1}.
-  const Eigen::VectorXd du =
-      p.per_contact(p.collocation->trial_values, p.gather(p.solve_stacked(p.frequency_derivative_times(a), false)));
+  // G′ a, then P G⁻¹, then the kinematic rows (trial values at τ_{k+1}, or their increments).
+  const Eigen::VectorXd dx = p.gather(p.solve_stacked(p.frequency_derivative_times(a), false));
+  const Eigen::VectorXd du = p.kinematic(dx);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
   for (int i : gap_rows) out(i) = du(i) / p.scale;  // g = g0 − u and ∂u/∂f = −V P G⁻¹ G′ a
+  for (int e : pinned) {  // the position row, −u(τ_1)
+    const auto i = static_cast<size_t>(e);
+    const Eigen::VectorXd dx_c = dx(Eigen::seq(p.stuck_contact[i], Eigen::last, p.nc));
+    out(p.stuck_row_of[i]) = p.collocation->trial_values.row(0).dot(dx_c) / p.scale;
+  }
   return out;
 }
 
 Eigen::VectorXd WeightedResidual::signorini_load_derivative(const Eigen::VectorXd& lambda, double load) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_load_derivative");
-  std::vector<int> gap_rows;
-  (void)p.signorini(lambda, load, &gap_rows);
+  std::vector<int> gap_rows, pinned;
+  (void)p.signorini(lambda, load, &gap_rows, &pinned);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
   for (int i : gap_rows) out(i) = -p.u_lin(i) / p.scale;
+  for (int e : pinned) out(p.stuck_row_of[static_cast<size_t>(e)]) = -p.stuck_lin(e) / p.scale;
   return out;
 }
 
@@ -213,7 +289,11 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   NewtonResult result = newton(Signorini{this, 1.0}, l0, p.options.newton);
   s.path = SolutionPath::DirectNewton;
   std::string history = "primal-dual active set (semismooth Newton on the Signorini conditions): " + result.report.message;
-  if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy) {
+  if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy && p.collocation->any_coulomb) {
+    history += "; no penalty homotopy for exact Coulomb friction (its penalty regularization is the Jenkins element, "
+               "which has a state): start from the impulses of a nearby solution (continuation), or use "
+               "law = \"jenkins\" with a stiff k_t";
+  } else if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy) {
     NewtonResult h = solve_rigid_with_penalty_homotopy(s.homotopy);
     h.report.iterations += result.report.iterations;
     history += "; " + h.report.message;
@@ -226,20 +306,49 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   const Eigen::VectorXd a = expand_forces(lambda);
   s.coefficients = spectral::as_coefficients(a, p.n);
   s.contact_force_samples = spectral::as_coefficients(lambda, p.nc);
+  s.collocation_times = p.collocation->tau;
   const double bnorm = p.b.norm();
   s.relative_residual = residual(a, lambda).norm() / (bnorm > 0.0 ? bnorm : 1.0);
   s.residual_tolerance = p.options.residual_tolerance;
   // The conditions recomputed from the coefficients, not from D λ.
   const Eigen::VectorXd xa = p.gather(a);
-  const Eigen::VectorXd gap = p.collocation->gaps - p.per_contact(p.collocation->trial_values, xa);
+  const Eigen::VectorXd kin = p.kinematic(xa);  // u_c(τ_{k+1}) at a stop, Δ_k for friction
+  const auto& col = *p.collocation;
   Eigen::VectorXd phi(size);
-  for (Eigen::Index i = 0; i < size; ++i) phi(i) = contact::signorini_min(p.force_compliance * lambda(i), gap(i)).value;
-  s.collocation_penetration = (-gap).maxCoeff();
+  s.collocation_penetration = -std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < size; ++i) {
+    const auto c = static_cast<size_t>(i % p.nc);
+    if (col.coulomb[c] != 0) {
+      phi(i) = contact::coulomb_projection(p.force_compliance * lambda(i), kin(i),
+                                           p.force_compliance * col.slip_forces(static_cast<Eigen::Index>(c))).value;
+    } else {
+      phi(i) = contact::signorini_min(p.force_compliance * lambda(i), col.gaps(i) - kin(i)).value;
+      s.collocation_penetration = std::max(s.collocation_penetration, kin(i) - col.gaps(i));
+    }
+  }
+  for (int c = 0; c < p.nc; ++c) {  // a stuck friction contact: u(τ_1) = 0
+    if (col.coulomb[static_cast<size_t>(c)] == 0) continue;
+    bool slips = false;
+    for (int k = 0; k < p.m; ++k) {
+      const Eigen::Index i = static_cast<Eigen::Index>(k) * p.nc + c;
+      slips = slips || !contact::coulomb_projection(p.force_compliance * lambda(i), kin(i),
+                                                    p.force_compliance * col.slip_forces(c)).stick;
+    }
+    if (slips) continue;
+    const Eigen::VectorXd x_c = xa(Eigen::seq(c, Eigen::last, p.nc));
+    phi(c) = col.trial_values.row(0).dot(x_c);
+  }
   s.complementarity = phi.cwiseAbs().maxCoeff();
-  s.max_contact_force = lambda.maxCoeff();
+  s.max_contact_force = lambda.cwiseAbs().maxCoeff();
   const Eigen::MatrixXd u = p.contact_samples(xa);
   s.max_penetration = -std::numeric_limits<double>::infinity();
-  for (int c = 0; c < p.nc; ++c) s.max_penetration = std::max(s.max_penetration, u.row(c).maxCoeff() - p.contacts[c].law->gap());
+  for (int c = 0; c < p.nc; ++c) {
+    if (col.coulomb[static_cast<size_t>(c)] == 0) {
+      s.max_penetration = std::max(s.max_penetration, u.row(c).maxCoeff() - p.contacts[c].law->gap());
+    }
+  }
+  if (!std::isfinite(s.collocation_penetration)) s.collocation_penetration = std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(s.max_penetration)) s.max_penetration = std::numeric_limits<double>::quiet_NaN();
   const double phi_norm = detail::residual_norm(phi / p.scale, p.options.newton.norm);
   if (s.report.converged() && (!std::isfinite(s.relative_residual) || !s.coefficients.allFinite())) {
     s.report.status = SolveStatus::NonFinite;

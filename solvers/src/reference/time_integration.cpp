@@ -157,7 +157,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
                            "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
                            "raise MoreauJeanOptions.samples_per_period (and steps_per_period, a multiple of it)");
   for (const auto& c : contacts) {
-    if (!c.law->rigid()) {
+    if (!c.law->rigid() || c.law->hysteretic()) {
       throw std::invalid_argument("integrate_moreau_jean_to_periodic: the contact at DOF " + std::to_string(c.dof) +
                                   " is a " + c.law->describe() + "; this scheme takes rigid stops (contact::RigidStop) "
                                   "only: use integrate_to_periodic for penalty laws");

@@ -37,6 +37,7 @@
 /// graphite. Br. J. Appl. Phys. 13, 30–32. [G80] Griffin, J.H. (1980). Friction damping of
 /// resonant stresses in gas turbine engine airfoils. J. Eng. Power 102, 329–333.
 
+#include <cmath>
 #include <string>
 
 #include <Eigen/Core>
@@ -107,6 +108,61 @@ class JenkinsLaw final : public ContactLaw {
 
  private:
   JenkinsParameters p_;
+};
+
+/// Exact Coulomb friction in discrete time, the tangential analogue of signorini_min: with λ the
+/// friction force over one time cell [N] (its mean), F_s = μ N ≥ 0 the slip force and Δ the
+/// tangential displacement of the contact point over that cell [m] (Δ = w(t + h) − w(t)), the
+/// law Δ ∈ N_[−F_s, F_s](λ) (the implicit, Moreau-type discretization of f ∈ F_s Sign(ẇ): the
+/// force opposes the slip and stays inside the cone) is the projection equation
+///   φ(a, Δ, b) = a − proj_[−b, b](a + Δ) = 0,    a = c λ,  b = c F_s,
+/// with c > 0 [m/N] a compliance that puts both arguments in metres (the root set does not
+/// depend on c; Newton's path does: c plays the role of the DLFT's inverse penalty, 1/ε).
+/// Branches: stick, |a + Δ| ≤ b, φ = −Δ (the point holds); slip, φ = a − σ b with σ =
+/// sign(a + Δ) (the force saturates). The tie |a + Δ| = b is taken as stick. φ is semismooth,
+/// so Newton with its generalized derivative is an active-set method, as for the Signorini
+/// conditions. Units: m. Throws nothing; b < 0 is the caller's error (CoulombFriction checks).
+struct CoulombProjection {
+  double value;   // φ [m]
+  bool stick;     // ∂φ/∂Δ = −1, ∂φ/∂a = 0 if true; ∂φ/∂a = 1, ∂φ/∂b = −σ otherwise
+  double sigma;   // σ = ±1 in slip, 0 in stick
+};
+[[nodiscard]] inline CoulombProjection coulomb_projection(double a, double delta, double b) {
+  const double t = a + delta;
+  if (std::abs(t) <= b) return {-delta, true, 0.0};
+  const double sigma = t > 0.0 ? 1.0 : -1.0;
+  return {a - sigma * b, false, sigma};
+}
+
+/// Exact (rigid-plastic) Coulomb friction along one tangent under a constant normal load: the
+/// limit k_t → ∞ of the Jenkins element, with no tangential compliance. Like RigidStop its force
+/// is a Lagrange multiplier that the solver computes (rigid() is true), here from the projection
+/// equation above at each time cell (solvers/weighted_residual.hpp); it is also hysteretic(), so
+/// that laws needing f(u) or a slider state refuse it. force(), stiffness() throw
+/// std::logic_error; potential() is 0 (a rigid-plastic slider stores no energy); gap() is 0 (a
+/// tangential law has no gap). Throws std::invalid_argument (construction) naming the field for
+/// a μ or N that is not finite and ≥ 0.
+struct CoulombParameters {
+  double friction_coefficient;  // μ [-], finite and >= 0
+  double normal_load;           // N [N], finite and >= 0: a preload; the slip force is μ N
+  void validate() const;
+};
+
+class CoulombFriction final : public ContactLaw {
+ public:
+  explicit CoulombFriction(const CoulombParameters& parameters);
+  [[nodiscard]] double force(double u) const override;
+  [[nodiscard]] double stiffness(double u) const override;
+  [[nodiscard]] double potential(double /*u*/) const override { return 0.0; }
+  [[nodiscard]] double gap() const override { return 0.0; }
+  [[nodiscard]] std::string describe() const override;
+  [[nodiscard]] bool rigid() const override { return true; }
+  [[nodiscard]] bool hysteretic() const override { return true; }
+  [[nodiscard]] const CoulombParameters& parameters() const { return p_; }
+  [[nodiscard]] double slip_force() const { return p_.friction_coefficient * p_.normal_load; }
+
+ private:
+  CoulombParameters p_;
 };
 
 }  // namespace wbm::contact

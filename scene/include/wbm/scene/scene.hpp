@@ -130,9 +130,15 @@ struct Forcing {
 };
 
 /// The law of a [contact] entry: "exponential" [JL14 Eq. (5)], "linear" (penalty spring),
-/// "rigid" (exact Signorini contact) or "jenkins" (friction along the contact's direction: a
-/// Jenkins element, contact/friction.hpp).
-enum class ContactLawKind { Exponential, Linear, Rigid, Jenkins };
+/// "rigid" (exact Signorini contact), "jenkins" (friction along the contact's direction: a
+/// Jenkins element, contact/friction.hpp) or "coulomb" (exact Coulomb friction along it, its
+/// force a multiplier as a rigid stop's: contact::CoulombFriction).
+enum class ContactLawKind { Exponential, Linear, Rigid, Jenkins, Coulomb };
+/// True for the laws whose force is a Lagrange multiplier (rigid, coulomb): a forced response
+/// takes all of its contacts exact or none.
+[[nodiscard]] constexpr bool exact(ContactLawKind law) noexcept {
+  return law == ContactLawKind::Rigid || law == ContactLawKind::Coulomb;
+}
 [[nodiscard]] std::string_view to_string(ContactLawKind law) noexcept;
 
 /// The outer algorithm of type = "nnm": "continuation" (pseudo-arclength on the KKT
@@ -146,9 +152,9 @@ struct Contact {
   double exponent = 0.0;     // α [1/m] (exponential)
   double stiffness = 0.0;    // k [N/m] (linear)
   double tangential_stiffness = 0.0;  // k_t [N/m] (jenkins)
-  double friction_coefficient = 0.0;  // μ [-] (jenkins)
-  double normal_load = 0.0;           // N [N] (jenkins): a constant preload; slip force μ N
-  double gap = 0.0;          // g0 [m] (not jenkins)
+  double friction_coefficient = 0.0;  // μ [-] (jenkins, coulomb)
+  double normal_load = 0.0;           // N [N] (jenkins, coulomb): a constant preload; slip force μ N
+  double gap = 0.0;          // g0 [m] (not jenkins, coulomb)
   int dof = 0;               // 0-based
   /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
   /// g0 − (u[dof] − u[against]) and the force pushes the two apart. −1: a fixed obstacle.
@@ -243,11 +249,13 @@ struct Scene {
   Solver solver;
   solvers::TimeIntegrationOptions timestep{};  // BDF, penalty laws
   solvers::MoreauJeanOptions moreau_jean{};    // type = "timestep" with law = "rigid"
-  [[nodiscard]] bool rigid() const { return !contacts.empty() && contacts.front().law == ContactLawKind::Rigid; }
-  /// True when a contact is a friction law ("jenkins").
+  /// True when the contacts are exact (every one "rigid" or "coulomb"): their forces are the
+  /// multipliers of the weighted residual's collocation instants (solvers::WeightedResidual::rigid).
+  [[nodiscard]] bool rigid() const { return !contacts.empty() && exact(contacts.front().law); }
+  /// True when a contact is a friction law ("jenkins" or "coulomb").
   [[nodiscard]] bool friction() const {
     for (const auto& c : contacts) {
-      if (c.law == ContactLawKind::Jenkins) return true;
+      if (c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb) return true;
     }
     return false;
   }

@@ -175,7 +175,7 @@ struct WeightedResidualSolution {
   NewtonReport report;             // Newton on the contact unknowns (scaled residual)
   double relative_residual = 0.0;  // ‖G a − b + n(a)‖₂ / ‖b‖₂ of the full system, recomputed
   double residual_tolerance = 0.0; // the bound relative_residual was verified against
-  double max_penetration = 0.0;    // max over normal contacts and samples of u_c − g0 [m]
+  double max_penetration = 0.0;    // max over normal contacts and samples of u_c − g0 [m] (NaN: none)
   double max_contact_force = 0.0;  // max over contacts and samples of f_c [N] (|f| for a friction law)
   int contact_unknowns = 0;        // n_c · M
   double condition_number = 0.0;   // 1-norm condition estimate of G (Hager–Higham), inf if G is singular
@@ -199,15 +199,19 @@ struct WeightedResidualSolution {
   /// residual in the harmonics left out, ‖(I − Π) R(a)‖₂ / ‖b‖₂ (WeightedResidual::
   /// dropped_harmonics_residual); NaN without a selection.
   double dropped_harmonics_residual = std::numeric_limits<double>::quiet_NaN();
-  /// Rigid stops only (WeightedResidual::rigid()), else empty / NaN:
-  ///  - contact_force_samples: λ, n_c × M [N], row = contact, column k = impulse instant
-  ///    τ_k = (k + ½)/M; λ_k/M is the impulse (N·period), λ_k the mean force over one cell;
-  ///  - collocation_penetration: max over contacts and k of u_c(τ_{k+1}) − g0 [m], recomputed
+  /// Exact contacts only (WeightedResidual::rigid(): rigid stops, Coulomb friction), else empty / NaN:
+  ///  - contact_force_samples: λ, n_c × M [N], row = contact, column k = impulse instant τ_k
+  ///    (collocation_times); λ_k/M is the impulse (N·period), λ_k the mean force over one cell;
+  ///  - collocation_times: τ_k (length M), (k + ½)/M, or k/M for friction with a weighting
+  ///    basis that does not see every impulse pattern at the midpoints (WeightedResidual);
+  ///  - collocation_penetration: max over the stops and k of u_c(τ_{k+1}) − g0 [m], recomputed
   ///    from `coefficients` (the plateau's flatness where the conditions are imposed;
-  ///    max_penetration is over the Q samples, between the instants as well);
-  ///  - complementarity: max over contacts and k of |min(c λ_k, g0 − u_c(τ_{k+1}))| [m],
-  ///    recomputed from `coefficients`, c the force compliance (WeightedResidual::force_compliance).
+  ///    max_penetration is over the Q samples, between the instants as well); NaN without a stop;
+  ///  - complementarity: max over contacts and k of |φ| [m], the stops' min(c λ_k, g0 − u_c(τ_{k+1}))
+  ///    and friction's c λ_k − proj(c λ_k + Δ_k), recomputed from `coefficients`, c the force
+  ///    compliance (WeightedResidual::force_compliance).
   Eigen::MatrixXd contact_force_samples;
+  Eigen::VectorXd collocation_times;
   double collocation_penetration = std::numeric_limits<double>::quiet_NaN();
   double complementarity = std::numeric_limits<double>::quiet_NaN();
   [[nodiscard]] bool converged() const { return report.converged(); }
@@ -260,6 +264,24 @@ struct WeightedResidualSolution {
 /// the stop (a 1-DOF oscillator) has no local compliance: its D is dominated by the periodic
 /// echo of the impulses and the iteration may stagnate (reported, not hidden). Mixing rigid and
 /// penalty contacts, and ContactQuadrature::CellAverage with rigid stops, are refused.
+///
+/// Exact Coulomb friction (contact::CoulombFriction, also rigid(); it may be mixed with rigid
+/// stops): the friction force of contact c is the same M impulses, each paired with the slip
+/// of the cell it opens, Δ_{c,k} = u_c(τ_{k+1}) − u_c(τ_k), through the discrete Coulomb law
+/// Δ ∈ N_[−μN, μN](λ) (the implicit, Moreau-type discretization of f ∈ μN Sign(u̇)), written
+///   φ_{c,k} = c λ_{c,k} − proj_[−c μN, c μN](c λ_{c,k} + Δ_{c,k}) = 0
+/// (contact::coulomb_projection); its rows of D and u_lin use V(τ_{k+1}) − V(τ_k), and the same
+/// active-set Newton applies (stick rows: D_i/c; slip rows: λ = ±μN). At convergence this is the
+/// fixed point the DLFT iterates on [Nacivet et al. 2002], with c in the role of the DLFT's
+/// inverse penalty; here it is solved in time, on the impulses, by Newton. Contrary to the
+/// frequency-domain DLFT it holds for any admissible pair. The friction force switches at an
+/// instant: the response converges at first order in 1/M (tests/solvers/test_friction.cpp).
+/// In full stick the slips leave the position free: a contact that sticks at every instant is
+/// pinned at u(τ_1) = 0 (the Jenkins convention, f = k_t w, as k_t → ∞). The instants are the
+/// midpoints unless W is singular there (Fourier of even M, whose top function vanishes at
+/// them; the B-splines, against (−1)^k): then τ_k = k/M, where W is invertible (else
+/// std::invalid_argument at construction). Exact friction has no penalty homotopy (its
+/// regularization, the Jenkins element, has a state): a failed active-set Newton is reported.
 ///
 /// Throws std::invalid_argument for invalid inputs, for a load at a harmonic h with 2h ≥ M
 /// (HarmonicForcing::require_resolved: M functions would alias it), for M differing between trial and weighting,
@@ -332,8 +354,9 @@ class WeightedResidual {
   [[nodiscard]] bool rigid() const;
   /// The contact quadrature in use (WeightedResidualOptions::contact_quadrature).
   [[nodiscard]] ContactQuadrature contact_quadrature() const;
-  /// Rigid stops: the impulse instants τ_k = (k + ½)/M (length M); impulse k is paired with the
-  /// gap at τ_{k+1}.
+  /// Exact contacts: the impulse instants τ_k (length M), (k + ½)/M or, for friction with a
+  /// weighting basis singular at the midpoints, k/M; impulse k is paired with the gap at τ_{k+1}
+  /// (a stop) or the slip from τ_k to τ_{k+1} (friction).
   [[nodiscard]] Eigen::VectorXd collocation_times() const;
   /// Rigid stops: D = V H W (n_c·M square [m/N], rows and columns k·n_c + c): the contact
   /// displacements at τ_{k+1} are u(λ) = u_lin − D λ.
