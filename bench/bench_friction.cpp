@@ -1,12 +1,14 @@
 // The cost of friction (issue #36): the 1-DOF damper of examples/scenes/friction_damper.toml
-// (1 kg, f_n = 10 Hz, ζ = 0.5 %, 1 N; a Jenkins element k_t = 1000 k, μN = 0.2 N) against the same
-// oscillator with a frictionless linear penalty stop of the same stiffness at 0.3 mm (it touches
-// over part of each cycle at 8 Hz; cell-average quadrature, the scenes' rule for that law; the
-// Jenkins element takes midpoints), per pair at Q = 1024 samples: one solve at 8 Hz (counter:
-// Newton iterations), and the continuation from 5 to 20 Hz without stability (counters: points,
-// points per second; at most 20 000 points). The Jenkins law evaluates the whole period per
-// residual (the return map, two periods) and its Jacobian is dense in the condensed unknowns;
-// the stop's is diagonal in the samples and goes through Woodbury.
+// (1 kg, f_n = 10 Hz, ζ = 0.5 %, 1 N; a Jenkins element k_t = 1000 k, μN = 0.2 N, or exact Coulomb
+// friction of the same μN) against the same oscillator with a frictionless linear penalty stop of
+// the Jenkins stiffness at 0.3 mm (it touches over part of each cycle at 8 Hz; cell-average
+// quadrature, the scenes' rule for that law; the Jenkins element takes midpoints), per pair at
+// Q = 1024 samples: one solve at 8 Hz (counter: Newton iterations), and the continuation from 5
+// to 20 Hz without stability (counters: points, points per second; at most 20 000 points). The
+// Jenkins law evaluates the whole period per residual (the return map, two periods) and its
+// Jacobian is dense in the condensed unknowns; the stop's is diagonal in the samples and goes
+// through Woodbury; exact Coulomb friction forms the Delassus operator (M × M) once per
+// frequency, then solves with the stick rows only.
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -35,10 +37,13 @@ wbm::solvers::MechanicalSystem damper() {
   return s;
 }
 
-std::shared_ptr<const wbm::contact::ContactLaw> law(bool friction) {
-  if (friction) return std::make_shared<wbm::contact::JenkinsLaw>(wbm::contact::JenkinsParameters{1e3 * kStiffness, 0.2, 1.0});
+// 0: the frictionless stop, 1: the Jenkins element, 2: exact Coulomb friction.
+std::shared_ptr<const wbm::contact::ContactLaw> law(int kind) {
+  if (kind == 1) return std::make_shared<wbm::contact::JenkinsLaw>(wbm::contact::JenkinsParameters{1e3 * kStiffness, 0.2, 1.0});
+  if (kind == 2) return std::make_shared<wbm::contact::CoulombFriction>(wbm::contact::CoulombParameters{0.2, 1.0});
   return std::make_shared<wbm::contact::LinearPenalty>(wbm::contact::LinearPenaltyParameters{1e3 * kStiffness, 3e-4});
 }
+const char* const kLaws[] = {"frictionless stop", "Jenkins", "exact Coulomb"};
 
 const char* const kPairs[] = {"fourier", "db6", "bspline"};
 
@@ -46,21 +51,20 @@ wbm::solvers::TimeBasis basis(int pair) {
   return pair == 0 ? wbm::solvers::TimeBasis::fourier_harmonics(32) : wbm::solvers::TimeBasis::from_name(kPairs[pair], 64);
 }
 
-wbm::solvers::WeightedResidualOptions options(bool friction) {
+wbm::solvers::WeightedResidualOptions options(int kind) {
   return {.time_samples = 1024,
-          .contact_quadrature = friction ? wbm::solvers::ContactQuadrature::Midpoint : wbm::solvers::ContactQuadrature::CellAverage};
+          .contact_quadrature = kind != 0 ? wbm::solvers::ContactQuadrature::Midpoint : wbm::solvers::ContactQuadrature::CellAverage};
 }
 
-void label(benchmark::State& state, int pair, bool friction) {
-  state.SetLabel(std::string(kPairs[pair]) + ":" + kPairs[pair] + (friction ? ", Jenkins" : ", frictionless stop"));
+void label(benchmark::State& state, int pair, int kind) {
+  state.SetLabel(std::string(kPairs[pair]) + ":" + kPairs[pair] + ", " + kLaws[kind]);
 }
 
 void BM_Friction_Solve(benchmark::State& state) {
   const int pair = static_cast<int>(state.range(0));
-  const bool friction = state.range(1) != 0;
-  label(state, pair, friction);
-  const wbm::solvers::WeightedResidual w(damper(), {0, 1.0, 8.0}, {{0, law(friction)}}, basis(pair), basis(pair),
-                                         options(friction));
+  const auto kind = static_cast<int>(state.range(1));
+  label(state, pair, kind);
+  const wbm::solvers::WeightedResidual w(damper(), {0, 1.0, 8.0}, {{0, law(kind)}}, basis(pair), basis(pair), options(kind));
   int iterations = 0;
   for (auto _ : state) {
     const auto s = w.solve();
@@ -72,10 +76,10 @@ void BM_Friction_Solve(benchmark::State& state) {
 
 void BM_Friction_Continuation(benchmark::State& state) {
   const int pair = static_cast<int>(state.range(0));
-  const bool friction = state.range(1) != 0;
-  label(state, pair, friction);
-  const wbm::solvers::WeightedResidual base(damper(), {0, 1.0, 5.0}, {{0, law(friction)}}, basis(pair), basis(pair),
-                                            options(friction));
+  const auto kind = static_cast<int>(state.range(1));
+  label(state, pair, kind);
+  const wbm::solvers::WeightedResidual base(damper(), {0, 1.0, 5.0}, {{0, law(kind)}}, basis(pair), basis(pair),
+                                            options(kind));
   wbm::solvers::ResponseCurveOptions o;
   o.parameter_min = 5.0;
   o.parameter_max = 20.0;
@@ -95,6 +99,6 @@ void BM_Friction_Continuation(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_Friction_Solve)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Friction_Continuation)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Friction_Solve)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Friction_Continuation)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -261,6 +261,16 @@ order the family does not have.)");
                  contact::JenkinsParameters{tangential_stiffness, friction_coefficient, normal_load});
            }),
            py::arg("tangential_stiffness"), py::arg("friction_coefficient"), py::arg("normal_load"));
+  py::class_<contact::CoulombFriction, contact::ContactLaw, std::shared_ptr<contact::CoulombFriction>>(
+      m, "CoulombFriction",
+      "Exact Coulomb friction along the contact's direction, slip force mu N [N] (contact/friction.hpp): the k_t -> inf "
+      "limit of JenkinsLaw. Its force is a multiplier at the collocation instants, as a RigidStop's (rigid is True; "
+      "force() and stiffness() raise); wbm.solve returns it in contact_force_samples with collocation_times. All "
+      "contacts of one solve exact (RigidStop, CoulombFriction) or none.")
+      .def(py::init([](double friction_coefficient, double normal_load) {
+             return std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{friction_coefficient, normal_load});
+           }),
+           py::arg("friction_coefficient"), py::arg("normal_load"));
   m.def(
       "jenkins_loop",
       [](double tangential_stiffness, const py::object& w, const py::object& slip_force) {
@@ -301,7 +311,10 @@ ValueError for bad input.)");
         // plus its arrays.
         py::dict out = to_python(nlohmann::json(s));
         out["coefficients"] = py::cast(s.coefficients);
-        if (s.contact_force_samples.size() > 0) out["contact_force_samples"] = py::cast(s.contact_force_samples);
+        if (s.contact_force_samples.size() > 0) {
+          out["contact_force_samples"] = py::cast(s.contact_force_samples);
+          out["collocation_times"] = py::cast(s.collocation_times);
+        }
         return out;
       },
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
@@ -312,7 +325,7 @@ ValueError for bad input.)");
 
 loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
-RigidStop, or penalty and JenkinsLaw ones; a JenkinsLaw needs contact_quadrature "midpoint"). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
+RigidStop and CoulombFriction, or penalty and JenkinsLaw ones; a JenkinsLaw needs contact_quadrature "midpoint"). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
 (empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
 dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖ (None without a
 selection).
@@ -323,8 +336,8 @@ diagnostics.solution (docs/scenes.md; one serializer, wbm/scene/json.hpp): conve
 residual), status, message, newton (iterations, residual_norms, tolerance, ...), path,
 relative_residual, residual_tolerance, max_penetration_m, max_contact_force_N, condition_number,
 dropped_harmonics_residual, wall_time_s, ... (None for a value that is not finite); and the
-arrays coefficients (n × M: row = DOF, column = trial function) and contact_force_samples
-(n_c × M, rigid stops only). Non-convergence is returned, not raised; bad input raises ValueError.)");
+arrays coefficients (n × M: row = DOF, column = trial function), contact_force_samples
+(n_c × M [N], exact contacts only: the multipliers) and collocation_times (M, their instants τ_k). Non-convergence is returned, not raised; bad input raises ValueError.)");
   m.def(
       "trace_response",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,

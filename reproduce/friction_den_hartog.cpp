@@ -32,13 +32,12 @@ using namespace wbm;
 using namespace wbm::reproduce;
 constexpr double kPi = std::numbers::pi;
 
-// m = 1 kg, f_n = 10 Hz, P = 1 N.
-constexpr double kMass = 1.0, kNaturalHz = 10.0, kForce = 1.0;
-const double kStiffness = std::pow(2.0 * kPi * kNaturalHz, 2);
+// m = 1 kg, f_n = 10 Hz, P = 1 N (common/coulomb_oscillator.hpp: friction_damper).
+const CoulombOscillator kDamper = friction_damper(0.0, 0.0, 1.0);
+const double kMass = kDamper.mass, kNaturalHz = kDamper.frequency_hz, kForce = kDamper.force_amplitude,
+             kStiffness = kDamper.stiffness;
 
-CoulombOscillator oscillator(double zeta, double slip_force, double r) {
-  return {kMass, 2.0 * zeta * std::sqrt(kStiffness * kMass), kStiffness, kForce, slip_force, r * kNaturalHz};
-}
+CoulombOscillator oscillator(double zeta, double slip_force, double r) { return friction_damper(zeta, slip_force, r); }
 
 // One weighted-residual solve of the oscillator with a Jenkins element k_t = ratio · k by direct
 // Newton from the contact unknowns x0; the displacement at `tau`.
@@ -49,16 +48,7 @@ struct FrictionSolve {
   // The contact unknowns: the contact DOF's coefficients (one contact along the only DOF).
   [[nodiscard]] Eigen::VectorXd unknowns() const { return solution.coefficients.row(0).transpose(); }
 };
-solvers::MechanicalSystem system_of(const CoulombOscillator& o) {
-  solvers::MechanicalSystem s;
-  s.mass.resize(1, 1);
-  s.mass.insert(0, 0) = o.mass;
-  s.stiffness.resize(1, 1);
-  s.stiffness.insert(0, 0) = o.stiffness;
-  s.damping.resize(1, 1);
-  if (o.damping > 0.0) s.damping.insert(0, 0) = o.damping;
-  return s;
-}
+solvers::MechanicalSystem system_of(const CoulombOscillator& o) { return oscillator_system(o); }
 FrictionSolve solve(const CoulombOscillator& o, double ratio, const Combination& c, int m, int samples,
                     const Eigen::VectorXd& tau, const Eigen::VectorXd* x0) {
   const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{ratio * o.stiffness, o.slip_force, 1.0});

@@ -626,6 +626,42 @@ def friction_den_hartog(folder):
     save(fig, folder, "friction")
 
 
+def friction_coulomb_exact(folder):
+    """Issue #36, exact Coulomb friction: (a) the largest error against Den Hartog versus M, per
+    pair; (b) one period of the stick-slip motion, the event-driven reference and each pair."""
+    meta = json.loads((folder / "meta.json").read_text())
+    labels = meta["combinations"]
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    ax = axes[0]
+    dims = meta["a"]["dimensions"]
+    for c, label in enumerate(labels):
+        errors = meta["a"]["largest_error_den_hartog"][c]
+        pts = [(m, e) for m, e in zip(dims, errors) if e is not None and math.isfinite(e) and e > 0]
+        if pts:
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
+                      label=f"{label} (order {meta['a']['orders'][c]:.2f})" if meta["a"]["orders"][c] is not None
+                      else label)
+    ax.set_xlabel("M [-]")
+    ax.set_ylabel("largest |x_max / Den Hartog - 1| [-]")
+    ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, "
+                 f"{len(meta['a']['ratios'])} frequency ratios", fontsize=9)
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    hist = wbm_plot.read_csv(folder / "history.csv")
+    tau = hist["tau [-]"]
+    ax.plot(tau, hist["coulomb [m]"], "k-", lw=1.6, label="Coulomb, event-driven")
+    for name in hist:
+        if name not in ("tau [-]", "coulomb [m]"):
+            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("x [m]")
+    ax.set_title(f"(b) stick–slip, ζ = {meta['b']['zeta']:g}, r = {meta['b']['r']:g}, "
+                 f"M = {meta['b']['history_dimension']}", fontsize=9)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    save(fig, folder, "friction_exact")
+
+
 def figures():
     """{id: drawing function} from reproductions.txt, the one list of the reproductions."""
     report = _load("report", Path(__file__).with_name("report.py"))

@@ -225,4 +225,21 @@ double den_hartog_amplitude(const CoulombOscillator& o) {
   return radicand < 0.0 ? NAN : o.force_amplitude / k * std::sqrt(radicand);
 }
 
+CoulombOscillator friction_damper(double zeta, double slip_force, double r) {
+  constexpr double kMass = 1.0, kNaturalHz = 10.0, kForce = 1.0;
+  const double k = std::pow(2.0 * kPi * kNaturalHz, 2);
+  return {kMass, 2.0 * zeta * std::sqrt(k * kMass), k, kForce, slip_force, r * kNaturalHz};
+}
+
+solvers::MechanicalSystem oscillator_system(const CoulombOscillator& o) {
+  solvers::MechanicalSystem s;
+  s.mass.resize(1, 1);
+  s.mass.insert(0, 0) = o.mass;
+  s.stiffness.resize(1, 1);
+  s.stiffness.insert(0, 0) = o.stiffness;
+  s.damping.resize(1, 1);
+  if (o.damping > 0.0) s.damping.insert(0, 0) = o.damping;
+  return s;
+}
+
 }  // namespace wbm::reproduce

@@ -25,6 +25,8 @@
 
 #include <Eigen/Core>
 
+#include <wbm/solvers/mechanical_system.hpp>
+
 namespace wbm::reproduce {
 
 struct CoulombOscillator {
@@ -38,6 +40,13 @@ struct CoulombOscillator {
   /// Throws std::invalid_argument naming the field, its value and the allowed range.
   void validate() const;
 };
+
+/// The damper of the friction reproductions: m = 1 kg, f_n = 10 Hz, P = 1 N, damping ratio ζ,
+/// slip force F0 [N], forcing at r = ω/ω_n; Coulomb's law (k_t = ∞).
+[[nodiscard]] CoulombOscillator friction_damper(double zeta, double slip_force, double r);
+
+/// The oscillator's M, C, K (1 DOF) for the weighted residual.
+[[nodiscard]] solvers::MechanicalSystem oscillator_system(const CoulombOscillator& oscillator);
 
 /// The steady state over one period at the Q samples τ_q = (q + ½)/Q (the weighted residual's
 /// midpoint samples).

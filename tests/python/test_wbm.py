@@ -302,3 +302,27 @@ def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
     assert s["max_contact_force_N"] == pytest.approx(f0, rel=1e-12)
     with pytest.raises(ValueError, match="friction_coefficient"):
         wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=-0.1, normal_load=1.0)
+
+
+def test_exact_coulomb_friction_gives_den_hartogs_amplitude_and_its_impulses():
+    # The same oscillator with wbm.CoulombFriction (no spring): first order in 1/M, within 5e-3 of
+    # Den Hartog at M = 256 and r = 1.5 (measured 4.2e-3; out/friction_coulomb_exact); every
+    # impulse slips at ±F0 but at most one per reversal, at the instants returned with them.
+    m, k, p, f0, r = 1.0, (2.0 * math.pi * 10.0) ** 2, 1.0, 0.2, 1.5
+    u = math.tan(math.pi / (2.0 * r)) / r
+    exact = p / k * math.sqrt((1.0 / (1.0 - r * r)) ** 2 - (f0 * u / p) ** 2)
+    system = wbm.MechanicalSystem([[m]], [[0.0]], [[k]])
+    law = wbm.CoulombFriction(friction_coefficient=f0, normal_load=1.0)
+    assert law.rigid
+    basis = wbm.TimeBasis("fourier", 256)
+    s = wbm.solve(system, 0, p, 10.0 * r, [(0, law)], basis, basis)
+    assert s["converged"], s["message"]
+    tau = np.arange(4096) / 4096
+    amplitude = np.max(np.abs(basis.values(tau) @ s["coefficients"][0]))
+    assert amplitude / exact == pytest.approx(1.0, abs=5e-3)
+    impulses = s["contact_force_samples"][0]
+    assert impulses.shape == (256,) and s["collocation_times"].shape == (256,)
+    assert np.max(np.abs(impulses)) == pytest.approx(f0, rel=1e-12)
+    assert np.count_nonzero(np.abs(impulses) < f0 * (1.0 - 1e-12)) <= 2
+    with pytest.raises(ValueError, match="normal_load"):
+        wbm.CoulombFriction(friction_coefficient=0.2, normal_load=-1.0)

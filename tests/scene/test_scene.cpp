@@ -189,7 +189,7 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
         (void)parse(rod + force + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\n[[contact]]\nlaw = \"linear\"\n"
                                   "stiffness = 1e9\ngap = 1e-3\nnode = 5\n");
       },
-      {"contact[1]: mixes rigid and penalty contacts"});
+      {"contact[1]: mixes exact contacts (\"rigid\", \"coulomb\") with penalty"});
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(rod + force + stop + "[basis]\ntrial = \"fourier\"\nharmonics = 8\ncontact_quadrature = \"cell-average\"\n"); },
       {"basis.contact_quadrature: \"cell-average\" integrates a penalty law", "\"midpoint\""});

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <wbm/contact/friction.hpp>
+#include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/time_integration.hpp>
@@ -198,8 +199,8 @@ TEST(Friction, ExactCoulombInFullStickCarriesTheWholeLoad) {
   }
 }
 
-// The friction rows' generalized Jacobian, frequency and load derivatives equal central
-// differences away from a switch, in stick–slip (ζ = 2 %, μN/P = 0.5, r = 0.4: the Den Hartog
+// The friction rows' generalized Jacobian (at load 1 and 0.5), frequency and load derivatives
+// equal central differences away from a switch, in stick–slip (ζ = 2 %, μN/P = 0.5, r = 0.4: the Den Hartog
 // oscillator stops at its reversals), for Fourier and DB6.
 TEST(Friction, ExactCoulombDerivativesMatchCentralDifferences) {
   DenHartog d;
@@ -227,6 +228,15 @@ TEST(Friction, ExactCoulombDerivativesMatchCentralDifferences) {
       xm(i) -= h;
       const Eigen::VectorXd fd = (w.signorini_residual(xp) - w.signorini_residual(xm)) / (2.0 * h);
       EXPECT_LT((fd - j.col(i)).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << pair << " column " << i;
+    }
+    // At another load s the branches are those at s (the load stepping of exact friction uses it).
+    const Eigen::MatrixXd j_half = w.signorini_jacobian(x, 0.5).dense();
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp(i) += h;
+      xm(i) -= h;
+      const Eigen::VectorXd fd = (w.signorini_residual(xp, 0.5) - w.signorini_residual(xm, 0.5)) / (2.0 * h);
+      EXPECT_LT((fd - j_half.col(i)).cwiseAbs().maxCoeff(), 1e-6 * j_half.cwiseAbs().maxCoeff()) << pair << " s = 0.5, column " << i;
     }
     const double df = 1e-6 * w.frequency_hz();
     const Eigen::VectorXd by_f = (w.at_frequency(w.frequency_hz() + df).signorini_residual(x) -
@@ -259,4 +269,40 @@ TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::floquet_multipliers(d.system(), {{0, d.coulomb()}}, Eigen::MatrixXd::Zero(1, 64), 15.0); },
       {"Coulomb friction (exact)", "stability is not computed for friction"});
+}
+
+// Exact friction and rigid stops in one problem: on a 2-DOF chain with a rigid stop on DOF 0
+// (1 mm) and a Coulomb contact on DOF 1, loaded at 8 Hz, a stop that is never reached leaves the
+// friction solution unchanged, and friction of zero slip force leaves the stop solution
+// unchanged (each against the problem without the other contact, to 1e-9 of the response); with
+// a stop that is reached, both multipliers are active in one solve.
+TEST(Friction, ExactCoulombAndRigidStopsMixInOneProblem) {
+  const double k = std::pow(2.0 * kPi * 10.0, 2);
+  solvers::MechanicalSystem s;
+  s.mass = Eigen::MatrixXd::Identity(2, 2).sparseView();
+  s.stiffness = (Eigen::MatrixXd(2, 2) << 2.0 * k, -k, -k, k).finished().sparseView();
+  s.damping = (2.0 * 0.02 * std::sqrt(k) * Eigen::MatrixXd::Identity(2, 2)).sparseView();
+  const TimeBasis basis = TimeBasis::fourier_harmonics(32);
+  const solvers::HarmonicForcing load{1, 1.0, 8.0};
+  const auto friction = std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.3, 1.0});
+  const auto none = std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.0, 1.0});
+  const auto far = std::make_shared<contact::RigidStop>(1.0), near = std::make_shared<contact::RigidStop>(1e-3);
+  const auto compare = [&](const std::vector<solvers::ContactPoint>& both, const std::vector<solvers::ContactPoint>& one) {
+    const auto a = solvers::WeightedResidual(s, load, both, basis, basis).solve();
+    const auto b = solvers::WeightedResidual(s, load, one, basis, basis).solve();
+    ASSERT_TRUE(a.converged()) << a.brief();
+    ASSERT_TRUE(b.converged()) << b.brief();
+    EXPECT_LT((a.coefficients - b.coefficients).cwiseAbs().maxCoeff(), 1e-9 * b.coefficients.cwiseAbs().maxCoeff());
+  };
+  compare({{0, far}, {1, friction}}, {{1, friction}});
+  compare({{0, near}, {1, none}}, {{0, near}});
+  // Both active: the stop pushes and the friction slips at μN. The active-set Newton from zero
+  // impulses cycles here (measured); load stepping reaches the solution.
+  const auto touching = std::make_shared<contact::RigidStop>(2e-4);
+  const auto mixed = solvers::WeightedResidual(s, load, {{0, touching}, {1, friction}}, basis, basis).solve();
+  ASSERT_TRUE(mixed.converged()) << mixed.brief();
+  EXPECT_EQ(mixed.path, solvers::SolutionPath::LoadStepping);
+  EXPECT_GT(mixed.contact_force_samples.row(0).maxCoeff(), 0.0) << "the stop is reached";
+  EXPECT_NEAR(mixed.contact_force_samples.row(1).cwiseAbs().maxCoeff(), 0.3, 1e-12) << "friction slips at mu N";
+  EXPECT_LT(mixed.complementarity, 1e-9 * 2e-4);
 }

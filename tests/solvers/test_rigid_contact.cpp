@@ -294,7 +294,7 @@ TEST(RigidContact, RefusesWhatItCannotDo) {
       [&] {
         (void)solvers::WeightedResidual(c.system, c.forcing, {c.stop[0], {c.tip - 1, penalty}}, fourier, fourier);
       },
-      {"1 of the 2 contacts are rigid", "make every contact rigid"});
+      {"1 of the 2 contacts are exact", "make every contact exact", "the rigid ones a stiff LinearPenalty"});
   solvers::WeightedResidualOptions cell;
   cell.contact_quadrature = solvers::ContactQuadrature::CellAverage;
   wbm::testing::expect_throw_with<std::invalid_argument>(

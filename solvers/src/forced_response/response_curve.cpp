@@ -60,7 +60,7 @@ Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double l
   Linearization l;
   if (wr.rigid()) {  // the Signorini conditions on the impulses
     l.residual = wr.signorini_residual(x, load(lambda));
-    l.jacobian = wr.signorini_jacobian(x).dense();
+    l.jacobian = wr.signorini_jacobian(x, load(lambda)).dense();
     l.parameter_derivative = parameter_ == ContinuationParameter::Frequency
                                  ? wr.signorini_frequency_derivative(x, load(lambda))
                                  : Eigen::VectorXd(wr.signorini_load_derivative(x, load(lambda)) / base_amplitude_);

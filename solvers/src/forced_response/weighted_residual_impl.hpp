@@ -26,6 +26,7 @@
 
 #include <Eigen/Sparse>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/spectral/aft.hpp>
@@ -250,6 +251,17 @@ struct WeightedResidual::Impl {
   std::vector<int> stuck_contact; // R: c
 
   double force_compliance = 1.0;
+  // Friction rows: their own compliance c_f = mean |D_ii| over them (a slip is far smaller than a
+  // gap's displacement), and the weight ρ = c/c_f on their φ, so that every slip row has
+  // ∂φ/∂λ = c as a stop's force row: φ = ρ (c_f λ − proj_[−c_f μN, c_f μN](c_f λ + Δ)), the same
+  // roots. Without stops c = c_f and ρ = 1.
+  double friction_compliance = 1.0;
+  [[nodiscard]] double friction_weight() const { return force_compliance / friction_compliance; }
+  [[nodiscard]] contact::CoulombProjection friction_row(double lambda, double slip, double slip_force) const {
+    auto cp = contact::coulomb_projection(friction_compliance * lambda, slip, friction_compliance * slip_force);
+    cp.value *= friction_weight();
+    return cp;
+  }
 
   Impl(MechanicalSystem s, HarmonicForcing f, std::vector<ContactPoint> c, TimeBasis tr, TimeBasis we,
        WeightedResidualOptions o);
@@ -303,7 +315,14 @@ struct WeightedResidual::Impl {
   // pinned rows included).
   [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
                                           std::vector<int>* pinned = nullptr) const;
-  // ∂φ/∂λ rows of the gap rows: D_i, or stuck_rows(r) for a pinned entry r.
+  // Multiplies the friction rows of v (length n_c·M) by ρ.
+  void weigh_friction_rows(Eigen::VectorXd& v) const {
+    if (!collocation->any_coulomb) return;
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      if (collocation->coulomb[static_cast<size_t>(i % nc)] != 0) v(i) *= friction_weight();
+    }
+  }
+  // ∂φ/∂λ rows of the gap rows: D_i, or stuck_rows(r) for a pinned entry r; ρ D_i on friction rows.
   [[nodiscard]] Eigen::MatrixXd constraint_rows(const std::vector<int>& rows, const std::vector<int>& pinned) const;
 
   // n(λ) = (W ⊗ I_{n_c}) λ, stacked like x: the weighted residual of the collocation impulses.

@@ -305,6 +305,7 @@ WeightedResidual::Impl::Impl(const Impl& base, double frequency_hz)
   x_lin = gather(a_lin);
   if (nc > 0) set_compliance();
   force_compliance = base.force_compliance;  // like s_r: residuals at different f comparable
+  friction_compliance = base.friction_compliance;
   if (nc > 0 && rigid) set_delassus(false);
 }
 

@@ -9,6 +9,7 @@
 
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/signorini.hpp>
+#include <wbm/solvers/natural_parameter.hpp>
 
 namespace wbm::solvers {
 
@@ -35,8 +36,18 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   delassus = kinematic(hw);
   u_lin = kinematic(x_lin);
   if (set_force_compliance) {
-    force_compliance = delassus.diagonal().cwiseAbs().mean();
+    // c over the stops' rows (all rows when there is no stop), c_f over the friction rows.
+    double stops = 0.0, friction = 0.0;
+    Eigen::Index n_stops = 0, n_friction = 0;
+    for (Eigen::Index i = 0; i < delassus.rows(); ++i) {
+      const bool f = col.coulomb[static_cast<size_t>(i % nc)] != 0;
+      (f ? friction : stops) += std::abs(delassus(i, i));
+      ++(f ? n_friction : n_stops);
+    }
+    force_compliance = n_stops > 0 ? stops / static_cast<double>(n_stops) : friction / static_cast<double>(n_friction);
     if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+    friction_compliance = n_friction > 0 ? friction / static_cast<double>(n_friction) : force_compliance;
+    if (!(friction_compliance > 0.0) || !std::isfinite(friction_compliance)) friction_compliance = force_compliance;
   }
   if (!col.any_coulomb) return;
   // The row that replaces a stuck contact's first: its position u_c(τ_1) (row c of
@@ -74,7 +85,7 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
     const auto c = static_cast<size_t>(i % nc);
     bool d_branch = false;
     if (col.coulomb[c] != 0) {
-      const auto cp = contact::coulomb_projection(force_compliance * lambda(i), u(i), force_compliance * col.slip_forces(static_cast<Eigen::Index>(c)));
+      const auto cp = friction_row(lambda(i), u(i), col.slip_forces(static_cast<Eigen::Index>(c)));
       phi(i) = cp.value;
       d_branch = cp.stick;
       if (!cp.stick) slips[c] = 1;
@@ -90,7 +101,7 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
     // Full stick: the slips Δ_k sum to zero over the period, so the rows leave the contact's
     // position free: pinned at u(τ_1) = 0, the Jenkins convention as k_t → ∞.
     const auto ee = static_cast<Eigen::Index>(e);
-    phi(stuck_row_of[e]) = stuck_rows.row(ee).dot(lambda) - load * stuck_lin(ee);
+    phi(stuck_row_of[e]) = friction_weight() * (stuck_rows.row(ee).dot(lambda) - load * stuck_lin(ee));
     if (pinned != nullptr) pinned->push_back(static_cast<int>(e));
   }
   return phi;
@@ -102,6 +113,11 @@ Eigen::MatrixXd WeightedResidual::Impl::constraint_rows(const std::vector<int>& 
   for (int e : pinned) {
     const auto at = std::find(rows.begin(), rows.end(), stuck_row_of[static_cast<size_t>(e)]);
     if (at != rows.end()) out.row(at - rows.begin()) = stuck_rows.row(e);
+  }
+  if (collocation->any_coulomb) {  // friction rows carry the weight ρ
+    for (size_t r = 0; r < rows.size(); ++r) {
+      if (collocation->coulomb[static_cast<size_t>(rows[r] % nc)] != 0) out.row(static_cast<Eigen::Index>(r)) *= friction_weight();
+    }
   }
   return out;
 }
@@ -134,11 +150,11 @@ Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lamb
   return p.signorini(lambda, load, nullptr) / p.scale;
 }
 
-LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda) const {
+LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda, double load) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_jacobian");
   std::vector<int> active, pinned;
-  (void)p.signorini(lambda, 1.0, &active, &pinned);
+  (void)p.signorini(lambda, load, &active, &pinned);
   const Eigen::Index size = lambda.size();
   const auto rank = static_cast<Eigen::Index>(active.size());
   const double c = p.force_compliance;
@@ -176,6 +192,7 @@ Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::Ve
     const Eigen::VectorXd dx_c = dx(Eigen::seq(p.stuck_contact[i], Eigen::last, p.nc));
     out(p.stuck_row_of[i]) = p.collocation->trial_values.row(0).dot(dx_c) / p.scale;
   }
+  p.weigh_friction_rows(out);
   return out;
 }
 
@@ -187,6 +204,7 @@ Eigen::VectorXd WeightedResidual::signorini_load_derivative(const Eigen::VectorX
   Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
   for (int i : gap_rows) out(i) = -p.u_lin(i) / p.scale;
   for (int e : pinned) out(p.stuck_row_of[static_cast<size_t>(e)]) = -p.stuck_lin(e) / p.scale;
+  p.weigh_friction_rows(out);
   return out;
 }
 
@@ -214,7 +232,7 @@ struct WeightedResidual::Signorini {
   const WeightedResidual* wr;
   double load;
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& lambda) const { return wr->signorini_residual(lambda, load); }
-  [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& lambda) const { return wr->signorini_jacobian(lambda); }
+  [[nodiscard]] LowRankJacobian jacobian(const Eigen::VectorXd& lambda) const { return wr->signorini_jacobian(lambda, load); }
 };
 
 // The Signorini conditions regularized by a penalty of relative stiffness κ = 10^μ at the same
@@ -277,6 +295,46 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
   return out;
 }
 
+NewtonResult WeightedResidual::solve_exact_with_load_stepping(int& steps) const {
+  const auto& p = *impl_;
+  NaturalParameterOptions o;
+  o.parameter_min = 0.0;
+  o.parameter_max = 1.0;
+  o.initial_step = 0.125;
+  o.max_step = 0.25;
+  o.min_step = 1e-6;
+  o.shrink = 0.25;
+  o.grow = [](double h, int) { return 2.0 * h; };
+  NewtonResult last;
+  SolveStatus failed = SolveStatus::MaxIterations;
+  int iterations = 0;
+  steps = 0;
+  auto correct = [&](double s, Eigen::VectorXd guess) {
+    NewtonResult r = newton(Signorini{this, s}, std::move(guess), p.options.newton);
+    iterations += r.report.iterations;
+    ++steps;
+    if (r.report.converged()) {
+      last = r;
+    } else {
+      failed = r.report.status;
+    }
+    return to_correction(std::move(r));
+  };
+  const Branch branch = natural_parameter(correct, Eigen::VectorXd::Zero(p.u_lin.size()), 0.0, o);
+  if (branch.stop != StopReason::RangeReached) {
+    NewtonResult stalled;
+    stalled.x = branch.points.empty() ? Eigen::VectorXd::Zero(p.u_lin.size()) : branch.points.back().x;
+    stalled.report.status = failed;
+    stalled.report.iterations = iterations;
+    stalled.report.message = "load stepping stalled at s = " +
+                             format_number(branch.points.empty() ? 0.0 : branch.points.back().parameter) + " of F: " +
+                             std::string(to_string(branch.stop)) + ": " + branch.message;
+    return stalled;
+  }
+  last.report.iterations = iterations;
+  return last;
+}
+
 WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
                                                        std::chrono::steady_clock::time_point start) const {
   const auto& p = *impl_;
@@ -290,9 +348,15 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   s.path = SolutionPath::DirectNewton;
   std::string history = "primal-dual active set (semismooth Newton on the Signorini conditions): " + result.report.message;
   if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy && p.collocation->any_coulomb) {
-    history += "; no penalty homotopy for exact Coulomb friction (its penalty regularization is the Jenkins element, "
-               "which has a state): start from the impulses of a nearby solution (continuation), or use "
-               "law = \"jenkins\" with a stiff k_t";
+    // Exact friction has no penalty homotopy (its regularization, the Jenkins element, has a
+    // state): the load is stepped instead, s: 0 → 1, from λ = 0 (at s = 0 every contact sticks or
+    // stays open), each step's active-set Newton from the secant prediction.
+    int steps = 0;
+    NewtonResult stepped = solve_exact_with_load_stepping(steps);
+    stepped.report.iterations += result.report.iterations;
+    history += "; load stepping (" + std::to_string(steps) + " steps): " + stepped.report.message;
+    if (stepped.report.converged()) s.path = SolutionPath::LoadStepping;
+    result = std::move(stepped);
   } else if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy) {
     NewtonResult h = solve_rigid_with_penalty_homotopy(s.homotopy);
     h.report.iterations += result.report.iterations;
@@ -319,8 +383,7 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   for (Eigen::Index i = 0; i < size; ++i) {
     const auto c = static_cast<size_t>(i % p.nc);
     if (col.coulomb[c] != 0) {
-      phi(i) = contact::coulomb_projection(p.force_compliance * lambda(i), kin(i),
-                                           p.force_compliance * col.slip_forces(static_cast<Eigen::Index>(c))).value;
+      phi(i) = p.friction_row(lambda(i), kin(i), col.slip_forces(static_cast<Eigen::Index>(c))).value;
     } else {
       phi(i) = contact::signorini_min(p.force_compliance * lambda(i), col.gaps(i) - kin(i)).value;
       s.collocation_penetration = std::max(s.collocation_penetration, kin(i) - col.gaps(i));
@@ -331,12 +394,11 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
     bool slips = false;
     for (int k = 0; k < p.m; ++k) {
       const Eigen::Index i = static_cast<Eigen::Index>(k) * p.nc + c;
-      slips = slips || !contact::coulomb_projection(p.force_compliance * lambda(i), kin(i),
-                                                    p.force_compliance * col.slip_forces(c)).stick;
+      slips = slips || !p.friction_row(lambda(i), kin(i), col.slip_forces(c)).stick;
     }
     if (slips) continue;
     const Eigen::VectorXd x_c = xa(Eigen::seq(c, Eigen::last, p.nc));
-    phi(c) = col.trial_values.row(0).dot(x_c);
+    phi(c) = p.friction_weight() * col.trial_values.row(0).dot(x_c);
   }
   s.complementarity = phi.cwiseAbs().maxCoeff();
   s.max_contact_force = lambda.cwiseAbs().maxCoeff();

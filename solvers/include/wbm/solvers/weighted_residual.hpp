@@ -281,7 +281,10 @@ struct WeightedResidualSolution {
 /// midpoints unless W is singular there (Fourier of even M, whose top function vanishes at
 /// them; the B-splines, against (−1)^k): then τ_k = k/M, where W is invertible (else
 /// std::invalid_argument at construction). Exact friction has no penalty homotopy (its
-/// regularization, the Jenkins element, has a state): a failed active-set Newton is reported.
+/// regularization, the Jenkins element, has a state): when the active-set Newton from zero
+/// impulses fails, the load is stepped, s: 0 → 1 (SolutionPath::LoadStepping; natural-parameter
+/// continuation from λ = 0, where every contact sticks or stays open, adaptive steps from 1/8,
+/// the active-set Newton at each from the secant prediction).
 ///
 /// Throws std::invalid_argument for invalid inputs, for a load at a harmonic h with 2h ≥ M
 /// (HarmonicForcing::require_resolved: M functions would alias it), for M differing between trial and weighting,
@@ -369,7 +372,8 @@ class WeightedResidual {
   /// the gap rows, (c/s_r)(I + P_A (D/c − I)_A), with capacitance D_AA/c (dense when
   /// r > ¾ n_c·M). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
   [[nodiscard]] Eigen::VectorXd signorini_residual(const Eigen::VectorXd& lambda, double load = 1.0) const;
-  [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda) const;
+  /// (The Jacobian's branches are those at load s.)
+  [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda, double load = 1.0) const;
   /// Rigid stops: ∂φ/∂f of signorini_residual at λ and load s [1/Hz]: on the gap rows
   /// (V P G⁻¹ G′(f) a(λ)) / s_r with a(λ) = G⁻¹(s b − Pᵀ n(λ)), G′ = 2f A_M ⊗ M + A_C ⊗ C; 0 on
   /// the force rows. And ∂φ/∂s (the load): −u_lin/s_r on the gap rows, 0 elsewhere.
@@ -434,6 +438,7 @@ class WeightedResidual {
   struct Signorini;
   struct SignoriniPenalty;
   NewtonResult solve_rigid_with_penalty_homotopy(HomotopyReport& report) const;
+  NewtonResult solve_exact_with_load_stepping(int& steps) const;
   WeightedResidualSolution solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
                                        std::chrono::steady_clock::time_point start) const;
   double rounding_floor(const Eigen::VectorXd& x) const;
