@@ -12,7 +12,7 @@
 //      and the flatness of each computed stick plateau between its instants. The question,
 //      whether Haar trial functions capture stick better than harmonic balance, asked of exact
 //      Coulomb friction (friction_den_hartog asks it of the Jenkins element).
-// Each solve starts from zero impulses (the active-set Newton; exact friction has no fallback).
+// Each solve starts from zero impulses (the active-set Newton, then load stepping if it fails).
 // ~1 min. Writes out/friction_coulomb_exact/{frf,stick,history}.csv, meta.json, report.md.
 // --quick: (a) r = 0.75, 1.5 and M = 32, 64; (b) M = 16, 32.
 #include <algorithm>
@@ -237,7 +237,8 @@ int main(int argc, char** argv) {
        << format("%g", ob.frequency_hz / kRB) << " Hz, P = " << format("%g", ob.force_amplitude)
        << " N) with Coulomb's law itself (`law = \"coulomb\"`): no tangential spring; M friction impulses at the "
           "collocation instants, each paired with the slip of its cell through the discrete Coulomb law and solved "
-          "by the active-set Newton of rigid stops from zero impulses (the fixed point DLFT iterates on). Every pair "
+          "by the active-set Newton of rigid stops from zero impulses, then by load stepping if that fails (the fixed "
+          "point DLFT iterates on). Every pair "
           "of Table 2 in the " << solvers::to_string(kFigureFormulation) << " form. References as above: Den Hartog's "
           "closed form, and the event-driven Coulomb motion.\n\n"
        << "**(a) Den Hartog**, undamped, F0/P = " << format("%g", kSlipA) << ", r = " << format("%g", ratios.front())

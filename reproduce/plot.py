@@ -607,23 +607,30 @@ def friction_den_hartog(folder):
     ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, M = {meta['a']['dimension']}",
                  fontsize=9)
     ax.legend(fontsize=7)
-    ax = axes[1]
+    def curves(ax, hist, tau):
+        for name in hist:
+            if name.startswith("jenkins_exact_kt"):
+                ax.plot(tau, hist[name], "--", lw=0.9, label=f"exact Jenkins, k_t = {name[16:].split(' ')[0]} k")
+        for name in hist:
+            if "_kt" in name and not name.startswith("jenkins"):
+                ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", "").replace("_kt", ", k_t = ") + " k")
+    _stick_slip_panel(axes[1], folder, meta, curves)
+    fig.tight_layout()
+    save(fig, folder, "friction")
+
+
+def _stick_slip_panel(ax, folder, meta, curves):
+    """Panel (b) of the friction figures: one period of history.csv, the event-driven Coulomb
+    motion in black and the other columns drawn by curves(ax, hist, tau)."""
     hist = wbm_plot.read_csv(folder / "history.csv")
     tau = hist["tau [-]"]
     ax.plot(tau, hist["coulomb [m]"], "k-", lw=1.6, label="Coulomb, event-driven")
-    for name in hist:
-        if name.startswith("jenkins_exact_kt"):
-            ax.plot(tau, hist[name], "--", lw=0.9, label=f"exact Jenkins, k_t = {name[16:].split(' ')[0]} k")
-    for name in hist:
-        if "_kt" in name and not name.startswith("jenkins"):
-            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", "").replace("_kt", ", k_t = ") + " k")
+    curves(ax, hist, tau)
     ax.set_xlabel("τ = t/T [-]")
     ax.set_ylabel("x [m]")
     ax.set_title(f"(b) stick–slip, ζ = {meta['b']['zeta']:g}, r = {meta['b']['r']:g}, "
                  f"M = {meta['b']['history_dimension']}", fontsize=9)
     ax.legend(fontsize=6)
-    fig.tight_layout()
-    save(fig, folder, "friction")
 
 
 def friction_coulomb_exact(folder):
@@ -646,18 +653,11 @@ def friction_coulomb_exact(folder):
     ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, "
                  f"{len(meta['a']['ratios'])} frequency ratios", fontsize=9)
     ax.legend(fontsize=7)
-    ax = axes[1]
-    hist = wbm_plot.read_csv(folder / "history.csv")
-    tau = hist["tau [-]"]
-    ax.plot(tau, hist["coulomb [m]"], "k-", lw=1.6, label="Coulomb, event-driven")
-    for name in hist:
-        if name not in ("tau [-]", "coulomb [m]"):
-            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
-    ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("x [m]")
-    ax.set_title(f"(b) stick–slip, ζ = {meta['b']['zeta']:g}, r = {meta['b']['r']:g}, "
-                 f"M = {meta['b']['history_dimension']}", fontsize=9)
-    ax.legend(fontsize=6)
+    def curves(ax, hist, tau):
+        for name in hist:
+            if name not in ("tau [-]", "coulomb [m]"):
+                ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
+    _stick_slip_panel(axes[1], folder, meta, curves)
     fig.tight_layout()
     save(fig, folder, "friction_exact")
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -36,6 +37,22 @@ std::string slurp(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// Over one cycle of a 1-DOF solve, from velocity.csv: the load's work ∮ P cos ωt u̇ dt and the
+// viscous dissipation ∮ c u̇² dt [J] (rectangle rule on the uniform output samples).
+std::pair<double, double> cycle_work(const Scene& s, const wbm::scene::AnalysisResult& r) {
+  const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
+  const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
+  const double hz = s.forcing->frequency_hz, period = 1.0 / hz, c = s.system().damping.coeff(0, 0),
+               amplitude = s.forcing->amplitude;
+  const auto samples = static_cast<double>(time.size());
+  double load = 0.0, viscous = 0.0;
+  for (Eigen::Index i = 0; i < time.size(); ++i) {
+    load += amplitude * std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;
+    viscous += c * v(i) * v(i) * period / samples;
+  }
+  return {load, viscous};
 }
 
 }  // namespace
@@ -72,17 +89,9 @@ TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
   const Scene s = parse(text);
   const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
   ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
-  const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
-  const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
   const Eigen::VectorXd& f = column(r, "contact_force.csv", 2);
-  const double hz = s.forcing->frequency_hz, period = 1.0 / hz, c = s.system().damping.coeff(0, 0),
-               amplitude = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
-  const auto samples = static_cast<double>(time.size());
-  double load = 0.0, viscous = 0.0;
-  for (Eigen::Index i = 0; i < time.size(); ++i) {
-    load += amplitude * std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;  // ∮ P cos ωt u̇ dt
-    viscous += c * v(i) * v(i) * period / samples;
-  }
+  const double slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
+  const auto [load, viscous] = cycle_work(s, r);
   const auto& friction = r.diagnostics.at("friction").at(0);
   const double dissipated = friction.at("dissipated_energy_per_cycle_J").get<double>();
   EXPECT_NEAR(viscous + dissipated, load, 1e-3 * load);
@@ -188,16 +197,8 @@ TEST(SceneFriction, AnExactCoulombSolveBalancesTheEnergyOfLoadViscosityAndFricti
   const Scene s = parse(text);
   const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
   ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
-  const Eigen::VectorXd& time = column(r, "velocity.csv", 1);
-  const Eigen::VectorXd& v = column(r, "velocity.csv", 2);
-  const double hz = s.forcing->frequency_hz, period = 1.0 / hz, c = s.system().damping.coeff(0, 0),
-               amplitude = s.forcing->amplitude, slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
-  const auto samples = static_cast<double>(time.size());
-  double load = 0.0, viscous = 0.0;
-  for (Eigen::Index i = 0; i < time.size(); ++i) {
-    load += amplitude * std::cos(2.0 * kPi * hz * time(i)) * v(i) * period / samples;
-    viscous += c * v(i) * v(i) * period / samples;
-  }
+  const double slip = s.contacts[0].friction_coefficient * s.contacts[0].normal_load;
+  const auto [load, viscous] = cycle_work(s, r);
   const auto& friction = r.diagnostics.at("friction").at(0);
   const double dissipated = friction.at("dissipated_energy_per_cycle_J").get<double>();
   EXPECT_NEAR(viscous + dissipated, load, 1e-2 * load);

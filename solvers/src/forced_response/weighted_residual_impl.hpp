@@ -29,6 +29,7 @@
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/natural_parameter.hpp>
 #include <wbm/spectral/aft.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -486,5 +487,56 @@ struct WeightedResidual::Impl {
 
   void require_factorized() const;
 };
+
+namespace detail {
+
+// Natural-parameter continuation in the load factor s (forcing s·F) from 0 to 1, the fallback of
+// both solve paths: Δs from 1/8, doubled after a success (at most ½), quartered after a failure,
+// down to 1e-6; at each s the one Newton core on make_system(s) from predict(branch, s). Returns
+// the last Newton solve at s = 1 (its iterations the sum over all steps), or, if the stepping
+// stalls, the last converged point (`if_none` without one) with the status of the last failure
+// and a message naming the s reached. `steps` counts the Newton solves.
+template <class MakeSystem, class Predict>
+NewtonResult load_stepping(MakeSystem make_system, Predict predict, Eigen::VectorXd x0, const Eigen::VectorXd& if_none,
+                           const NewtonOptions& newton_options, int& steps) {
+  NaturalParameterOptions o;
+  o.parameter_min = 0.0;
+  o.parameter_max = 1.0;
+  o.initial_step = 0.125;
+  o.max_step = 0.5;
+  o.min_step = 1e-6;
+  o.shrink = 0.25;
+  o.grow = [](double h, int) { return 2.0 * h; };
+  NewtonResult last;  // the Newton solve of the last accepted point, for its report
+  SolveStatus failed = SolveStatus::MaxIterations;  // that of the last attempt that failed
+  int iterations = 0;
+  steps = 0;
+  auto correct = [&](double s, Eigen::VectorXd guess) {
+    NewtonResult r = newton(make_system(s), std::move(guess), newton_options);
+    iterations += r.report.iterations;
+    ++steps;
+    if (r.report.converged()) {
+      last = r;
+    } else {
+      failed = r.report.status;
+    }
+    return to_correction(std::move(r));
+  };
+  const Branch branch = natural_parameter(correct, predict, std::move(x0), 0.0, o);
+  if (branch.stop != StopReason::RangeReached) {
+    NewtonResult stalled;
+    stalled.x = branch.points.empty() ? if_none : branch.points.back().x;
+    stalled.report.status = failed;
+    stalled.report.iterations = iterations;
+    stalled.report.message = "load stepping stalled at s = " +
+                             format_number(branch.points.empty() ? 0.0 : branch.points.back().parameter) +
+                             " of F: " + std::string(to_string(branch.stop)) + ": " + branch.message;
+    return stalled;
+  }
+  last.report.iterations = iterations;
+  return last;
+}
+
+}  // namespace detail
 
 }  // namespace wbm::solvers

@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/signorini.hpp>
-#include <wbm/solvers/natural_parameter.hpp>
 
 namespace wbm::solvers {
 
@@ -36,18 +36,24 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   delassus = kinematic(hw);
   u_lin = kinematic(x_lin);
   if (set_force_compliance) {
-    // c over the stops' rows (all rows when there is no stop), c_f over the friction rows.
-    double stops = 0.0, friction = 0.0;
-    Eigen::Index n_stops = 0, n_friction = 0;
+    // c over the stops' rows, c_f over the friction rows; with one kind only both are the mean over
+    // every row, evaluated on the diagonal expression as before friction existed (a contiguous
+    // copy would be summed in another order: rigid-stop results would move by rounding).
+    std::vector<Eigen::Index> stops, friction;
     for (Eigen::Index i = 0; i < delassus.rows(); ++i) {
-      const bool f = col.coulomb[static_cast<size_t>(i % nc)] != 0;
-      (f ? friction : stops) += std::abs(delassus(i, i));
-      ++(f ? n_friction : n_stops);
+      (col.coulomb[static_cast<size_t>(i % nc)] != 0 ? friction : stops).push_back(i);
     }
-    force_compliance = n_stops > 0 ? stops / static_cast<double>(n_stops) : friction / static_cast<double>(n_friction);
-    if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
-    friction_compliance = n_friction > 0 ? friction / static_cast<double>(n_friction) : force_compliance;
-    if (!(friction_compliance > 0.0) || !std::isfinite(friction_compliance)) friction_compliance = force_compliance;
+    if (stops.empty() || friction.empty()) {
+      force_compliance = delassus.diagonal().cwiseAbs().mean();
+      if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+      friction_compliance = force_compliance;
+    } else {
+      const Eigen::VectorXd d = delassus.diagonal().cwiseAbs();
+      force_compliance = Eigen::VectorXd(d(stops)).mean();
+      if (!(force_compliance > 0.0) || !std::isfinite(force_compliance)) force_compliance = 1.0;
+      friction_compliance = Eigen::VectorXd(d(friction)).mean();
+      if (!(friction_compliance > 0.0) || !std::isfinite(friction_compliance)) friction_compliance = force_compliance;
+    }
   }
   if (!col.any_coulomb) return;
   // The row that replaces a stuck contact's first: its position u_c(τ_1) (row c of
@@ -77,6 +83,10 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
   require_factorized();
   const Collocation& col = *collocation;
   const Eigen::VectorXd u = load * u_lin - delassus * lambda;  // a stop's displacement, or a slip Δ
+  // The stops' gaps in one expression, as before friction existed (forming g0 − u from the stored
+  // u rounds differently in the last bits, and rigid-stop results would move by rounding).
+  Eigen::VectorXd gap;
+  if (std::find(col.coulomb.begin(), col.coulomb.end(), 0) != col.coulomb.end()) gap = col.gaps - (load * u_lin - delassus * lambda);
   Eigen::VectorXd phi(u.size());
   if (gap_rows != nullptr) gap_rows->clear();
   if (pinned != nullptr) pinned->clear();
@@ -90,7 +100,7 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
       d_branch = cp.stick;
       if (!cp.stick) slips[c] = 1;
     } else {
-      const auto cp = contact::signorini_min(force_compliance * lambda(i), col.gaps(i) - u(i));
+      const auto cp = contact::signorini_min(force_compliance * lambda(i), gap(i));
       phi(i) = cp.value;
       d_branch = cp.gap_branch;
     }
@@ -296,43 +306,10 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
 }
 
 NewtonResult WeightedResidual::solve_exact_with_load_stepping(int& steps) const {
-  const auto& p = *impl_;
-  NaturalParameterOptions o;
-  o.parameter_min = 0.0;
-  o.parameter_max = 1.0;
-  o.initial_step = 0.125;
-  o.max_step = 0.25;
-  o.min_step = 1e-6;
-  o.shrink = 0.25;
-  o.grow = [](double h, int) { return 2.0 * h; };
-  NewtonResult last;
-  SolveStatus failed = SolveStatus::MaxIterations;
-  int iterations = 0;
-  steps = 0;
-  auto correct = [&](double s, Eigen::VectorXd guess) {
-    NewtonResult r = newton(Signorini{this, s}, std::move(guess), p.options.newton);
-    iterations += r.report.iterations;
-    ++steps;
-    if (r.report.converged()) {
-      last = r;
-    } else {
-      failed = r.report.status;
-    }
-    return to_correction(std::move(r));
-  };
-  const Branch branch = natural_parameter(correct, Eigen::VectorXd::Zero(p.u_lin.size()), 0.0, o);
-  if (branch.stop != StopReason::RangeReached) {
-    NewtonResult stalled;
-    stalled.x = branch.points.empty() ? Eigen::VectorXd::Zero(p.u_lin.size()) : branch.points.back().x;
-    stalled.report.status = failed;
-    stalled.report.iterations = iterations;
-    stalled.report.message = "load stepping stalled at s = " +
-                             format_number(branch.points.empty() ? 0.0 : branch.points.back().parameter) + " of F: " +
-                             std::string(to_string(branch.stop)) + ": " + branch.message;
-    return stalled;
-  }
-  last.report.iterations = iterations;
-  return last;
+  // detail::load_stepping on the exact conditions from λ = 0, the secant predictor.
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(impl_->u_lin.size());
+  return detail::load_stepping([this](double s) { return Signorini{this, s}; }, secant_predictor, zero, zero,
+                               impl_->options.newton, steps);
 }
 
 WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,

@@ -58,50 +58,15 @@ struct WeightedResidual::Condensed {
 };
 
 NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& steps) const {
-  // Natural-parameter continuation in the load factor s (forcing s·F) from 0 to 1: Δs from 1/8,
-  // doubled after a success (at most ½), quartered after a failure, down to 1e-6; predictor
-  // x + Δs·x_lin (the linear part of the response); the last step ends on s = 1.
+  // detail::load_stepping on the condensed residual, predictor x + Δs·x_lin (the linear part of
+  // the response); the last step ends on s = 1.
   const auto& p = *impl_;
-  NaturalParameterOptions o;
-  o.parameter_min = 0.0;
-  o.parameter_max = 1.0;
-  o.initial_step = 0.125;
-  o.max_step = 0.5;
-  o.min_step = 1e-6;
-  o.shrink = 0.25;
-  o.grow = [](double h, int) { return 2.0 * h; };
-  NewtonResult last;  // the Newton solve of the last accepted point, for its report
-  SolveStatus failed = SolveStatus::MaxIterations;  // that of the last attempt that failed
-  int iterations = 0;
-  steps = 0;
-  auto correct = [&](double s, Eigen::VectorXd guess) {
-    NewtonResult r = newton(Condensed{this, s}, std::move(guess), p.options.newton);
-    iterations += r.report.iterations;
-    ++steps;
-    if (r.report.converged()) {
-      last = r;
-    } else {
-      failed = r.report.status;
-    }
-    return to_correction(std::move(r));
-  };
   auto predict = [&](const Branch& branch, double s) {
     const BranchPoint& b = branch.points.back();
     return Eigen::VectorXd(b.x + (s - b.parameter) * p.x_lin);
   };
-  const Branch branch = natural_parameter(correct, predict, std::move(x), 0.0, o);
-  if (branch.stop != StopReason::RangeReached) {
-    NewtonResult stalled;
-    stalled.x = branch.points.empty() ? Eigen::VectorXd(p.x_lin) : branch.points.back().x;
-    stalled.report.status = failed;
-    stalled.report.iterations = iterations;
-    stalled.report.message = "load stepping stalled at s = " +
-                             format_number(branch.points.empty() ? 0.0 : branch.points.back().parameter) +
-                             " of F: " + std::string(to_string(branch.stop)) + ": " + branch.message;
-    return stalled;
-  }
-  last.report.iterations = iterations;
-  return last;
+  return detail::load_stepping([this](double s) { return Condensed{this, s}; }, predict, std::move(x), p.x_lin,
+                               p.options.newton, steps);
 }
 
 Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorXd& x, double lambda) const {

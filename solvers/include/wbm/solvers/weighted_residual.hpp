@@ -272,7 +272,7 @@ struct WeightedResidualSolution {
 ///   φ_{c,k} = c λ_{c,k} − proj_[−c μN, c μN](c λ_{c,k} + Δ_{c,k}) = 0
 /// (contact::coulomb_projection); its rows of D and u_lin use V(τ_{k+1}) − V(τ_k), and the same
 /// active-set Newton applies (stick rows: D_i/c; slip rows: λ = ±μN). At convergence this is the
-/// fixed point the DLFT iterates on [Nacivet et al. 2002], with c in the role of the DLFT's
+/// fixed point the DLFT iterates on [NPT03], with c in the role of the DLFT's
 /// inverse penalty; here it is solved in time, on the impulses, by Newton. Contrary to the
 /// frequency-domain DLFT it holds for any admissible pair. The friction force switches at an
 /// instant: the response converges at first order in 1/M (tests/solvers/test_friction.cpp).
