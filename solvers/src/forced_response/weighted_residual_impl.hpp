@@ -491,19 +491,19 @@ struct WeightedResidual::Impl {
 namespace detail {
 
 // Natural-parameter continuation in the load factor s (forcing s·F) from 0 to 1, the fallback of
-// both solve paths: Δs from 1/8, doubled after a success (at most ½), quartered after a failure,
+// both solve paths: Δs from 1/8, doubled after a success (at most max_step), quartered after a failure,
 // down to 1e-6; at each s the one Newton core on make_system(s) from predict(branch, s). Returns
 // the last Newton solve at s = 1 (its iterations the sum over all steps), or, if the stepping
 // stalls, the last converged point (`if_none` without one) with the status of the last failure
 // and a message naming the s reached. `steps` counts the Newton solves.
 template <class MakeSystem, class Predict>
 NewtonResult load_stepping(MakeSystem make_system, Predict predict, Eigen::VectorXd x0, const Eigen::VectorXd& if_none,
-                           const NewtonOptions& newton_options, int& steps) {
+                           const NewtonOptions& newton_options, double max_step, int& steps) {
   NaturalParameterOptions o;
   o.parameter_min = 0.0;
   o.parameter_max = 1.0;
   o.initial_step = 0.125;
-  o.max_step = 0.5;
+  o.max_step = max_step;
   o.min_step = 1e-6;
   o.shrink = 0.25;
   o.grow = [](double h, int) { return 2.0 * h; };

@@ -306,10 +306,12 @@ NewtonResult WeightedResidual::solve_rigid_with_penalty_homotopy(HomotopyReport&
 }
 
 NewtonResult WeightedResidual::solve_exact_with_load_stepping(int& steps) const {
-  // detail::load_stepping on the exact conditions from λ = 0, the secant predictor.
+  // detail::load_stepping on the exact conditions from λ = 0, the secant predictor, steps of at
+  // most ¼: each step changes the active set less (a mixed stop and friction contact stagnated
+  // with ½, tests/solvers/test_friction.cpp).
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(impl_->u_lin.size());
   return detail::load_stepping([this](double s) { return Signorini{this, s}; }, secant_predictor, zero, zero,
-                               impl_->options.newton, steps);
+                               impl_->options.newton, 0.25, steps);
 }
 
 WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,

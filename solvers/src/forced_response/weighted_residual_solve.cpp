@@ -66,7 +66,7 @@ NewtonResult WeightedResidual::solve_with_load_stepping(Eigen::VectorXd x, int& 
     return Eigen::VectorXd(b.x + (s - b.parameter) * p.x_lin);
   };
   return detail::load_stepping([this](double s) { return Condensed{this, s}; }, predict, std::move(x), p.x_lin,
-                               p.options.newton, steps);
+                               p.options.newton, 0.5, steps);
 }
 
 Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorXd& x, double lambda) const {
