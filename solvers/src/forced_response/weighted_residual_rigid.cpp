@@ -82,16 +82,17 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
                                                   std::vector<int>* pinned) const {
   require_factorized();
   const Collocation& col = *collocation;
-  const Eigen::VectorXd u = load * u_lin - delassus * lambda;  // a stop's displacement, or a slip Δ
-  // The stops' gaps in one expression, as before friction existed (forming g0 − u from the stored
-  // u rounds differently in the last bits, and rigid-stop results would move by rounding).
-  Eigen::VectorXd gap;
+  // The slips Δ (friction rows), and the stops' gaps in one expression, as before friction existed
+  // (forming g0 − u from a stored u rounds differently in the last bits: rigid-stop results would
+  // move by rounding). Each only when that kind of contact is present.
+  Eigen::VectorXd u, gap;
+  if (col.any_coulomb) u = load * u_lin - delassus * lambda;
   if (std::find(col.coulomb.begin(), col.coulomb.end(), 0) != col.coulomb.end()) gap = col.gaps - (load * u_lin - delassus * lambda);
-  Eigen::VectorXd phi(u.size());
+  Eigen::VectorXd phi(lambda.size());
   if (gap_rows != nullptr) gap_rows->clear();
   if (pinned != nullptr) pinned->clear();
   std::vector<char> slips(static_cast<size_t>(nc), 0);
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
+  for (Eigen::Index i = 0; i < phi.size(); ++i) {
     const auto c = static_cast<size_t>(i % nc);
     bool d_branch = false;
     if (col.coulomb[c] != 0) {
