@@ -243,11 +243,8 @@ int main(int argc, char** argv) {
           "closed form, and the event-driven Coulomb motion.\n\n"
        << "**(a) Den Hartog**, undamped, F0/P = " << format("%g", kSlipA) << ", r = " << format("%g", ratios.front())
        << " … " << format("%g", ratios.back()) << " (" << ratios.size()
-       << " frequencies): the largest relative error of max|x| over r, per M, and its fitted order in 1/M:\n\n| pair |";
-    for (int m : dims_a) md << " M = " << m << " |";
-    md << " order |\n|---|";
-    for (size_t i = 0; i <= dims_a.size(); ++i) md << "---|";
-    md << "\n";
+       << " frequencies): the largest relative error of max|x| over r, per M, and its fitted order in 1/M:\n\n"
+       << dimension_table_header(dims_a, "order");
     for (size_t ci = 0; ci < combos.size(); ++ci) {
       md << "| " << combos[ci].label() << " |";
       for (double e : worst[ci]) md << " " << format("%.2e", std::isfinite(e) ? e : NAN) << " |";
@@ -259,11 +256,8 @@ int main(int argc, char** argv) {
        << format("%g", kRB) << ": the event-driven Coulomb motion sticks " << format("%.1f", 100.0 * ref.stick_fraction)
        << " % of the period. Each cell: the relative rms error on all samples / on the stick samples, and the largest "
           "spread of x between the instants of one computed stick run over max|x|; — with the status where the solve "
-          "failed:\n\n| pair |";
-    for (int m : dims_b) md << " M = " << m << " |";
-    md << "\n|---|";
-    for (size_t i = 0; i < dims_b.size(); ++i) md << "---|";
-    md << "\n";
+          "failed:\n\n"
+       << dimension_table_header(dims_b);
     for (size_t ci = 0; ci < combos.size(); ++ci) {
       md << "| " << combos[ci].label() << " |";
       for (int m : dims_b) {

@@ -430,11 +430,8 @@ int main(int argc, char** argv) {
           "Jenkins motion at that k_t on all samples / on its stick samples / the largest spread of x over one stick "
           "interval over max|x| (the exact motion's at " << kt_label << ": "
        << format("%.1e", plateau_spread(ref.displacement, ref.displacement, ref.stuck)) << "); — where even the "
-          "softest k_t failed, with its status:\n\n| pair |";
-    for (int m : dims_b) md << " M = " << m << " |";
-    md << "\n|---|";
-    for (size_t i = 0; i < dims_b.size(); ++i) md << "---|";
-    md << "\n";
+          "softest k_t failed, with its status:\n\n"
+       << dimension_table_header(dims_b);
     for (size_t ci = 0; ci < combos.size(); ++ci) {
       md << "| " << combos[ci].label() << " |";
       for (int m : dims_b) {

@@ -228,6 +228,13 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) 
   return n >= 2 && d > 0.0 ? (n * sxy - sx * sy) / d : NAN;
 }
 
+std::string dimension_table_header(const std::vector<int>& dimensions, const std::string& last) {
+  std::string head = "| pair |", rule = "|---|";
+  for (int m : dimensions) head += " M = " + std::to_string(m) + " |", rule += "---|";
+  if (!last.empty()) head += " " + last + " |", rule += "---|";
+  return head + "\n" + rule + "\n";
+}
+
 std::string claims_markdown(const std::vector<Claim>& claims) {
   std::ostringstream md;
   int agree = 0, disagree = 0, unchecked = 0;

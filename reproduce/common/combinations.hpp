@@ -119,6 +119,11 @@ struct Claim {
 /// checked; then the count of each.
 [[nodiscard]] std::string claims_markdown(const std::vector<Claim>& claims);
 
+/// The header of a report table with one row per pair and one column per dimension M:
+/// "| pair | M = m_1 | … |" (then " <last> |" if `last` is not empty), its separator row, each
+/// line ended by a newline.
+[[nodiscard]] std::string dimension_table_header(const std::vector<int>& dimensions, const std::string& last = "");
+
 /// Signal measures for the claims, on samples over one period:
 ///  - fraction of samples with u > threshold;
 ///  - periodic total variation Σ_q |v_{q+1} − v_q| (with v_Q = v_0);

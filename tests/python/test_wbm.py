@@ -284,21 +284,27 @@ def test_jenkins_loop_gives_griffins_loop_and_its_energy():
         wbm.jenkins_loop(kt, np.zeros(4), np.full(3, fs))
 
 
-def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
-    # m ẍ + k x + F0 sign ẋ = P cos ωt without stops [Den Hartog 1930]: the amplitude is
-    # (P/k) √((1/(1 − r²))² − (F0 U/P)²), U = tan(π/(2r))/r; the Jenkins element with
-    # k_t = 1e4 k is within 3.5e-3 of it (its stick at each reversal, tests/solvers/test_friction.cpp).
-    m, k, p, f0, r = 1.0, (2.0 * math.pi * 10.0) ** 2, 1.0, 0.2, 1.5
+def _den_hartog_ratio(law, f0, r=1.5, dimension=256):
+    """The 1-DOF oscillator m = 1 kg, f_n = 10 Hz, P = 1 N with `law` (slip force f0) solved by
+    Fourier:Fourier at r = ω/ω_n: (max|x| / Den Hartog's amplitude, the solution). Den Hartog
+    [1930]: (P/k) √((1/(1 − r²))² − (F0 U/P)²), U = tan(π/(2r))/r."""
+    m, k, p = 1.0, (2.0 * math.pi * 10.0) ** 2, 1.0
     u = math.tan(math.pi / (2.0 * r)) / r
     exact = p / k * math.sqrt((1.0 / (1.0 - r * r)) ** 2 - (f0 * u / p) ** 2)
     system = wbm.MechanicalSystem([[m]], [[0.0]], [[k]])
-    law = wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=f0, normal_load=1.0)
-    basis = wbm.TimeBasis("fourier", 256)
+    basis = wbm.TimeBasis("fourier", dimension)
     s = wbm.solve(system, 0, p, 10.0 * r, [(0, law)], basis, basis)
     assert s["converged"], s["message"]
     tau = np.arange(4096) / 4096
-    amplitude = np.max(np.abs(basis.values(tau) @ s["coefficients"][0]))
-    assert amplitude / exact == pytest.approx(1.0, abs=3.5e-3)
+    return np.max(np.abs(basis.values(tau) @ s["coefficients"][0])) / exact, s
+
+
+def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
+    # m ẍ + k x + F0 sign ẋ = P cos ωt without stops [Den Hartog 1930]; the Jenkins element with
+    # k_t = 1e4 k is within 3.5e-3 of it (its stick at each reversal, tests/solvers/test_friction.cpp).
+    k, f0 = (2.0 * math.pi * 10.0) ** 2, 0.2
+    ratio, s = _den_hartog_ratio(wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=f0, normal_load=1.0), f0)
+    assert ratio == pytest.approx(1.0, abs=3.5e-3)
     assert s["max_contact_force_N"] == pytest.approx(f0, rel=1e-12)
     with pytest.raises(ValueError, match="friction_coefficient"):
         wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=-0.1, normal_load=1.0)
@@ -308,18 +314,11 @@ def test_exact_coulomb_friction_gives_den_hartogs_amplitude_and_its_impulses():
     # The same oscillator with wbm.CoulombFriction (no spring): first order in 1/M, within 5e-3 of
     # Den Hartog at M = 256 and r = 1.5 (measured 4.2e-3; out/friction_coulomb_exact); every
     # impulse slips at ±F0 but at most one per reversal, at the instants returned with them.
-    m, k, p, f0, r = 1.0, (2.0 * math.pi * 10.0) ** 2, 1.0, 0.2, 1.5
-    u = math.tan(math.pi / (2.0 * r)) / r
-    exact = p / k * math.sqrt((1.0 / (1.0 - r * r)) ** 2 - (f0 * u / p) ** 2)
-    system = wbm.MechanicalSystem([[m]], [[0.0]], [[k]])
+    f0 = 0.2
     law = wbm.CoulombFriction(friction_coefficient=f0, normal_load=1.0)
     assert law.rigid
-    basis = wbm.TimeBasis("fourier", 256)
-    s = wbm.solve(system, 0, p, 10.0 * r, [(0, law)], basis, basis)
-    assert s["converged"], s["message"]
-    tau = np.arange(4096) / 4096
-    amplitude = np.max(np.abs(basis.values(tau) @ s["coefficients"][0]))
-    assert amplitude / exact == pytest.approx(1.0, abs=5e-3)
+    ratio, s = _den_hartog_ratio(law, f0)
+    assert ratio == pytest.approx(1.0, abs=5e-3)
     impulses = s["contact_force_samples"][0]
     assert impulses.shape == (256,) and s["collocation_times"].shape == (256,)
     assert np.max(np.abs(impulses)) == pytest.approx(f0, rel=1e-12)

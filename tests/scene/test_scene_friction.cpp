@@ -39,6 +39,12 @@ std::string slurp(const std::string& path) {
   return text.str();
 }
 
+// The result table written as `file`, or nullptr.
+const wbm::scene::Table* find_table(const wbm::scene::AnalysisResult& r, const std::string& file) {
+  const auto t = std::find_if(r.tables.begin(), r.tables.end(), [&](const auto& x) { return x.file == file; });
+  return t == r.tables.end() ? nullptr : &*t;
+}
+
 // Over one cycle of a 1-DOF solve, from velocity.csv: the load's work ∮ P cos ωt u̇ dt and the
 // viscous dissipation ∮ c u̇² dt [J] (rectangle rule on the uniform output samples).
 std::pair<double, double> cycle_work(const Scene& s, const wbm::scene::AnalysisResult& r) {
@@ -102,9 +108,8 @@ TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
   // The hysteresis loop beside the force: w_c is the contact DOF's displacement (the only DOF),
   // and the loop's area ∮ f dw (closed trapezoids) is the energy the element dissipates, which the
   // loop computes instead from the slider's increments, Σ f Δs.
-  const auto& files = r.tables;
-  const auto table = std::find_if(files.begin(), files.end(), [](const auto& t) { return t.file == "contact_force.csv"; });
-  ASSERT_NE(table, files.end());
+  const auto* table = find_table(r, "contact_force.csv");
+  ASSERT_NE(table, nullptr);
   ASSERT_EQ(table->header.size(), 4u);
   const std::string& force_name = table->header[2];  // "f_c_<label> [N]"
   EXPECT_EQ(table->header[3], "w_c_" + force_name.substr(4, force_name.size() - 8) + " [m]");
@@ -204,9 +209,8 @@ TEST(SceneFriction, AnExactCoulombSolveBalancesTheEnergyOfLoadViscosityAndFricti
   EXPECT_NEAR(viscous + dissipated, load, 1e-2 * load);
   EXPECT_NEAR(dissipated, 4.0 * slip * friction.at("slip_amplitude_m").get<double>(), 1e-9 * dissipated);
   EXPECT_LT(friction.at("stick_fraction").get<double>(), 0.05);
-  const auto& files = r.tables;
-  const auto table = std::find_if(files.begin(), files.end(), [](const auto& t) { return t.file == "contact_force.csv"; });
-  ASSERT_NE(table, files.end());
+  const auto* table = find_table(r, "contact_force.csv");
+  ASSERT_NE(table, nullptr);
   ASSERT_EQ(table->header.size(), 4u);
   EXPECT_EQ(table->header[3].rfind("w_c_", 0), 0u);
   const Eigen::VectorXd& tk = table->columns[0];

@@ -85,9 +85,11 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
   // The slips Δ (friction rows), and the stops' gaps in one expression, as before friction existed
   // (forming g0 − u from a stored u rounds differently in the last bits: rigid-stop results would
   // move by rounding). Each only when that kind of contact is present.
+  // (Eigen forms the product first in both, so one product serves both bit for bit.)
+  const Eigen::VectorXd d_lambda = delassus * lambda;
   Eigen::VectorXd u, gap;
-  if (col.any_coulomb) u = load * u_lin - delassus * lambda;
-  if (std::find(col.coulomb.begin(), col.coulomb.end(), 0) != col.coulomb.end()) gap = col.gaps - (load * u_lin - delassus * lambda);
+  if (col.any_coulomb) u = load * u_lin - d_lambda;
+  if (std::find(col.coulomb.begin(), col.coulomb.end(), 0) != col.coulomb.end()) gap = col.gaps - (load * u_lin - d_lambda);
   Eigen::VectorXd phi(lambda.size());
   if (gap_rows != nullptr) gap_rows->clear();
   if (pinned != nullptr) pinned->clear();
