@@ -141,6 +141,39 @@ JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u) const {
   return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()));
 }
 
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal) const {
+  if (normal.size() != u.size()) {
+    throw std::invalid_argument("JenkinsLaw::loop: normal has " + std::to_string(normal.size()) + " samples, u " +
+                                std::to_string(u.size()) + "; give the normal load at every sample of u");
+  }
+  for (Eigen::Index q = 0; q < normal.size(); ++q) {
+    if (!(normal(q) >= 0.0) || !std::isfinite(normal(q))) {
+      std::ostringstream m;
+      m << "JenkinsLaw::loop: normal[" << q << "] = " << normal(q)
+        << " must be finite and >= 0 [N] (the compressive force of the normal law)";
+      throw std::invalid_argument(m.str());
+    }
+  }
+  const Eigen::VectorXd fs = p_.friction_coefficient * (normal.array() + p_.normal_load).matrix();
+  return jenkins_loop(p_.tangential_stiffness, u, fs);
+}
+
+void JenkinsLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u,
+                                        const Eigen::Ref<const Eigen::VectorXd>& normal, Eigen::Ref<Eigen::VectorXd> force,
+                                        Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                                        Eigen::Ref<Eigen::VectorXd> load_sensitivity) const {
+  if (force.size() != u.size() || stiffness.size() != u.size() || anchor.size() != u.size() ||
+      load_sensitivity.size() != u.size()) {
+    throw std::invalid_argument("JenkinsLaw::evaluate_period_loaded: force, stiffness, anchor and load_sensitivity "
+                                "must have the " + std::to_string(u.size()) + " samples of u");
+  }
+  const JenkinsLoop l = loop(u, normal);
+  force = l.force;
+  stiffness = l.stiffness;
+  anchor = l.anchor;
+  load_sensitivity = p_.friction_coefficient * l.slip_sensitivity;
+}
+
 void JenkinsLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
                                  Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const {
   if (force.size() != u.size() || stiffness.size() != u.size() || anchor.size() != u.size()) {

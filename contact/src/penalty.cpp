@@ -38,6 +38,15 @@ void ContactLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   anchor.setConstant(-1);
 }
 
+void ContactLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& /*u*/,
+                                        const Eigen::Ref<const Eigen::VectorXd>& /*normal*/,
+                                        Eigen::Ref<Eigen::VectorXd> /*force*/, Eigen::Ref<Eigen::VectorXd> /*stiffness*/,
+                                        Eigen::Ref<Eigen::VectorXi> /*anchor*/,
+                                        Eigen::Ref<Eigen::VectorXd> /*load_sensitivity*/) const {
+  throw std::logic_error("ContactLaw::evaluate_period_loaded: the " + describe() + " takes no normal load; only a "
+                         "friction law with takes_normal_load() (a Jenkins element) does");
+}
+
 void ExponentialPenaltyParameters::validate() const {
   const char* law = "ExponentialPenalty";
   if (!(coefficient > 0.0) || !std::isfinite(coefficient)) bad(law, "coefficient (a_c)", coefficient, "must be finite and > 0 [N]");

@@ -186,6 +186,26 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
                                   " appears twice: combine the laws into one per DOF");
     }
   }
+  const auto count = static_cast<int>(contacts.size());
+  for (int i = 0; i < count; ++i) {
+    const ContactPoint& c = contacts[static_cast<size_t>(i)];
+    if (c.normal == -1) continue;
+    const std::string where = "ContactPoint.normal = " + std::to_string(c.normal) + " (contact " + std::to_string(i) +
+                              " at DOF " + std::to_string(c.dof) + ")";
+    if (c.normal < -1 || c.normal >= count || c.normal == i) {
+      throw std::invalid_argument(where + ": must be -1 (a constant normal load) or the index of another contact in [0, " +
+                                  std::to_string(count) + ")");
+    }
+    if (!c.law->takes_normal_load()) {
+      throw std::invalid_argument(where + ": the " + c.law->describe() + " takes no varying normal load; only a "
+                                  "Jenkins element does (exact Coulomb friction under a varying load is not implemented)");
+    }
+    const auto& n = *contacts[static_cast<size_t>(c.normal)].law;
+    if (n.rigid() || n.hysteretic()) {
+      throw std::invalid_argument(where + ": the normal contact is a " + n.describe() + "; the normal load comes from "
+                                  "a penalty law (linear or exponential) whose force is a function of the normal gap");
+    }
+  }
 }
 
 Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const HarmonicForcing& forcing) {
@@ -214,6 +234,20 @@ Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const Harmon
     rhs(l.dof) += l.amplitude * std::polar(1.0, l.phase_rad);
   }
   return lu.solve(rhs);
+}
+
+void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
+                             Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
+                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity) {
+  const ContactPoint& point = contacts[static_cast<size_t>(c)];
+  if (point.normal < 0) {
+    point.law->evaluate_period(u.row(c).transpose(), force, stiffness, anchor);
+    load_sensitivity.setZero();
+    return;
+  }
+  Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
+  contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal, normal_stiffness);
+  point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity);
 }
 
 }  // namespace wbm::solvers

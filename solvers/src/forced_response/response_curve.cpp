@@ -322,9 +322,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(x, nc).transpose();  // P × n_c
     for (int c = 0; c < nc; ++c) {
       if (contacts[c].law->hysteretic()) {  // the periodic loop over the P samples; |f| (friction)
-        Eigen::VectorXd f(uc.rows()), k(uc.rows());
+        Eigen::VectorXd f(uc.rows()), k(uc.rows()), sensitivity(uc.rows());
         Eigen::VectorXi anchor(uc.rows());
-        contacts[c].law->evaluate_period(uc.col(c), f, k, anchor);
+        evaluate_contact_period(contacts, c, uc.transpose(), f, k, anchor, sensitivity);
         r.max_contact_force = std::max(r.max_contact_force, f.cwiseAbs().maxCoeff());
         continue;
       }

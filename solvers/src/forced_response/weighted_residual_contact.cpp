@@ -176,6 +176,7 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
   if (tangents != nullptr) tangents->assign(static_cast<size_t>(nc), {});
   Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
   Eigen::VectorXi anchor = Eigen::VectorXi::Constant(q, -1);     // a hysteretic law's last slip
+  Eigen::VectorXd load_sensitivity = Eigen::VectorXd::Zero(q);    // ∂f_q/∂n_r under a varying normal load
   for (int c = 0; c < nc; ++c) {
     if (contacts[c].law->hysteretic()) {
       if (cell_average_rule) {
@@ -184,7 +185,7 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
                                     contacts[c].law->describe() + ", whose force depends on the history: use "
                                     "contact_quadrature = Midpoint");
       }
-      contacts[c].law->evaluate_period(u.row(c).transpose(), fc, kc, anchor);
+      evaluate_contact_period(contacts, c, u, fc, kc, anchor, load_sensitivity);
     } else if (cell_average_rule) {
       for (int r = 0; r < q; ++r) detail::cell_average(*contacts[c].law, u(c, r), slope(c, r), fc(r), kc(r), kd(r));
     } else {
@@ -201,7 +202,20 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
     t.kc = kc;
     t.kd = kd;
     t.anchor = anchor;
+    if (const int n = contacts[c].normal; n >= 0) {
+      t.normal = n;
+      for (int r = 0; r < q; ++r) {
+        if (load_sensitivity(r) == 0.0) continue;
+        const int at = kc(r) != 0.0 ? anchor(r) : r;
+        const double kn = contacts[n].law->stiffness(u(n, at));
+        if (kn == 0.0) continue;
+        t.coupled.push_back(r);
+        t.coupled_at.push_back(at);
+        t.coupled_weight.push_back(load_sensitivity(r) * kn);
+      }
+    }
     anchor.setConstant(-1);
+    load_sensitivity.setZero();
   }
   return force;
 }
@@ -234,6 +248,21 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
     for (int k = 0; k < m; ++k) {
       for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
     }
+    if (!t.coupled.empty()) {
+      // A varying normal load: + Σ_q p_j(τ_q) (∂f_q/∂u_n,r)/Q q_k(τ_r) into the columns of the
+      // normal contact n (r the sample whose slip force f_q hangs on).
+      const auto nq = static_cast<Eigen::Index>(t.coupled.size());
+      Eigen::VectorXd tq(nq), tr(nq), kq(nq);
+      for (Eigen::Index i = 0; i < nq; ++i) {
+        tq(i) = sampling->tau(t.coupled[static_cast<size_t>(i)]);
+        tr(i) = sampling->tau(t.coupled_at[static_cast<size_t>(i)]);
+        kq(i) = t.coupled_weight[static_cast<size_t>(i)] / q;
+      }
+      const Eigen::MatrixXd cross = (kq.asDiagonal() * weighting_values(tq)).transpose() * trial.values(tr, 0);
+      for (int k = 0; k < m; ++k) {
+        for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + t.normal) += cross(j, k);
+      }
+    }
   }
   return jac;
 }
@@ -265,7 +294,7 @@ LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::V
   bool anchored = false;  // a hysteretic law's samples hang on earlier ones: W V is not diagonal in the samples
   for (const auto& t : tangents) {
     rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
-    anchored = anchored || !t.anchored.empty();
+    anchored = anchored || !t.anchored.empty() || t.normal >= 0;  // a varying normal load couples two contacts
   }
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   jac.rows = size;

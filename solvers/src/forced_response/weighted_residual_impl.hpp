@@ -433,10 +433,16 @@ struct WeightedResidual::Impl {
   // The law's derivatives at the samples of one contact: ∂f_q/∂u_q = kc(q) (active: kc ≠ 0),
   // the CellAverage kink terms kd (sloped), and for a hysteretic law ∂f_q/∂u_r = −kc(q) at
   // r = anchor(q) (anchored: the samples with an anchor; ContactLaw::evaluate_period).
+  // A friction contact under a varying normal load (ContactPoint::normal) also has
+  // ∂f_q/∂u_n,r = coupled_weight(i) at q = coupled[i], r = coupled_at[i] (the normal contact n's
+  // sample that sets the slip force f_q hangs on: q in slip, its anchor in stick).
   struct ContactTangent {
     Eigen::VectorXd kc, kd;
     std::vector<int> active, sloped, anchored;
     Eigen::VectorXi anchor;
+    int normal = -1;
+    std::vector<int> coupled, coupled_at;
+    std::vector<double> coupled_weight;
   };
 
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally

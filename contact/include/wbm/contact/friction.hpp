@@ -103,6 +103,28 @@ class JenkinsLaw final : public ContactLaw {
                        Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const override;
   /// The whole loop at the samples u (jenkins_loop), with its slip sensitivities and energy.
   [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  /// A normal load that varies with the normal gap [Yang & Menq 1998; Petrov & Ewins 2003]: the
+  /// slip force at sample q is F_s,q = μ (N + n_q), n_q ≥ 0 [N] the force of the contact point's
+  /// normal law (`normal`, one per sample; N the preload of the parameters, 0 if there is none).
+  /// Where the normal law opens (n_q = 0, N = 0) F_s = 0: the tangential force vanishes and the
+  /// slider follows, the separation of a 2D frictional contact. Throws std::invalid_argument for
+  /// a normal of another size than u, or a normal load that is not finite and >= 0.
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u,
+                                 const Eigen::Ref<const Eigen::VectorXd>& normal) const;
+  [[nodiscard]] bool takes_normal_load() const override { return true; }
+  /// evaluate_period with F_s,q = μ (N + normal_q) (loop above); load_sensitivity = μ σ, the
+  /// slip_sensitivity of the loop times μ (ContactLaw::evaluate_period_loaded).
+  void evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
+                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
+                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity) const override;
+  /// One step of the return map, for time stepping: the force after the tangential displacement
+  /// moves by du [m] from a state of force f [N], under the normal load n ≥ 0 [N] of the normal
+  /// law: f* = f + k_t du, projected on |f| ≤ μ (N + n). Throws nothing.
+  [[nodiscard]] double return_map(double f, double du, double n) const {
+    const double trial = f + p_.tangential_stiffness * du;
+    const double fs = p_.friction_coefficient * (p_.normal_load + n);
+    return trial > fs ? fs : (trial < -fs ? -fs : trial);
+  }
   [[nodiscard]] const JenkinsParameters& parameters() const { return p_; }
   [[nodiscard]] double slip_force() const { return p_.friction_coefficient * p_.normal_load; }
 

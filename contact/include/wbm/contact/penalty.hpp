@@ -46,6 +46,20 @@ class ContactLaw {
   /// else −1. The default is evaluate() with every anchor −1. All four have the size of u.
   virtual void evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
                                Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const;
+
+  /// True for a friction law whose slip force follows a normal load that varies over the period
+  /// (JenkinsLaw): evaluate_period_loaded() is then defined.
+  [[nodiscard]] virtual bool takes_normal_load() const { return false; }
+
+  /// evaluate_period under a normal load N_q ≥ 0 [N] per sample (`normal`, from the normal law of
+  /// the same contact point), with also load_sensitivity(q) = ∂f_q/∂N_r [-] at the sample
+  /// r = q where stiffness(q) = 0 (slip), r = anchor(q) where stiffness(q) ≠ 0 and anchor(q) ≥ 0
+  /// (stick after a slip), and 0 in full stick. All six have the size of u. The default throws
+  /// std::logic_error (a law without a normal load: check takes_normal_load() first).
+  virtual void evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u,
+                                      const Eigen::Ref<const Eigen::VectorXd>& normal, Eigen::Ref<Eigen::VectorXd> force,
+                                      Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                                      Eigen::Ref<Eigen::VectorXd> load_sensitivity) const;
 };
 
 /// Exponential penalty [JL14 Eq. (5)]:

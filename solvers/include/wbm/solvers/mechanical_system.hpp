@@ -83,6 +83,12 @@ struct ContactPoint {
   std::shared_ptr<const contact::ContactLaw> law;
   int other = -1;  // the second DOF of a relative contact (two bodies), or −1 (a fixed obstacle)
   std::vector<std::pair<int, double>> along = {};  // (DOF, weight) of a general direction, or empty
+  /// A friction contact whose normal load varies: the index, in the same contact list, of the
+  /// normal contact whose force n_c(u_n) [N] is the normal load (a penalty law: linear or
+  /// exponential, with its gap; a negative gap is a preload). The friction law's slip force is
+  /// then μ (N + n_c) at every sample (contact::ContactLaw::takes_normal_load; N its own preload),
+  /// and the tangential force depends on both displacements. −1: a constant normal load.
+  int normal = -1;
   /// The nonzeros of e_c as (DOF, weight), in the order given.
   [[nodiscard]] std::vector<std::pair<int, double>> terms() const {
     if (!along.empty()) return along;
@@ -103,9 +109,21 @@ struct ContactPoint {
   }
   /// Throws std::invalid_argument for a DOF (or other DOF) out of range, other == dof, a null law,
   /// a direction (along) with a DOF out of range or repeated, a non-finite weight, all weights
-  /// zero, dof not among its DOFs or other ≥ 0 beside it, or the same direction twice.
+  /// zero, dof not among its DOFs or other ≥ 0 beside it, the same direction twice, or a `normal`
+  /// that is out of range, names the contact itself, is given to a law without
+  /// takes_normal_load(), or names a contact whose law is rigid or hysteretic.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
+
+/// The force of contact `c` over the Q uniform samples of one period, u (n_c × Q, row = contact,
+/// the contact displacements u_c(τ_q)): ContactLaw::evaluate_period, or for a friction contact
+/// with a `normal`, ContactLaw::evaluate_period_loaded under the normal contact's force at the
+/// same samples. force, stiffness (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries
+/// (load_sensitivity(q) = ∂f_q/∂n_r as documented there, 0 without a normal). Throws as the laws
+/// do (std::logic_error for a rigid law).
+void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
+                             Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
+                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity);
 
 /// Checks a contact direction over the DOFs, given as (DOF, weight) pairs: every DOF in
 /// [0, dofs), none twice, finite weights, not all zero, and `dof` (the DOF that names the

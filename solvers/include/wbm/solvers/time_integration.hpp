@@ -109,6 +109,38 @@ struct MoreauJeanOptions {
                                                                  const std::vector<ContactPoint>& contacts,
                                                                  const MoreauJeanOptions& options = {});
 
+/// Options of the explicit central-difference time stepping (integrate_central_difference_to_periodic).
+struct CentralDifferenceOptions {
+  int steps_per_period = 65536;         // N fixed steps per period, h = T/N; a multiple of P
+  int samples_per_period = 1024;        // P output samples per period, τ_p = p/P
+  double periodicity_tolerance = 1e-9;  // stop when δ_i < this (as TimeIntegrationOptions)
+  int max_periods = 5000;               // >= 2
+  void validate() const;                // throws std::invalid_argument naming the field
+};
+
+/// Periodic steady state with penalty laws and Jenkins elements (friction, with a constant or a
+/// varying normal load, ContactPoint::normal) by explicit central differences in the
+/// velocity-Verlet form with the damping treated by the trapezoidal rule, from rest, in physical
+/// time with fixed step h = T/N [Hughes 1987, The Finite Element Method, Sec. 9.1.3]:
+///   v_{k+½} = v_k + (h/2) M⁻¹ (F_k − K q_k − C v_k − Σ_c e_c f_c,k),   q_{k+1} = q_k + h v_{k+½},
+///   (M + (h/2) C) v_{k+1} = M v_{k+½} + (h/2) (F_{k+1} − K q_{k+1} − Σ_c e_c f_c,k+1),
+/// with f_c,k+1 = f_c(u_c,k+1) for a memoryless law and, for a Jenkins element, one step of its
+/// return map from f_c,k (contact::JenkinsLaw::return_map) under the normal contact's force at
+/// q_{k+1}: the slider state is carried from step to step, with no basis and no period loop. The
+/// scheme is second order on smooth forces; a stick–slip switch or a contact onset is a kink of
+/// the force, met within one step. Explicit: stable for h ω_max < 2, ω_max² the largest
+/// eigenvalue of (K + Σ_c k_c e_c e_cᵀ, M) with k_c the law's stiffness in contact (k_t for a
+/// Jenkins element, the onset stiffness of an exponential law); N below 2 π ω_max T is refused
+/// with the smallest N that passes. Dense (n is small for the systems this reference is for).
+/// Output samples, δ_i and max_periods as integrate_to_periodic; contact_force is n_c × P, the
+/// contact forces at τ_p [N]. Throws std::invalid_argument for invalid inputs, a rigid law (use
+/// integrate_moreau_jean_to_periodic) or exact Coulomb friction; a run that hits max_periods or
+/// turns non-finite is reported.
+[[nodiscard]] PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem& system,
+                                                                        const HarmonicForcing& forcing,
+                                                                        const std::vector<ContactPoint>& contacts,
+                                                                        const CentralDifferenceOptions& options = {});
+
 /// Samples of a trajectory: displacement and velocity n × S at the times t (S).
 struct Trajectory {
   Eigen::VectorXd time_s;        // [s]

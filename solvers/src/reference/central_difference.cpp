@@ -1,0 +1,171 @@
+// Explicit central differences to a periodic steady state, for penalty laws and Jenkins elements
+// (wbm/solvers/time_integration.hpp): the time-stepping reference of friction.
+#include <wbm/solvers/time_integration.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include <wbm/contact/friction.hpp>
+
+namespace wbm::solvers {
+
+void CentralDifferenceOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("CentralDifferenceOptions." + what); };
+  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
+  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
+    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
+         std::to_string(samples_per_period));
+  }
+  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
+  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
+}
+
+namespace {
+
+// The law's stiffness in contact, for the stability limit: k_t of a Jenkins element, else the
+// stiffness just past the gap (a linear law's k, an exponential law's onset a_c α).
+double contact_stiffness(const contact::ContactLaw& law) {
+  if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(&law)) return jenkins->parameters().tangential_stiffness;
+  const double g = law.gap();
+  return law.stiffness(g + 1e-9 * std::max(1.0, std::abs(g)));
+}
+
+}  // namespace
+
+PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
+                                                          const std::vector<ContactPoint>& contacts,
+                                                          const CentralDifferenceOptions& options) {
+  system.validate();
+  forcing.validate(system.dofs());
+  ContactPoint::validate(contacts, system.dofs());
+  options.validate();
+  forcing.require_resolved(options.samples_per_period,
+                           "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
+                           "raise CentralDifferenceOptions.samples_per_period (and steps_per_period, a multiple of it)");
+  const int n = system.dofs();
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  std::vector<const contact::JenkinsLaw*> jenkins(static_cast<size_t>(nc), nullptr);
+  for (Eigen::Index i = 0; i < nc; ++i) {
+    const auto& ct = contacts[static_cast<size_t>(i)];
+    jenkins[static_cast<size_t>(i)] = dynamic_cast<const contact::JenkinsLaw*>(ct.law.get());
+    if (ct.law->rigid() || (ct.law->hysteretic() && jenkins[static_cast<size_t>(i)] == nullptr)) {
+      throw std::invalid_argument("integrate_central_difference_to_periodic: the contact at DOF " + std::to_string(ct.dof) +
+                                  " is a " + ct.law->describe() + "; this scheme takes force laws (penalty laws and "
+                                  "Jenkins elements): use integrate_moreau_jean_to_periodic for rigid stops");
+    }
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const double period = 1.0 / forcing.frequency_hz;
+  const int steps = options.steps_per_period, p_count = options.samples_per_period;
+  const int stride = steps / p_count;
+  const double h = period / steps;
+  const Eigen::MatrixXd m = Eigen::MatrixXd(system.mass), c = Eigen::MatrixXd(system.damping),
+                        k = Eigen::MatrixXd(system.stiffness);
+  Eigen::MatrixXd e_cols = Eigen::MatrixXd::Zero(n, nc);
+  for (Eigen::Index i = 0; i < nc; ++i) e_cols.col(i) = contacts[static_cast<size_t>(i)].direction(n);
+  {  // the stability limit h ω_max < 2, with the contacts closed
+    Eigen::MatrixXd k_closed = k;
+    for (Eigen::Index i = 0; i < nc; ++i) {
+      k_closed += contact_stiffness(*contacts[static_cast<size_t>(i)].law) * e_cols.col(i) * e_cols.col(i).transpose();
+    }
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k_closed, m, Eigen::EigenvaluesOnly);
+    const double omega_max = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+    if (!(h * omega_max < 2.0)) {
+      const double needed = std::ceil(period * omega_max / 2.0 / p_count) * p_count;
+      std::ostringstream msg;
+      msg << "CentralDifferenceOptions.steps_per_period = " << steps << ": h omega_max = " << h * omega_max
+          << " >= 2 (omega_max = " << omega_max << " rad/s with the contacts closed), the explicit scheme is unstable; "
+          << "raise steps_per_period to at least " << needed << " (a multiple of samples_per_period)";
+      throw std::invalid_argument(msg.str());
+    }
+  }
+  const Eigen::LLT<Eigen::MatrixXd> mass_llt(m);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> end_lu(m + 0.5 * h * c);  // M + (h/2) C
+  const std::vector<HarmonicLoad> loads = forcing.loads();
+  const double omega = 2.0 * std::numbers::pi * forcing.frequency_hz;
+  auto external = [&](double t) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    for (const auto& l : loads) f(l.dof) += l.amplitude * std::cos(omega * l.harmonic * t + l.phase_rad);
+    return f;
+  };
+  // The contact forces at q, the Jenkins elements stepping from their forces f_old at u_old.
+  Eigen::VectorXd f_contact = Eigen::VectorXd::Zero(nc), u_contact = Eigen::VectorXd::Zero(nc);
+  auto update_contacts = [&](const Eigen::VectorXd& q) {
+    Eigen::VectorXd u_new(nc);
+    for (Eigen::Index i = 0; i < nc; ++i) u_new(i) = contacts[static_cast<size_t>(i)].displacement(q);
+    for (Eigen::Index i = 0; i < nc; ++i) {
+      const auto& ct = contacts[static_cast<size_t>(i)];
+      if (const auto* jl = jenkins[static_cast<size_t>(i)]) {
+        const double normal = ct.normal >= 0 ? contacts[static_cast<size_t>(ct.normal)].law->force(u_new(ct.normal)) : 0.0;
+        f_contact(i) = jl->return_map(f_contact(i), u_new(i) - u_contact(i), normal);
+      } else {
+        f_contact(i) = ct.law->force(u_new(i));
+      }
+    }
+    u_contact = u_new;
+  };
+
+  PeriodicResponse out;
+  out.frequency_hz = forcing.frequency_hz;
+  out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
+  Eigen::VectorXd previous_tip;
+  auto& rep = out.report;
+  update_contacts(q);  // a preloaded penalty law pushes at rest; a Jenkins element starts unstretched
+  Eigen::VectorXd rhs = external(0.0) - k * q - c * v - e_cols * f_contact;  // the force balance at step k
+  for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
+    for (int step = 0; step < steps; ++step) {
+      if (step % stride == 0) {
+        disp.col(step / stride) = q;
+        vel.col(step / stride) = v;
+        force.col(step / stride) = f_contact;
+      }
+      const Eigen::VectorXd v_half = v + 0.5 * h * mass_llt.solve(rhs);
+      q += h * v_half;
+      update_contacts(q);
+      const Eigen::VectorXd f_end = external(static_cast<double>(step + 1) * h) - k * q - e_cols * f_contact;
+      v = end_lu.solve(m * v_half + 0.5 * h * f_end);
+      rhs = f_end - c * v;
+    }
+    rep.periods = period_index;
+    if (!q.allFinite() || !v.allFinite()) {
+      rep.status = SolveStatus::NonFinite;
+      rep.message = "non-finite state in period " + std::to_string(period_index);
+      break;
+    }
+    rep.steps += steps;
+    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
+    if (previous_tip.size() == tip.size()) {
+      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
+      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
+      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
+      rep.periodicity.push_back(delta);
+      if (delta < options.periodicity_tolerance) {
+        rep.status = SolveStatus::Converged;
+        break;
+      }
+    }
+    previous_tip = tip;
+  }
+  out.displacement = std::move(disp);
+  out.velocity = std::move(vel);
+  out.contact_force = std::move(force);
+  if (rep.message.empty()) {
+    std::ostringstream os;
+    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of " << steps
+       << " central-difference steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
+    rep.message = os.str();
+  }
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace wbm::solvers
