@@ -44,6 +44,7 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   int last_slip = -1;
   double sigma_last = 0.0;
   double previous_end = 0.0, before = 0.0;
+  double previous_sigma = 0.0;  // σ of the previous sample if it slipped, else 0
   // The end force repeats when it is within kUlps roundings of the force scale. In exact
   // arithmetic the period map is monotone, so it has no cycle of two periods; in floating point a
   // stick sample whose predictor lies within rounding of F_s can slip in one period and not in the
@@ -59,17 +60,24 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
     for (Eigen::Index q = 0; q < n; ++q) {
       const double trial = f_anchor + kt * (w(q) - w_anchor);  // the elastic predictor
       double f = trial;
+      double sigma_here = 0.0;  // σ if this sample slips
       if (std::abs(trial) <= slip_force(q)) {  // stick
         out.stiffness(q) = kt;
         out.anchor(q) = last_slip;
         out.slip_sensitivity(q) = last_slip >= 0 ? sigma_last : 0.0;
       } else {  // slip: the projection on |f| <= F_s
         const double sigma = trial > 0.0 ? 1.0 : -1.0;
+        sigma_here = sigma;
         f = sigma * slip_force(q);
         out.stiffness(q) = 0.0;
         out.anchor(q) = -1;
         out.slip_sensitivity(q) = sigma;
-        out.dissipated_energy += f * ((w(q) - w_prev) - (f - f_prev) / kt);  // f Δs, Δs the slider's increment
+        // f Δs, Δs the slider's increment: exact at a slip onset for w linear between samples (the
+        // slider moves only once f has reached the slip force); along a slip in one direction the
+        // slip force may vary (a varying normal load), so the mean ½ (f_q + f_{q−1}) Δs (the same
+        // value when it does not vary): second order instead of first.
+        const bool slipping_on = previous_sigma == sigma;
+        out.dissipated_energy += (slipping_on ? 0.5 * (f + f_prev) : f) * ((w(q) - w_prev) - (f - f_prev) / kt);
         last_slip = static_cast<int>(q);
         sigma_last = sigma;
         f_anchor = f;
@@ -78,6 +86,7 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
         ++out.slipping_samples;
       }
       out.force(q) = f;
+      previous_sigma = sigma_here;
       f_prev = f;
       w_prev = w(q);
     }

@@ -125,7 +125,12 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
         // The element's periodic loop over the P output samples (tau uniform over one period).
         Eigen::VectorXd w(tau.size());
         for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = c.displacement(solver_displacement.col(p));
-        const contact::JenkinsLoop loop = jenkins->loop(w);
+        Eigen::VectorXd normal = Eigen::VectorXd::Zero(tau.size());  // a varying normal load's n(τ_p)
+        if (c.normal >= 0) {
+          const auto& n = contacts[static_cast<size_t>(c.normal)];
+          for (Eigen::Index p = 0; p < tau.size(); ++p) normal(p) = n.law->force(n.displacement(solver_displacement.col(p)));
+        }
+        const contact::JenkinsLoop loop = c.normal >= 0 ? jenkins->loop(w, normal) : jenkins->loop(w);
         force = loop.force;
         slip_displacements.emplace_back(k, w);
         const Eigen::VectorXd slider = w - force / jenkins->parameters().tangential_stiffness;

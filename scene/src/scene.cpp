@@ -188,7 +188,7 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
-    points.push_back({c.dof, law, c.against, c.along});
+    points.push_back({c.dof, law, c.against, c.along, c.normal_index});
   }
   return points;
 }
@@ -333,6 +333,7 @@ nlohmann::json to_json(const Scene& s) {
         if (c.law == ContactLawKind::Jenkins) o["tangential_stiffness"] = c.tangential_stiffness;
         o["friction_coefficient"] = c.friction_coefficient;
         o["normal_load"] = c.normal_load;
+        if (c.normal_contact >= 0) o["normal_contact"] = c.normal_contact;
       } else if (c.law == ContactLawKind::Exponential) {
         o["coefficient"] = c.coefficient;
         o["exponent"] = c.exponent;

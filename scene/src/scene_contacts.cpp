@@ -28,7 +28,9 @@ void Parser::contacts(const toml::table& root) {
   }
   std::set<std::pair<int, int>> dofs;  // (dof, against)
   const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
-  for (const auto& [t, section] : tables) {
+  std::vector<int> table_contact(tables.size(), -1);  // the contact a table located by node or dof became
+  for (size_t table = 0; table < tables.size(); ++table) {
+    const auto& [t, section] = tables[table];
     Contact c;
     const size_t errors = r_.error_count();
     const std::string law = r_.choice(*t, section, "law", names(law_table()));
@@ -76,6 +78,16 @@ void Parser::contacts(const toml::table& root) {
     }
     // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
     read_keys(r_, *t, section, contact_keys(), c, "", law);
+    if (friction) {  // a constant normal load, or one that follows a normal contact (jenkins)
+      const bool varying = c.law == ContactLawKind::Jenkins && t->contains("normal_contact");
+      c.normal_load = r_.number(*t, section, "normal_load", non_negative("N"),
+                                varying ? std::optional<double>(0.0) : std::nullopt);
+      if (varying) {
+        c.normal_contact = static_cast<int>(r_.integer(*t, section, "normal_contact", 0,
+                                                       static_cast<long long>(tables.size()) - 1, std::nullopt,
+                                                       " (the index of a [[contact]] table, 0-based in file order)"));
+      }
+    }
     if (c.law == ContactLawKind::Linear) {
       if (modes && !s_.contacts.empty() && s_.contacts.front().law == ContactLawKind::Linear &&
           c.stiffness != s_.contacts.front().stiffness) {
@@ -110,7 +122,42 @@ void Parser::contacts(const toml::table& root) {
                                          (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
                                          "; one law per DOF (combine them into one)");
     }
+    table_contact[table] = static_cast<int>(s_.contacts.size());
     s_.contacts.push_back(c);
+  }
+  normal_contacts(tables, table_contact);
+}
+
+void Parser::normal_contacts(const std::vector<std::pair<const toml::table*, std::string>>& tables,
+                             const std::vector<int>& table_contact) {
+  for (size_t table = 0; table < tables.size(); ++table) {
+    const int own = table_contact[table];
+    if (own < 0 || s_.contacts[static_cast<size_t>(own)].normal_contact < 0) continue;
+    Contact& c = s_.contacts[static_cast<size_t>(own)];
+    const auto& [t, section] = tables[table];
+    const auto where = Reader::source_of(*t, "normal_contact");
+    const std::string full = section + ".normal_contact";
+    const auto target = static_cast<size_t>(c.normal_contact);
+    if (target == table) {
+      r_.error(where, full, "= " + std::to_string(c.normal_contact) + " is this contact itself; give the index of the "
+                            "[[contact]] on the normal DOF (a \"linear\" or \"exponential\" law)");
+      continue;
+    }
+    const int index = table_contact[target];
+    if (index < 0) {
+      r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second +
+                            ", which is not one contact located by node or dof (a nodes set, or a table with errors); "
+                            "give the normal contact its own [[contact]] with node or dof");
+      continue;
+    }
+    const ContactLawKind law = s_.contacts[static_cast<size_t>(index)].law;
+    if (law != ContactLawKind::Linear && law != ContactLawKind::Exponential) {
+      r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second + " of law \"" +
+                            std::string(to_string(law)) + "\"; the normal load comes from a \"linear\" or \"exponential\" "
+                            "contact on the normal DOF (a gap < 0 is a preload)");
+      continue;
+    }
+    c.normal_index = index;
   }
 }
 

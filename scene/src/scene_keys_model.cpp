@@ -177,9 +177,19 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
           .is_required()
           .only_in({"jenkins", "coulomb"}),
       number_key<C>("normal_load", [](auto& c) -> auto& { return c.normal_load; }, non_negative("N"),
-                    "N [N], a constant normal preload: the slip force is μN")
-          .is_required()
-          .only_in({"jenkins", "coulomb"}),
+                    "N [N], a constant normal preload: the slip force is μN (with `normal_contact`, μ (N + n), n the "
+                    "normal contact's force)")
+          .documented_default("required; 0 with `normal_contact`")
+          .only_in({"jenkins", "coulomb"})
+          .read_by_section(),
+      compound_key<C>("normal_contact", "integer", "none (a constant normal load)",
+                      "the index (0-based, in file order) of another `[[contact]]`, a `\"linear\"` or "
+                      "`\"exponential\"` one located by `node` or `dof`",
+                      "a normal load that varies with the normal gap: the slip force at each instant is μ (N + n), n "
+                      "the force of that normal contact (its `gap` < 0 is a preload; n = 0 where it opens, and the "
+                      "element then slides freely)",
+                      [](const C& c) { return c.normal_contact >= 0 ? nlohmann::json(c.normal_contact) : nlohmann::json(); })
+          .only_in({"jenkins"}),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),
       compound_key<C>("dof", kLocation, "1-DOF matrices: `0`", "see Locations", "matrices only: the contact DOF"),
       compound_key<C>("nodes", "node set name or list of node numbers", "none",

@@ -167,6 +167,11 @@ class Parser {
   // the largest component names the contact.
   void node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law);
 
+  // [contact] normal_contact of the jenkins tables: the named table (index in file order) must be
+  // another contact located by node or dof with a linear or exponential law; sets normal_index.
+  void normal_contacts(const std::vector<std::pair<const toml::table*, std::string>>& tables,
+                       const std::vector<int>& table_contact);
+
   // [contact] direction: ±1 (the side of the stop along the DOF) or a table {DOF name = weight}
   // (matrices); returns the (DOF, weight) pairs, empty for +1.
   std::vector<std::pair<int, double>> direction(const toml::node& d, const std::string& section, const Contact& c);

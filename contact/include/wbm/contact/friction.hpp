@@ -60,9 +60,11 @@ struct JenkinsLoop {
   Eigen::VectorXd slip_sensitivity;
   int slipping_samples = 0;   // samples in slip
   int periods = 0;            // periods run until the end force repeated (≥ 2)
-  /// The work of the slider over the period, Σ_q f_q Δs_q ≥ 0 [J], with the slider increment
-  /// Δs_q = (w_q − w_{q−1}) − (f_q − f_{q−1})/k_t (zero in stick): the energy the element
-  /// dissipates per cycle, ∮ f dw.
+  /// The work of the slider over the period, Σ_q f̄_q Δs_q ≥ 0 [J], with the slider increment
+  /// Δs_q = (w_q − w_{q−1}) − (f_q − f_{q−1})/k_t (zero in stick) and f̄_q = f_q at a slip onset
+  /// (exact for w linear between samples), ½ (f_q + f_{q−1}) along a slip in one direction
+  /// (equal to f_q under a constant slip force; second order under a varying one): the energy
+  /// the element dissipates per cycle, ∮ f dw.
   double dissipated_energy = 0.0;
 };
 

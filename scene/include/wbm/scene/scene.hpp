@@ -154,6 +154,11 @@ struct Contact {
   double tangential_stiffness = 0.0;  // k_t [N/m] (jenkins)
   double friction_coefficient = 0.0;  // μ [-] (jenkins, coulomb)
   double normal_load = 0.0;           // N [N] (jenkins, coulomb): a constant preload; slip force μ N
+  /// jenkins: a normal load that varies with the normal gap. `normal_contact` is the index of the
+  /// [[contact]] table (as given, 0-based) whose force n adds to N, and `normal_index` that
+  /// contact's index in Scene::contacts (solvers::ContactPoint::normal); −1 for none.
+  int normal_contact = -1;
+  int normal_index = -1;
   double gap = 0.0;          // g0 [m] (not jenkins, coulomb)
   int dof = 0;               // 0-based
   /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
