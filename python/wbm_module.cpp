@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -116,10 +117,21 @@ solvers::HarmonicForcing forcing(int dof, double amplitude, double frequency_hz,
   return f;
 }
 
-std::vector<solvers::ContactPoint> points(
-    const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts) {
+// A contact of the Python API: (dof, law), or (dof, law, normal) for a friction law whose slip
+// force follows the contact at index `normal` of the same list (solvers::ContactPoint::normal).
+using ContactSpec = std::variant<std::tuple<int, std::shared_ptr<contact::ContactLaw>>,
+                                 std::tuple<int, std::shared_ptr<contact::ContactLaw>, int>>;
+
+std::vector<solvers::ContactPoint> points(const std::vector<ContactSpec>& contacts) {
   std::vector<solvers::ContactPoint> out;
-  for (const auto& [d, law] : contacts) out.push_back({d, law});
+  for (const auto& spec : contacts) {
+    if (const auto* pair = std::get_if<0>(&spec)) {
+      out.push_back({std::get<0>(*pair), std::get<1>(*pair)});
+    } else {
+      const auto& [d, law, normal] = std::get<1>(spec);
+      out.push_back({d, law, -1, {}, normal});
+    }
+  }
   return out;
 }
 
@@ -298,7 +310,7 @@ ValueError for bad input.)");
   m.def(
       "solve",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, double frequency_hz,
-         const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
+         const std::vector<ContactSpec>& contacts, const solvers::TimeBasis& trial,
          const solvers::TimeBasis& weighting, const std::string& formulation, const std::vector<Load>& loads,
          const std::vector<int>& harmonics, const std::string& contact_quadrature) {
         solvers::WeightedResidualOptions options;
@@ -325,7 +337,9 @@ ValueError for bad input.)");
 
 loads: further loads, a list of (dof, amplitude [N], phase [rad], harmonic h ≥ 0) tuples, each
 F cos(2π h f t + φ) (h = 0: a constant load). contacts: list of (dof, ContactLaw) pairs (all
-RigidStop and CoulombFriction, or penalty and JenkinsLaw ones; a JenkinsLaw needs contact_quadrature "midpoint"). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
+RigidStop and CoulombFriction, or penalty and JenkinsLaw ones; a JenkinsLaw needs contact_quadrature "midpoint"),
+or (dof, JenkinsLaw, normal) triples for a normal load that varies: the slip force is μ (N + n), n the force of
+the penalty contact at index `normal` of this list (ContactPoint::normal). harmonics: harmonic selection for Fourier:Fourier, e.g. [1, 3, 5]
 (empty: all; WeightedResidualOptions::harmonics, docs/scenes.md); the dict then also has
 dropped_harmonics_residual, the residual left in the other harmonics over ‖b‖ (None without a
 selection).
@@ -341,7 +355,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
   m.def(
       "trace_response",
       [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,
-         const std::vector<std::tuple<int, std::shared_ptr<contact::ContactLaw>>>& contacts, const solvers::TimeBasis& trial,
+         const std::vector<ContactSpec>& contacts, const solvers::TimeBasis& trial,
          const solvers::TimeBasis& weighting, const std::string& formulation, bool stability, double max_step,
          double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads,
          const std::vector<int>& harmonics, const std::string& contact_quadrature) {

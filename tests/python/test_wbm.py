@@ -310,6 +310,33 @@ def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
         wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=-0.1, normal_load=1.0)
 
 
+def test_a_normal_contact_at_rest_gives_the_constant_load_it_balances():
+    # A point mass on springs k in x and y, pressed by a normal spring k_n of gap g < 0 and rubbing
+    # along x through a Jenkins element whose slip force follows that spring, (dof, law, normal):
+    # nothing forces y, so y rests where k y + k_n (y − g) = 0 and the spring's force is the
+    # closed form N = −g k k_n / (k + k_n). The x response then equals that of the constant load N
+    # (another code path: no normal contact at all), to rounding.
+    m, k, kn, g, kt, mu = 1.0, (2.0 * math.pi * 10.0) ** 2, 2e4, -5e-5, 2e4, 0.3
+    n_closed = -g * k * kn / (k + kn)
+    c = 2.0 * 0.02 * math.sqrt(k * m)
+    both = wbm.MechanicalSystem(np.diag([m, m]), np.diag([c, c]), np.diag([k, k]))
+    basis = wbm.TimeBasis("fourier", 65)
+    varying = wbm.solve(both, 0, 1.0, 12.0, [(1, wbm.LinearPenalty(kn, g)),
+                                             (0, wbm.JenkinsLaw(tangential_stiffness=kt, friction_coefficient=mu,
+                                                                normal_load=0.0), 0)], basis, basis)
+    assert varying["converged"], varying["message"]
+    one = wbm.MechanicalSystem([[m]], [[c]], [[k]])
+    constant = wbm.solve(one, 0, 1.0, 12.0, [(0, wbm.JenkinsLaw(tangential_stiffness=kt, friction_coefficient=mu,
+                                                                  normal_load=n_closed))], basis, basis)
+    assert constant["converged"], constant["message"]
+    x = varying["coefficients"][0]
+    assert np.max(np.abs(x - constant["coefficients"][0])) < 1e-9 * np.max(np.abs(x))
+    assert varying["max_contact_force_N"] == pytest.approx(n_closed, rel=1e-9)  # the normal spring's
+    with pytest.raises(ValueError, match="ContactPoint.normal = 0"):
+        wbm.solve(one, 0, 1.0, 12.0, [(0, wbm.JenkinsLaw(tangential_stiffness=kt, friction_coefficient=mu,
+                                                           normal_load=0.0), 0)], basis, basis)
+
+
 def test_exact_coulomb_friction_gives_den_hartogs_amplitude_and_its_impulses():
     # The same oscillator with wbm.CoulombFriction (no spring): first order in 1/M, within 5e-3 of
     # Den Hartog at M = 256 and r = 1.5 (measured 4.2e-3; out/friction_coulomb_exact); every
