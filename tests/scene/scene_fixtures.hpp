@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -43,6 +44,14 @@ inline std::filesystem::path write(const std::string& name, const std::string& t
 }
 
 inline wbm::scene::Scene parse(const std::string& text) { return wbm::scene::parse_scene(text, temp("inline.toml")); }
+
+// The text of a file (an example scene to edit before parsing).
+inline std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 // Linear 1-DOF oscillator m ü + c u̇ + k u = F cos ωt: steady amplitude F / |k − mω² + iωc|.
 inline double oscillator_amplitude(double m, double c, double k, double f, double hz) {

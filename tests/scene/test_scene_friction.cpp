@@ -32,13 +32,6 @@ constexpr double kPi = std::numbers::pi;
 const std::string kDamper = std::string(WBM_EXAMPLES) + "/friction_damper.toml";
 const std::string kCoulombDamper = std::string(WBM_EXAMPLES) + "/friction_damper_coulomb.toml";
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // The result table written as `file`, or nullptr.
 const wbm::scene::Table* find_table(const wbm::scene::AnalysisResult& r, const std::string& file) {
   const auto t = std::find_if(r.tables.begin(), r.tables.end(), [&](const auto& x) { return x.file == file; });

@@ -27,16 +27,9 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 const std::string kExample = std::string(WBM_EXAMPLES) + "/friction_normal_load.toml";
 
-std::string slurp_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // The example at one frequency (a solve).
 Scene example_at(double hz) {
-  std::string text = slurp_file(kExample);
+  std::string text = slurp(kExample);
   text.replace(text.find("frequency_hz = [5.0, 25.0]"), 26, "frequency_hz = " + std::to_string(hz));
   text.replace(text.find("type = \"continuation\""), 21, "type = \"solve\"");
   text.replace(text.find("stability = false"), 17, "");
@@ -87,7 +80,7 @@ TEST(SceneFrictionNormalLoad, ASolveBalancesEnergyAndKeepsCoulombsBound) {
 // range, a friction contact as the normal one, on a law that takes no varying load; without it,
 // normal_load stays required.
 TEST(SceneFrictionNormalLoad, KeysAreReadEchoedAndRefused) {
-  const Scene s = parse(slurp_file(kExample));
+  const Scene s = parse(slurp(kExample));
   const nlohmann::json echo = wbm::scene::to_json(s)["contact"][1];
   EXPECT_EQ(echo["normal_contact"], 0);
   EXPECT_EQ(echo["normal_load"], 0.0);

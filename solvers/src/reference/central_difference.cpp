@@ -12,6 +12,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "periodicity.hpp"
+
 #include <wbm/contact/friction.hpp>
 
 namespace wbm::solvers {
@@ -143,17 +145,7 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
     }
     rep.steps += steps;
     const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (previous_tip.size() == tip.size()) {
-      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
-      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
-      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
-      rep.periodicity.push_back(delta);
-      if (delta < options.periodicity_tolerance) {
-        rep.status = SolveStatus::Converged;
-        break;
-      }
-    }
-    previous_tip = tip;
+    if (detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep)) break;
   }
   out.displacement = std::move(disp);
   out.velocity = std::move(vel);

@@ -12,6 +12,8 @@
 
 #include <Eigen/LU>
 
+#include "periodicity.hpp"
+
 namespace wbm::solvers {
 
 void TimeIntegrationOptions::validate() const {
@@ -269,17 +271,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
     rep.periods = period_index;
     rep.steps += steps;
     const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (previous_tip.size() == tip.size()) {
-      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
-      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
-      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
-      rep.periodicity.push_back(delta);
-      if (delta < options.periodicity_tolerance) {
-        rep.status = SolveStatus::Converged;
-        break;
-      }
-    }
-    previous_tip = tip;
+    if (detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep)) break;
   }
   out.displacement = std::move(disp);
   out.velocity = std::move(vel);
@@ -351,18 +343,10 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
     }
     rep.periods = period;
     const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (previous_tip.size() == tip.size()) {
-      const double rms_tip = std::sqrt(tip.squaredNorm() / p_count);
-      const double rms_diff = std::sqrt((tip - previous_tip).squaredNorm() / p_count);
-      const double delta = rms_tip > 0.0 ? rms_diff / rms_tip : rms_diff;
-      rep.periodicity.push_back(delta);
-      if (options.on_period) options.on_period(period, delta);
-      if (delta < options.periodicity_tolerance) {
-        rep.status = SolveStatus::Converged;
-        break;
-      }
-    }
-    previous_tip = tip;
+    const size_t measured = rep.periodicity.size();
+    const bool done = detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep);
+    if (options.on_period && rep.periodicity.size() > measured) options.on_period(period, rep.periodicity.back());
+    if (done) break;
   }
   rep.steps = static_cast<long>(driver->e->count);
   out.displacement = std::move(disp);
