@@ -105,8 +105,8 @@ class JenkinsLaw final : public ContactLaw {
                        Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const override;
   /// The whole loop at the samples u (jenkins_loop), with its slip sensitivities and energy.
   [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u) const;
-  /// A normal load that varies with the normal gap [Yang & Menq 1998; Petrov & Ewins 2003]: the
-  /// slip force at sample q is F_s,q = μ (N + n_q), n_q ≥ 0 [N] the force of the contact point's
+  /// A normal load that varies with the normal gap [YCM98; PE03 in docs/references.md]: the slip
+  /// force at sample q is F_s,q = μ (N + n_q), n_q ≥ 0 [N] the force of the contact point's
   /// normal law (`normal`, one per sample; N the preload of the parameters, 0 if there is none).
   /// Where the normal law opens (n_q = 0, N = 0) F_s = 0: the tangential force vanishes and the
   /// slider follows, the separation of a 2D frictional contact. Throws std::invalid_argument for

@@ -121,7 +121,7 @@ struct CentralDifferenceOptions {
 /// Periodic steady state with penalty laws and Jenkins elements (friction, with a constant or a
 /// varying normal load, ContactPoint::normal) by explicit central differences in the
 /// velocity-Verlet form with the damping treated by the trapezoidal rule, from rest, in physical
-/// time with fixed step h = T/N [Hughes 1987, The Finite Element Method, Sec. 9.1.3]:
+/// time with fixed step h = T/N (Newmark's β = 0, γ = ½, written in velocity-Verlet form):
 ///   v_{k+½} = v_k + (h/2) M⁻¹ (F_k − K q_k − C v_k − Σ_c e_c f_c,k),   q_{k+1} = q_k + h v_{k+½},
 ///   (M + (h/2) C) v_{k+1} = M v_{k+½} + (h/2) (F_{k+1} − K q_{k+1} − Σ_c e_c f_c,k+1),
 /// with f_c,k+1 = f_c(u_c,k+1) for a memoryless law and, for a Jenkins element, one step of its
