@@ -662,6 +662,52 @@ def friction_coulomb_exact(folder):
     save(fig, folder, "friction_exact")
 
 
+def friction_normal_load(folder):
+    """Issue #36, a varying normal load: (a) the rms error of x3 against the central-difference
+    reference versus M, per pair, with the reference's own error; (b) one period of x3, the
+    reference and each pair; (c) the reference's normal and friction forces and the bound ±μ n."""
+    meta = json.loads((folder / "meta.json").read_text())
+    labels = meta["combinations"]
+    fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.2))
+    ax = axes[0]
+    dims = meta["dimensions"]
+    for c, label in enumerate(labels):
+        pts = [(m, e) for m, e in zip(dims, meta["errors_x3"][c]) if e is not None and math.isfinite(e) and e > 0]
+        if pts:
+            order = meta["orders"][c]
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
+                      label=f"{label} (order {order:.2f})" if order is not None else label)
+    ax.axhline(meta["reference_self_error"], color="k", ls=":", lw=0.8, label="reference's own error")
+    ax.set_xlabel("M [-]")
+    ax.set_ylabel("rms error of x3 / rms x3 [-]")
+    ax.set_title(f"(a) {meta['frequency_hz']:g} Hz, Q = {meta['time_samples']}", fontsize=9)
+    ax.legend(fontsize=7)
+    hist = wbm_plot.read_csv(folder / "history.csv")
+    tau = hist["tau [-]"]
+    ax = axes[1]
+    ax.plot(tau, hist["reference [m]"], "k-", lw=1.6, label="central differences")
+    for name in hist:
+        if name not in ("tau [-]", "reference [m]"):
+            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("x3 [m]")
+    ax.set_title(f"(b) M = {meta['history_dimension']}", fontsize=9)
+    ax.legend(fontsize=6)
+    ref = wbm_plot.read_csv(folder / "reference.csv")
+    ax = axes[2]
+    mu = meta["friction_coefficient"]
+    ax.plot(ref["tau [-]"], ref["normal_force [N]"], "k-", lw=1.2, label="normal force n")
+    ax.plot(ref["tau [-]"], ref["friction_force [N]"], "C3-", lw=1.2, label="friction force f_t")
+    ax.plot(ref["tau [-]"], [mu * n for n in ref["normal_force [N]"]], "C3:", lw=0.8, label="±μ n")
+    ax.plot(ref["tau [-]"], [-mu * n for n in ref["normal_force [N]"]], "C3:", lw=0.8)
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("force [N]")
+    ax.set_title(f"(c) reference: stick {100.0 * meta['stick_fraction']:.1f} % of the period", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "friction_normal_load")
+
+
 def figures():
     """{id: drawing function} from reproductions.txt, the one list of the reproductions."""
     report = _load("report", Path(__file__).with_name("report.py"))

@@ -88,19 +88,22 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
       throw std::invalid_argument(msg.str());
     }
   }
-  const Eigen::LLT<Eigen::MatrixXd> mass_llt(m);
-  const Eigen::PartialPivLU<Eigen::MatrixXd> end_lu(m + 0.5 * h * c);  // M + (h/2) C
+  // Dense inverses, formed once: M⁻¹ and (M + (h/2) C)⁻¹ (n is small), so that a step only
+  // multiplies.
+  const Eigen::MatrixXd minv = Eigen::LLT<Eigen::MatrixXd>(m).solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd end_inv = Eigen::PartialPivLU<Eigen::MatrixXd>(m + 0.5 * h * c).solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd end_m = end_inv * m;
   const std::vector<HarmonicLoad> loads = forcing.loads();
   const double omega = 2.0 * std::numbers::pi * forcing.frequency_hz;
+  Eigen::VectorXd f_ext(n);
   auto external = [&](double t) {
-    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
-    for (const auto& l : loads) f(l.dof) += l.amplitude * std::cos(omega * l.harmonic * t + l.phase_rad);
-    return f;
+    f_ext.setZero();
+    for (const auto& l : loads) f_ext(l.dof) += l.amplitude * std::cos(omega * l.harmonic * t + l.phase_rad);
   };
-  // The contact forces at q, the Jenkins elements stepping from their forces f_old at u_old.
-  Eigen::VectorXd f_contact = Eigen::VectorXd::Zero(nc), u_contact = Eigen::VectorXd::Zero(nc);
+  // The contact forces at q, the Jenkins elements stepping from their forces at the previous
+  // contact displacements.
+  Eigen::VectorXd f_contact = Eigen::VectorXd::Zero(nc), u_contact = Eigen::VectorXd::Zero(nc), u_new(nc);
   auto update_contacts = [&](const Eigen::VectorXd& q) {
-    Eigen::VectorXd u_new(nc);
     for (Eigen::Index i = 0; i < nc; ++i) u_new(i) = contacts[static_cast<size_t>(i)].displacement(q);
     for (Eigen::Index i = 0; i < nc; ++i) {
       const auto& ct = contacts[static_cast<size_t>(i)];
@@ -117,12 +120,13 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
   PeriodicResponse out;
   out.frequency_hz = forcing.frequency_hz;
   out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
-  Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n), v_half(n), f_end(n);
   Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
   Eigen::VectorXd previous_tip;
   auto& rep = out.report;
   update_contacts(q);  // a preloaded penalty law pushes at rest; a Jenkins element starts unstretched
-  Eigen::VectorXd rhs = external(0.0) - k * q - c * v - e_cols * f_contact;  // the force balance at step k
+  external(0.0);
+  Eigen::VectorXd rhs = f_ext - k * q - c * v - e_cols * f_contact;  // the force balance at step k
   for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
     for (int step = 0; step < steps; ++step) {
       if (step % stride == 0) {
@@ -130,12 +134,19 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
         vel.col(step / stride) = v;
         force.col(step / stride) = f_contact;
       }
-      const Eigen::VectorXd v_half = v + 0.5 * h * mass_llt.solve(rhs);
+      v_half.noalias() = minv * rhs;
+      v_half = v + (0.5 * h) * v_half;
       q += h * v_half;
       update_contacts(q);
-      const Eigen::VectorXd f_end = external(static_cast<double>(step + 1) * h) - k * q - e_cols * f_contact;
-      v = end_lu.solve(m * v_half + 0.5 * h * f_end);
-      rhs = f_end - c * v;
+      external(static_cast<double>(step + 1) * h);
+      f_end = f_ext;
+      f_end.noalias() -= k * q;
+      f_end.noalias() -= e_cols * f_contact;
+      v.noalias() = end_m * v_half;
+      v_half.noalias() = end_inv * f_end;  // reused as scratch
+      v += (0.5 * h) * v_half;
+      rhs = f_end;
+      rhs.noalias() -= c * v;
     }
     rep.periods = period_index;
     if (!q.allFinite() || !v.allFinite()) {

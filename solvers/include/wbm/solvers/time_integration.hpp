@@ -46,8 +46,9 @@ struct PeriodicResponse {
   Eigen::VectorXd tau;
   Eigen::MatrixXd displacement;  // [m]
   Eigen::MatrixXd velocity;      // [m/s]
-  /// Moreau–Jean only (else empty): n_c × P, the impulses of the steps in [τ_p, τ_{p+1}) over
-  /// the interval's duration: the mean contact force there [N], row = contact.
+  /// Moreau–Jean: n_c × P, the impulses of the steps in [τ_p, τ_{p+1}) over the interval's
+  /// duration: the mean contact force there [N], row = contact. Central differences: the contact
+  /// forces at τ_p [N]. BDF: empty.
   Eigen::MatrixXd contact_force;
   /// Moreau–Jean only (else NaN): the mean powers over the last period [W], summed per step with
   /// v_{k+θ}: input h f_{k+θ}·v, damping h vᵀ C v, and the stops' absorption Σ_c P_c v_c (the
