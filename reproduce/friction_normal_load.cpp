@@ -4,12 +4,13 @@
 // Jenkins element whose slip force is μ times that spring's force at each instant
 // (solvers::ContactPoint::normal, scene key normal_contact). Harmonic forces on the first mass
 // along x and on the last along y make the normal load swing over the period. Every
-// trial:weighting pair of [JL14 Table 2] in the distributional form, M = 16 … 512, against the
+// trial:weighting pair of [JL14 Table 2] in the distributional form, M = 16 … 256, against the
 // explicit central-difference time stepping (solvers::integrate_central_difference_to_periodic),
 // which carries the slider state step by step with no basis and no sample grid: the error versus
 // M (the Figs. 10–11 of friction), on all samples and on the stick samples, and the issue's
 // question: do Haar trial functions capture stick better than harmonic balance here?
-// ~1 min. Writes out/friction_normal_load/{reference,errors,history}.csv, meta.json, report.md.
+// ~1.5 min (the dense Jacobian of a coupled loop costs M² Q per iteration; M = 512 would double
+// it). Writes out/friction_normal_load/{reference,errors,history}.csv, meta.json, report.md.
 // --quick: M = 16, 32, Q = 1024, a coarse reference.
 #include <algorithm>
 #include <cmath>
@@ -68,11 +69,11 @@ int main(int argc, char** argv) {
     const auto& combos = table2_combinations();
     const int samples = quick ? 1024 : 4096;  // Q
     const int steps = quick ? 16384 : 65536;  // the reference's steps per period (and twice as many)
-    const std::vector<int> dims = quick ? std::vector<int>{16, 32} : std::vector<int>{16, 32, 64, 128, 256, 512};
+    const std::vector<int> dims = quick ? std::vector<int>{16, 32} : std::vector<int>{16, 32, 64, 128, 256};
     const int history_m = quick ? 32 : 64;
     constexpr double kStickMargin = 1e-9;  // a reference sample sticks when |f_t| < μ n (1 − this)
     // The claims' tolerances (reported as used).
-    constexpr double kReferenceTolerance = 1e-6, kFourierTolerance = 1e-5, kGain = 10.0, kFloorGain = 3.0;
+    constexpr double kReferenceTolerance = 1e-6, kFourierTolerance = 1e-5, kLeastOrder = 0.8, kFloorGain = 3.0;
 
     // The reference at `steps` and 2 `steps` per period: the finer one is the reference, their
     // difference its own error (second order: the finer is about 4 times closer).
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
               {ref.tau, x3, y3, normal, friction});
 
     // Every pair at every M, each solve by solve() from the frictionless response.
-    std::vector<double> e_c, e_m, e_x, e_y, e_stick, e_it;
+    std::vector<double> e_c, e_m, e_x, e_y, e_stick, e_it, e_time;
     std::vector<std::string> e_status;
     std::vector<std::string> history_header = {"tau [-]", "reference [m]"};
     std::vector<Eigen::VectorXd> history_columns = {ref.tau, x3};
@@ -125,6 +126,7 @@ int main(int argc, char** argv) {
         e_y.push_back(ok ? solvers::rms_relative_error(uy, y3) : NAN);
         e_stick.push_back(ok ? rms_relative_error_on(ux, x3, stuck) : NAN);
         e_it.push_back(s.report.iterations);
+        e_time.push_back(s.wall_time_s);
         e_status.push_back(std::string(solvers::to_string(s.report.status)));
         errors[ci].push_back(e_x.back());
         if (m == history_m && ok) {
@@ -134,8 +136,8 @@ int main(int argc, char** argv) {
       }
     }
     run.table("errors.csv", {"combination [-]", "M [-]", "error_x3 [-]", "error_y3 [-]", "stick_error_x3 [-]",
-                             "newton_iterations [-]"},
-              {column(e_c), column(e_m), column(e_x), column(e_y), column(e_stick), column(e_it)}, e_status);
+                             "newton_iterations [-]", "wall_time [s]"},
+              {column(e_c), column(e_m), column(e_x), column(e_y), column(e_stick), column(e_it), column(e_time)}, e_status);
     run.table("history.csv", history_header, history_columns);
 
     // The floor the smooth pairs share at large M: the smallest error of the table. Is it the Q
@@ -175,12 +177,11 @@ int main(int argc, char** argv) {
     };
     const long fourier_row = row(0, m_top);
     const double fourier_top = fourier_row >= 0 ? e_x[static_cast<size_t>(fourier_row)] : NAN;
-    // The smallest gain from M = dims[1] to the largest M over the pairs (NaN if a solve failed).
-    double least_gain = INFINITY;
+    // The lowest observed order over the pairs (NaN if one has none).
+    double least_order = INFINITY;
     std::string least_label;
     for (size_t ci = 0; ci < combos.size(); ++ci) {
-      const double gain = e_x[static_cast<size_t>(row(ci, dims[1]))] / e_x[static_cast<size_t>(row(ci, m_top))];
-      if (!(gain >= least_gain)) least_gain = gain, least_label = combos[ci].label();
+      if (!(orders[ci] >= least_order)) least_order = orders[ci], least_label = combos[ci].label();
     }
     double haar_stick = NAN;
     std::string haar_label = "no Haar pair converged at M = " + std::to_string(m_top);
@@ -198,10 +199,10 @@ int main(int argc, char** argv) {
         {"Fourier:Fourier (harmonic balance) at M = " + std::to_string(m_top) + " reproduces the reference within " +
              format("%g", kFourierTolerance) + " (rms, x3)",
          std::isfinite(fourier_top) && fourier_top <= kFourierTolerance, "error " + format("%.2e", fourier_top)},
-        {"every pair of Table 2 converges to the reference: its error at M = " + std::to_string(m_top) +
-             " is at least " + format("%g", kGain) + " times smaller than at M = " + std::to_string(dims[1]),
-         std::isfinite(least_gain) && least_gain >= kGain,
-         "smallest gain " + format("%.1f", least_gain) + " (" + least_label + ")"},
+        {"every pair of Table 2 converges to the reference as M grows, at first order or better (the order of "
+         "piecewise-constant Haar trial functions): observed orders of at least " + format("%g", kLeastOrder),
+         std::isfinite(least_order) && least_order >= kLeastOrder,
+         "lowest " + format("%.2f", least_order) + " (" + least_label + ")"},
         {"the floor the errors reach at large M (" + format("%.2e", floor) + ", the table's smallest) is the Q = " +
              std::to_string(samples) + " samples of the loop, not the reference: Fourier:Fourier at M = " +
              std::to_string(m_floor) + " with Q = " + std::to_string(fine_samples) + " falls at least " +
@@ -254,7 +255,8 @@ int main(int argc, char** argv) {
                            {"frequency_hz", chain.hz}, {"time_samples", samples}, {"dimensions", dims},
                            {"friction_coefficient", chain.mu},
                            {"history_dimension", history_m}, {"reference_steps", 2 * steps},
-                           {"reference_self_error", reference_self}, {"stick_fraction", stick_fraction},
+                           {"reference_self_error", reference_self},
+                           {"reference_wall_time_s", coarse.report.wall_time_s + ref.report.wall_time_s}, {"stick_fraction", stick_fraction},
                            {"floor", floor}, {"fine_samples", fine_samples}, {"fine_error", fine_error},
                            {"orders", orders}, {"errors_x3", errors}};
     meta["combinations"] = nlohmann::json::array();

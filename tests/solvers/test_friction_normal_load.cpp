@@ -134,11 +134,12 @@ TEST(FrictionNormalLoad, CentralDifferencesAgreeWithBdfWithoutFriction) {
 
 // The weighted residual with a varying normal load against the time-stepping reference, for
 // Fourier:Fourier and two wavelet pairs (Q = 4096): the error falls as M grows, by more than 8
-// from M = 32 to 128, to below 5e-5 of the rms motion at M = 128. Measured with a reference of
-// 2^18 steps (its own error about 1.5e-7 in x, 5e-7 in y, the floor that Fourier and B-splines
-// reach at M = 256): x 2.0e-5 → 3.3e-7 (Fourier), 6.9e-4 → 8.4e-6 (DB6), 3.7e-5 → 2.6e-7
-// (B-spline); y 3.3e-5 → 5.7e-7, 2.8e-3 → 1.9e-5, 4.0e-5 → 7.0e-7. The contact opens over part
-// of the period (N = 0): the slip force vanishes there.
+// from M = 32 to 128, to below 5e-5 of the rms motion at M = 128. Measured against 2^16 steps:
+// x 2.0e-5 → 3.3e-7 (Fourier), 6.9e-4 → 8.4e-6 (DB6), 3.7e-5 → 2.6e-7 (B-spline); y 3.3e-5 →
+// 5.8e-7, 2.8e-3 → 1.9e-5, 4.0e-5 → 7.0e-7. (Against 2^18 steps Fourier and B-splines level off
+// at M = 256 near 1.4e-7 in x and 5.2e-7 in y: the reference's steps or the Q samples of the loop,
+// not separated here; friction_normal_load separates them on its chain.) The contact opens over
+// part of the period (N = 0): the slip force vanishes there.
 TEST(FrictionNormalLoad, WeightedResidualConvergesToTheTimeSteppingReference) {
   const Slider2d s;
   const auto ref = solvers::integrate_central_difference_to_periodic(s.system(), s.forcing(), s.contacts(s.mu),
