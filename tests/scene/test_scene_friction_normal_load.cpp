@@ -4,8 +4,6 @@
 // normal penalty spring is conservative, ∮ n dy = 0), from the written samples; Coulomb's bound
 // |f_t| ≤ μ n at every written sample, with f_t = 0 where the normal contact is open.
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <numbers>
 #include <stdexcept>
 #include <string>
