@@ -82,10 +82,6 @@ ExactSolve solve_exact(const CoulombOscillator& o, const Combination& c, int m, 
   return out;
 }
 
-Eigen::VectorXd column(const std::vector<double>& v) {
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -122,7 +118,9 @@ int main(int argc, char** argv) {
     }
     run.table("frf.csv", {"combination [-]", "M [-]", "r [-]", "amplitude [m]", "den_hartog [m]", "error_den_hartog [-]",
                           "newton_iterations [-]"},
-              {column(a_c), column(a_m), column(a_r), column(a_amp), column(a_dh), column(a_err), column(a_it)}, a_status);
+              {as_column(a_c), as_column(a_m), as_column(a_r), as_column(a_amp), as_column(a_dh), as_column(a_err),
+               as_column(a_it)},
+              a_status);
     std::vector<double> orders(combos.size(), NAN);
     std::vector<double> m_as_double(dims_a.begin(), dims_a.end());
     for (size_t ci = 0; ci < combos.size(); ++ci) {
@@ -164,8 +162,8 @@ int main(int argc, char** argv) {
     }
     run.table("stick.csv", {"combination [-]", "M [-]", "error [-]", "stick_error [-]", "slip_error [-]",
                             "computed_plateau_spread [-]", "stick_fraction [-]", "newton_iterations [-]"},
-              {column(b_c), column(b_m), column(b_err), column(b_stick), column(b_slip), column(b_plateau),
-               column(b_fraction), column(b_it)},
+              {as_column(b_c), as_column(b_m), as_column(b_err), as_column(b_stick), as_column(b_slip), as_column(b_plateau),
+               as_column(b_fraction), as_column(b_it)},
               b_status);
     run.table("history.csv", history_header, history_columns);
 

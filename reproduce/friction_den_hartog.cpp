@@ -86,10 +86,6 @@ std::vector<FrictionSolve> stiffness_series(const CoulombOscillator& o, const st
   return out;
 }
 
-Eigen::VectorXd column(const std::vector<double>& v) {
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-}
-
 // The largest spread max − min of u over one stick interval of the reference (cyclic runs of
 // `stuck`), over the amplitude max |u_ref|: 0 for a perfectly flat plateau.
 double plateau_spread(const Eigen::VectorXd& u, const Eigen::VectorXd& reference, const std::vector<bool>& stuck) {
@@ -165,7 +161,7 @@ int main(int argc, char** argv) {
     // kt_over_k = 0 marks Coulomb's law (k_t = ∞, which a CSV cannot hold).
     run.table("reference.csv", {"r [-]", "kt_over_k [-]", "den_hartog [m]", "amplitude [m]", "relative_difference [-]",
                                 "stick_fraction [-]"},
-              {column(ref_r), column(ref_kt), column(ref_dh), column(ref_amp), column(ref_err), column(ref_stick)});
+              {as_column(ref_r), as_column(ref_kt), as_column(ref_dh), as_column(ref_amp), as_column(ref_err), as_column(ref_stick)});
 
     const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(8192, 0.0, 1.0 - 1.0 / 8192);
     std::vector<double> frf_c, frf_r, frf_kt, frf_a, frf_dh, frf_exact, frf_err, frf_disc, frf_it;
@@ -203,8 +199,8 @@ int main(int argc, char** argv) {
     }
     run.table("frf.csv", {"combination [-]", "r [-]", "kt_over_k [-]", "amplitude [m]", "den_hartog [m]",
                           "jenkins_exact [m]", "error_den_hartog [-]", "error_jenkins_exact [-]", "newton_iterations [-]"},
-              {column(frf_c), column(frf_r), column(frf_kt), column(frf_a), column(frf_dh), column(frf_exact),
-               column(frf_err), column(frf_disc), column(frf_it)},
+              {as_column(frf_c), as_column(frf_r), as_column(frf_kt), as_column(frf_a), as_column(frf_dh), as_column(frf_exact),
+               as_column(frf_err), as_column(frf_disc), as_column(frf_it)},
               frf_status);
 
     // (b) Stick plateaus against the exact Jenkins motion at each k_t.
@@ -264,8 +260,8 @@ int main(int argc, char** argv) {
     }
     run.table("stick.csv", {"combination [-]", "M [-]", "kt_over_k [-]", "error [-]", "stick_error [-]",
                             "slip_error [-]", "plateau_spread [-]", "error_coulomb [-]", "newton_iterations [-]"},
-              {column(st_c), column(st_m), column(st_kt), column(st_tip), column(st_stick), column(st_slip),
-               column(st_spread), column(st_coulomb), column(st_it)},
+              {as_column(st_c), as_column(st_m), as_column(st_kt), as_column(st_tip), as_column(st_stick), as_column(st_slip),
+               as_column(st_spread), as_column(st_coulomb), as_column(st_it)},
               st_status);
     run.table("history.csv", history_header, history_columns);
 

@@ -55,10 +55,6 @@ struct Chain {
   }
 };
 
-Eigen::VectorXd column(const std::vector<double>& v) {
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -137,7 +133,7 @@ int main(int argc, char** argv) {
     }
     run.table("errors.csv", {"combination [-]", "M [-]", "error_x3 [-]", "error_y3 [-]", "stick_error_x3 [-]",
                              "newton_iterations [-]", "wall_time [s]"},
-              {column(e_c), column(e_m), column(e_x), column(e_y), column(e_stick), column(e_it), column(e_time)}, e_status);
+              {as_column(e_c), as_column(e_m), as_column(e_x), as_column(e_y), as_column(e_stick), as_column(e_it), as_column(e_time)}, e_status);
     run.table("history.csv", history_header, history_columns);
 
     // The floor the smooth pairs share at large M: the smallest error of the table. Is it the Q

@@ -6,52 +6,17 @@ reads the CSV, labels the axes from its header (units in brackets) and applies t
 Figures whose folder is missing are skipped with a note (a failed run writes no folder).
 
 One plotting module: the CSV reader and the style are those of `wbm run`'s pictures
-(cli/wbm_plot.py, loaded from the source tree); this file holds only the papers' figures.
+(cli/wbm_plot.py, loaded from the source tree; plot_common.py); this file holds the papers' figures
+and the blade's, plot_friction.py the friction figures of issue #36.
 """
-import importlib.util
 import json
 import math
 import sys
 from pathlib import Path
 
-
-def _load(name, path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-# matplotlib with the Agg backend, the CSV reader and the style (it exits 3 without matplotlib).
-wbm_plot = _load("wbm_plot", Path(__file__).resolve().parents[1] / "cli" / "wbm_plot.py")
-plt = wbm_plot.plt
-STYLE = wbm_plot.STYLE
-LABELS = {"bdf": "time stepping (BDF)", "fourier_fourier": "Fourier:Fourier", "bspline_bspline": "B-spline:B-spline",
-          "db6_db6": "DB6:DB6", "haar_fourier": "Haar:Fourier", "db6_fourier": "DB6:Fourier",
-          "haar_bspline": "Haar:B-spline"}
-# Table 2 order (the combination index of the sweep tables), then BDF.
-METHODS = ["Fourier:Fourier", "B-spline:B-spline", "DB6:DB6", "Haar:Fourier", "DB6:Fourier", "Haar:B-spline", "BDF"]
-MARKERS = ["o", "s", "^", "v", "D", "<", "x"]
-
-
-def read_csv(path):
-    """Numeric columns of a result CSV (wbm_plot.read_csv) as (header, columns); an empty cell (a
-    missing value) reads as NaN, and the text column "status", which says why a value is missing,
-    is left out (read_status)."""
-    table = wbm_plot.read_csv(path)
-    header = [name for name in table if name != "status"]
-    return header, [table[name] for name in header]
-
-
-def read_status(path):
-    """The "status" column of a result CSV (empty list if it has none)."""
-    return wbm_plot.read_csv(path).get("status", [])
-
-
-def save(fig, folder, stem):
-    for ext in ("png", "pdf"):
-        fig.savefig(folder / f"{stem}.{ext}", bbox_inches="tight")
-    plt.close(fig)
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # plot_common, plot_friction beside this file
+from plot_common import LABELS, MARKERS, METHODS, STYLE, _load, plt, read_csv, read_status, save, wbm_plot  # noqa: E402
+from plot_friction import friction_coulomb_exact, friction_den_hartog, friction_normal_load  # noqa: E402,F401
 
 
 def history(folder):
@@ -576,136 +541,6 @@ def blade_forced(folder):
                  f"{meta['reduced_dofs']} DOFs", fontsize=9)
     ax.legend(fontsize=7, loc="upper left")
     save(fig, folder, "forced_response")
-
-
-def friction_den_hartog(folder):
-    """Issue #36: (a) the damper's amplitude against r, Den Hartog's closed form and every pair at
-    the stiffest k_t; (b) one period of the stick-slip motion, the exact motions and each pair."""
-    meta = json.loads((folder / "meta.json").read_text())
-    labels = meta["combinations"]
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
-    ax = axes[0]
-    table = wbm_plot.read_csv(folder / "frf.csv")
-    top = max(meta["kt_over_k"])
-    rows = [i for i, kt in enumerate(table["kt_over_k [-]"]) if kt == top and table["combination [-]"][i] == 0]
-    r = [table["r [-]"][i] for i in rows]
-    static = meta["force_N"] / meta["stiffness_N_per_m"]
-    for side in (lambda x: x < 1.0, lambda x: x > 1.0):
-        pts = [(x, table["den_hartog [m]"][i] / static) for x, i in zip(r, rows) if side(x)]
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], "k-", lw=1.4,
-                label="Den Hartog (closed form, at the r computed)" if side(0.5) else None)
-    for c, label in enumerate(labels):
-        idx = [i for i, kt in enumerate(table["kt_over_k [-]"]) if kt == top and table["combination [-]"][i] == c
-               and math.isfinite(table["amplitude [m]"][i])]
-        if not idx:
-            continue  # not solved (its status is in frf.csv and the report)
-        ax.plot([table["r [-]"][i] for i in idx], [table["amplitude [m]"][i] / static for i in idx], MARKERS[c],
-                ms=5, mfc="none", label=f"{label}, k_t = {top:g} k")
-    ax.set_yscale("log")
-    ax.set_xlabel("r = ω/ω_n [-]")
-    ax.set_ylabel("amplitude / (P/k) [-]")
-    ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, M = {meta['a']['dimension']}",
-                 fontsize=9)
-    ax.legend(fontsize=7)
-    def curves(ax, hist, tau):
-        for name in hist:
-            if name.startswith("jenkins_exact_kt"):
-                ax.plot(tau, hist[name], "--", lw=0.9, label=f"exact Jenkins, k_t = {name[16:].split(' ')[0]} k")
-        for name in hist:
-            if "_kt" in name and not name.startswith("jenkins"):
-                ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", "").replace("_kt", ", k_t = ") + " k")
-    _stick_slip_panel(axes[1], folder, meta, curves)
-    fig.tight_layout()
-    save(fig, folder, "friction")
-
-
-def _stick_slip_panel(ax, folder, meta, curves):
-    """Panel (b) of the friction figures: one period of history.csv, the event-driven Coulomb
-    motion in black and the other columns drawn by curves(ax, hist, tau)."""
-    hist = wbm_plot.read_csv(folder / "history.csv")
-    tau = hist["tau [-]"]
-    ax.plot(tau, hist["coulomb [m]"], "k-", lw=1.6, label="Coulomb, event-driven")
-    curves(ax, hist, tau)
-    ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("x [m]")
-    ax.set_title(f"(b) stick–slip, ζ = {meta['b']['zeta']:g}, r = {meta['b']['r']:g}, "
-                 f"M = {meta['b']['history_dimension']}", fontsize=9)
-    ax.legend(fontsize=6)
-
-
-def friction_coulomb_exact(folder):
-    """Issue #36, exact Coulomb friction: (a) the largest error against Den Hartog versus M, per
-    pair; (b) one period of the stick-slip motion, the event-driven reference and each pair."""
-    meta = json.loads((folder / "meta.json").read_text())
-    labels = meta["combinations"]
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
-    ax = axes[0]
-    dims = meta["a"]["dimensions"]
-    for c, label in enumerate(labels):
-        errors = meta["a"]["largest_error_den_hartog"][c]
-        pts = [(m, e) for m, e in zip(dims, errors) if e is not None and math.isfinite(e) and e > 0]
-        if pts:
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
-                      label=f"{label} (order {meta['a']['orders'][c]:.2f})" if meta["a"]["orders"][c] is not None
-                      else label)
-    ax.set_xlabel("M [-]")
-    ax.set_ylabel("largest |x_max / Den Hartog - 1| [-]")
-    ax.set_title(f"(a) undamped, F0/P = {meta['a']['slip_force_N'] / meta['force_N']:g}, "
-                 f"{len(meta['a']['ratios'])} frequency ratios", fontsize=9)
-    ax.legend(fontsize=7)
-    def curves(ax, hist, tau):
-        for name in hist:
-            if name not in ("tau [-]", "coulomb [m]"):
-                ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
-    _stick_slip_panel(axes[1], folder, meta, curves)
-    fig.tight_layout()
-    save(fig, folder, "friction_exact")
-
-
-def friction_normal_load(folder):
-    """Issue #36, a varying normal load: (a) the rms error of x3 against the central-difference
-    reference versus M, per pair, with the reference's own error; (b) one period of x3, the
-    reference and each pair; (c) the reference's normal and friction forces and the bound ±μ n."""
-    meta = json.loads((folder / "meta.json").read_text())
-    labels = meta["combinations"]
-    fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.2))
-    ax = axes[0]
-    dims = meta["dimensions"]
-    for c, label in enumerate(labels):
-        pts = [(m, e) for m, e in zip(dims, meta["errors_x3"][c]) if e is not None and math.isfinite(e) and e > 0]
-        if pts:
-            order = meta["orders"][c]
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
-                      label=f"{label} (order {order:.2f})" if order is not None else label)
-    ax.axhline(meta["reference_self_error"], color="k", ls=":", lw=0.8, label="reference's own error")
-    ax.set_xlabel("M [-]")
-    ax.set_ylabel("rms error of x3 / rms x3 [-]")
-    ax.set_title(f"(a) {meta['frequency_hz']:g} Hz, Q = {meta['time_samples']}", fontsize=9)
-    ax.legend(fontsize=7)
-    hist = wbm_plot.read_csv(folder / "history.csv")
-    tau = hist["tau [-]"]
-    ax = axes[1]
-    ax.plot(tau, hist["reference [m]"], "k-", lw=1.6, label="central differences")
-    for name in hist:
-        if name not in ("tau [-]", "reference [m]"):
-            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
-    ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("x3 [m]")
-    ax.set_title(f"(b) M = {meta['history_dimension']}", fontsize=9)
-    ax.legend(fontsize=6)
-    ref = wbm_plot.read_csv(folder / "reference.csv")
-    ax = axes[2]
-    mu = meta["friction_coefficient"]
-    ax.plot(ref["tau [-]"], ref["normal_force [N]"], "k-", lw=1.2, label="normal force n")
-    ax.plot(ref["tau [-]"], ref["friction_force [N]"], "C3-", lw=1.2, label="friction force f_t")
-    ax.plot(ref["tau [-]"], [mu * n for n in ref["normal_force [N]"]], "C3:", lw=0.8, label="±μ n")
-    ax.plot(ref["tau [-]"], [-mu * n for n in ref["normal_force [N]"]], "C3:", lw=0.8)
-    ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("force [N]")
-    ax.set_title(f"(c) reference: stick {100.0 * meta['stick_fraction']:.1f} % of the period", fontsize=9)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    save(fig, folder, "friction_normal_load")
 
 
 def figures():

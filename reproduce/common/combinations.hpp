@@ -140,6 +140,11 @@ struct Claim {
 /// differ.
 [[nodiscard]] double loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
 
+/// A column of a report table (Run::table) from the values gathered row by row.
+[[nodiscard]] inline Eigen::VectorXd as_column(const std::vector<double>& v) {
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
 /// One number for report tables through the solvers' one formatter (solvers::format); NaN (a
 /// missing value) prints "—".
 [[nodiscard]] std::string format(const char* spec, double value);
