@@ -348,7 +348,7 @@ over each cell: C¹ in the unknowns, so a law with a corner such as LinearPenalt
 residual; needs a trial with a slope). Returns a dict with the keys of result.json's
 diagnostics.solution (docs/scenes.md; one serializer, wbm/scene/json.hpp): converged (verified
 residual), status, message, newton (iterations, residual_norms, tolerance, ...), path,
-relative_residual, residual_tolerance, max_penetration_m, max_contact_force_N, condition_number,
+relative_residual, backward_error (the verified quantity), residual_tolerance, max_penetration_m, max_contact_force_N, condition_number,
 dropped_harmonics_residual, wall_time_s, ... (None for a value that is not finite); and the
 arrays coefficients (n × M: row = DOF, column = trial function), contact_force_samples
 (n_c × M [N], exact contacts only: the multipliers) and collocation_times (M, their instants τ_k). Non-convergence is returned, not raised; bad input raises ValueError.)");

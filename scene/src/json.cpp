@@ -51,6 +51,7 @@ void to_json(nlohmann::json& j, const WeightedResidualSolution& s) {
        {"contact_homotopy", s.homotopy},
        {"rounding_floor", finite_or_null(s.rounding_floor)},
        {"relative_residual", finite_or_null(s.relative_residual)},
+       {"backward_error", finite_or_null(s.backward_error)},
        {"residual_tolerance", s.residual_tolerance},
        {"max_penetration_m", finite_or_null(s.max_penetration)},
        {"max_contact_force_N", finite_or_null(s.max_contact_force)},

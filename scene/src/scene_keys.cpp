@@ -172,10 +172,11 @@ const std::vector<DeclaredKey<Solver>>& solver_keys() {
                          "factorization of the linear operator (modal needs Rayleigh damping)"),
       number_key<Solver>(
           "residual_tolerance", [](auto& s) -> auto& { return s.residual_tolerance; }, positive(""),
-          "a solve (every point of a sweep or branch) is converged only if the full residual ‖G a − b + n(a)‖₂ ≤ "
-          "this · ‖b‖₂, recomputed from the solution; echoed in `result.json` (`scene.solver`, and per solve in the "
-          "diagnostics). Raise it (e.g. 1e-7) only for an ill-conditioned G whose solve is reported \"not verified\" "
-          "at its rounding floor (Craig–Bampton models)"),
+          "a solve (every point of a sweep or branch) is converged only if the normwise backward error of its full "
+          "residual, ‖G a − b + n(a)‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n(a)‖₂) with γ = (‖G‖₁ ‖G‖∞)^½ ≥ ‖G‖₂, recomputed from "
+          "the solution, is at most this: the solution then solves exactly a problem whose data differ by this "
+          "relative amount, whatever the units or the scaling of the coordinates. Echoed in `result.json` "
+          "(`scene.solver`; per solve `backward_error` beside `relative_residual` = ‖R‖/‖b‖ in the diagnostics)"),
   };
   return keys;
 }

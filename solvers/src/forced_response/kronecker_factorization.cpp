@@ -357,6 +357,7 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
   const Setup& su = *setup_;
   operator_ = g;
   norm1_ = -1.0;
+  norm_inf_ = -1.0;
   compliance_structure_.reset();
   factorized_ = false;
   blocks_.clear();
@@ -580,6 +581,29 @@ double KroneckerFactorization::norm1() const {
     norm1_ = std::max(norm1_, s);
   }
   return norm1_;
+}
+
+double KroneckerFactorization::norm_inf() const {
+  if (norm_inf_ >= 0.0) return norm_inf_;
+  if (setup_->modal) {
+    const MechanicalSystem& system = *operator_.system;
+    const TimeOperators& ops = *operator_.ops;
+    const double fr = operator_.frequency_hz;
+    // ‖G‖∞ = ‖Gᵀ‖₁ and Gᵀ = Σ A_sᵀ ⊗ X_sᵀ.
+    const Eigen::SparseMatrix<double> mt = system.mass.transpose(), ct = system.damping.transpose(),
+                                      kt = system.stiffness.transpose();
+    norm_inf_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass.transpose()).sparseView()),
+                                 Eigen::SparseMatrix<double>((fr * ops.damping.transpose()).sparseView()),
+                                 Eigen::SparseMatrix<double>(ops.stiffness.transpose().sparseView())},
+                                {&mt, &ct, &kt});
+    return norm_inf_;
+  }
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(g_.rows());
+  for (int k = 0; k < g_.outerSize(); ++k) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) rows(it.row()) += std::abs(it.value());
+  }
+  norm_inf_ = rows.size() > 0 ? rows.maxCoeff() : 0.0;
+  return norm_inf_;
 }
 
 }  // namespace wbm::solvers::detail

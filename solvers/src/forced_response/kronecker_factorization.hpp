@@ -81,6 +81,8 @@ class KroneckerFactorization {
   /// ‖G(f)‖₁ of the last factorized operator: from the assembled G (sparse LU path) or from the
   /// Kronecker factors (modal path, computed on first use).
   [[nodiscard]] double norm1() const;
+  /// ‖G(f)‖∞ = ‖Gᵀ‖₁ alike (the row sums of |G|).
+  [[nodiscard]] double norm_inf() const;
 
  private:
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
@@ -96,7 +98,8 @@ class KroneckerFactorization {
   std::shared_ptr<SparseLu> lu_;
   std::shared_ptr<SupernodalLu> supernodal_lu_;
   std::vector<std::shared_ptr<const ModeBlock>> blocks_;
-  mutable double norm1_ = -1.0;  // < 0: not computed yet
+  mutable double norm1_ = -1.0;     // < 0: not computed yet
+  mutable double norm_inf_ = -1.0;  // alike
   std::shared_ptr<const ComplianceStructure> compliance_structure_;  // set by compliance(), reset by factorize()
 };
 

@@ -48,6 +48,21 @@ double WeightedResidual::condition_number() const {
   return p.g->condition_estimate();  // ‖G‖₁ · est(‖G⁻¹‖₁) through the factorization in use
 }
 
+double WeightedResidual::backward_error(const Eigen::VectorXd& a, const Eigen::VectorXd& r) const {
+  const auto& p = *impl_;
+  const Eigen::Index size = static_cast<Eigen::Index>(p.n) * p.m;
+  if (a.size() != size || r.size() != size) {
+    throw std::invalid_argument("WeightedResidual::backward_error: a has length " + std::to_string(a.size()) +
+                                " and r " + std::to_string(r.size()) + ", expected n*M = " + std::to_string(size));
+  }
+  p.require_factorized();
+  const double rnorm = r.norm();
+  if (rnorm == 0.0) return 0.0;
+  const double gamma = std::sqrt(p.g->norm1() * p.g->norm_inf());  // ≥ ‖G‖₂ (Hölder)
+  const double contact = (r - p.linear_residual(a)).norm();        // ‖n‖: r = (G a − b) + n
+  return rnorm / (gamma * a.norm() + p.b.norm() + contact);
+}
+
 Eigen::VectorXd WeightedResidual::residual(const Eigen::VectorXd& a) const {
   const auto& p = *impl_;
   Eigen::VectorXd r = p.linear_residual(a);

@@ -33,7 +33,7 @@ void to_json(nlohmann::json& j, const NewtonReport& r);
 /// points, folds, corrector_iterations, stop ("stop word: message")}.
 void to_json(nlohmann::json& j, const HomotopyReport& h);
 /// {status, converged, message (the verified solve's, as NewtonReport), frequency_hz, newton,
-/// path, contact_homotopy, rounding_floor, relative_residual, residual_tolerance,
+/// path, contact_homotopy, rounding_floor, relative_residual, backward_error, residual_tolerance,
 /// max_penetration_m, max_contact_force_N, collocation_penetration_m, complementarity_m,
 /// contact_unknowns, condition_number, dropped_harmonics_residual, linear_solver, operators,
 /// wall_time_s}; the arrays (coefficients, contact force samples) are not included.

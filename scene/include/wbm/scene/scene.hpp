@@ -197,7 +197,8 @@ struct Basis {
 struct Solver {
   solvers::NewtonOptions newton{};
   solvers::LinearSolverPath linear_solver = solvers::LinearSolverPath::Automatic;
-  /// [solver] residual_tolerance: a solve is converged only if ‖G a − b + n(a)‖ ≤ this · ‖b‖
+  /// [solver] residual_tolerance: a solve is converged only if the normwise backward error of
+  /// its full residual, ‖G a − b + n(a)‖ / (γ‖a‖ + ‖b‖ + ‖n(a)‖), γ ≥ ‖G‖₂, is at most this
   /// (solvers::WeightedResidualOptions::residual_tolerance), reported as used.
   double residual_tolerance = solvers::WeightedResidualOptions{}.residual_tolerance;
 };

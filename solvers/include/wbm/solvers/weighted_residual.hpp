@@ -127,8 +127,12 @@ struct WeightedResidualOptions {
   LinearSolverPath linear_solver = LinearSolverPath::Automatic;
   NewtonOptions newton{};  // on the condensed contact unknowns (scaled residual, see below)
   /// A solve is Converged only if, besides Newton on the condensed unknowns, the full residual
-  /// recomputed from the solution satisfies ‖G a − b + n(a)‖₂ ≤ residual_tolerance · ‖b‖₂
-  /// (‖b‖₂ replaced by 1 N when b = 0); otherwise SolveStatus::ResidualNotVerified.
+  /// R = G a − b + n(a), recomputed from the solution, has a normwise backward error
+  /// η = ‖R‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n(a)‖₂) ≤ residual_tolerance (WeightedResidual::backward_error;
+  /// γ ≥ ‖G‖₂): the solution solves exactly a problem whose G, b and contact forces differ from
+  /// the given ones by at most this relative amount. Unlike ‖R‖/‖b‖ it does not grow with the
+  /// condition of G, i.e. with the units or the scaling of the coordinates. Otherwise
+  /// SolveStatus::ResidualNotVerified. Both η and ‖R‖/‖b‖ are reported (WeightedResidualSolution).
   /// Throws std::invalid_argument (at construction) unless > 0.
   double residual_tolerance = 1e-8;
   /// Contact homotopy fallback (SolutionPath::ContactHomotopy): on/off and its point limit
@@ -174,7 +178,9 @@ struct WeightedResidualSolution {
   double frequency_hz = 0.0;
   NewtonReport report;             // Newton on the contact unknowns (scaled residual)
   double relative_residual = 0.0;  // ‖G a − b + n(a)‖₂ / ‖b‖₂ of the full system, recomputed
-  double residual_tolerance = 0.0; // the bound relative_residual was verified against
+  /// η of the same residual (WeightedResidual::backward_error), dimensionless; NaN if G is singular.
+  double backward_error = std::numeric_limits<double>::quiet_NaN();
+  double residual_tolerance = 0.0; // the bound backward_error was verified against
   double max_penetration = 0.0;    // max over normal contacts and samples of u_c − g0 [m] (NaN: none)
   double max_contact_force = 0.0;  // max over contacts and samples of f_c [N] (|f| for a friction law)
   int contact_unknowns = 0;        // n_c · M
@@ -185,9 +191,10 @@ struct WeightedResidualSolution {
   HomotopyReport homotopy;         // the σ path, when it was tried
   /// Only for a solve whose full residual was not verified (SolveStatus::ResidualNotVerified):
   /// the rounding floor of the relative residual at this solution, measured as the largest
-  /// change of ‖G a − b + n(a)‖/‖b‖ when the contact unknowns x move by their own rounding
-  /// (x ⊙ (1 ± ε), two sign patterns, ε = 2⁻⁵²); NaN otherwise. A residual within 10× of
-  /// it cannot be reduced in double precision (a penalty too stiff for the arithmetic).
+  /// change of ‖G a − b + n(a)‖/‖b‖ when the contact unknowns x, or all the coefficients a,
+  /// move by their own rounding (x ⊙ (1 ± ε), a ⊙ (1 ± ε), two sign patterns each, ε = 2⁻⁵²);
+  /// NaN otherwise. A residual within 10× of it cannot be reduced in double precision (a
+  /// penalty too stiff for the arithmetic: x; an ill-conditioned G: a).
   double rounding_floor = std::numeric_limits<double>::quiet_NaN();
   static constexpr double kRoundingFloorFactor = 10.0;
   /// Not verified, but as small as double precision allows: relative_residual ≤ 10 × rounding_floor.
@@ -218,7 +225,8 @@ struct WeightedResidualSolution {
   /// One line: the status, the verified full residual against its tolerance, and Newton's brief().
   [[nodiscard]] std::string brief() const {
     return std::string(to_string(report.status)) + ": ‖G a − b + n(a)‖/‖b‖ = " + format_number(relative_residual) +
-           " (tolerance " + format_number(residual_tolerance) + "); Newton " + report.brief();
+           ", backward error " + format_number(backward_error) + " (tolerance " + format_number(residual_tolerance) +
+           "); Newton " + report.brief();
   }
 };
 
@@ -322,6 +330,19 @@ class WeightedResidual {
   /// ‖G⁻¹‖₁ by Hager's method with Higham's refinements [Higham 1988, Alg. 4.1] (a lower bound,
   /// a few solves with G and Gᵀ; solvers/src/core/one_norm_estimate.hpp); inf if G is singular.
   [[nodiscard]] double condition_number() const;
+  /// Normwise backward error of coefficients a (length n·M) whose full residual is r (length n·M,
+  /// from residual(a), or residual(a, λ) for exact contact) [Rigal & Gaches 1967; Higham,
+  /// Accuracy and Stability of Numerical Algorithms, 2nd ed. 2002, Thm. 7.1]:
+  ///   η = ‖r‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n‖₂),   n = r − (G a − b) the contact forces' term [N],
+  ///   γ = (‖G‖₁ ‖G‖∞)^½ ≥ ‖G‖₂, both norms exact (from the assembled G or its Kronecker factors).
+  /// η is the smallest ε for which a solves (G + ΔG) a − (b + Δb) + (n + Δn) = 0 exactly with
+  /// ‖ΔG‖₂ ≤ ε γ, ‖Δb‖₂ ≤ ε ‖b‖₂, ‖Δn‖₂ ≤ ε ‖n‖₂: relative changes of the data, dimensionless.
+  /// Rounding alone leaves ‖r‖ ≈ ε_mach ‖G‖ ‖a‖ ≤ ε_mach κ(G) ‖b‖, so the relative residual
+  /// ‖r‖/‖b‖ of an exact solve grows with the condition of G (mixed units, Craig–Bampton
+  /// coordinates), while η stays at the order of ε_mach. This is the quantity
+  /// WeightedResidualOptions::residual_tolerance bounds. 0 when r = 0. Throws
+  /// std::invalid_argument if a or r has not n·M entries, std::logic_error if G is singular.
+  [[nodiscard]] double backward_error(const Eigen::VectorXd& a, const Eigen::VectorXd& r) const;
   /// "sparse-lu" or "modal".
   [[nodiscard]] std::string linear_solver() const;
 
@@ -441,7 +462,7 @@ class WeightedResidual {
   NewtonResult solve_exact_with_load_stepping(int& steps) const;
   WeightedResidualSolution solve_rigid(const Eigen::VectorXd* lambda0, WeightedResidualSolution s,
                                        std::chrono::steady_clock::time_point start) const;
-  double rounding_floor(const Eigen::VectorXd& x) const;
+  double rounding_floor(const Eigen::VectorXd& a, const Eigen::VectorXd& x) const;
   std::unique_ptr<Impl> impl_;
 };
 
