@@ -175,7 +175,8 @@ const std::vector<DeclaredKey<Solver>>& solver_keys() {
           "a solve (every point of a sweep or branch) is converged only if the normwise backward error of its full "
           "residual, ‖G a − b + n(a)‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n(a)‖₂) with γ = (‖G‖₁ ‖G‖∞)^½ ≥ ‖G‖₂, recomputed from "
           "the solution, is at most this: the solution then solves exactly a problem whose data differ by this "
-          "relative amount, whatever the units or the scaling of the coordinates. Echoed in `result.json` "
+          "relative amount. Unlike ‖R‖/‖b‖ it does not grow with the conditioning that units or reduced "
+          "coordinates give G, so the default holds for Craig–Bampton models. Echoed in `result.json` "
           "(`scene.solver`; per solve `backward_error` beside `relative_residual` = ‖R‖/‖b‖ in the diagnostics)"),
   };
   return keys;

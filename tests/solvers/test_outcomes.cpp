@@ -48,7 +48,9 @@ TEST(Outcomes, BriefSaysTheStopAndTheCounts) {
   wbm::solvers::WeightedResidualSolution s;
   s.report.status = SolveStatus::ResidualNotVerified;
   s.relative_residual = 2e-8;
-  s.residual_tolerance = 1e-8;
-  EXPECT_EQ(s.brief().rfind("residual-not-verified: ‖G a − b + n(a)‖/‖b‖ = 2e-08 (tolerance 1e-08); Newton ", 0), 0u)
+  s.backward_error = 3e-9;
+  s.residual_tolerance = 1e-9;
+  EXPECT_EQ(s.brief().rfind("residual-not-verified: ‖G a − b + n(a)‖/‖b‖ = 2e-08, backward error 3e-09 (tolerance 1e-09); "
+                            "Newton ", 0), 0u)
       << s.brief();
 }
