@@ -43,7 +43,9 @@ def test_linear_oscillator_matches_the_closed_form_amplitude():
     s = wbm.solve(system, 0, force, f, [], basis, basis)
     assert s["converged"] and s["status"] == "converged"
     # The keys of result.json's diagnostics.solution (one serializer), plus the arrays.
-    assert {"message", "newton", "path", "relative_residual", "max_penetration_m", "condition_number"} <= s.keys()
+    assert {"message", "newton", "path", "relative_residual", "backward_error", "max_penetration_m",
+            "condition_number"} <= s.keys()
+    assert 0.0 <= s["backward_error"] <= s["relative_residual"]
     assert s["newton"]["status"] == "converged" and s["newton"]["tolerance"] > 0.0
     assert s["dropped_harmonics_residual"] is None  # no harmonic selection: not finite, written as null
     w = 2 * math.pi * f

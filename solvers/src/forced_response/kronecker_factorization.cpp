@@ -563,47 +563,42 @@ Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd
 }
 
 double KroneckerFactorization::norm1() const {
-  if (norm1_ >= 0.0) return norm1_;
-  if (setup_->modal) {
-    const MechanicalSystem& system = *operator_.system;
-    const TimeOperators& ops = *operator_.ops;
-    const double fr = operator_.frequency_hz;
-    norm1_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass).sparseView()),
-                              Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()),
-                              Eigen::SparseMatrix<double>(ops.stiffness.sparseView())},
-                             {&system.mass, &system.damping, &system.stiffness});
-    return norm1_;
-  }
-  norm1_ = 0.0;
-  for (int k = 0; k < g_.outerSize(); ++k) {
-    double s = 0.0;
-    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) s += std::abs(it.value());
-    norm1_ = std::max(norm1_, s);
-  }
+  if (norm1_ < 0.0) norm1_ = operator_norm(false);
   return norm1_;
 }
 
 double KroneckerFactorization::norm_inf() const {
-  if (norm_inf_ >= 0.0) return norm_inf_;
-  if (setup_->modal) {
+  if (norm_inf_ < 0.0) norm_inf_ = operator_norm(true);
+  return norm_inf_;
+}
+
+double KroneckerFactorization::operator_norm(bool transposed) const {
+  if (setup_->modal) {  // from the Kronecker factors; Gᵀ = Σ A_sᵀ ⊗ X_sᵀ
     const MechanicalSystem& system = *operator_.system;
     const TimeOperators& ops = *operator_.ops;
     const double fr = operator_.frequency_hz;
-    // ‖G‖∞ = ‖Gᵀ‖₁ and Gᵀ = Σ A_sᵀ ⊗ X_sᵀ.
-    const Eigen::SparseMatrix<double> mt = system.mass.transpose(), ct = system.damping.transpose(),
-                                      kt = system.stiffness.transpose();
-    norm_inf_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass.transpose()).sparseView()),
-                                 Eigen::SparseMatrix<double>((fr * ops.damping.transpose()).sparseView()),
-                                 Eigen::SparseMatrix<double>(ops.stiffness.transpose().sparseView())},
-                                {&mt, &ct, &kt});
-    return norm_inf_;
+    const auto time = [&](const Eigen::MatrixXd& a, double s) -> Eigen::SparseMatrix<double> {
+      if (transposed) return (s * a.transpose()).sparseView();
+      return (s * a).sparseView();
+    };
+    std::array<Eigen::SparseMatrix<double>, 3> xt;
+    std::array<const Eigen::SparseMatrix<double>*, 3> x = {&system.mass, &system.damping, &system.stiffness};
+    if (transposed) {
+      for (size_t i = 0; i < 3; ++i) {
+        xt[i] = x[i]->transpose();
+        x[i] = &xt[i];
+      }
+    }
+    return kronecker_norm1({time(ops.mass, fr * fr), time(ops.damping, fr), time(ops.stiffness, 1.0)}, x);
   }
-  Eigen::VectorXd rows = Eigen::VectorXd::Zero(g_.rows());
+  // The assembled G: the largest column sum (‖G‖₁) or row sum (‖G‖∞) of |G|.
+  Eigen::VectorXd sums = Eigen::VectorXd::Zero(transposed ? g_.rows() : g_.cols());
   for (int k = 0; k < g_.outerSize(); ++k) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) rows(it.row()) += std::abs(it.value());
+    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) {
+      sums(transposed ? it.row() : it.col()) += std::abs(it.value());
+    }
   }
-  norm_inf_ = rows.size() > 0 ? rows.maxCoeff() : 0.0;
-  return norm_inf_;
+  return sums.size() > 0 ? sums.maxCoeff() : 0.0;
 }
 
 }  // namespace wbm::solvers::detail

@@ -86,6 +86,7 @@ class KroneckerFactorization {
 
  private:
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
+  [[nodiscard]] double operator_norm(bool transposed) const;  // ‖G‖₁, or ‖G‖∞ = ‖Gᵀ‖₁
   struct Setup;
   class ModeBlock;
   struct ComplianceStructure;
