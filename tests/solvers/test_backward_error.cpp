@@ -134,5 +134,24 @@ TEST(BackwardError, UnitsAndCoordinateScalingVerifyWithDefaultsAndGiveOneRespons
   EXPECT_GT(largest_relative, 1e-6);
 }
 
+// The rounding floor explains the residual it is printed beside (issue #38: it was 0 for a solve
+// without contact, beside ‖R‖ = 1.8e-8 ‖b‖, because it moved the contact unknowns only): the
+// reduced rod with q_tip × 1e-6 (κ₁(G) = 2e17), solved by sparse LU (backward stable: its
+// residual is of the order of ε |G| |a|) and held to a tolerance no double can meet, is not
+// verified, and its residual lies within 10× of the change that rounding its coefficients makes
+// (measured: 2.1e-8 beside a floor of 3.0e-8).
+TEST(BackwardError, TheRoundingFloorExplainsTheResidualOfAnIllConditionedG) {
+  const double f1 = steel_rod(60).natural_frequencies_hz(1)(0);
+  const Reduced red = reduced_rod(1.0, 1e-6);
+  const HarmonicForcing forcing{0, 1e-6, 0.999 * f1, {}};
+  const auto basis = TimeBasis::fourier_harmonics(3);
+  const WeightedResidualSolution s = solve_weighted_residual(
+      red.system, forcing, {}, basis, basis, {.linear_solver = LinearSolverPath::SparseLU, .residual_tolerance = 1e-30});
+  ASSERT_EQ(s.report.status, SolveStatus::ResidualNotVerified) << s.brief();
+  EXPECT_GT(s.rounding_floor, 0.0);
+  EXPECT_TRUE(s.at_rounding_floor()) << "‖R‖/‖b‖ " << s.relative_residual << ", floor " << s.rounding_floor;
+  EXPECT_NE(s.report.message.find("rounding floor of the residual at this solution"), std::string::npos) << s.report.message;
+}
+
 }  // namespace
 }  // namespace wbm::solvers
