@@ -9,10 +9,11 @@
 //    scaled by 1e±3 and 1e±6, all verify with the default tolerance and give the same response.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <vector>
+#include <string>
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>
@@ -25,8 +26,6 @@
 
 namespace wbm::solvers {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 fem::Rod steel_rod(int elements) { return fem::Rod({210e9, 7800.0, 1e-4, 1.0, elements}); }
 
