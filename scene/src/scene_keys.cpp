@@ -173,7 +173,7 @@ const std::vector<DeclaredKey<Solver>>& solver_keys() {
       number_key<Solver>(
           "residual_tolerance", [](auto& s) -> auto& { return s.residual_tolerance; }, positive(""),
           "a solve (every point of a sweep or branch) is converged only if the normwise backward error of its full "
-          "residual, ‖G a − b + n(a)‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n(a)‖₂) with γ = (‖G‖₁ ‖G‖∞)^½ ≥ ‖G‖₂, recomputed from "
+          "residual, ‖G a − b + n(a)‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n(a)‖₂) with γ = ‖G‖_F ≥ ‖G‖₂, recomputed from "
           "the solution, is at most this: the solution then solves exactly a problem whose data differ by this "
           "relative amount. Unlike ‖R‖/‖b‖ it does not grow with the conditioning that units or reduced "
           "coordinates give G, so the default holds for Craig–Bampton models. Echoed in `result.json` "

@@ -357,7 +357,6 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
   const Setup& su = *setup_;
   operator_ = g;
   norm1_ = -1.0;
-  norm_inf_ = -1.0;
   compliance_structure_.reset();
   factorized_ = false;
   blocks_.clear();
@@ -563,42 +562,42 @@ Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd
 }
 
 double KroneckerFactorization::norm1() const {
-  if (norm1_ < 0.0) norm1_ = operator_norm(false);
-  return norm1_;
-}
-
-double KroneckerFactorization::norm_inf() const {
-  if (norm_inf_ < 0.0) norm_inf_ = operator_norm(true);
-  return norm_inf_;
-}
-
-double KroneckerFactorization::operator_norm(bool transposed) const {
-  if (setup_->modal) {  // from the Kronecker factors; Gᵀ = Σ A_sᵀ ⊗ X_sᵀ
+  if (norm1_ >= 0.0) return norm1_;
+  if (setup_->modal) {
     const MechanicalSystem& system = *operator_.system;
     const TimeOperators& ops = *operator_.ops;
     const double fr = operator_.frequency_hz;
-    const auto time = [&](const Eigen::MatrixXd& a, double s) -> Eigen::SparseMatrix<double> {
-      if (transposed) return (s * a.transpose()).sparseView();
-      return (s * a).sparseView();
-    };
-    std::array<Eigen::SparseMatrix<double>, 3> xt;
-    std::array<const Eigen::SparseMatrix<double>*, 3> x = {&system.mass, &system.damping, &system.stiffness};
-    if (transposed) {
-      for (size_t i = 0; i < 3; ++i) {
-        xt[i] = x[i]->transpose();
-        x[i] = &xt[i];
-      }
-    }
-    return kronecker_norm1({time(ops.mass, fr * fr), time(ops.damping, fr), time(ops.stiffness, 1.0)}, x);
+    norm1_ = kronecker_norm1({Eigen::SparseMatrix<double>((fr * fr * ops.mass).sparseView()),
+                              Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()),
+                              Eigen::SparseMatrix<double>(ops.stiffness.sparseView())},
+                             {&system.mass, &system.damping, &system.stiffness});
+    return norm1_;
   }
-  // The assembled G: the largest column sum (‖G‖₁) or row sum (‖G‖∞) of |G|.
-  Eigen::VectorXd sums = Eigen::VectorXd::Zero(transposed ? g_.rows() : g_.cols());
+  norm1_ = 0.0;
   for (int k = 0; k < g_.outerSize(); ++k) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) {
-      sums(transposed ? it.row() : it.col()) += std::abs(it.value());
+    double s = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(g_, k); it; ++it) s += std::abs(it.value());
+    norm1_ = std::max(norm1_, s);
+  }
+  return norm1_;
+}
+
+double KroneckerFactorization::frobenius_norm() const {
+  const MechanicalSystem& system = *operator_.system;
+  const TimeOperators& ops = *operator_.ops;
+  const double fr = operator_.frequency_hz;
+  const std::array<double, 3> c = {fr * fr, fr, 1.0};
+  const std::array<const Eigen::MatrixXd*, 3> a = {&ops.mass, &ops.damping, &ops.stiffness};
+  const std::array<const Eigen::SparseMatrix<double>*, 3> x = {&system.mass, &system.damping, &system.stiffness};
+  double sum = 0.0;
+  for (size_t s = 0; s < 3; ++s) {
+    for (size_t r = s; r < 3; ++r) {  // the pairs (s, r) and (r, s) alike
+      const double time = a[s]->cwiseProduct(*a[r]).sum();
+      if (time == 0.0) continue;
+      sum += (r == s ? 1.0 : 2.0) * c[s] * c[r] * time * x[s]->cwiseProduct(*x[r]).sum();
     }
   }
-  return sums.size() > 0 ? sums.maxCoeff() : 0.0;
+  return std::sqrt(std::max(sum, 0.0));
 }
 
 }  // namespace wbm::solvers::detail

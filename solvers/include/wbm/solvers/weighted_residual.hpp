@@ -334,7 +334,8 @@ class WeightedResidual {
   /// from residual(a), or residual(a, λ) for exact contact) [Rigal & Gaches 1967; Higham,
   /// Accuracy and Stability of Numerical Algorithms, 2nd ed. 2002, Thm. 7.1]:
   ///   η = ‖r‖₂ / (γ ‖a‖₂ + ‖b‖₂ + ‖n‖₂),   n = r − (G a − b) the contact forces' term [N],
-  ///   γ = (‖G‖₁ ‖G‖∞)^½ ≥ ‖G‖₂, both norms exact (from the assembled G or its Kronecker factors).
+  ///   γ = ‖G‖_F ≥ ‖G‖₂, exact from the Kronecker factors (G = Σ_s c_s A_s ⊗ X_s, so
+  ///   ‖G‖_F² = Σ_{s,s'} c_s c_s' ⟨A_s, A_s'⟩_F ⟨X_s, X_s'⟩_F: O(M²) + O(nnz(X)), G not formed).
   /// η is the smallest ε for which a solves (G + ΔG) a − (b + Δb) + (n + Δn) = 0 exactly with
   /// ‖ΔG‖₂ ≤ ε γ, ‖Δb‖₂ ≤ ε ‖b‖₂, ‖Δn‖₂ ≤ ε ‖n‖₂: relative changes of the data, dimensionless.
   /// Rounding alone leaves ‖r‖ ≈ ε_mach ‖G‖ ‖a‖ ≤ ε_mach κ(G) ‖b‖, so the relative residual
