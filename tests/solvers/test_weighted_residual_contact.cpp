@@ -122,7 +122,7 @@ TEST(WeightedResidual, ANanometreGapIsScaledByTheMotion) {
 // (a_c = 1e12 N, k_c = a_c α = 5e13 N/m, 3e5 times E S/L):
 //  - Fourier:Fourier converges on the contact unknowns, but its full residual cannot fall below
 //    the change that rounding the contact unknowns causes: the floor is far above what an O(1)
-//    problem shows (1e3 ε), and the residual lies within 10× of it. Its backward error (7.7e-10
+//    problem shows (1e3 ε), and the residual lies within 10× of it. Its backward error (6.3e-11
 //    measured) meets the default tolerance, so the solve is verified, although ‖R‖/‖b‖ is 8e-7;
 //    held to 1e-12 it is not, and the floor is the diagnosis;
 //  - DB6:Fourier: the branch from the linear response in σ turns back before σ = 1 (a fold in
