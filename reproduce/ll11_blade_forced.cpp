@@ -11,14 +11,14 @@
 // regime it excites the first mode only. s puts the linear resonance peak of the first stop to
 // touch at `overload` gaps. Damping C = β K_r with β = 2ζ/ω₁ (ζ₁ = ζ). Amplitude measure, for the
 // curves and the backbone alike: (max − min)/2 over the period of the circumferential (y)
-// displacement of the first tip node to touch, in gaps. Not computed here: stability (a
-// monodromy matrix of the 224-state blade costs about a second per point) and rigid stops (the
-// rigid-stop continuation stalls on this blade: at grazing contact from below, at 1.044 f1 from
-// inside the contact region, and, started at 0.98 f1 upward with Fourier:Fourier H = 12, at
-// 0.9806 f1 after 9–11 points, whether the corrector tolerance is 1e-9 or 1e-6 and with corner
-// bisection or without; see the notes of issue #15).
+// displacement of the first tip node to touch, in gaps. The same 24 stops rigid (Signorini at the
+// 2H + 1 impulse instants, Fourier:Fourier at the file's rigid_harmonics), continued piece by
+// piece (solvers::SignoriniResponseFamily, issue #38): the corner continuation stalled on this
+// blade at 0.9806 f1 after 9 points (issue #15). Not computed here: stability (a monodromy
+// matrix of the 224-state blade costs about a second per point; with rigid stops it needs
+// saltation matrices).
 // Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
-// About 100 s on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
+// About 150 s on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -30,6 +30,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <wbm/contact/penalty.hpp>
+#include <wbm/contact/signorini.hpp>
 #include <wbm/fem/craig_bampton.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/response_curve.hpp>
@@ -44,8 +45,10 @@ namespace {
 using namespace wbm;
 
 struct Traced {
-  std::string label;  // "Fourier:Fourier", "B-spline:B-spline"
-  std::string key;    // "fourier_fourier", "bspline_bspline" (timing keys)
+  std::string label;  // "Fourier:Fourier", "B-spline:B-spline", "Fourier:Fourier, rigid stops (H = 6)"
+  std::string key;    // "fourier_fourier", "bspline_bspline", "fourier_fourier_rigid" (timing keys)
+  bool rigid = false; // the stops rigid (Signorini)
+  bool compared = true;  // its peak compared with the backbones (the penalty stops' at H = 12, M = 32)
   solvers::ResponseCurve curve;
   double time_s = 0.0;
   double condition = 0.0;  // 1-norm condition estimate of G at the start
@@ -112,6 +115,7 @@ int main(int argc, char** argv) {
     const double stiffness_ratio = parameters.number("contact.stiffness_ratio");  // k = ratio × the static radial stiffness there
     const int n_tip = parameters.integer("interface.tip_nodes"), modes = parameters.integer("interface.modes");
     const int harmonics = parameters.integer("response.harmonics");
+    const int rigid_harmonics = parameters.integer("response.rigid_harmonics");  // H of the rigid-stop curve
     const int wavelet_m = parameters.integer("response.wavelet_dimension");
     const int mode_harmonics = parameters.integer("nnm.harmonics"), mode_samples = parameters.integer("nnm.samples");
     const double from = parameters.number("response.from_f1"), to = parameters.number("response.to_f1");  // f/f1
@@ -178,16 +182,21 @@ int main(int argc, char** argv) {
     const double radial_stiffness = 1.0 / e_c.dot(k_dense.ldlt().solve(e_c));
     const double k_pen = stiffness_ratio * radial_stiffness;
 
-    std::vector<solvers::ContactPoint> contacts;
+    std::vector<solvers::ContactPoint> contacts, rigid_contacts;
     const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{k_pen, gap});
-    for (const auto& st : stops) contacts.push_back({st.dof, law, -1, st.along});
+    const auto rigid_law = std::make_shared<contact::RigidStop>(gap);
+    for (const auto& st : stops) {
+      contacts.push_back({st.dof, law, -1, st.along});
+      rigid_contacts.push_back({st.dof, rigid_law, -1, st.along});
+    }
 
     // Forced responses.
     std::vector<Traced> traced;
     auto trace = [&](const std::string& label, const std::string& key, solvers::TimeBasis trial,
-                     solvers::TimeBasis weighting, double max_step, bool keep_all) {
+                     solvers::TimeBasis weighting, double max_step, bool keep_all, bool rigid = false,
+                     bool compared = true) {
       t = std::chrono::steady_clock::now();
-      const solvers::WeightedResidual base(reduced, forcing, contacts, std::move(trial), std::move(weighting),
+      const solvers::WeightedResidual base(reduced, forcing, rigid ? rigid_contacts : contacts, std::move(trial), std::move(weighting),
                                            {.formulation = reproduce::kFigureFormulation,
                                             .residual_tolerance = residual_tolerance});
       solvers::ResponseCurveOptions o;
@@ -200,7 +209,7 @@ int main(int argc, char** argv) {
       if (keep_all) {  // every DOF's trial coefficients: the peak's orbit starts a backbone below
         for (Eigen::Index j = 0; j < n; ++j) o.keep_dofs.push_back(static_cast<int>(j));
       }
-      traced.push_back({label, key, solvers::trace_response(base, o), 0.0, 0.0});
+      traced.push_back({label, key, rigid, compared, solvers::trace_response(base, o), 0.0, 0.0});
       traced.back().time_s = models::seconds_since(t);
       traced.back().condition = base.condition_number();
       const auto& c = traced.back().curve;
@@ -214,6 +223,16 @@ int main(int argc, char** argv) {
           solvers::TimeBasis::fourier_harmonics(harmonics), parameters.number("response.max_step_fourier_f1"), true);
     trace("B-spline:B-spline", "bspline_bspline", solvers::TimeBasis::from_name("bspline", wavelet_m),
           solvers::TimeBasis::from_name("bspline", wavelet_m), parameters.number("response.max_step_bspline_f1"), false);
+    // The same stops rigid (Signorini at the 2H + 1 impulse instants), continued piece by piece:
+    // every impulse that starts or ends is an event, located and crossed (issue #38); beside the
+    // penalty stops at the same H, so that the two differ by the contact law only.
+    const std::string rigid_h = " (H = " + std::to_string(rigid_harmonics) + ")";
+    trace("Fourier:Fourier" + rigid_h, "fourier_fourier_rigid_harmonics", solvers::TimeBasis::fourier_harmonics(rigid_harmonics),
+          solvers::TimeBasis::fourier_harmonics(rigid_harmonics), parameters.number("response.max_step_rigid_f1"), false,
+          false, false);
+    trace("Fourier:Fourier, rigid stops" + rigid_h, "fourier_fourier_rigid", solvers::TimeBasis::fourier_harmonics(rigid_harmonics),
+          solvers::TimeBasis::fourier_harmonics(rigid_harmonics), parameters.number("response.max_step_rigid_f1"), false,
+          true, false);
 
     // The backbone of the same stops (damping and load ignored) from the linear mode, and the
     // branch through harmonic balance's resonance peak: its orbit (every DOF's coefficients),
@@ -337,6 +356,20 @@ int main(int argc, char** argv) {
           pf = p.frequency_hz;
         }
       }
+      peak_ratio.push_back(pf / f1);
+      peak_amp.push_back(pa);
+      rows << "| " << tr.label << " | " << tr.curve.points.size() << " | " << tr.curve.folds.size() << " | "
+           << tr.curve.events << " | " << format("%.5f", pf / f1) << " | " << format("%.3f", pa) << " | ";
+      if (!tr.compared) {  // another H or contact law than the backbones': not compared with them
+        rows << "not compared | not compared | not compared | " << format("%.1f", tr.time_s) << " |\n";
+        stats.push_back({{"curve", tr.label}, {"points", tr.curve.points.size()}, {"folds", tr.curve.folds.size()},
+                         {"events", tr.curve.events}, {"switches", tr.curve.switches},
+                         {"peak_frequency_over_f1", pf / f1}, {"peak_amplitude_gap", pa}, {"time_s", tr.time_s},
+                         {"condition_number_of_g", tr.condition}, {"corrector_iterations", tr.curve.corrector_iterations},
+                         {"rejected_steps", tr.curve.rejected_steps},
+                         {"stop", std::string(solvers::to_string(tr.curve.stop))}, {"message", tr.curve.message}});
+        continue;
+      }
       // NaN: the branch never has this amplitude.
       const double f0 = backbone_frequency_at(backbone, pa, pf), fp = backbone_frequency_at(peak_branch, pa, pf);
       const double off0 = (pf - f0) / f1, offp = (pf - fp) / f1;
@@ -344,10 +377,7 @@ int main(int argc, char** argv) {
       on_peak_branch = on_peak_branch && std::isfinite(offp) && std::abs(offp) <= 2.0 * zeta;
       worst_off0 = std::isfinite(off0) ? std::max(worst_off0, std::abs(off0)) : std::nan("");
       worst_offp = std::isfinite(offp) ? std::max(worst_offp, std::abs(offp)) : std::nan("");
-      peak_ratio.push_back(pf / f1);
-      peak_amp.push_back(pa);
-      rows << "| " << tr.label << " | " << tr.curve.points.size() << " | " << tr.curve.folds.size() << " | "
-           << format("%.5f", pf / f1) << " | " << format("%.3f", pa) << " | " << cell(f0 / f1) << " | " << cell(fp / f1)
+      rows << cell(f0 / f1) << " | " << cell(fp / f1)
            << " | " << (std::isfinite(offp) ? format("%+.1e", offp) : std::string("—")) << " | "
            << format("%.1f", tr.time_s) << " |\n";
       stats.push_back({{"curve", tr.label}, {"points", tr.curve.points.size()}, {"folds", tr.curve.folds.size()},
@@ -361,6 +391,9 @@ int main(int argc, char** argv) {
     }
     const double wavelet_df = peak_ratio[1] - peak_ratio[0], wavelet_da = peak_amp[1] / peak_amp[0] - 1.0;
     const bool wavelet_ok = std::abs(wavelet_df) <= 1e-3 && std::abs(wavelet_da) <= 1e-2;
+    // The rigid stops against the penalty ones at the same H: a stiffer casing hardens more.
+    const Traced& rigid_curve = traced[3];
+    const double rigid_shift = peak_ratio[3] - peak_ratio[2];
     const double linear_peak = la.maxCoeff();
     Eigen::Index top = 0;
     backbone.frequency_hz.maxCoeff(&top);
@@ -421,7 +454,7 @@ int main(int argc, char** argv) {
               {"dofs", blade.model.dofs.size()}, {"reduced_dofs", n}, {"gap_m", gap}, {"zeta", zeta}, {"beta_s", beta},
               {"load_scale", s}, {"overload_gaps", overload}, {"penalty_stiffness_n_per_m", k_pen},
               {"radial_static_stiffness_n_per_m", radial_stiffness}, {"harmonics", harmonics}, {"wavelet_dimension", wavelet_m},
-              {"linear_frequency_hz", f1}, {"onset_node_index", onset + 1}, {"curves", stats}, {"timing_s", timing},
+              {"linear_frequency_hz", f1}, {"rigid_harmonics", rigid_harmonics}, {"onset_node_index", onset + 1}, {"curves", stats}, {"timing_s", timing},
               {"linear_peak_amplitude_gap", linear_peak}, {"residual_tolerance", residual_tolerance},
               {"backbone_levels", nl}, {"backbone_max_frequency_over_f1", backbone.frequency_hz(top) / f1},
               {"backbone_stop", backbone.stop}, {"peak_branch_levels", np}, {"peak_branch_stop", peak_branch.stop},
@@ -441,7 +474,9 @@ int main(int argc, char** argv) {
        << ") reaches " << format("%g", overload) << " gaps. Casing: " << n_tip << " radial stops at g0 = "
        << format("%g", gap * 1e3) << " mm, as penalty springs k = " << format("%.3g", k_pen) << " N/m ("
        << format("%g", stiffness_ratio) << " × the static radial stiffness " << format("%.3g", radial_stiffness)
-       << " N/m at that node). Continuation in f from "
+       << " N/m at that node), and as rigid stops (Signorini at the M = " << 2 * rigid_harmonics + 1
+       << " impulse instants of Fourier:Fourier H = " << rigid_harmonics << ", continued piece by piece: each "
+          "impulse that starts or ends is an event, located and crossed). Continuation in f from "
        << format("%.2f", from) << " f1 to " << format("%.2f", to) << " f1, f1 = " << format("%.2f", f1)
        << " Hz; Fourier:Fourier H = " << harmonics << " (M = " << 2 * harmonics + 1 << "), B-spline:B-spline M = "
        << wavelet_m << ", distributional form. Amplitude: half the peak-to-peak circumferential displacement "
@@ -450,7 +485,7 @@ int main(int argc, char** argv) {
        << (residual_tolerance == solvers::WeightedResidualOptions{}.residual_tolerance ? " (the default)" : "")
        << ". Parameters: `reproduce/scenes/ll11_blade_forced.toml`. Figure: "
           "`forced_response.png`. Not computed: "
-          "stability (cost) and rigid stops (the continuation stalls on this blade; notes of issue #15).\n\n"
+          "stability (cost; with rigid stops, saltation matrices).\n\n"
        << "Two backbone branches of the same stops (undamped, unforced; KKT continuation, N = " << mode_harmonics
        << ", m = " << mode_samples << "): (0) from the linear first mode, E = " << format("%g", co.energy_min) << " to " << format("%g", co.energy_max)
        << " (" << nl << " levels); (1) through harmonic balance's resonance peak: the peak's orbit (every DOF's "
@@ -459,9 +494,12 @@ int main(int argc, char** argv) {
        << " to " << format("%.2f", peak_branch.energy.maxCoeff()) << "). backbone.csv gives, per level, the share of "
           "m̂ held by the first linear mode at the fundamental and the largest other (mode, harmonic) component "
           "(NonlinearModes::modal_energy_shares).\n\n"
-       << "| basis pair | points | folds | peak f/f1 | peak amplitude [gap] | branch 0 f/f1 at that amplitude | "
-          "branch 1 f/f1 at that amplitude | peak − branch 1 [f1] | time [s] |\n|---|---|---|---|---|---|---|---|---|\n"
-       << rows.str() << "\n(\"—\": the branch never has the peak's amplitude.)\n\n"
+       << "| curve | points | folds | events | peak f/f1 | peak amplitude [gap] | branch 0 f/f1 at that amplitude | "
+          "branch 1 f/f1 at that amplitude | peak − branch 1 [f1] | time [s] |\n|---|---|---|---|---|---|---|---|---|---|\n"
+       << rows.str() << "\n(\"—\": the branch never has the peak's amplitude. \"not compared\": a curve at another H "
+          "or with rigid stops; both backbone branches are the penalty stops', compared with the penalty curves at H = "
+       << harmonics << " and M = " << wavelet_m << ". events: impulses starting or ending, located and crossed by the piecewise-smooth "
+          "continuation of the rigid stops.)\n\n"
        << "The branch from the linear mode: its highest frequency is " << format("%.5f", backbone.frequency_hz(top) / f1)
        << " f1 at E = " << format("%.2f", backbone.energy(top)) << "; at its end, " << describe(backbone, nl - 1)
        << ". The branch through the peak: at its start, " << describe(peak_branch, start_level) << "; mode 1 holds "
@@ -493,7 +531,21 @@ int main(int argc, char** argv) {
          came_back, "‖ΔY‖/‖Y‖ = " + format("%.1e", ends_apart)},
         {"B-spline:B-spline (M = " + std::to_string(wavelet_m) + ") gives harmonic balance's resonance (peak frequency "
          "within 1e-3 f1 and amplitude within 1 %)",
-         wavelet_ok, "Δf = " + format("%+.1e", wavelet_df) + " f1, Δa/a = " + format("%+.1e", wavelet_da)}};
+         wavelet_ok, "Δf = " + format("%+.1e", wavelet_df) + " f1, Δa/a = " + format("%+.1e", wavelet_da)},
+        {"with the " + std::to_string(stops.size()) + " stops rigid, the continuation runs over the range to " +
+             format("%.2f", to) + " f1, every impulse that starts or ends crossed as an event",
+         rigid_curve.curve.converged(),
+         std::string(solvers::to_string(rigid_curve.curve.stop)) + ": " + std::to_string(rigid_curve.curve.points.size()) +
+             " points, " + std::to_string(rigid_curve.curve.events) + " events (" +
+             std::to_string(rigid_curve.curve.switches) + " impulses switched), " +
+             std::to_string(rigid_curve.curve.folds.size()) + " folds, " +
+             std::to_string(rigid_curve.curve.rejected_steps) + " rejected steps"},
+        {"the rigid stops' resonance peak lies above the penalty stops' at the same H = " +
+             std::to_string(rigid_harmonics) + " (a stiffer casing hardens the blade more)",
+         rigid_shift > 0.0,
+         "rigid " + format("%.5f", peak_ratio[3]) + " f1 at " + format("%.3f", peak_amp[3]) + " gaps, penalty " +
+             format("%.5f", peak_ratio[2]) + " f1 at " + format("%.3f", peak_amp[2]) + " gaps: " +
+             format("%+.2e", rigid_shift) + " f1"}};
     md << reproduce::claims_markdown(claims)
        << "Timings: gmsh " << format("%.1f", blade.gmsh_s) << " s, ccx " << format("%.1f", blade.ccx_s)
        << " s, Craig–Bampton " << format("%.1f", timing["craig_bampton_s"].get<double>()) << " s, backbone from the "

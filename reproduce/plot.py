@@ -506,7 +506,8 @@ def blade(folder):
 
 def blade_forced(folder):
     """Beyond LL11: the reduced blade's forced response near its first bending resonance (penalty
-    stops, Fourier:Fourier and B-spline:B-spline), the linear response, and two backbone branches of
+    stops, Fourier:Fourier and B-spline:B-spline; rigid stops, Fourier:Fourier), the linear response,
+    and two backbone branches of
     the same stops overlaid (from the linear mode; through the resonance peak), their levels marked
     where the first mode holds less than half of the energy; amplitudes in gaps."""
     meta = json.loads((folder / "meta.json").read_text())
@@ -515,7 +516,7 @@ def blade_forced(folder):
     fig, ax = plt.subplots(figsize=(7.5, 5.0))
     ax.plot(column(folder, "linear.csv", "frequency_over_f1 [-]"), column(folder, "linear.csv", "amplitude [gap]"),
             color="0.6", lw=0.8, ls=":", label="linear (no casing)")
-    styles = ["C0-", "C2--"]
+    styles = ["C0-", "C2--", "C1:", "C3-"]
     for i, c in enumerate(meta["curves"]):
         xs = [r for r, j in zip(ratio, curve) if j == i]
         ys = [a for a, j in zip(amp, curve) if j == i]

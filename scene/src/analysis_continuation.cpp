@@ -165,6 +165,8 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                      {"message", curve.message + way_out(scene, curve.stop)},
                                      {"rejected_steps", curve.rejected_steps},
                                      {"corners", curve.kinks},
+                                     {"events", curve.events},
+                                     {"switches", curve.switches},
                                      {"corrector_iterations", curve.corrector_iterations},
                                      {"continuation_time_s", curve.wall_time_s},
                                      {"stability_time_s", curve.stability_time_s},

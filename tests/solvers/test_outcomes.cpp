@@ -40,6 +40,8 @@ TEST(Outcomes, BriefSaysTheStopAndTheCounts) {
   c.rejected_steps = 1;
   c.wall_time_s = 0.25;
   EXPECT_EQ(c.brief(), "state bound exceeded: 3 points, 2 folds, 1 rejected steps, 0.25 s (stability 0 s)");
+  c.events = 5;
+  EXPECT_EQ(c.brief(), "state bound exceeded: 3 points, 2 folds, 5 events, 1 rejected steps, 0.25 s (stability 0 s)");
   wbm::solvers::Backbone b;
   b.stop = StopReason::RangeReached;
   b.levels.resize(4);

@@ -41,18 +41,18 @@ const WeightedResidual& ForcedResponseFamily::at(double lambda) const {
 // A predictor can overshoot to a frequency ≤ 0 (or non-finite) on a steep branch: no problem
 // exists there, so the residual is NaN and the corrector fails, and the step is halved, instead
 // of at_frequency throwing out of the continuation.
-bool ForcedResponseFamily::outside(double lambda) const {
-  return parameter_ == ContinuationParameter::Frequency && !(lambda > 0.0 && std::isfinite(lambda));
+bool ForcedResponseFamily::defined(double lambda) const {
+  return parameter_ != ContinuationParameter::Frequency || (lambda > 0.0 && std::isfinite(lambda));
 }
 
 Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double lambda) const {
-  if (outside(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
+  if (!defined(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
   if (base_->rigid()) return at(lambda).signorini_residual(x, load(lambda));
   return at(lambda).contact_residual(x, load(lambda));
 }
 
 Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double lambda) const {
-  if (outside(lambda)) {
+  if (!defined(lambda)) {
     return {Eigen::VectorXd::Constant(x.size(), NAN), Eigen::MatrixXd::Constant(x.size(), x.size(), NAN),
             Eigen::VectorXd::Constant(x.size(), NAN)};
   }
@@ -74,6 +74,52 @@ Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double l
     l.parameter_derivative = -wr.contact_unknowns(wr.linear_response()) / (wr.residual_scale() * base_amplitude_);
   }
   return l;
+}
+
+namespace {
+// Every contact a rigid stop (friction laws are rigid too, and hysteretic).
+bool rigid_stops_only(const WeightedResidual& wr) {
+  if (!wr.rigid()) return false;
+  return std::none_of(wr.contacts().begin(), wr.contacts().end(),
+                      [](const ContactPoint& c) { return c.law->hysteretic(); });
+}
+}  // namespace
+
+SignoriniResponseFamily::SignoriniResponseFamily(const ForcedResponseFamily& family) : family_(&family) {
+  if (!rigid_stops_only(family.base())) {
+    throw std::invalid_argument("SignoriniResponseFamily: the problem's contacts must all be rigid stops "
+                                "(contact::RigidStop) without friction; continue it with ForcedResponseFamily");
+  }
+}
+
+ActiveSet SignoriniResponseFamily::active_set(const Eigen::VectorXd& x, double lambda) const {
+  return family_->at(lambda).signorini_active_set(x, family_->load(lambda));
+}
+
+Eigen::VectorXd SignoriniResponseFamily::residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const {
+  if (!family_->defined(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
+  return family_->at(lambda).signorini_residual(x, family_->load(lambda), &piece);
+}
+
+Linearization SignoriniResponseFamily::linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const {
+  if (!family_->defined(lambda)) {
+    return {Eigen::VectorXd::Constant(x.size(), NAN), Eigen::MatrixXd::Constant(x.size(), x.size(), NAN),
+            Eigen::VectorXd::Constant(x.size(), NAN)};
+  }
+  const WeightedResidual& wr = family_->at(lambda);
+  const double s = family_->load(lambda);
+  Linearization l;
+  l.residual = wr.signorini_residual(x, s, &piece);
+  l.jacobian = wr.signorini_jacobian(x, s, &piece).dense();
+  l.parameter_derivative = family_->parameter() == ContinuationParameter::Frequency
+                               ? wr.signorini_frequency_derivative(x, s, &piece)
+                               : Eigen::VectorXd(wr.signorini_load_derivative(x, s, &piece) / wr.forcing().amplitude);
+  return l;
+}
+
+Eigen::VectorXd SignoriniResponseFamily::events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const {
+  if (!family_->defined(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
+  return family_->at(lambda).signorini_events(x, family_->load(lambda), piece);
 }
 
 }  // namespace wbm::solvers
@@ -244,7 +290,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.parameter_scale = std::abs(lambda0) > 0.0 ? std::abs(lambda0) : 1.0;
   // λ in newtons: scaled so that c λ is compared with s_r, as the residual is.
   pa.state_scale = rigid ? base.residual_scale() / base.force_compliance() : base.residual_scale();
-  pa.corner_restart = rigid;  // the branch has a corner at every change of the active instants
+  // Rigid stops alone: pieces and events (SignoriniResponseFamily). With friction the branch has
+  // a corner at every change of the active instants, restarted there.
+  const bool pieces = rigid_stops_only(base);
+  pa.corner_restart = rigid && !pieces;
   pa.direction = o.direction;
   pa.initial_step = o.initial_step;
   pa.min_step = o.min_step;
@@ -259,7 +308,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   // The ends of the range are landed on by the continuation (an end the branch starts on is
   // landed on at its first step, and not again).
   pa.land_on = {o.parameter_min, o.parameter_max};
-  Branch branch = pseudo_arclength(family, x0, lambda0, pa);
+  Branch branch = pieces ? pseudo_arclength(SignoriniResponseFamily(family), x0, lambda0, pa)
+                         : pseudo_arclength(family, x0, lambda0, pa);
   // Rigid stops never drive the top function: it vanishes at every impulse instant.
   if (!rigid) cut_at_undamped_top_resonance(base, branch);
   replace_last_by_landing(branch, o);
@@ -280,6 +330,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   }
   curve.rejected_steps = branch.rejected_steps;
   curve.kinks = branch.kinks;
+  curve.events = branch.events;
+  curve.switches = branch.switches;
   curve.corrector_iterations = branch.corrector_iterations;
   curve.wall_time_s = branch.wall_time_s;
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(o.samples, 0.0, 1.0 - 1.0 / o.samples);

@@ -313,9 +313,13 @@ struct WeightedResidual::Impl {
   // Δ(λ) = s u_lin − D λ; a friction contact that sticks at every instant has its row c replaced
   // by −u(τ_1) (`pinned` lists the stuck_* entries used).
   // gap_rows: the rows on the branch that depends on D (the gap of a stop, the stick of friction,
-  // pinned rows included).
+  // pinned rows included). With a piece (stops only, no friction; require_piece), each stop row
+  // takes the branch the piece names, 1 the gap g0 − u, 0 the force c λ, instead of the min's.
   [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
-                                          std::vector<int>* pinned = nullptr) const;
+                                          std::vector<int>* pinned = nullptr, const ActiveSet* piece = nullptr) const;
+  // Throws std::logic_error with friction contacts (their rows have three branches) and
+  // std::invalid_argument unless the piece has length n_c·M; nothing for a null piece.
+  void require_piece(const char* what, const ActiveSet* piece) const;
   // Multiplies the friction rows of v (length n_c·M) by ρ.
   void weigh_friction_rows(Eigen::VectorXd& v) const {
     if (!collocation->any_coulomb) return;

@@ -30,9 +30,20 @@ Eigen::MatrixXd WeightedResidual::Impl::kinematic(const Eigen::MatrixXd& y) cons
 void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   const Collocation& col = *collocation;
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(size, size);  // W ⊗ I_{n_c}
-  for (int c = 0; c < nc; ++c) w(Eigen::seq(c, Eigen::last, nc), Eigen::seq(c, Eigen::last, nc)) = col.weights;
-  const Eigen::MatrixXd hw = compliance_times(w);
+  Eigen::MatrixXd hw;  // H (W ⊗ I_{n_c})
+  if (nc == 1) {
+    hw = compliance_times(col.weights);
+  } else {
+    // Column j·n_c + d of H (W ⊗ I) is Σ_b H(:, b·n_c + d) W(b, j): one dense (n_c·M × M)(M × M)
+    // product per contact, O(n_c² M³) in all, instead of H times the n_c·M square W ⊗ I, which
+    // is zero but for a 1/n_c share (on the 24 stops of the blade at M = 25, 41 % of a
+    // continuation's time was that product).
+    hw.resize(size, size);
+    for (int d = 0; d < nc; ++d) {
+      const auto cols = Eigen::seq(d, Eigen::last, nc);
+      hw(Eigen::all, cols) = Eigen::MatrixXd(h(Eigen::all, cols)) * col.weights;
+    }
+  }
   delassus = kinematic(hw);
   u_lin = kinematic(x_lin);
   if (set_force_compliance) {
@@ -78,8 +89,22 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
 }
 
 
+void WeightedResidual::Impl::require_piece(const char* what, const ActiveSet* piece) const {
+  if (piece == nullptr) return;
+  if (collocation->any_coulomb) {
+    throw std::logic_error(std::string("WeightedResidual::") + what + ": a piece (active set) is defined for rigid "
+                           "stops without friction; a friction row has three branches (stick, slip either way): "
+                           "call it without a piece");
+  }
+  if (piece->size() != static_cast<size_t>(nc) * static_cast<size_t>(m)) {
+    throw std::invalid_argument(std::string("WeightedResidual::") + what + ": the piece has length " +
+                                std::to_string(piece->size()) + ", expected n_c*M = " + std::to_string(nc * m) +
+                                " (one entry per impulse, ordering k*n_c + c; from signorini_active_set)");
+  }
+}
+
 Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
-                                                  std::vector<int>* pinned) const {
+                                                  std::vector<int>* pinned, const ActiveSet* piece) const {
   require_factorized();
   const Collocation& col = *collocation;
   // The slips Δ (friction rows), and the stops' gaps in one expression, as before friction existed
@@ -102,6 +127,9 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
       phi(i) = cp.value;
       d_branch = cp.stick;
       if (!cp.stick) slips[c] = 1;
+    } else if (piece != nullptr) {  // the piece's branch
+      d_branch = (*piece)[static_cast<size_t>(i)] != 0;
+      phi(i) = d_branch ? gap(i) : force_compliance * lambda(i);
     } else {
       const auto cp = contact::signorini_min(force_compliance * lambda(i), gap(i));
       phi(i) = cp.value;
@@ -153,21 +181,48 @@ double WeightedResidual::force_compliance() const {
   return impl_->force_compliance;
 }
 
-Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lambda, double load) const {
+Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lambda, double load,
+                                                     const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_residual");
   if (lambda.size() != static_cast<Eigen::Index>(p.nc) * p.m) {
     throw std::invalid_argument("WeightedResidual::signorini_residual: lambda has length " + std::to_string(lambda.size()) +
                                 ", expected n_c*M = " + std::to_string(p.nc * p.m));
   }
-  return p.signorini(lambda, load, nullptr) / p.scale;
+  p.require_piece("signorini_residual", piece);
+  return p.signorini(lambda, load, nullptr, nullptr, piece) / p.scale;
 }
 
-LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda, double load) const {
+ActiveSet WeightedResidual::signorini_active_set(const Eigen::VectorXd& lambda, double load) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_active_set");
+  const ActiveSet none(static_cast<size_t>(p.nc) * static_cast<size_t>(p.m), 0);
+  p.require_piece("signorini_active_set", &none);  // stops only
+  std::vector<int> gap_rows;
+  (void)p.signorini(lambda, load, &gap_rows);
+  ActiveSet a = none;
+  for (int i : gap_rows) a[static_cast<size_t>(i)] = 1;
+  return a;
+}
+
+Eigen::VectorXd WeightedResidual::signorini_events(const Eigen::VectorXd& lambda, double load, const ActiveSet& piece) const {
+  const auto& p = *impl_;
+  p.require_rigid("signorini_events");
+  p.require_piece("signorini_events", &piece);
+  // The other branch's value: on a gap row the force c λ, on a force row the gap g0 − u, each in
+  // the same expression as signorini() (the event is the row the piece does not hold).
+  ActiveSet other = piece;
+  for (auto& e : other) e ^= 1U;
+  return p.signorini(lambda, load, nullptr, nullptr, &other) / p.scale;
+}
+
+LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lambda, double load,
+                                                     const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_jacobian");
+  p.require_piece("signorini_jacobian", piece);
   std::vector<int> active, pinned;
-  (void)p.signorini(lambda, load, &active, &pinned);
+  (void)p.signorini(lambda, load, &active, &pinned, piece);
   const Eigen::Index size = lambda.size();
   const auto rank = static_cast<Eigen::Index>(active.size());
   const double c = p.force_compliance;
@@ -189,11 +244,13 @@ LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lamb
   return jac;
 }
 
-Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load) const {
+Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load,
+                                                                 const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_frequency_derivative");
+  p.require_piece("signorini_frequency_derivative", piece);
   std::vector<int> gap_rows, pinned;
-  (void)p.signorini(lambda, load, &gap_rows, &pinned);
+  (void)p.signorini(lambda, load, &gap_rows, &pinned, piece);
   const Eigen::MatrixXd a = spectral::as_coefficients(expand_forces(lambda, load), p.n);  // n × M
   // G′ a, then P G⁻¹, then the kinematic rows (trial values at τ_{k+1}, or their increments).
   const Eigen::VectorXd dx = p.gather(p.solve_stacked(p.frequency_derivative_times(a), false));
@@ -209,11 +266,13 @@ Eigen::VectorXd WeightedResidual::signorini_frequency_derivative(const Eigen::Ve
   return out;
 }
 
-Eigen::VectorXd WeightedResidual::signorini_load_derivative(const Eigen::VectorXd& lambda, double load) const {
+Eigen::VectorXd WeightedResidual::signorini_load_derivative(const Eigen::VectorXd& lambda, double load,
+                                                            const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_load_derivative");
+  p.require_piece("signorini_load_derivative", piece);
   std::vector<int> gap_rows, pinned;
-  (void)p.signorini(lambda, load, &gap_rows, &pinned);
+  (void)p.signorini(lambda, load, &gap_rows, &pinned, piece);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(lambda.size());
   for (int i : gap_rows) out(i) = -p.u_lin(i) / p.scale;
   for (int e : pinned) out(p.stuck_row_of[static_cast<size_t>(e)]) = -p.stuck_lin(e) / p.scale;

@@ -40,14 +40,46 @@ class ForcedResponseFamily {
   /// Forcing scale s = F/F₀ at λ (1 for a frequency parameter).
   [[nodiscard]] double load(double lambda) const;
   [[nodiscard]] ContinuationParameter parameter() const { return parameter_; }
+  [[nodiscard]] const WeightedResidual& base() const { return *base_; }
+  /// False at a frequency ≤ 0 or non-finite (no problem exists there; residuals are NaN).
+  [[nodiscard]] bool defined(double lambda) const;
 
  private:
-  [[nodiscard]] bool outside(double lambda) const;
   const WeightedResidual* base_;
   ContinuationParameter parameter_;
   double base_amplitude_;
   mutable std::optional<WeightedResidual> cache_;
   mutable double cache_lambda_ = 0.0;
+};
+
+/// Rigid stops without friction: the family's Signorini conditions on the impulses as a
+/// PiecewiseSmoothSystem (linearization.hpp). Its pieces are the active instants (1: the sample
+/// touches its stop, the row g0 − u(λ) = 0; 0: it is free, c λ = 0), on each of which the
+/// residual is affine in λ and smooth in f; its events are the rows a piece does not hold, c λ on
+/// the touching samples and g0 − u(λ) on the free ones (WeightedResidual::signorini_events), so
+/// pseudo_arclength locates each impulse that starts or ends and crosses it onto the
+/// neighbouring piece (continuation.hpp) instead of halving its step at the corner. On the
+/// reduced blade of reproduce/ll11_blade_forced (24 stops, H = 12) the corner path stalled at
+/// 0.9806 f1 after 9 points, whatever the corrector tolerance (issue #38). The nonsmooth
+/// residual and linearization are the family's; active_set is the min's piece at (x, λ).
+/// Throws std::invalid_argument (construction) unless the family's problem is rigid without
+/// friction.
+class SignoriniResponseFamily {
+ public:
+  explicit SignoriniResponseFamily(const ForcedResponseFamily& family);
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
+    return family_->residual(x, lambda);
+  }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const {
+    return family_->linearize(x, lambda);
+  }
+  [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double lambda) const;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+  [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+
+ private:
+  const ForcedResponseFamily* family_;
 };
 
 /// One point of a forced-response curve.
@@ -93,6 +125,8 @@ struct ResponseCurve {
   std::string message;
   int rejected_steps = 0;
   int kinks = 0;
+  int events = 0;                      // switching points located (rigid stops without friction)
+  int switches = 0;                    // impulses that started or ended there
   long corrector_iterations = 0;
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
   double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
@@ -100,10 +134,13 @@ struct ResponseCurve {
   /// branch_status(stop): Converged when the range was reached (its last point on the range end).
   [[nodiscard]] SolveStatus status() const { return branch_status(stop); }
   [[nodiscard]] bool converged() const { return status() == SolveStatus::Converged; }
-  /// One line: "range reached: 163 points, 2 folds, 0 rejected steps, 0.22 s (stability 0.5 s)".
+  /// One line: "range reached: 163 points, 2 folds, 0 rejected steps, 0.22 s (stability 0.5 s)",
+  /// with ", 14 events" after the folds when the branch was continued by events.
   [[nodiscard]] std::string brief() const {
     return std::string(to_string(stop)) + ": " + std::to_string(points.size()) + " points, " +
-           std::to_string(folds.size()) + " folds, " + std::to_string(rejected_steps) + " rejected steps, " +
+           std::to_string(folds.size()) + " folds, " +
+           (events > 0 ? std::to_string(events) + " events, " : std::string()) +
+           std::to_string(rejected_steps) + " rejected steps, " +
            format_number(wall_time_s) + " s (stability " + format_number(stability_time_s) + " s)";
   }
 };
@@ -154,9 +191,11 @@ struct ResponseCurveOptions {
 /// without contact (a linear curve needs no continuation: frequency_response()), and for
 /// stability = true with rigid stops (no saltation matrices). Rigid stops (WeightedResidual::
 /// rigid()): the unknowns are the impulses λ (contact_unknowns of the points), the residual the
-/// Signorini conditions with their generalized Jacobian, and the continuation restarts at the
-/// corners of the branch (PseudoArclengthOptions::corner_restart), one at every change of the
-/// active instants.
+/// Signorini conditions. Without friction the branch is continued piece by piece
+/// (SignoriniResponseFamily): every change of the active instants is an event, located and
+/// crossed, and counted in ResponseCurve::events and switches. With exact friction (three
+/// branches per row) the continuation restarts at the corners of the branch instead
+/// (PseudoArclengthOptions::corner_restart), with the generalized Jacobian.
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
 }  // namespace wbm::solvers

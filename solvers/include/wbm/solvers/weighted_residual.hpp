@@ -393,14 +393,34 @@ class WeightedResidual {
   /// and its generalized Jacobian (gap rows: D_i/s_r; force rows: c e_i/s_r) as identity plus
   /// the gap rows, (c/s_r)(I + P_A (D/c − I)_A), with capacitance D_AA/c (dense when
   /// r > ¾ n_c·M). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
-  [[nodiscard]] Eigen::VectorXd signorini_residual(const Eigen::VectorXd& lambda, double load = 1.0) const;
-  /// (The Jacobian's branches are those at load s.)
-  [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  /// With a piece (rigid stops without friction; an ActiveSet of length n_c·M, ordering
+  /// k·n_c + c, 1 = the gap row g0 − u(λ), 0 = the force row c λ): the smooth residual of that
+  /// piece, each row on the branch the piece names instead of the min's, and its Jacobian and
+  /// derivatives; the pieces of the piecewise-smooth continuation (SignoriniResponseFamily).
+  /// Throws std::logic_error for a piece with friction contacts (a friction row has three
+  /// branches) and std::invalid_argument for a piece of another length.
+  [[nodiscard]] Eigen::VectorXd signorini_residual(const Eigen::VectorXd& lambda, double load = 1.0,
+                                                   const ActiveSet* piece = nullptr) const;
+  /// (The Jacobian's branches are those at load s, or the piece's.)
+  [[nodiscard]] LowRankJacobian signorini_jacobian(const Eigen::VectorXd& lambda, double load = 1.0,
+                                                   const ActiveSet* piece = nullptr) const;
   /// Rigid stops: ∂φ/∂f of signorini_residual at λ and load s [1/Hz]: on the gap rows
   /// (V P G⁻¹ G′(f) a(λ)) / s_r with a(λ) = G⁻¹(s b − Pᵀ n(λ)), G′ = 2f A_M ⊗ M + A_C ⊗ C; 0 on
-  /// the force rows. And ∂φ/∂s (the load): −u_lin/s_r on the gap rows, 0 elsewhere.
-  [[nodiscard]] Eigen::VectorXd signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load = 1.0) const;
-  [[nodiscard]] Eigen::VectorXd signorini_load_derivative(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  /// the force rows. And ∂φ/∂s (the load): −u_lin/s_r on the gap rows, 0 elsewhere. (Gap rows:
+  /// the min's at λ, or the piece's.)
+  [[nodiscard]] Eigen::VectorXd signorini_frequency_derivative(const Eigen::VectorXd& lambda, double load = 1.0,
+                                                               const ActiveSet* piece = nullptr) const;
+  [[nodiscard]] Eigen::VectorXd signorini_load_derivative(const Eigen::VectorXd& lambda, double load = 1.0,
+                                                          const ActiveSet* piece = nullptr) const;
+  /// Rigid stops without friction: the piece the min picks at λ and load s, 1 where
+  /// g0 − u(λ) ≤ c λ (contact::signorini_min's tie rule). Throws std::logic_error with friction.
+  [[nodiscard]] ActiveSet signorini_active_set(const Eigen::VectorXd& lambda, double load = 1.0) const;
+  /// Rigid stops without friction: the event functions of a piece (length n_c·M), the row it
+  /// does not hold: c λ / s_r on a gap row (the impulse stays ≥ 0 while the sample touches),
+  /// (g0 − u(λ)) / s_r on a force row (the gap stays ≥ 0 while the sample is free); all ≥ 0
+  /// exactly where the piece's solution satisfies the Signorini conditions. Throws as the
+  /// pieces above.
+  [[nodiscard]] Eigen::VectorXd signorini_events(const Eigen::VectorXd& lambda, double load, const ActiveSet& piece) const;
   /// Rigid stops: a = G⁻¹(s b − Pᵀ n(λ)), the full coefficients (length n·M) for given forces.
   [[nodiscard]] Eigen::VectorXd expand_forces(const Eigen::VectorXd& lambda, double load = 1.0) const;
   /// Rigid stops: R(a, λ) = G a − b + Pᵀ n(λ) [N] (length n·M), the full residual with the
