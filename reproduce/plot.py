@@ -540,7 +540,7 @@ def blade_forced(folder):
     ax.set_ylabel(f"circumferential amplitude of tip node #{meta['onset_node_index']} / gap [-]")
     ax.set_title(f"Reduced blade against the casing: zeta = {meta['zeta']:g}, gap {1e3 * meta['gap_m']:g} mm, "
                  f"{meta['reduced_dofs']} DOFs", fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="lower left")
     save(fig, folder, "forced_response")
 
 

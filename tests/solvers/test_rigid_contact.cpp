@@ -25,19 +25,14 @@
 
 #include "shipped_scenes.hpp"
 #include "testing.hpp"
+#include "weighted_residual_fixtures.hpp"
 
 using namespace wbm;
 using solvers::TimeBasis;
+using wbm::testing::kTable2;  // the six combinations of [JL14 Table 2]
+using wbm::testing::Pair;
 
 namespace {
-
-struct Pair {
-  const char* trial;
-  const char* weighting;
-};
-// The six combinations of [JL14 Table 2].
-const Pair kTable2[] = {{"fourier", "fourier"}, {"bspline", "bspline"}, {"db6", "db6"},
-                        {"haar", "fourier"},    {"db6", "fourier"},     {"haar", "bspline"}};
 
 // Case 1 of [JL14 Table 1] with its exponential penalty replaced by a rigid stop at the same gap.
 struct RigidCase1 {
@@ -423,16 +418,8 @@ TEST(RigidContact, ContinuationPassesThroughTheFixedFrequencySolves) {
     ASSERT_TRUE(s.converged());
     const Eigen::VectorXd u = solvers::evaluate_trial(trial, s.coefficients, c.tip, grid(1024), f);
     const double amplitude = 0.5 * (u.maxCoeff() - u.minCoeff());
-    // The branch between its two points around f, linearly.
-    for (size_t i = 0; i + 1 < curve.points.size(); ++i) {
-      const auto& a = curve.points[i];
-      const auto& b = curve.points[i + 1];
-      if (a.frequency_hz <= f && f <= b.frequency_hz) {
-        const double t = b.frequency_hz > a.frequency_hz ? (f - a.frequency_hz) / (b.frequency_hz - a.frequency_hz) : 0.0;
-        EXPECT_NEAR(a.amplitude + t * (b.amplitude - a.amplitude), amplitude, 2e-3 * amplitude) << f << " Hz";
-        break;
-      }
-    }
+    // The branch between its first two points around f, linearly.
+    EXPECT_NEAR(wbm::testing::branch_amplitude_at(curve, f), amplitude, 2e-3 * amplitude) << f << " Hz";
   }
 }
 

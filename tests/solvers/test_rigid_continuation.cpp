@@ -19,6 +19,7 @@
 
 #include "shipped_scenes.hpp"
 #include "testing.hpp"
+#include "weighted_residual_fixtures.hpp"
 
 using namespace wbm;
 using solvers::ActiveSet;
@@ -141,15 +142,8 @@ TEST(RigidContinuation, BranchCrossesEveryChangeOfTheActiveInstantsAsAnEvent) {
     ASSERT_TRUE(s.converged());
     const Eigen::VectorXd u = solvers::evaluate_trial(trial, s.coefficients, c.tip, Eigen::VectorXd::LinSpaced(1024, 0.0, 1023.0 / 1024), f);
     const double amplitude = 0.5 * (u.maxCoeff() - u.minCoeff());
-    for (size_t i = 0; i + 1 < curve.points.size(); ++i) {
-      const auto& a = curve.points[i];
-      const auto& b = curve.points[i + 1];
-      if (a.frequency_hz <= f && f <= b.frequency_hz) {
-        const double t = b.frequency_hz > a.frequency_hz ? (f - a.frequency_hz) / (b.frequency_hz - a.frequency_hz) : 0.0;
-        EXPECT_NEAR(a.amplitude + t * (b.amplitude - a.amplitude), amplitude, 2e-3 * amplitude) << f << " Hz";
-        break;
-      }
-    }
+    // The branch between its first two points around f, linearly.
+    EXPECT_NEAR(wbm::testing::branch_amplitude_at(curve, f), amplitude, 2e-3 * amplitude) << f << " Hz";
   }
   c.system.stiffness *= 1.0 + 1e-12;
   const solvers::WeightedResidual nudged(c.system, c.forcing, c.stop, trial, trial);
