@@ -18,7 +18,7 @@
 // matrix of the 224-state blade costs about a second per point; with rigid stops it needs
 // saltation matrices).
 // Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
-// About 150 s on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
+// About 6 min on one core. --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -48,7 +48,7 @@ struct Traced {
   std::string label;  // "Fourier:Fourier", "B-spline:B-spline", "Fourier:Fourier, rigid stops (H = 6)"
   std::string key;    // "fourier_fourier", "bspline_bspline", "fourier_fourier_rigid" (timing keys)
   bool rigid = false; // the stops rigid (Signorini)
-  bool compared = true;  // its peak compared with the backbones (the penalty stops' at H = 12, M = 32)
+  bool compared = true;  // its peak compared with the backbones (the penalty curves at the file's H and M)
   solvers::ResponseCurve curve;
   double time_s = 0.0;
   double condition = 0.0;  // 1-norm condition estimate of G at the start
