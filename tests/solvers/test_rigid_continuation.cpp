@@ -177,7 +177,7 @@ TEST(RigidContinuation, RefusesFrictionAndPiecesOfTheWrongLength) {
       [&] { (void)with_friction.signorini_residual(Eigen::VectorXd::Zero(2 * m), 1.0, &piece); },
       {"friction", "without a piece"});
   wbm::testing::expect_throw_with<std::logic_error>(
-      [&] { (void)with_friction.signorini_active_set(Eigen::VectorXd::Zero(2 * m)); }, {"friction"});
+      [&] { (void)with_friction.signorini_active_set(Eigen::VectorXd::Zero(2 * m)); }, {"signorini_active_set", "without friction"});
   const solvers::ForcedResponseFamily family(with_friction, solvers::ContinuationParameter::Frequency);
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)solvers::SignoriniResponseFamily{family}; },
                                                          {"rigid stops", "without friction", "ForcedResponseFamily"});

@@ -196,11 +196,13 @@ Eigen::VectorXd WeightedResidual::signorini_residual(const Eigen::VectorXd& lamb
 ActiveSet WeightedResidual::signorini_active_set(const Eigen::VectorXd& lambda, double load) const {
   const auto& p = *impl_;
   p.require_rigid("signorini_active_set");
-  const ActiveSet none(static_cast<size_t>(p.nc) * static_cast<size_t>(p.m), 0);
-  p.require_piece("signorini_active_set", &none);  // stops only
+  if (p.collocation->any_coulomb) {
+    throw std::logic_error("WeightedResidual::signorini_active_set: pieces are defined for rigid stops without "
+                           "friction (a friction row has three branches: stick, slip either way)");
+  }
   std::vector<int> gap_rows;
   (void)p.signorini(lambda, load, &gap_rows);
-  ActiveSet a = none;
+  ActiveSet a(static_cast<size_t>(p.nc) * static_cast<size_t>(p.m), 0);
   for (int i : gap_rows) a[static_cast<size_t>(i)] = 1;
   return a;
 }
