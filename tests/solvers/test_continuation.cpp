@@ -280,8 +280,8 @@ TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
     const solvers::ForcedResponseFamily* family;
     mutable int failures_left = 6;
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const { return family->residual(x, f); }
-    [[nodiscard]] solvers::Linearization linearize(const Eigen::VectorXd& x, double f) const {
-      solvers::Linearization l = family->linearize(x, f);
+    [[nodiscard]] solvers::LowRankLinearization linearize(const Eigen::VectorXd& x, double f) const {
+      solvers::LowRankLinearization l = family->linearize(x, f);
       if (f > 10.5 && f < 11.0 && failures_left > 0) {
         --failures_left;
         l.residual.setConstant(std::nan(""));
@@ -311,8 +311,8 @@ TEST(Continuation, SparseJacobianPathEqualsTheDensePath) {
     const solvers::ForcedResponseFamily* family;
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const { return family->residual(x, f); }
     [[nodiscard]] solvers::SparseLinearization linearize(const Eigen::VectorXd& x, double f) const {
-      const solvers::Linearization l = family->linearize(x, f);
-      return {l.residual, l.jacobian.sparseView(), l.parameter_derivative};
+      const solvers::LowRankLinearization l = family->linearize(x, f);
+      return {l.residual, l.jacobian.dense().sparseView(), l.parameter_derivative};
     }
   };
   const solvers::PseudoArclengthOptions o = duffing_arclength(base);

@@ -73,7 +73,7 @@ TEST(RigidContinuation, PieceLinearizationMatchesFiniteDifferences) {
         double p0;
         const ActiveSet* piece;
         Eigen::VectorXd residual(const Eigen::VectorXd& l) const { return p->residual(l, p0, *piece); }
-        Eigen::MatrixXd jacobian(const Eigen::VectorXd& l) const { return p->linearize(l, p0, *piece).jacobian; }
+        Eigen::MatrixXd jacobian(const Eigen::VectorXd& l) const { return p->linearize(l, p0, *piece).jacobian.dense(); }
       };
       wbm::testing::expect_jacobian_matches_fd(OnPiece{&pieces, p0, &piece}, lambda, 1e-7, 1e-6, s.max_contact_force);
       const double h = 1e-5 * p0;

@@ -5,6 +5,9 @@
 // each of about a hundred translation units: about 9 s of g++'s front end each.)
 #include <wbm/solvers/newton.hpp>
 
+#include <memory>
+#include <utility>
+
 #include <Eigen/QR>
 
 namespace wbm::solvers {
@@ -51,6 +54,61 @@ Eigen::MatrixXd LowRankJacobian::dense() const {
   Eigen::MatrixXd j = Eigen::MatrixXd::Identity(size(), size());
   if (rank() > 0) j += u_times(times_v(Eigen::MatrixXd::Identity(size(), size())));
   return j / scale;
+}
+
+LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
+                                  const Eigen::VectorXd& c, double d) {
+  const Eigen::Index n = j.size();
+  if (!(alpha > 0.0) || !std::isfinite(alpha)) {
+    throw std::invalid_argument("bordered_low_rank: alpha = " + format_number(alpha) +
+                                ": must be finite and > 0 (the factor of J in the bordered matrix)");
+  }
+  if (b.size() != n || c.size() != n) {
+    throw std::invalid_argument("bordered_low_rank: the border has " + std::to_string(b.size()) + " rows and " +
+                                std::to_string(c.size()) + " columns for a Jacobian of size " + std::to_string(n) +
+                                "; both must equal it");
+  }
+  LowRankJacobian out;
+  if (j.dense_form()) {
+    out.capacitance.resize(n + 1, n + 1);
+    out.capacitance.topLeftCorner(n, n) = (j.capacitance / j.scale) * alpha;
+    out.capacitance.topRightCorner(n, 1) = b;
+    out.capacitance.bottomLeftCorner(1, n) = c.transpose();
+    out.capacitance(n, n) = d;
+    return out;
+  }
+  const double a = alpha / j.scale;
+  const Eigen::Index r = j.rank();
+  const Eigen::MatrixXd u = r == 0 ? Eigen::MatrixXd(n, 0) : j.u.size() > 0 ? j.u : j.u_times(Eigen::MatrixXd::Identity(r, r));
+  out.scale = 1.0 / a;
+  out.rows = n + 1;
+  out.capacitance = Eigen::MatrixXd::Zero(r + 2, r + 2);
+  out.capacitance.topLeftCorner(r, r) = j.capacitance;
+  if (r > 0) out.capacitance.block(0, r, r, 1) = j.times_v(b) / a;
+  out.capacitance(r, r) = 1.0;
+  out.capacitance(r, r + 1) = 1.0 / a;
+  out.capacitance.block(r + 1, 0, 1, r) = c.transpose() * u;
+  out.capacitance(r + 1, r) = c.dot(b) / a;
+  out.capacitance(r + 1, r + 1) = d / a;
+  // V̂ Y = [V Y_x; Y_λ; cᵀ Y_x + (d − a) Y_λ] and Û Z = [U Z_r + (b/a) z_(r+1); z_(r+2)/a] for Y with n + 1
+  // rows and Z with r + 2.
+  auto inner = std::make_shared<const LowRankJacobian>(j);
+  auto border = std::make_shared<const std::pair<Eigen::VectorXd, Eigen::VectorXd>>(b / a, c);
+  out.times_v = [inner, border, n, r, a, d](const Eigen::MatrixXd& y) {
+    Eigen::MatrixXd v(r + 2, y.cols());
+    if (r > 0) v.topRows(r) = inner->times_v(y.topRows(n));
+    v.row(r) = y.row(n);
+    v.row(r + 1) = border->second.transpose() * y.topRows(n) + (d - a) * y.row(n);
+    return v;
+  };
+  out.times_u = [inner, border, n, r, a](const Eigen::MatrixXd& z) {
+    Eigen::MatrixXd w(n + 1, z.cols());
+    w.topRows(n) = border->first * z.row(r);
+    if (r > 0) w.topRows(n) += inner->u_times(z.topRows(r));
+    w.row(n) = z.row(r + 1) / a;
+    return w;
+  };
+  return out;
 }
 
 bool DenseLu::factorize(const Eigen::MatrixXd& jacobian) {

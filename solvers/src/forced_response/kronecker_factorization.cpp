@@ -489,19 +489,29 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     compliance_structure_ = std::move(structure);
     return h;
   }
+  // Ψ (n_c × modes), Ψ(c, i) = ψ_c(i): H_cd(k, l) = Σ_i Ψ(c, i) s_i(k, l) Ψ(d, i), so for each entry (k, l)
+  // of the blocks the n_c × n_c matrix Ψ diag(s_·(k, l)) Ψᵀ is one matrix product (the 24 stops of the
+  // blade: 2.5 ms per frequency where the scalar sum over (i, c, d) took about 60 ms; issue #39).
+  const auto modes = static_cast<Eigen::Index>(blocks_.size());
+  Eigen::MatrixXd psi(nc, modes);
+  if (su.modal) {
+    for (int c = 0; c < nc; ++c) {
+      for (Eigen::Index i = 0; i < modes; ++i) psi(c, i) = shape(c, i);
+    }
+  }
   if (su.modal && !su.components.empty()) {  // only the components' entries are nonzero
-    for (size_t i = 0; i < blocks_.size(); ++i) {
-      for (size_t comp = 0; comp < su.components.size(); ++comp) {
-        const auto& idx = su.components[comp];
-        const auto inv = blocks_[i]->component_inverse(comp);
-        for (int c = 0; c < nc; ++c) {
+    Eigen::VectorXd s(modes);
+    for (size_t comp = 0; comp < su.components.size(); ++comp) {
+      const auto& idx = su.components[comp];
+      for (size_t b = 0; b < idx.size(); ++b) {
+        for (size_t a = 0; a < idx.size(); ++a) {
+          for (Eigen::Index i = 0; i < modes; ++i) {
+            s(i) = blocks_[static_cast<size_t>(i)]->component_inverse(comp)(static_cast<Eigen::Index>(a),
+                                                                            static_cast<Eigen::Index>(b));
+          }
+          const Eigen::MatrixXd hab = psi * s.asDiagonal() * psi.transpose();
           for (int d = 0; d < nc; ++d) {
-            const double w = weight(i, c, d);
-            for (size_t b = 0; b < idx.size(); ++b) {
-              for (size_t a = 0; a < idx.size(); ++a) {
-                h(idx[a] * nc + c, idx[b] * nc + d) += w * inv(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
-              }
-            }
+            for (int c = 0; c < nc; ++c) h(idx[a] * nc + c, idx[b] * nc + d) += hab(c, d);
           }
         }
       }

@@ -51,23 +51,24 @@ Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double 
   return at(lambda).contact_residual(x, load(lambda));
 }
 
-Linearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double lambda) const {
+LowRankLinearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, double lambda) const {
   if (!defined(lambda)) {
-    return {Eigen::VectorXd::Constant(x.size(), NAN), Eigen::MatrixXd::Constant(x.size(), x.size(), NAN),
-            Eigen::VectorXd::Constant(x.size(), NAN)};
+    LowRankLinearization l{Eigen::VectorXd::Constant(x.size(), NAN), {}, Eigen::VectorXd::Constant(x.size(), NAN)};
+    l.jacobian.capacitance = Eigen::MatrixXd::Constant(x.size(), x.size(), NAN);  // dense form
+    return l;
   }
   const WeightedResidual& wr = at(lambda);
-  Linearization l;
+  LowRankLinearization l;
   if (wr.rigid()) {  // the Signorini conditions on the impulses
     l.residual = wr.signorini_residual(x, load(lambda));
-    l.jacobian = wr.signorini_jacobian(x, load(lambda)).dense();
+    l.jacobian = wr.signorini_jacobian(x, load(lambda));
     l.parameter_derivative = parameter_ == ContinuationParameter::Frequency
                                  ? wr.signorini_frequency_derivative(x, load(lambda))
                                  : Eigen::VectorXd(wr.signorini_load_derivative(x, load(lambda)) / base_amplitude_);
     return l;
   }
   l.residual = wr.contact_residual(x, load(lambda));
-  l.jacobian = wr.contact_jacobian(x);
+  l.jacobian = wr.contact_jacobian_low_rank(x);
   if (parameter_ == ContinuationParameter::Frequency) {
     l.parameter_derivative = wr.contact_residual_frequency_derivative(x);
   } else {
@@ -101,16 +102,14 @@ Eigen::VectorXd SignoriniResponseFamily::residual(const Eigen::VectorXd& x, doub
   return family_->at(lambda).signorini_residual(x, family_->load(lambda), &piece);
 }
 
-Linearization SignoriniResponseFamily::linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const {
-  if (!family_->defined(lambda)) {
-    return {Eigen::VectorXd::Constant(x.size(), NAN), Eigen::MatrixXd::Constant(x.size(), x.size(), NAN),
-            Eigen::VectorXd::Constant(x.size(), NAN)};
-  }
+LowRankLinearization SignoriniResponseFamily::linearize(const Eigen::VectorXd& x, double lambda,
+                                                        const ActiveSet& piece) const {
+  if (!family_->defined(lambda)) return family_->linearize(x, lambda);  // NaN
   const WeightedResidual& wr = family_->at(lambda);
   const double s = family_->load(lambda);
-  Linearization l;
+  LowRankLinearization l;
   l.residual = wr.signorini_residual(x, s, &piece);
-  l.jacobian = wr.signorini_jacobian(x, s, &piece).dense();
+  l.jacobian = wr.signorini_jacobian(x, s, &piece);
   l.parameter_derivative = family_->parameter() == ContinuationParameter::Frequency
                                ? wr.signorini_frequency_derivative(x, s, &piece)
                                : Eigen::VectorXd(wr.signorini_load_derivative(x, s, &piece) / wr.forcing().amplitude);

@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <wbm/solvers/newton.hpp>
+
 namespace wbm::solvers {
 
 /// Residual R (n), Jacobian ∂R/∂x (n × n) and parameter derivative ∂R/∂λ (n) at (x, λ).
@@ -27,15 +29,26 @@ struct SparseLinearization {
   Eigen::VectorXd parameter_derivative;
 };
 
+/// The same with an identity-plus-low-rank Jacobian (newton.hpp), the condensed contact systems:
+/// J = (I + U V)/s with rank r the samples in contact. The bordered systems are then solved by
+/// the bordered Woodbury (bordered_low_rank, WoodburyLu): an (r + 2) LU per corrector iteration
+/// instead of an (n + 1) one, and U costs r products with the compliance instead of n.
+struct LowRankLinearization {
+  Eigen::VectorXd residual;
+  LowRankJacobian jacobian;
+  Eigen::VectorXd parameter_derivative;
+};
+
 /// A square system along one parameter: residual(x, λ) and linearize(x, λ), the latter
-/// returning a Linearization (dense) or a SparseLinearization. A system may also provide
+/// returning a Linearization (dense), a SparseLinearization or a LowRankLinearization. A system may also provide
 /// linear_solver(), a linear-solver policy (newton.hpp) for its Jacobians and for their forms
 /// bordered by the continuation (one more row and column); pseudo_arclength then uses it.
 template <class S>
 concept ParametrizedSystem = requires(const S& s, const Eigen::VectorXd& x, double p) {
   { s.residual(x, p) } -> std::convertible_to<Eigen::VectorXd>;
   requires std::same_as<decltype(s.linearize(x, p)), Linearization> ||
-               std::same_as<decltype(s.linearize(x, p)), SparseLinearization>;
+               std::same_as<decltype(s.linearize(x, p)), SparseLinearization> ||
+               std::same_as<decltype(s.linearize(x, p)), LowRankLinearization>;
 };
 
 /// The smooth piece of a piecewise-smooth residual: one entry per switching unknown (a contact

@@ -56,6 +56,23 @@ struct LowRankJacobian {
   [[nodiscard]] Eigen::MatrixXd dense() const;
 };
 
+/// The bordered matrix of a continuation corrector (continuation.hpp) for J = (I + U V)/s:
+///   B = [[α J, b], [cᵀ, d]]   ((n + 1) × (n + 1), the border last),
+/// itself identity plus low rank, so that its solves cost an (r + 2) × (r + 2) LU instead of an
+/// (n + 1) × (n + 1) one: with a = α/s,
+///   B = a (I + Û V̂),   Û = [[U, b/a, 0], [0, 0, 1/a]]   ((n + 1) × (r + 2)),
+///                      V̂ = [[V, 0], [0, 1], [cᵀ, d − a]]  ((r + 2) × (n + 1)),
+/// and the capacitance I + V̂ Û = [[C, V b/a, 0], [0, 1, 1/a], [cᵀ U, cᵀ b/a, d/a]] with
+/// C = I + V U, J's own: a bordered Woodbury [Govaerts 2000, Numerical Methods for Bifurcations
+/// of Dynamical Equilibria, Sec. 3.6, on bordered systems; Hager 1989]. det B = aⁿ⁺¹ det(I + V̂ Û),
+/// so the capacitance is singular exactly where B is: at a fold, where J is singular and B is
+/// not, it is regular. Returned with scale 1/a. When J is in the dense form (C = s J, n × n), B
+/// is returned dense (capacitance = B, scale 1), its block α J formed as (C/s) α, as the dense
+/// corrector forms it. cᵀ U needs U: J.u, else U = times_u(I_r) is formed (r products).
+/// Throws std::invalid_argument if α is not finite and > 0, or if b or c does not have J's size.
+[[nodiscard]] LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
+                                                const Eigen::VectorXd& c, double d);
+
 /// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n), either
 /// dense (Eigen::MatrixXd), sparse (Eigen::SparseMatrix<double>) or identity plus low rank
 /// (LowRankJacobian); the Jacobian's type picks the default linear solver (DenseLu, SparseLu

@@ -2,8 +2,9 @@
 /// Forced-response curves of the weighted-residual problem by pseudo-arclength continuation
 /// [JL14 Sec. 5.6], in the forcing frequency or the forcing amplitude, for any trial:weighting
 /// pair and formulation. The continuation runs on the condensed contact unknowns x (n_c·M) of
-/// WeightedResidual, so each corrector iteration costs one refactorization of G(f) and an
-/// (n_c·M + 1) bordered LU. Units: SI, Hz.
+/// WeightedResidual, so each corrector iteration costs one refactorization of G(f), r products
+/// with the compliance and an (r + 2) bordered Woodbury LU, r the contact samples that carry rank
+/// (issue #39; an (n_c·M + 1) dense LU once r > 3/4 n_c·M). Units: SI, Hz.
 
 #include <limits>
 #include <optional>
@@ -25,7 +26,8 @@ enum class ContinuationParameter {
 /// The condensed residual r(x; λ) of a WeightedResidual as a ParametrizedSystem:
 ///   residual(x, λ) = contact_residual at λ,
 ///   linearize(x, λ) = {r, ∂r/∂x, ∂r/∂λ} with ∂r/∂f from contact_residual_frequency_derivative
-///   and ∂r/∂F = −x_lin/(F₀ s_r).
+///   and ∂r/∂F = −x_lin/(F₀ s_r); ∂r/∂x identity plus low rank (contact_jacobian_low_rank, or
+///   signorini_jacobian with rigid stops).
 /// The WeightedResidual of the last frequency asked for is cached (continuation asks each f
 /// several times). At a frequency ≤ 0 or non-finite (a predictor overshooting on a steep branch)
 /// residual and linearization are NaN, so the corrector fails there and the step is halved.
@@ -34,7 +36,7 @@ class ForcedResponseFamily {
  public:
   ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter);
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const;
-  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const;
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const;
   /// The problem at λ (a frequency, or the base problem for an amplitude parameter).
   [[nodiscard]] const WeightedResidual& at(double lambda) const;
   /// Forcing scale s = F/F₀ at λ (1 for a frequency parameter).
@@ -70,12 +72,12 @@ class SignoriniResponseFamily {
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
     return family_->residual(x, lambda);
   }
-  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const {
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const {
     return family_->linearize(x, lambda);
   }
   [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double lambda) const;
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
-  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
   [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
 
  private:

@@ -16,6 +16,9 @@ namespace wbm::solvers::detail {
 inline Eigen::VectorXd row_change(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).cwiseAbs().rowwise().sum();
 }
+inline Eigen::VectorXd row_change(const LowRankJacobian& a, const LowRankJacobian& b) {
+  return row_change(a.dense(), b.dense());
+}
 inline Eigen::VectorXd row_change(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
   const Eigen::SparseMatrix<double> d = a - b;
   return d.cwiseAbs() * Eigen::VectorXd::Ones(d.cols());

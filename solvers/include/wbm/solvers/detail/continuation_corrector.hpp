@@ -50,9 +50,15 @@ inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const 
   return b;
 }
 
+// The same for an identity-plus-low-rank Jacobian: the bordered Woodbury (newton.hpp).
+inline LowRankJacobian bordered(const LowRankLinearization& l, const Eigen::VectorXd& t, double xs, double ls) {
+  const auto n = l.jacobian.size();
+  return bordered_low_rank(l.jacobian, xs, l.parameter_derivative * ls, t.head(n) / static_cast<double>(n), t(n));
+}
+
 // The linear-solver policy of a branch: the system's own (linear_solver(), for its Jacobians
 // and their bordered forms, e.g. NonlinearModes::BackboneSystem::KktSolver), else SparseLu for
-// sparse linearizations and DenseLu for dense ones.
+// sparse linearizations, WoodburyLu for low-rank ones and DenseLu for dense ones.
 template <class S>
 concept ProvidesLinearSolver = requires(const S& s, const Eigen::VectorXd& r) {
   { s.linear_solver().solve(r) } -> std::convertible_to<Eigen::VectorXd>;
@@ -63,12 +69,17 @@ auto branch_linear_solver(const S& system) {
     return system.linear_solver();
   } else if constexpr (std::is_same_v<Lin, SparseLinearization>) {
     return SparseLu{};
+  } else if constexpr (std::is_same_v<Lin, LowRankLinearization>) {
+    return WoodburyLu{};
   } else {
     return DenseLu{};
   }
 }
 
 inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
+inline bool finite(const LowRankLinearization& l) {
+  return l.jacobian.capacitance.allFinite() && l.jacobian.u.allFinite() && l.parameter_derivative.allFinite();
+}
 inline bool finite(const SparseLinearization& l) {
   return Eigen::Map<const Eigen::VectorXd>(l.jacobian.valuePtr(), l.jacobian.nonZeros()).allFinite() &&
          l.parameter_derivative.allFinite();
