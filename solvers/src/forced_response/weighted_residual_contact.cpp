@@ -63,6 +63,7 @@ void WeightedResidual::Impl::set_compliance() {
 
 
 Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& v) const {
+  if (v.cols() == 0) return Eigen::MatrixXd(v.rows(), 0);
   if (h_is_sparse) return *h_sparse * v;
   if (g->fast_compliance_product()) return g->compliance_product(v);
   return h * v;
@@ -300,6 +301,12 @@ LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::V
   jac.rows = size;
   if (4 * rank > 3 * size || anchored) {
     jac.capacitance = identity_plus_hn(tangents);
+    return jac;
+  }
+  if (rank == 0) {  // no sample in contact: J = I/s, without products of empty matrices (a null data pointer)
+    jac.u = Eigen::MatrixXd::Zero(size, 0);
+    jac.capacitance.resize(0, 0);
+    jac.times_v = [](const Eigen::MatrixXd& y) { return Eigen::MatrixXd(0, y.cols()); };
     return jac;
   }
   if (shift_kernel_once()) return shift_kernel_jacobian(tangents, std::move(jac), rank);
