@@ -5,6 +5,7 @@
 // (the path every branch took before).
 #include <wbm/solvers/newton.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>

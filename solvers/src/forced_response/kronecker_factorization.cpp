@@ -490,8 +490,9 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     return h;
   }
   // Ψ (n_c × modes), Ψ(c, i) = ψ_c(i): H_cd(k, l) = Σ_i Ψ(c, i) s_i(k, l) Ψ(d, i), so for each entry (k, l)
-  // of the blocks the n_c × n_c matrix Ψ diag(s_·(k, l)) Ψᵀ is one matrix product (the 24 stops of the
-  // blade: 2.5 ms per frequency where the scalar sum over (i, c, d) took about 60 ms; issue #39).
+  // of the blocks the n_c × n_c matrix Ψ diag(s_·(k, l)) Ψᵀ is one matrix product instead of a scalar
+  // sum over (i, c, d) (issue #39: the blade's 24 rigid stops at H = 6, where this loop was 66 % of the
+  // continuation, went from 30.9 s to 9.7 s).
   const auto modes = static_cast<Eigen::Index>(blocks_.size());
   Eigen::MatrixXd psi(nc, modes);
   if (su.modal) {
