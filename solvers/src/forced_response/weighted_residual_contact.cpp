@@ -237,14 +237,14 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
       // A hysteretic law: − Σ_q p_j(τ_q) κ_q/Q q_k(τ_a(q)) over the stick samples q hanging on
       // the slip sample a(q) (∂f_q/∂u_a = −κ_q).
       const auto na = static_cast<Eigen::Index>(t.anchored.size());
-      Eigen::VectorXd tq(na), ta(na), kq(na);
+      std::vector<int> slips(t.anchored.size());
+      Eigen::VectorXd kq(na);
       for (Eigen::Index i = 0; i < na; ++i) {
         const int r = t.anchored[static_cast<size_t>(i)];
-        tq(i) = sampling->tau(r);
-        ta(i) = sampling->tau(t.anchor(r));
+        slips[static_cast<size_t>(i)] = t.anchor(r);
         kq(i) = t.kc(r) / q;
       }
-      block.noalias() -= (kq.asDiagonal() * weighting_values(tq)).transpose() * trial.values(ta, 0);
+      block.noalias() -= (kq.asDiagonal() * weighting_rows_at(t.anchored)).transpose() * trial_rows_at(slips);
     }
     for (int k = 0; k < m; ++k) {
       for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
@@ -253,19 +253,28 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
       // A varying normal load: + Σ_q p_j(τ_q) (∂f_q/∂u_n,r)/Q q_k(τ_r) into the columns of the
       // normal contact n (r the sample whose slip force f_q hangs on).
       const auto nq = static_cast<Eigen::Index>(t.coupled.size());
-      Eigen::VectorXd tq(nq), tr(nq), kq(nq);
-      for (Eigen::Index i = 0; i < nq; ++i) {
-        tq(i) = sampling->tau(t.coupled[static_cast<size_t>(i)]);
-        tr(i) = sampling->tau(t.coupled_at[static_cast<size_t>(i)]);
-        kq(i) = t.coupled_weight[static_cast<size_t>(i)] / q;
-      }
-      const Eigen::MatrixXd cross = (kq.asDiagonal() * weighting_values(tq)).transpose() * trial.values(tr, 0);
+      Eigen::VectorXd kq(nq);
+      for (Eigen::Index i = 0; i < nq; ++i) kq(i) = t.coupled_weight[static_cast<size_t>(i)] / q;
+      const Eigen::MatrixXd cross =
+          (kq.asDiagonal() * weighting_rows_at(t.coupled)).transpose() * trial_rows_at(t.coupled_at);
       for (int k = 0; k < m; ++k) {
         for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + t.normal) += cross(j, k);
       }
     }
   }
   return jac;
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::trial_rows_at(const std::vector<int>& at) const {
+  return sampling->trial->rows_at(at, trial, sampling->tau);
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::weighting_rows_at(const std::vector<int>& at) const {
+  Eigen::MatrixXd v = sampling->weighting->rows_at(at, weighting, sampling->tau);
+  if (keep.size() > 0) v *= keep.asDiagonal();
+  return v;
 }
 
 

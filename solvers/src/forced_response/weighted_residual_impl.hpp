@@ -13,6 +13,7 @@
 
 #include <wbm/solvers/weighted_residual.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -53,6 +54,13 @@ struct SampledBasis {
   // one, applied to every projection (Π of WeightedResidualOptions::harmonics); empty: all kept.
   Eigen::RowVectorXd keep;
   int q = 0, m = 0, derivative = 0;
+  // Fourier: the dense table of rows_at, filled once (copies and threads share it).
+  struct Table {
+    std::atomic<Eigen::Index> asked{0};  // rows asked for so far
+    std::once_flag once;
+    Eigen::MatrixXd values;
+  };
+  std::shared_ptr<Table> table = std::make_shared<Table>();
 
   SampledBasis(const TimeBasis& basis, const Eigen::VectorXd& tau, int d, std::shared_ptr<const spectral::Aft> fft)
       : q(static_cast<int>(tau.size())), m(basis.dimension()), derivative(d) {
@@ -66,6 +74,33 @@ struct SampledBasis {
     } else {
       values = basis.wavelet_basis()->sparse_values(tau, d);
     }
+  }
+
+  // The functions at the samples `at` (|at| × M, dense; no selection applied), equal entry for
+  // entry to basis.values(τ_at, d): for wavelets the stored sparse rows (PeriodizedBasis::values
+  // densifies the same sparse_values); for Fourier the rows evaluated at τ_at until the rows asked
+  // for add up to Q, then the rows of the Q × M table of basis.values(τ, d), evaluated once, if it
+  // holds at most 2^22 entries (32 MB). So the table costs at most as much again as the rows
+  // evaluated before it: a friction law's stick samples ask for a large share of the Q rows at
+  // every Newton iteration (weighted_residual_contact.cpp), a short solve for a few rows.
+  [[nodiscard]] Eigen::MatrixXd rows_at(const std::vector<int>& at, const TimeBasis& basis, const Eigen::VectorXd& tau) const {
+    const auto rows = static_cast<Eigen::Index>(at.size());
+    if (!aft) {
+      Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rows, m);
+      for (Eigen::Index i = 0; i < rows; ++i) {
+        for (SparseRows::InnerIterator it(values, at[static_cast<size_t>(i)]); it; ++it) out(i, it.col()) = it.value();
+      }
+      return out;
+    }
+    if (static_cast<double>(q) * m <= 4194304.0 && table->asked.fetch_add(rows) + rows >= q) {
+      std::call_once(table->once, [&] { table->values = basis.values(tau, derivative); });
+      Eigen::MatrixXd out(rows, m);
+      for (Eigen::Index i = 0; i < rows; ++i) out.row(i) = table->values.row(at[static_cast<size_t>(i)]);
+      return out;
+    }
+    Eigen::VectorXd t(rows);
+    for (Eigen::Index i = 0; i < rows; ++i) t(i) = tau(at[static_cast<size_t>(i)]);
+    return basis.values(t, derivative);
   }
 
   // Σ_k X(i, k) v_k^{(d)}(τ_q): n × M coefficients → n × Q samples.
@@ -470,6 +505,13 @@ struct WeightedResidual::Impl {
     if (keep.size() > 0) v *= keep.asDiagonal();
     return v;
   }
+
+  // The trial functions (d = 0) and the weighting functions, the dropped ones of a selection as
+  // 0, at the samples τ_at (rows = |at|, columns = M), as trial.values(τ_at, 0) and
+  // weighting_values(τ_at), entry for entry, from Sampling (SampledBasis::rows_at: the stored
+  // sparse rows of a wavelet basis, a Fourier basis' table once it pays).
+  [[nodiscard]] Eigen::MatrixXd trial_rows_at(const std::vector<int>& at) const;
+  [[nodiscard]] Eigen::MatrixXd weighting_rows_at(const std::vector<int>& at) const;
 
   // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
   [[nodiscard]] std::pair<Eigen::VectorXd, Eigen::VectorXd> sloped_samples(const ContactTangent& t) const;
