@@ -61,23 +61,53 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
   const Eigen::MatrixXd eu = rows(u);
 
   Eigen::MatrixXd y = Eigen::MatrixXd::Identity(2 * n, 2 * n);
-  // Powers e^{A₀h·2^j}, built on demand, for runs of steps without contact stiffness.
-  std::vector<Eigen::MatrixXd> powers = {step};
-  auto advance_free = [&](Eigen::Index steps) {
-    for (size_t j = 0; steps > 0; ++j, steps >>= 1) {
-      if (j == powers.size()) powers.push_back(powers.back() * powers.back());
-      if (steps & 1) y = powers[j] * y;
-    }
-  };
-  // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end):
-  //   (I − (hs/2) K_b) Y ← e^{A₀ hs} (I + (hs/2) K_a) Y, the inverse by Woodbury.
-  auto trapezoid = [&](const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka, const Eigen::VectorXd& kb) {
-    if (!ka.isZero(0.0)) y += u * ((0.5 * hs) * ka.asDiagonal() * rows(y));
-    y = exp_step * y;
+  // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end), applied to z:
+  //   (I − (hs/2) K_b) Z ← e^{A₀ hs} (I + (hs/2) K_a) Z, the inverse by Woodbury.
+  auto trapezoid_on = [&](Eigen::MatrixXd& z, const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka,
+                          const Eigen::VectorXd& kb) {
+    if (!ka.isZero(0.0)) z += u * ((0.5 * hs) * ka.asDiagonal() * rows(z));
+    z = exp_step * z;
     if (!kb.isZero(0.0)) {
       const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
       const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
-      y += u * small.partialPivLu().solve(d * rows(y));
+      z += u * small.partialPivLu().solve(d * rows(z));
+    }
+  };
+  auto trapezoid = [&](const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka, const Eigen::VectorXd& kb) {
+    trapezoid_on(y, exp_step, hs, ka, kb);
+  };
+  // Runs of whole steps over which no contact crosses its gap and every contact's stiffness is
+  // the same at both ends of each step: each step is one matrix T_k, e^{A₀h} without contact
+  // stiffness, the trapezoidal step at k otherwise (a linear penalty stop keeps k over a whole
+  // contact phase). A run of L steps is T_k^L by binary powers T_k^{2^j}, kept per k (at most
+  // kMaxRuns of them): O(log L) products instead of L.
+  struct RunPowers {
+    Eigen::VectorXd k;
+    std::vector<Eigen::MatrixXd> powers;  // T_k^{2^j}
+  };
+  constexpr size_t kMaxRuns = 8;
+  std::vector<RunPowers> runs = {{Eigen::VectorXd::Zero(nc), {step}}};
+  Eigen::VectorXd run_k = Eigen::VectorXd::Zero(nc);
+  Eigen::Index run_length = 0;
+  auto advance_run = [&] {
+    if (run_length == 0) return;
+    if (run_length == 1 && !run_k.isZero(0.0)) {
+      trapezoid(step, h, run_k, run_k);  // one step: no power to form
+      run_length = 0;
+      return;
+    }
+    auto it = std::find_if(runs.begin(), runs.end(), [&](const RunPowers& r) { return r.k == run_k; });
+    if (it == runs.end()) {
+      if (runs.size() == kMaxRuns) runs.resize(1);  // e^{A₀h}'s powers are kept
+      Eigen::MatrixXd t = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+      trapezoid_on(t, step, h, run_k, run_k);
+      runs.push_back({run_k, {std::move(t)}});
+      it = runs.end() - 1;
+    }
+    std::vector<Eigen::MatrixXd>& powers = it->powers;
+    for (size_t j = 0; run_length > 0; ++j, run_length >>= 1) {
+      if (j == powers.size()) powers.push_back(powers.back() * powers.back());
+      if (run_length & 1) y = powers[j] * y;
     }
   };
   // Fractions θ ∈ (0, 1) of step p where a contact displacement, interpolated linearly between
@@ -106,7 +136,6 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
     }
     return k;
   };
-  Eigen::Index free_run = 0;
   Eigen::VectorXd k_now = stiffness(0);
   for (Eigen::Index p = 0; p < p_count; ++p) {
     const Eigen::VectorXd k_next = stiffness(p + 1);
@@ -116,8 +145,7 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
       // interpolated crossing, each piece integrated with one-sided stiffnesses (evaluated a
       // relative 1e-9 inside the piece). Without this split the switch sits at a sample, which
       // is first order in h, with an error growing with the stop's stiffness (issue #19).
-      advance_free(free_run);
-      free_run = 0;
+      advance_run();
       std::vector<double> edges = {0.0};
       edges.insert(edges.end(), theta.begin(), theta.end());
       edges.push_back(1.0);
@@ -131,19 +159,19 @@ Eigen::MatrixXd monodromy_of(const MechanicalSystem& system, const std::vector<C
       k_now = k_next;
       continue;
     }
-    if (k_now.isZero(0.0) && k_next.isZero(0.0)) {
-      ++free_run;
-      k_now = k_next;
+    if (k_now == k_next) {
+      if (run_length > 0 && k_now != run_k) advance_run();
+      run_k = k_now;
+      ++run_length;
       continue;
     }
-    advance_free(free_run);
-    free_run = 0;
+    advance_run();
     // (I + (h/2) K_p), e^{A₀h}, then (I − (h/2) K_{p+1})⁻¹ Z = Z + U (I − D E U)⁻¹ D E Z,
     // D = (h/2) diag(k_{p+1}) (Woodbury)
     trapezoid(step, h, k_now, k_next);
     k_now = k_next;
   }
-  advance_free(free_run);
+  advance_run();
 
   return y;
 }

@@ -18,8 +18,9 @@
 /// trapezoidal rule (variation of constants):
 ///   (I − (h/2) K_{p+1}) Y_{p+1} = e^{A₀h} (I + (h/2) K_p) Y_p,   K_p = Σ_c k_c(t_p) b_c e_cᵀ,
 /// second-order in h where k_c is smooth; K_p has rank n_c, so both brackets cost O(n n_c)
-/// (Woodbury), and runs of steps without contact stiffness (k_c = 0) are one product with a power
-/// of e^{A₀h}. A step in which a contact displacement crosses its gap (where the penalty laws'
+/// (Woodbury), and a run of L steps over which the stiffnesses stay the same (k_c = 0, or a
+/// linear penalty in contact) is the power T_k^L of that one step matrix (e^{A₀h} without
+/// contact), by binary powers: O(log L) products of 2n × 2n instead of L. A step in which a contact displacement crosses its gap (where the penalty laws'
 /// stiffness jumps) is split at the crossing of the samples' linear interpolant, each piece with
 /// its own e^{A₀h_s} and one-sided stiffnesses: the switch then sits at the crossing to O(h²)
 /// instead of at a sample (first order, with an error growing with the stop's stiffness; issue
