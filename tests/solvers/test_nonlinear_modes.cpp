@@ -99,6 +99,41 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The Jacobian reuses its sparsity pattern from one linearization to the next while the (row,
+// column) sequence of its entries is unchanged (core/triplet_pattern.hpp), and keeps up to four
+// patterns. Against Eigen's setFromTriplets (a new BackboneSystem assembles from scratch): on
+// seven pieces (exact contact: each piece its own pattern; penalty: one), each linearized at two
+// states in a row, the whole visited twice, so that patterns are reused, evicted and rebuilt, the
+// entries are equal bit for bit and so are the patterns.
+TEST(NonlinearModes, BackboneJacobianReusingItsPatternEqualsSetFromTriplets) {
+  const auto nm = modes(1e-3, 4, 32);
+  for (double k : {0.0, 3e9}) {
+    const solvers::NonlinearModes::BackboneSystem system(nm, k);
+    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
+    x(x.size() - 1) = 1.01;
+    if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+    const double energy = 1.4;
+    const solvers::ActiveSet own = system.active_set(x, energy);
+    for (int round = 0; round < 2; ++round) {
+      for (size_t visit = 0; visit < 14; ++visit) {
+        const size_t piece = visit / 2;
+        solvers::ActiveSet a = own;
+        for (size_t i = piece; i < a.size(); i += 7) a[i] ^= 1U;
+        const Eigen::VectorXd xi =
+            x + (1e-3 * static_cast<double>(2 * round + visit % 2 + 1)) * Eigen::VectorXd::LinSpaced(x.size(), -1.0, 1.0);
+        const Eigen::SparseMatrix<double> reused = system.linearize(xi, energy, a).jacobian;
+        const Eigen::SparseMatrix<double> fresh =
+            solvers::NonlinearModes::BackboneSystem(nm, k).linearize(xi, energy, a).jacobian;
+        ASSERT_EQ(reused.nonZeros(), fresh.nonZeros()) << "penalty " << k << ", piece " << piece;
+        EXPECT_EQ(Eigen::MatrixXd(reused - fresh).cwiseAbs().maxCoeff(), 0.0) << "penalty " << k << ", piece " << piece;
+        for (Eigen::Index i = 0; i < fresh.nonZeros(); ++i) {
+          ASSERT_EQ(reused.innerIndexPtr()[i], fresh.innerIndexPtr()[i]) << "penalty " << k << ", piece " << piece;
+        }
+      }
+    }
+  }
+}
+
 // The pieces of the backbone system (PiecewiseSmoothSystem): on a fixed active set the residual
 // is smooth, so its Jacobian matches central differences everywhere, also at samples where the
 // nonsmooth min would pick the other branch; where the piece is the min's own, it is the nonsmooth

@@ -15,6 +15,8 @@
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
 
+#include "core/triplet_pattern.hpp"
+
 namespace wbm::solvers {
 
 void BackboneContinuationOptions::validate() const {
@@ -118,7 +120,8 @@ NewtonResult newton_homotopy(const NonlinearModes::BackboneSystem& system, Eigen
 
 }  // namespace
 
-NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness) : nm_(&modes) {
+NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, double penalty_stiffness)
+    : nm_(&modes), pattern_(std::make_shared<const detail::TripletPattern>()) {
   if (!(penalty_stiffness >= 0.0) || !std::isfinite(penalty_stiffness)) {
     throw std::invalid_argument("BackboneSystem: penalty_stiffness = " + format_number(penalty_stiffness) +
                                 ": must be >= 0 [N/m]");
@@ -347,8 +350,7 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   } else {  // penalty: ∂HB(k, i)/∂Y(l, j) = w_i w_j Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
     for (const auto& e : nm.contact_curvature(state.penalty_stiffness)) add(e.row(), e.col(), e.value());
   }
-  out.jacobian.resize(size_, size_);
-  out.jacobian.setFromTriplets(t.begin(), t.end());
+  out.jacobian = pattern_->assemble(size_, size_, t);  // setFromTriplets, the pattern reused
   return out;
 }
 

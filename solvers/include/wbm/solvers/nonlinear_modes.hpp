@@ -65,6 +65,10 @@
 
 namespace wbm::solvers {
 
+namespace detail {
+class TripletPattern;  // solvers/src/core/triplet_pattern.hpp
+}  // namespace detail
+
 /// A rigid stop: u_c ≤ gap [m], gap > 0, with u_c = u_dof, or u_c = Σ_(j, w) ∈ along w u_j along a
 /// direction (e.g. n·u at a 3D node with n the unit outward normal of a casing, g = g0 − n·u;
 /// −e_dof for a stop on the −x side). `dof` names the stop and, with `along`, must be one of its
@@ -338,6 +342,8 @@ class NonlinearModes {
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
     std::optional<contact::LinearPenalty> penalty_law_;  // κ (g)₊ on the normalized gap (penalty only)
     Eigen::Index ny_ = 0, size_ = 0;
+    // The Jacobian's sparsity patterns, reused while the active set keeps them (copies share it).
+    std::shared_ptr<const detail::TripletPattern> pattern_;
   };
   /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
   /// (newton() without line search, BackboneSystem::KktSolver) to ‖R‖₂ ≤ options.tolerance in at most

@@ -1,0 +1,43 @@
+#pragma once
+// A sparse matrix assembled from triplets as Eigen's setFromTriplets assembles it (column-major
+// and compressed, duplicates summed in the order given, explicit zeros kept), reusing the work of
+// an earlier call whose (row, column) sequence was the same: then only the values are scattered,
+// O(T) for T triplets, without the sort and the row-major to column-major copy of setFromTriplets.
+// A Jacobian assembled at every corrector iteration keeps its pattern while its active set does
+// (the KKT backbone, nonlinear_modes_kkt.cpp). The entries are equal bit for bit to those of
+// setFromTriplets: each position starts at its first triplet's value, the later ones added in
+// their order, as Eigen's collapseDuplicates does. Up to kPatterns patterns are kept (the
+// nonsmooth system and a piece can differ); copies share them; safe to call from several threads.
+// Private to wbm::solvers.
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include <Eigen/SparseCore>
+
+namespace wbm::solvers::detail {
+
+class TripletPattern {
+ public:
+  using Triplets = std::vector<Eigen::Triplet<double>>;
+  // rows × cols from the triplets `t` (indices in range: Eigen's own assertion).
+  [[nodiscard]] Eigen::SparseMatrix<double> assemble(Eigen::Index rows, Eigen::Index cols, const Triplets& t) const;
+
+ private:
+  static constexpr std::size_t kPatterns = 4;
+  struct Pattern {
+    Eigen::Index rows = 0, cols = 0;
+    std::vector<int> row, col;      // the triplets' indices, in order
+    std::vector<int> position;      // triplet i → its index in the compressed value array
+    std::vector<char> first;        // triplet i is the first at its position
+    Eigen::SparseMatrix<double> matrix;
+  };
+  struct Cache {
+    std::mutex mutex;
+    std::vector<std::shared_ptr<const Pattern>> patterns;  // most recently used last
+  };
+  std::shared_ptr<Cache> cache_ = std::make_shared<Cache>();
+};
+
+}  // namespace wbm::solvers::detail
