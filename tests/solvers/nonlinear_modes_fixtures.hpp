@@ -37,6 +37,16 @@ inline wbm::solvers::NonlinearModes modes(
                                       {.harmonics = harmonics, .samples = samples, .algorithm = algorithm});
 }
 
+// A trial state of BackboneSystem(modes(1e-3, 4, 32), k) at E = 1.4: the linear state at E = 1
+// scaled by 1.3 (the tip beyond its gap over part of the period), ω²/ω₀² = 1.01 and, for exact
+// contact (k = 0), multipliers 0 … 0.05 over the 32 samples (no λ tail with a penalty).
+inline Eigen::VectorXd backbone_trial_state(const wbm::solvers::NonlinearModes::BackboneSystem& system, double k) {
+  Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
+  x(x.size() - 1) = 1.01;
+  if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+  return x;
+}
+
 // The converged level of the backbone at `energy` (to 1e-12), or nullptr.
 inline const wbm::solvers::ModeLevel* included(const wbm::solvers::Backbone& b, double energy) {
   for (const auto& l : b.included) {

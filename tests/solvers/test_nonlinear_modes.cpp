@@ -83,9 +83,7 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
   const auto nm = modes(1e-3, 4, 32);
   for (double k : {0.0, 3e9}) {
     const solvers::NonlinearModes::BackboneSystem system(nm, k);
-    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;  // the tip beyond its gap over part of the period
-    x(x.size() - 1) = 1.01;                               // ω²/ω₀² (no λ tail with a penalty)
-    if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+    Eigen::VectorXd x = wbm::testing::backbone_trial_state(system, k);
     x.head(20) += 1e-2 * Eigen::VectorXd::LinSpaced(20, -1.0, 1.0);
     if (k == 0.0) x(x.size() - 32 + 3) = 0.7;  // a sample whose min picks λ although g > 0
     const double energy = 1.4;
@@ -109,9 +107,7 @@ TEST(NonlinearModes, BackboneJacobianReusingItsPatternEqualsSetFromTriplets) {
   const auto nm = modes(1e-3, 4, 32);
   for (double k : {0.0, 3e9}) {
     const solvers::NonlinearModes::BackboneSystem system(nm, k);
-    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
-    x(x.size() - 1) = 1.01;
-    if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+    Eigen::VectorXd x = wbm::testing::backbone_trial_state(system, k);
     const double energy = 1.4;
     const solvers::ActiveSet own = system.active_set(x, energy);
     for (int round = 0; round < 2; ++round) {
@@ -143,9 +139,7 @@ TEST(NonlinearModes, BackbonePiecesAreSmoothAndTheirEventsMatchTheMin) {
   const auto nm = modes(1e-3, 4, 32);
   for (double k : {0.0, 3e9}) {
     const solvers::NonlinearModes::BackboneSystem system(nm, k);
-    Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
-    x(x.size() - 1) = 1.01;
-    if (k == 0.0) x.tail(32) = Eigen::VectorXd::LinSpaced(32, 0.0, 0.05);
+    Eigen::VectorXd x = wbm::testing::backbone_trial_state(system, k);
     x.head(20) += 1e-2 * Eigen::VectorXd::LinSpaced(20, -1.0, 1.0);
     const double energy = 1.4;
     const solvers::ActiveSet own = system.active_set(x, energy);
