@@ -20,8 +20,8 @@
 /// second-order in h where k_c is smooth; K_p has rank n_c, so both brackets cost O(n n_c)
 /// (Woodbury), and a run of L steps over which the stiffnesses stay the same (k_c = 0, or a
 /// linear penalty in contact) is the power T_k^L of that one step matrix (e^{A₀h} without
-/// contact), by binary powers: O(log L) products of 2n × 2n instead of L. A step in which a contact displacement crosses its gap (where the penalty laws'
-/// stiffness jumps) is split at the crossing of the samples' linear interpolant, each piece with
+/// contact), by binary powers: O(log L) products of 2n × 2n instead of L. A step in which a
+/// contact displacement crosses its gap (where the penalty laws' stiffness jumps) is split at the crossing of the samples' linear interpolant, each piece with
 /// its own e^{A₀h_s} and one-sided stiffnesses: the switch then sits at the crossing to O(h²)
 /// instead of at a sample (first order, with an error growing with the stop's stiffness; issue
 /// #19: a stop 100× stiffer than its spring had |μ| up to 1.6 instead of 0.94 at P = 512).
