@@ -26,7 +26,7 @@ using wbm::contact::JenkinsLoop;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 
 Eigen::VectorXd angles(int q) { return Eigen::VectorXd::LinSpaced(q, 0.0, 2.0 * kPi * (q - 1) / q); }
 

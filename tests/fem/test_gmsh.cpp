@@ -28,22 +28,22 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Scratch {
+struct GmshScratch {
   fs::path dir = fs::temp_directory_path() / ("wbm_test_gmsh_" + std::to_string(::getpid()));
-  Scratch() { fs::create_directories(dir); }
-  ~Scratch() {
+  GmshScratch() { fs::create_directories(dir); }
+  ~GmshScratch() {
     std::error_code ignored;
     fs::remove_all(dir, ignored);
   }
 };
 
-const fs::path& work() {
-  static const Scratch scratch;
+const fs::path& gmsh_work() {
+  static const GmshScratch scratch;
   return scratch.dir;
 }
 
-fs::path write(const std::string& name, const std::string& text) {
-  const fs::path p = work() / name;
+fs::path write_file(const std::string& name, const std::string& text) {
+  const fs::path p = gmsh_work() / name;
   std::ofstream(p) << text;
   return p;
 }
@@ -64,15 +64,15 @@ Mesh.SecondOrderLinear = 1;
 Mesh.SaveGroupsOfNodes = 1;
 )";
 
-const std::string kMaterial = "*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7800.\n"
+const std::string kBoxMaterial = "*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7800.\n"
                               "*SOLID SECTION, ELSET=SOLID, MATERIAL=STEEL\n";
 
 }  // namespace
 
 TEST(Gmsh, MeshesABoxIntoQuadraticTetrahedraWhoseMassIsRhoV) {
-  const fs::path mesh = work() / "box.inp";
-  const int written = wbm::fem::mesh_with_gmsh(write("box.geo", kBox), mesh, {.executable = "gmsh", .dimension = 3, .numbers = {{"h", 0.005}}});
-  const auto deck = wbm::fem::read_calculix_deck(write("free.inp", "*INCLUDE, INPUT=box.inp\n" + kMaterial));
+  const fs::path mesh = gmsh_work() / "box.inp";
+  const int written = wbm::fem::mesh_with_gmsh(write_file("box.geo", kBox), mesh, {.executable = "gmsh", .dimension = 3, .numbers = {{"h", 0.005}}});
+  const auto deck = wbm::fem::read_calculix_deck(write_file("free.inp", "*INCLUDE, INPUT=box.inp\n" + kBoxMaterial));
   EXPECT_EQ(static_cast<size_t>(written), deck.nodes.size());
   ASSERT_EQ(deck.element_types.count("C3D10"), 1u);
   EXPECT_GT(deck.element_types.at("C3D10"), 100);
@@ -90,8 +90,8 @@ TEST(Gmsh, MeshesABoxIntoQuadraticTetrahedraWhoseMassIsRhoV) {
 // its thin direction z) is close to Euler–Bernoulli's f = (1.8751²/2π) √(EI/(ρAL⁴)) with
 // I = b t³/12: within 3 % at L/t = 20 (shear and the clamp's Poisson stiffening remain).
 TEST(Gmsh, ClampedBoxBendsAtTheBeamFrequency) {
-  const fs::path mesh = work() / "box2.inp";
-  (void)wbm::fem::mesh_with_gmsh(write("box2.geo", kBox), mesh, {.executable = "gmsh", .dimension = 3, .numbers = {{"h", 0.005}}});
+  const fs::path mesh = gmsh_work() / "box2.inp";
+  (void)wbm::fem::mesh_with_gmsh(write_file("box2.geo", kBox), mesh, {.executable = "gmsh", .dimension = 3, .numbers = {{"h", 0.005}}});
   const auto raw = wbm::fem::read_calculix_deck(mesh);
   std::ostringstream root;
   root << "*NSET, NSET=ROOT\n";
@@ -104,7 +104,7 @@ TEST(Gmsh, ClampedBoxBendsAtTheBeamFrequency) {
   }
   ASSERT_GT(count, 10);
   const auto deck = wbm::fem::read_calculix_deck(
-      write("clamped.inp", "*INCLUDE, INPUT=box2.inp\n" + root.str() + kMaterial + "*BOUNDARY\nROOT, 1, 3\n"));
+      write_file("clamped.inp", "*INCLUDE, INPUT=box2.inp\n" + root.str() + kBoxMaterial + "*BOUNDARY\nROOT, 1, 3\n"));
   const auto model = wbm::fem::assemble_with_calculix(deck);
   ASSERT_EQ(model.mass.rows(), 3 * (static_cast<Eigen::Index>(deck.nodes.size()) - count));
   // The full model is ~12 000 DOFs: its first frequency through Craig–Bampton on the tip node
@@ -124,17 +124,17 @@ TEST(Gmsh, ClampedBoxBendsAtTheBeamFrequency) {
 
 TEST(Gmsh, ReportsGmshsOwnErrorsAndAMissingExecutable) {
   wbm::testing::expect_throw_with<std::runtime_error>(
-      [&] { (void)wbm::fem::mesh_with_gmsh(write("bad.geo", "Box(1) = {0, 0, 0, 1, 1, 1}\nPoint(1) = {0, 0, 0;\n"),
-                                           work() / "bad.inp"); },
+      [&] { (void)wbm::fem::mesh_with_gmsh(write_file("bad.geo", "Box(1) = {0, 0, 0, 1, 1, 1}\nPoint(1) = {0, 0, 0;\n"),
+                                           gmsh_work() / "bad.inp"); },
       {"bad.geo: gmsh (gmsh) could not mesh it", "gmsh says:", "Error", "bad.inp.log"});
-  EXPECT_FALSE(fs::exists(work() / "bad.inp"));
+  EXPECT_FALSE(fs::exists(gmsh_work() / "bad.inp"));
   wbm::testing::expect_throw_with<std::runtime_error>(
-      [&] { (void)wbm::fem::mesh_with_gmsh(write("ok.geo", kBox), work() / "ok.inp", {.executable = "wbm-no-such-gmsh", .dimension = 3, .numbers = {}}); },
+      [&] { (void)wbm::fem::mesh_with_gmsh(write_file("ok.geo", kBox), gmsh_work() / "ok.inp", {.executable = "wbm-no-such-gmsh", .dimension = 3, .numbers = {}}); },
       {"cannot run 'wbm-no-such-gmsh'", "install gmsh (Debian gmsh)"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)wbm::fem::mesh_with_gmsh(work() / "missing.geo", work() / "m.inp"); }, {"missing.geo does not exist"});
+      [&] { (void)wbm::fem::mesh_with_gmsh(gmsh_work() / "missing.geo", gmsh_work() / "m.inp"); }, {"missing.geo does not exist"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)wbm::fem::mesh_with_gmsh(write("ok2.geo", kBox), work() / "m.inp", {.executable = "gmsh", .dimension = 4, .numbers = {}}); },
+      [&] { (void)wbm::fem::mesh_with_gmsh(write_file("ok2.geo", kBox), gmsh_work() / "m.inp", {.executable = "gmsh", .dimension = 4, .numbers = {}}); },
       {"GmshOptions.dimension = 4: must be 1, 2 or 3"});
 }
 

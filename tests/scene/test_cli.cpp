@@ -38,17 +38,17 @@ struct Outcome {
 };
 
 // A scratch folder per process, removed at exit.
-struct Scratch {
+struct CliScratch {
   fs::path dir = fs::temp_directory_path() / ("wbm_test_cli_" + std::to_string(::getpid()));
-  Scratch() { fs::create_directories(dir); }
-  ~Scratch() {
+  CliScratch() { fs::create_directories(dir); }
+  ~CliScratch() {
     std::error_code ignored;
     fs::remove_all(dir, ignored);
   }
 };
 
-fs::path work() {
-  static const Scratch scratch;
+fs::path cli_work() {
+  static const CliScratch scratch;
   return scratch.dir;
 }
 
@@ -60,7 +60,7 @@ std::string slurp(const fs::path& p) {
 }
 
 Outcome run_wbm(const std::string& args) {
-  const fs::path out = work() / "stdout", err = work() / "stderr";
+  const fs::path out = cli_work() / "stdout", err = cli_work() / "stderr";
   const std::string cmd = std::string(WBM_CLI) + " " + args + " > " + out.string() + " 2> " + err.string();
   const int raw = std::system(cmd.c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
@@ -97,7 +97,7 @@ TEST(Cli, Case1ReproducesTheFigureExecutableExactly) {
 #ifndef WBM_FIG06
   GTEST_SKIP() << "the reproductions are not built (-DWBM_BUILD_REPRODUCE=OFF): no Fig. 6 executable to compare with";
 #else
-  const fs::path out = work() / "case1", fig = work() / "fig";
+  const fs::path out = cli_work() / "case1", fig = cli_work() / "fig";
   const Outcome run = run_wbm("run --no-plots " + case1() + " -o " + out.string());
   ASSERT_EQ(run.status, 0) << run.err;
   // The status line itself ("NOT converged" also contains "converged").
@@ -114,7 +114,7 @@ TEST(Cli, Case1ReproducesTheFigureExecutableExactly) {
   EXPECT_EQ(result["scene"]["basis"]["dimension"], 64);
   EXPECT_EQ(result["files"].size(), 5u);
   // Re-running the result.json gives the same files.
-  const fs::path again = work() / "again";
+  const fs::path again = cli_work() / "again";
   ASSERT_EQ(run_wbm("run --no-plots -q " + (out / "result.json").string() + " -o " + again.string()).status, 0);
   EXPECT_EQ(slurp(out / "displacement.csv"), slurp(again / "displacement.csv"));
 #endif
@@ -122,7 +122,7 @@ TEST(Cli, Case1ReproducesTheFigureExecutableExactly) {
 
 // Bad input: exit 2, one line per problem on standard error, and no output folder at all.
 TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
-  const fs::path scene = work() / "bad.toml", out = work() / "never";
+  const fs::path scene = cli_work() / "bad.toml", out = cli_work() / "never";
   std::ofstream(scene) << "[structure]\nmass = 1.0\nstiffness = -4.0e4\nstifness = 1\n"
                           "[forcing]\namplitude = 1.0\nfrequency_hz = 10.0\n"
                           "[basis]\ntrial = \"db6\"\nweighting = \"fourier\"\nformulation = \"strong\"\n";
@@ -134,9 +134,9 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
   EXPECT_NE(run.err.find("not run; nothing written"), std::string::npos);
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(run_wbm("check " + scene.string()).status, 2);
-  EXPECT_EQ(run_wbm("run --no-plots " + (work() / "absent.toml").string()).status, 2);
+  EXPECT_EQ(run_wbm("run --no-plots " + (cli_work() / "absent.toml").string()).status, 2);
   EXPECT_EQ(run_wbm("frobnicate").status, 2);
-  const fs::path file = work() / "a_file";
+  const fs::path file = cli_work() / "a_file";
   std::ofstream(file) << "not a folder\n";
   const Outcome blocked = run_wbm("run --no-plots " + case1() + " -o " + file.string());
   EXPECT_EQ(blocked.status, 2);
@@ -145,7 +145,7 @@ TEST(Cli, BadSceneExitsTwoAndWritesNothing) {
 
 // Non-convergence is an outcome: exit 1, result.json with the Newton report, no curve files.
 TEST(Cli, NonConvergenceExitsOneWithDiagnostics) {
-  const fs::path scene = work() / "stiff.toml", out = work() / "stiff";
+  const fs::path scene = cli_work() / "stiff.toml", out = cli_work() / "stiff";
   std::ofstream(scene) << "structure = { mass = 1.0, stiffness = 4e4 }\ndamping = { alpha = 1.0 }\n"
                           "forcing = { amplitude = 100.0, frequency_hz = 30.0 }\n"
                           "contact = { law = \"linear\", stiffness = 1e9, gap = 1e-4 }\n"
@@ -182,7 +182,7 @@ TEST(Cli, CheckBasesAndVersion) {
 // that the plot style asks for (6.4 in at 150 dpi = 960 px wide).
 TEST(Cli, RunDrawsPicturesAndPlotRedrawsThem) {
   const fs::path scene = fs::path(WBM_EXAMPLES) / "massless_contact_node.toml";
-  const fs::path out = work() / "pictures";
+  const fs::path out = cli_work() / "pictures";
   const Outcome run = run_wbm("run " + scene.string() + " -o " + out.string());
   ASSERT_EQ(run.status, 0) << run.err;
   const fs::path png = out / "time_histories.png";
@@ -200,11 +200,11 @@ TEST(Cli, RunDrawsPicturesAndPlotRedrawsThem) {
   const Outcome again = run_wbm("plot " + out.string());
   EXPECT_EQ(again.status, 0) << again.err;
   EXPECT_EQ(png_width(png), 960);
-  const fs::path bare = work() / "no-pictures";
+  const fs::path bare = cli_work() / "no-pictures";
   ASSERT_EQ(run_wbm("run --no-plots -q " + scene.string() + " -o " + bare.string()).status, 0);
   EXPECT_TRUE(fs::exists(bare / "displacement.csv"));
   EXPECT_FALSE(fs::exists(bare / "time_histories.png"));
-  const Outcome refused = run_wbm("plot " + (work() / "absent").string());
+  const Outcome refused = run_wbm("plot " + (cli_work() / "absent").string());
   EXPECT_EQ(refused.status, 2);
   EXPECT_NE(refused.err.find("no result.json"), std::string::npos) << refused.err;
 }
@@ -216,7 +216,7 @@ namespace {
 // The clamped bar, 1 m × 0.1 m × 0.1 m steel, 8 C3D8 bricks, sets ROOT and TIP (nodes 33–36);
 // with `millimetres` the same bar in N-mm-t-s (mm, N/mm², t/mm³) as bar_mm.inp.
 fs::path write_reduce_bar(bool millimetres = false) {
-  const fs::path dir = work() / "reduce";
+  const fs::path dir = cli_work() / "reduce";
   fs::create_directories(dir);
   std::ostringstream m;
   m << std::setprecision(17);
@@ -263,7 +263,7 @@ double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 // - a scene on the written files (structure.dofs = "dofs.txt") gives the full model's harmonic
 //   response at half the first frequency.
 TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
-  const fs::path deck = write_reduce_bar(), out = work() / "reduce" / "red";
+  const fs::path deck = write_reduce_bar(), out = cli_work() / "reduce" / "red";
   const Outcome run = run_wbm("reduce " + deck.string() + " -i tip -m 12 --check 6 --recovery -o " + out.string());
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_NE(run.out.find("96 DOFs -> 12 interface DOFs (4 nodes) + 12 modes = 24"), std::string::npos) << run.out;
@@ -331,7 +331,7 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
   // A scene on the reduced files: the tip's harmonic response at f1/2, C = 5 M, 1 kN along y
   // at node 36, against the full model's (K − ω²M + iωC)⁻¹ f.
   const double f1 = f_full(0), omega = 2.0 * 3.14159265358979323846 * 0.5 * f1, alpha = 5.0;
-  const fs::path scene = work() / "reduce" / "tip.toml", result = work() / "reduce" / "tip";
+  const fs::path scene = cli_work() / "reduce" / "tip.toml", result = cli_work() / "reduce" / "tip";
   std::ofstream(scene) << "[structure]\nstiffness = \"red/stiffness.mtx\"\nmass = \"red/mass.mtx\"\ndofs = \"red/dofs.txt\"\n"
                        << "[damping]\nalpha = " << alpha << "\n[forcing]\namplitude = 1000.0\ndof = \"n36_y\"\n"
                        << "frequency_hz = " << std::setprecision(17) << 0.5 * f1 << "\n"
@@ -348,7 +348,7 @@ TEST(Cli, ReduceWritesACraigBamptonModelThatScenesRun) {
   EXPECT_NEAR(std::stod(amplitude[1]), expected, 1e-5 * expected);  // measured 9.7e-7: modes 13+ left out
 
   // A DOF name file of another model is refused by the scene, naming both sizes.
-  const fs::path wrong = work() / "reduce" / "wrong.toml";
+  const fs::path wrong = cli_work() / "reduce" / "wrong.toml";
   std::ofstream(wrong) << "[structure]\nstiffness = \"red/stiffness.mtx\"\nmass = \"red/mass.mtx\"\ndofs = \"red/full_dofs.txt\"\n"
                        << "[forcing]\namplitude = 1.0\ndof = 0\nfrequency_hz = 10.0\n";
   const Outcome refused = run_wbm("check " + wrong.string());
@@ -514,7 +514,7 @@ TEST(Cli, ADeckSceneIsReducedWhenRunNotWhenCheckedAndTakesRadialContactsOnANodeS
 // `wbm reduce` refuses bad input with exit 2, says why and how out, and creates nothing; a deck
 // CalculiX cannot assemble exits 1 with ccx's reason.
 TEST(Cli, ReduceRefusesBadInputAndWritesNothing) {
-  const fs::path deck = write_reduce_bar(), out = work() / "reduce" / "never";
+  const fs::path deck = write_reduce_bar(), out = cli_work() / "reduce" / "never";
   auto refused = [&](const std::string& args, const std::string& message, int status = 2) {
     const Outcome r = run_wbm("reduce " + args + " -o " + out.string());
     EXPECT_EQ(r.status, status) << args << "\n" << r.err;
@@ -528,12 +528,12 @@ TEST(Cli, ReduceRefusesBadInputAndWritesNothing) {
   refused(deck.string() + " -i 33,33", "node 33 is listed twice");
   refused(deck.string() + " -i TIP -m 84", "the interior has only 84 DOFs");
   refused(deck.string() + " -i TIP -m -1", "modes = -1: must be >= 0");
-  refused((work() / "reduce" / "absent.inp").string() + " -i TIP", "deck: no file");
-  refused(deck.string() + " -i TIP --ccx " + (work() / "no-ccx").string(), "cannot run", 1);
+  refused((cli_work() / "reduce" / "absent.inp").string() + " -i TIP", "deck: no file");
+  refused(deck.string() + " -i TIP --ccx " + (cli_work() / "no-ccx").string(), "cannot run", 1);
   // The bar without its *MATERIAL: CalculiX refuses it, and the message names the deck.
   std::string text = slurp(deck);
   text.erase(text.find("*MATERIAL"), text.find("*SOLID SECTION") - text.find("*MATERIAL"));
-  const fs::path no_material = work() / "reduce" / "no_material.inp";
+  const fs::path no_material = cli_work() / "reduce" / "no_material.inp";
   std::ofstream(no_material) << text;
   refused(no_material.string() + " -i TIP", "no_material.inp: CalculiX (ccx) could not assemble the model", 1);
 }
@@ -544,7 +544,7 @@ TEST(Cli, ReduceRefusesBadInputAndWritesNothing) {
 // a directory given as a scene or a matrix, an unknown type or law each give one message and
 // exit 2, with no follow-on errors; CalculiX failing exits 1 from a deck scene as from reduce.
 TEST(Cli, AResultFolderHoldsOneResultAndEdgesHaveOneMessage) {
-  const fs::path out = work() / "one-result";
+  const fs::path out = cli_work() / "one-result";
   const fs::path branch_scene = fs::path(WBM_EXAMPLES) / "oscillator_stop.toml";
   const fs::path solve_scene = fs::path(WBM_EXAMPLES) / "massless_contact_node.toml";
   const Outcome first = run_wbm("run -q " + branch_scene.string() + " -o " + out.string());
@@ -584,22 +584,22 @@ TEST(Cli, AResultFolderHoldsOneResultAndEdgesHaveOneMessage) {
     return r.err;
   };
   refused("run -q " + solve_scene.string() + " -o ''", {"-o '': an empty folder name"});
-  refused("run -q " + work().string(), {"is a directory, not a scene file"});
-  const fs::path matrices = work() / "matrices.toml";
+  refused("run -q " + cli_work().string(), {"is a directory, not a scene file"});
+  const fs::path matrices = cli_work() / "matrices.toml";
   std::ofstream(matrices) << "[structure]\nmass = \".\"\nstiffness = [1.0]\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n";
   refused("check " + matrices.string(), {"structure.mass", "is a directory, not a Matrix Market file"});
-  const fs::path absurd = work() / "absurd.toml";  // only the analysis sees that (hΩ)² M overflows: still exit 2
+  const fs::path absurd = cli_work() / "absurd.toml";  // only the analysis sees that (hΩ)² M overflows: still exit 2
   std::ofstream(absurd) << "structure = { mass = [1.0], stiffness = [4e4] }\nforcing = { amplitude = 1.0, frequency_hz = 1e300 }\n";
-  refused("run -q " + absurd.string() + " -o " + (work() / "absurd").string(), {"overflows", "nothing written"});
-  EXPECT_FALSE(fs::exists(work() / "absurd"));
+  refused("run -q " + absurd.string() + " -o " + (cli_work() / "absurd").string(), {"overflows", "nothing written"});
+  EXPECT_FALSE(fs::exists(cli_work() / "absurd"));
   std::string nnm = slurp(fs::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
   const auto variant = [&](const std::string& from, const std::string& to, const std::string& name) {
     std::string text = nnm;
     const size_t at = text.find(from);
     EXPECT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
-    std::ofstream(work() / name) << text;
-    return (work() / name).string();
+    std::ofstream(cli_work() / name) << text;
+    return (cli_work() / name).string();
   };
   // One line each: the problem, then "not run; nothing written".
   const auto lines = [](const std::string& err) { return std::count(err.begin(), err.end(), '\n'); };
@@ -615,8 +615,8 @@ TEST(Cli, AResultFolderHoldsOneResultAndEdgesHaveOneMessage) {
   // CalculiX refusing a deck (no *MATERIAL) is a tool failure: exit 1, from a scene as from reduce.
   std::string deck = slurp(write_reduce_bar());
   deck.erase(deck.find("*MATERIAL"), deck.find("*SOLID SECTION") - deck.find("*MATERIAL"));
-  std::ofstream(work() / "reduce" / "no_material_scene.inp") << deck;
-  const fs::path deck_scene = work() / "reduce" / "no_material.toml";
+  std::ofstream(cli_work() / "reduce" / "no_material_scene.inp") << deck;
+  const fs::path deck_scene = cli_work() / "reduce" / "no_material.toml";
   std::ofstream(deck_scene) << "[structure]\ndeck = \"no_material_scene.inp\"\ninterface = \"tip\"\nmodes = 4\n"
                                "[forcing]\namplitude = 1.0\ndof = \"n36_y\"\nfrequency_hz = 10.0\n";
   refused("run -q " + deck_scene.string(), {"CalculiX (ccx) could not assemble the model", "a tool the scene runs failed"},
@@ -632,7 +632,7 @@ TEST(Cli, InterruptLeavesTheFolderAsItWas) {
     ASSERT_NE(long_scene.find(from), std::string::npos);
     long_scene.replace(long_scene.find(from), from.size(), to);
   }
-  const fs::path scene = work() / "long.toml", kept = work() / "kept", fresh = work() / "fresh";
+  const fs::path scene = cli_work() / "long.toml", kept = cli_work() / "kept", fresh = cli_work() / "fresh";
   std::ofstream(scene) << long_scene;
   ASSERT_EQ(run_wbm("run -q --no-plots " + (fs::path(WBM_EXAMPLES) / "massless_contact_node.toml").string() + " -o " +
                     kept.string())

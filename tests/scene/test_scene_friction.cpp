@@ -25,7 +25,7 @@ using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 
 const std::string kDamper = std::string(WBM_EXAMPLES) + "/friction_damper.toml";
 const std::string kCoulombDamper = std::string(WBM_EXAMPLES) + "/friction_damper_coulomb.toml";

@@ -22,7 +22,7 @@ using namespace wbm::testing;  // scene_fixtures.hpp, testing.hpp
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 const std::string kExample = std::string(WBM_EXAMPLES) + "/friction_normal_load.toml";
 
 // The example at one frequency (a solve).

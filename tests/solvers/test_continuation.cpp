@@ -26,7 +26,7 @@ using namespace wbm;
 using solvers::ContinuationParameter;
 using solvers::TimeBasis;
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 
 // Cubic spring f(u) = k3 u³ on one DOF: the Duffing oscillator's nonlinearity through the
 // contact-law interface (a law is any scalar restoring force of the DOF's displacement).

@@ -32,7 +32,7 @@ using solvers::TimeBasis;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 
 // m ẍ + k x + F0 sign(ẋ) = P0 cos ωt: m = 1 kg, f_n = 10 Hz, P0 = 1 N, F0 = 0.2 N.
 struct DenHartog {

@@ -33,7 +33,7 @@ using solvers::TimeBasis;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using wbm::testing::kPi;
 
 // A point mass m = 1 kg on springs k = (2π 10 Hz)² m in x (tangential, DOF 0) and y (normal,
 // DOF 1), 2 % damping, pressed on a plane by a normal penalty spring k_n = 5 k with a preload

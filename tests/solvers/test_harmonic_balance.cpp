@@ -17,18 +17,18 @@ using solvers::HarmonicBalance;
 using solvers::HarmonicBalanceOptions;
 
 namespace {
-scene::Scene case1() { return models::load_scene("jl14_case1"); }
-scene::Scene case2() { return models::load_scene("jl14_case2"); }
+scene::Scene hb_case1() { return models::load_scene("jl14_case1"); }
+scene::Scene hb_case2() { return models::load_scene("jl14_case2"); }
 }  // namespace
 
 // Published values [JL14 Sec. 4]: fundamental ≈ 1273 Hz; no-contact tip amplitudes ≈ 1.4 mm at
 // 150 Hz and 29 mm at 1275 Hz, with F at the tip. This checks the forcing placement.
 TEST(HarmonicBalance, NoContactAmplitudesMatchThePaper) {
-  const auto s1 = case1();
+  const auto s1 = hb_case1();
   EXPECT_NEAR(fem::Rod(s1.structure->rod).natural_frequencies_hz(1)(0), 1273.0, 1.0);
   const Eigen::VectorXcd u1 = solvers::frequency_response(s1.system(), s1.harmonic_forcing());
   EXPECT_NEAR(std::abs(u1(s1.harmonic_forcing().dof)), 1.4e-3, 0.05e-3);
-  const auto s2 = case2();
+  const auto s2 = hb_case2();
   const Eigen::VectorXcd u2 = solvers::frequency_response(s2.system(), s2.harmonic_forcing());
   EXPECT_NEAR(std::abs(u2(s2.harmonic_forcing().dof)), 29e-3, 0.5e-3);
 }
@@ -36,7 +36,7 @@ TEST(HarmonicBalance, NoContactAmplitudesMatchThePaper) {
 // Without contact, harmonic balance is exact on the first harmonic: coefficient of cos 2πτ is
 // Re U and of sin 2πτ is −Im U, with U from (K − ω²M + iωC) U = F e_tip; all others vanish.
 TEST(HarmonicBalance, LinearResponseEqualsDirectFrequencyResponse) {
-  for (const auto& s : {case1(), case2()}) {
+  for (const auto& s : {hb_case1(), hb_case2()}) {
     const auto sol = solvers::solve_harmonic_balance(s.system(), s.harmonic_forcing(), {}, {.dimension = 16});
     ASSERT_TRUE(sol.converged());
     const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.harmonic_forcing());
@@ -51,7 +51,7 @@ TEST(HarmonicBalance, LinearResponseEqualsDirectFrequencyResponse) {
 // Analytic Jacobian of the full residual against central differences, M = 8, at a state in
 // contact over part of the period (the no-contact response, whose tip exceeds g0).
 TEST(HarmonicBalance, FullJacobianMatchesFiniteDifferences) {
-  const auto s = case1();
+  const auto s = hb_case1();
   const HarmonicBalance hb(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = 8});
   const Eigen::VectorXd a = hb.linear_response() * 1.05;
   // Step 1e-7 of the coefficient scale (~1 mm): truncation O(h²·f''') ≪ rounding ~ eps·‖R‖/h.
@@ -60,7 +60,7 @@ TEST(HarmonicBalance, FullJacobianMatchesFiniteDifferences) {
 
 // Same for the condensed system on the contact unknowns, which Newton actually solves.
 TEST(HarmonicBalance, CondensedJacobianMatchesFiniteDifferences) {
-  for (const auto& s : {case1(), case2()}) {
+  for (const auto& s : {hb_case1(), hb_case2()}) {
     const HarmonicBalance hb(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = 16});
     const Eigen::VectorXd x = hb.contact_unknowns(hb.linear_response());
     struct View {
@@ -75,7 +75,7 @@ TEST(HarmonicBalance, CondensedJacobianMatchesFiniteDifferences) {
 // Newton converges on both cases of Table 1 at M = 64 and the recomputed full residual is at
 // rounding level relative to the forcing.
 TEST(HarmonicBalance, NewtonConvergesOnBothCases) {
-  for (const auto& s : {case1(), case2()}) {
+  for (const auto& s : {hb_case1(), hb_case2()}) {
     const auto sol = solvers::solve_harmonic_balance(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = 64});
     ASSERT_TRUE(sol.converged()) << s.name << ": " << sol.report.message;
     EXPECT_LT(sol.relative_residual, 1e-9) << s.name;
@@ -88,7 +88,7 @@ TEST(HarmonicBalance, NewtonConvergesOnBothCases) {
 // Condensation is exact: the full residual of the expanded solution vanishes, and Newton on
 // the full system from the same start reaches the same coefficients.
 TEST(HarmonicBalance, CondensedSolutionSolvesTheFullSystem) {
-  const auto s = case1();
+  const auto s = hb_case1();
   const HarmonicBalance hb(s.system(), s.harmonic_forcing(), s.contact_points(), {.dimension = 16});
   const auto condensed = hb.solve();
   ASSERT_TRUE(condensed.converged());
@@ -103,7 +103,7 @@ TEST(HarmonicBalance, CondensedSolutionSolvesTheFullSystem) {
 // (M/2)^{-3/2} ≈ 2e-3; measured 5e-4 (Case 1) and 8e-5 (Case 2). The reference itself is
 // periodic to 1e-7 and integrated at rtol 1e-10. The error must also shrink from M = 32.
 TEST(HarmonicBalance, AgreesWithTimeSteppingAtM128) {
-  for (const auto& s : {case1(), case2()}) {
+  for (const auto& s : {hb_case1(), hb_case2()}) {
     const auto ref = solvers::integrate_to_periodic(s.system(), s.harmonic_forcing(), s.contact_points(),
                                                     {.samples_per_period = 256});
     ASSERT_TRUE(ref.report.converged()) << ref.report.message;
@@ -123,7 +123,7 @@ TEST(HarmonicBalance, AgreesWithTimeSteppingAtM128) {
 
 // Time derivative in physical time: for the linear response, u̇_tip = Re(iω U e^{iωt}).
 TEST(HarmonicBalance, VelocityEvaluationMatchesAnalyticDerivative) {
-  const auto s = case1();
+  const auto s = hb_case1();
   const auto sol = solvers::solve_harmonic_balance(s.system(), s.harmonic_forcing(), {}, {.dimension = 8});
   const Eigen::VectorXcd u = solvers::frequency_response(s.system(), s.harmonic_forcing());
   const double w = 2 * std::numbers::pi * s.forcing->frequency_hz;
@@ -138,7 +138,7 @@ TEST(HarmonicBalance, VelocityEvaluationMatchesAnalyticDerivative) {
 
 TEST(HarmonicBalance, RejectsInvalidInput) {
   using wbm::testing::expect_throw_with;
-  const auto s = case1();
+  const auto s = hb_case1();
   auto f = s.harmonic_forcing();
   f.frequency_hz = 0.0;
   expect_throw_with<std::invalid_argument>([&] { HarmonicBalance hb(s.system(), f, s.contact_points(), {}); },

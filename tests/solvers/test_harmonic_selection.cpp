@@ -32,7 +32,7 @@ constexpr double kGap = 1e-3;   // m
 
 // Two unit masses in a chain (ground –k– m0 –k– m1), k = 4e4 N/m, C = 2e-4 K (first mode
 // 19.7 Hz, ζ₁ ≈ 1.2 %), forced on m0 at 20 Hz with 50 N: the linear motion of m1 is several gaps.
-solvers::MechanicalSystem chain() {
+solvers::MechanicalSystem two_mass_chain() {
   const double k = 4e4;
   Eigen::MatrixXd kk(2, 2), mm = Eigen::MatrixXd::Identity(2, 2);
   kk << 2 * k, -k, -k, k;
@@ -61,7 +61,7 @@ std::vector<int> odd() {
 WeightedResidual problem(bool symmetric, const std::vector<int>& harmonics,
                          solvers::ContactQuadrature rule = solvers::ContactQuadrature::Midpoint, int samples = 256) {
   const TimeBasis b = TimeBasis::fourier_harmonics(kHarmonics);
-  return {chain(), forcing(), stops(symmetric), b, b,
+  return {two_mass_chain(), forcing(), stops(symmetric), b, b,
           WeightedResidualOptions{.time_samples = samples, .contact_quadrature = rule, .harmonics = harmonics}};
 }
 
@@ -170,7 +170,7 @@ TEST(HarmonicSelection, RefusesWhatItCannotProject) {
   const TimeBasis f = TimeBasis::fourier_harmonics(kHarmonics);
   auto build = [&](const std::vector<int>& h, TimeBasis trial, TimeBasis weighting, solvers::HarmonicForcing fo,
                    std::vector<ContactPoint> c) {
-    return WeightedResidual(chain(), fo, std::move(c), std::move(trial), std::move(weighting),
+    return WeightedResidual(two_mass_chain(), fo, std::move(c), std::move(trial), std::move(weighting),
                             WeightedResidualOptions{.harmonics = h});
   };
   expect_throw_with<std::invalid_argument>(

@@ -21,7 +21,7 @@ using namespace wbm::solvers;
 
 // R(x, λ) = x³ + x − λ: one real root for every λ, x(λ) = ∛(λ/2 + √D) + ∛(λ/2 − √D),
 // D = λ²/4 + 1/27 (Cardano).
-struct Cubic {
+struct CubicPath {
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
     return Eigen::VectorXd::Constant(1, x(0) * x(0) * x(0) + x(0) - lambda);
   }
@@ -59,7 +59,7 @@ auto newton_corrector(const S& s, double tolerance = 1e-12) {
 }
 
 TEST(NaturalParameter, FollowsTheCubicAndLandsOnTheListedValuesAndTheRangeEnd) {
-  const Cubic cubic;
+  const CubicPath cubic;
   NaturalParameterOptions o;
   o.parameter_min = 0.0;
   o.parameter_max = 2.0;
@@ -85,7 +85,7 @@ TEST(NaturalParameter, FollowsTheCubicAndLandsOnTheListedValuesAndTheRangeEnd) {
 // Steps of 0.05 from 0.9 sum to 1.2999999999999994 after eight: the step ends on 1.3 itself
 // instead of leaving a step of 6e-16 to it (LL11 Alg. 2 once gave two levels at E = 1.3).
 TEST(NaturalParameter, ASumOfStepsShortOfTheEndByRoundingEndsOnIt) {
-  const Cubic cubic;
+  const CubicPath cubic;
   NaturalParameterOptions o;
   o.parameter_min = 0.9;
   o.parameter_max = 1.3;
@@ -100,7 +100,7 @@ TEST(NaturalParameter, ASumOfStepsShortOfTheEndByRoundingEndsOnIt) {
 }
 
 TEST(NaturalParameter, StepsDownwardWithDirectionMinusOne) {
-  const Cubic cubic;
+  const CubicPath cubic;
   NaturalParameterOptions o;
   o.parameter_min = -1.0;
   o.parameter_max = 1.0;
@@ -142,7 +142,7 @@ TEST(NaturalParameter, StopsAtAFoldThatPseudoArclengthPasses) {
 // (a failure shrinks h by ½; the stop comes once h < min_step, so the last failed step was
 // shorter than 2 min_step), with every accepted point before the wall.
 TEST(NaturalParameter, StopsWithinTwoMinimumStepsOfAWall) {
-  const Cubic cubic;
+  const CubicPath cubic;
   auto inner = newton_corrector(cubic);
   auto walled = [&](double lambda, Eigen::VectorXd guess) {
     if (lambda > 0.5) {
@@ -163,7 +163,7 @@ TEST(NaturalParameter, StopsWithinTwoMinimumStepsOfAWall) {
 }
 
 TEST(NaturalParameter, GoalAndInitialFailureAndTimeBudgetAreStops) {
-  const Cubic cubic;
+  const CubicPath cubic;
   NaturalParameterOptions o;
   o.parameter_min = 0.0;
   o.parameter_max = 2.0;
@@ -190,7 +190,7 @@ TEST(NaturalParameter, GoalAndInitialFailureAndTimeBudgetAreStops) {
 }
 
 TEST(NaturalParameter, RefusesInvalidOptionsNamingTheField) {
-  const Cubic cubic;
+  const CubicPath cubic;
   auto expect_names = [&](NaturalParameterOptions o, const std::string& field) {
     try {
       (void)natural_parameter(newton_corrector(cubic), Eigen::VectorXd::Zero(1), 0.0, o);

@@ -3,12 +3,17 @@
 
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
 namespace wbm::testing {
+
+/// π, for the test files that take it unqualified (`using wbm::testing::kPi;`: one definition,
+/// so that test files can share a unity-build unit, tests/CMakeLists.txt).
+inline constexpr double kPi = std::numbers::pi;
 
 /// Least-squares slope of log(error) against log(h): the observed convergence order.
 inline double observed_order(const std::vector<double>& h, const std::vector<double>& errors) {

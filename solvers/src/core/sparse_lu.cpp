@@ -13,11 +13,13 @@
 
 namespace wbm::solvers {
 
-namespace {
+namespace detail {
 
 // Eigen's KLU wrapper solves with J only; its KLU objects are protected members, which klu_tsolve
-// needs for Jᵀ. B is overwritten by the solution, column by column (KLU's own convention).
-class Klu : public Eigen::KLU<Eigen::SparseMatrix<double>> {
+// needs for Jᵀ. B is overwritten by the solution, column by column (KLU's own convention). In a
+// named namespace, not an anonymous one: it is a member of SparseLu::Impl, and in a unity build
+// (CMakeLists.txt) g++ would warn that Impl's field has a type of internal linkage.
+class KluWithTranspose : public Eigen::KLU<Eigen::SparseMatrix<double>> {
  public:
   [[nodiscard]] bool solve_in_place(Eigen::MatrixXd& b, bool transposed) const {
     auto* common = const_cast<klu_common*>(&m_common);  // KLU's API is not const-correct
@@ -27,6 +29,10 @@ class Klu : public Eigen::KLU<Eigen::SparseMatrix<double>> {
     return ok != 0;
   }
 };
+
+}  // namespace detail
+
+namespace {
 
 // A compressed copy of m if it is square, not empty and finite (what both policies factorize);
 // nullopt otherwise, which factorize() reports as false.
@@ -41,7 +47,7 @@ std::optional<Eigen::SparseMatrix<double>> factorizable(const Eigen::SparseMatri
 }  // namespace
 
 struct SparseLu::Impl {
-  Klu lu;
+  detail::KluWithTranspose lu;
   std::vector<int> outer, inner;  // the analysed pattern
   Eigen::Index rows = 0;
   int analyses = 0;
