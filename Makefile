@@ -4,6 +4,14 @@ JOBS  ?= 2
 OUT   ?= $(CURDIR)/out
 # Extra CMake arguments for the Release build, e.g. CMAKE_ARGS=-DWBM_WERROR=ON (.ci/run).
 CMAKE_ARGS ?=
+# Ninja for a new build tree (CMake reads CMAKE_GENERATOR when it first configures a tree; a tree
+# configured before keeps its generator, and a CMAKE_GENERATOR in the environment wins). Make
+# builds a target only after the targets it links have linked, so on 2 cores the last unity unit
+# of wbm_solvers or wbm_scene compiled alone while the tests waited; Ninja starts a target's
+# compiles at once and waits only to link. Measured on 2 cores (stop 61): the sanitizer build
+# 1067 -> 852 s (its tests passed alike). Ninja starts ready commands in the order of
+# build.ninja, which is the order of definition: the reproductions still start longest first.
+export CMAKE_GENERATOR ?= Ninja
 
 .PHONY: deps configure build test sanitize-configure check-sanitize check-fuzz reproduce bench clean
 

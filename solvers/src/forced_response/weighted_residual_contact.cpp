@@ -244,7 +244,7 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
         slips[static_cast<size_t>(i)] = t.anchor(r);
         kq(i) = t.kc(r) / q;
       }
-      block.noalias() -= (kq.asDiagonal() * weighting_rows_at(t.anchored)).transpose() * trial_rows_at(slips);
+      block -= anchored_product(t.anchored, kq, slips);
     }
     for (int k = 0; k < m; ++k) {
       for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
@@ -255,8 +255,7 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
       const auto nq = static_cast<Eigen::Index>(t.coupled.size());
       Eigen::VectorXd kq(nq);
       for (Eigen::Index i = 0; i < nq; ++i) kq(i) = t.coupled_weight[static_cast<size_t>(i)] / q;
-      const Eigen::MatrixXd cross =
-          (kq.asDiagonal() * weighting_rows_at(t.coupled)).transpose() * trial_rows_at(t.coupled_at);
+      const Eigen::MatrixXd cross = anchored_product(t.coupled, kq, t.coupled_at);
       for (int k = 0; k < m; ++k) {
         for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + t.normal) += cross(j, k);
       }
@@ -268,6 +267,21 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
 
 Eigen::MatrixXd WeightedResidual::Impl::trial_rows_at(const std::vector<int>& at) const {
   return sampling->trial->rows_at(at, trial, sampling->tau);
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::anchored_product(const std::vector<int>& r, const Eigen::VectorXd& kappa,
+                                                         const std::vector<int>& a) const {
+  std::vector<int> distinct = a;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  const Eigen::MatrixXd p = weighting_rows_at(r);
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(distinct.size()), p.cols());
+  for (size_t i = 0; i < r.size(); ++i) {
+    const auto at = std::lower_bound(distinct.begin(), distinct.end(), a[i]) - distinct.begin();
+    g.row(at) += kappa(static_cast<Eigen::Index>(i)) * p.row(static_cast<Eigen::Index>(i));
+  }
+  return g.transpose() * trial_rows_at(distinct);
 }
 
 

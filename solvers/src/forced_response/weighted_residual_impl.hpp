@@ -511,6 +511,11 @@ struct WeightedResidual::Impl {
   // weighting_values(τ_at), entry for entry, from Sampling (SampledBasis::rows_at: the stored
   // sparse rows of a wavelet basis, a Fourier basis' table once it pays).
   [[nodiscard]] Eigen::MatrixXd trial_rows_at(const std::vector<int>& at) const;
+  // Σ_i κ_i p(τ_{r_i}) q(τ_{a_i})ᵀ (M × M: weighting index j by trial index k), the sum grouped
+  // by the distinct a_i: G = Sᵀ diag(κ) P_r (one row per distinct a), then Gᵀ Q_a. The stick
+  // samples of a phase hang on one slip sample, so the product costs the phases, not the samples.
+  [[nodiscard]] Eigen::MatrixXd anchored_product(const std::vector<int>& r, const Eigen::VectorXd& kappa,
+                                                 const std::vector<int>& a) const;
   [[nodiscard]] Eigen::MatrixXd weighting_rows_at(const std::vector<int>& at) const;
 
   // The times τ_q and weights ∂f̄/∂δ / Q² of the CellAverage kink terms of one contact.
