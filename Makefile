@@ -9,8 +9,9 @@ CMAKE_ARGS ?=
 # builds a target only after the targets it links have linked, so on 2 cores the last unity unit
 # of wbm_solvers or wbm_scene compiled alone while the tests waited; Ninja starts a target's
 # compiles at once and waits only to link. Measured on 2 cores (stop 61): the sanitizer build
-# 1067 -> 852 s, the Release build 955 -> 771 s (the tests passed alike). Ninja starts ready commands in the order of
-# build.ninja, which is the order of definition: the reproductions still start longest first.
+# 1067 -> 852 s, the Release build 955 -> 771 s (the tests passed alike). Ninja starts ready
+# commands in the order of build.ninja, which is the order of definition: the reproductions still
+# start longest first.
 export CMAKE_GENERATOR ?= Ninja
 
 .PHONY: deps configure build test sanitize-configure check-sanitize check-fuzz reproduce bench clean
@@ -64,11 +65,11 @@ sanitize-configure:
 # --quick runs and the install test are left to `make test`.
 # SANITIZE_SKIP: the tests left to `make test` (Release), by name. Each repeats the LL11 backbone
 # continuation that shorter tests (BackbonePiecesAreSmoothAndTheirEventsMatchTheMin,
-# StopAlongADirectionIsAChangeOfCoordinates, the scene's nnm runs) put through the same code under the sanitizers; several times over (five
-# rounding perturbations, three N x m pairs, Alg. 1 against the KKT continuation) it took, measured
-# under ASan + UBSan at -O1 (stop 48, g++, ctest -j 2): 346, 246, 147, 116 and 99 s, 954 s of the
-# suite's 2499 s. Four more (stop 60, to keep CI under 50 min), each the longest of its group and
-# a repetition of what the group's shorter tests run under the sanitizers: the plastic impact
+# StopAlongADirectionIsAChangeOfCoordinates, the scene's nnm runs) put through the same code
+# under the sanitizers; several times over (five rounding perturbations, three N x m pairs,
+# Alg. 1 against the KKT continuation) it took, measured under ASan + UBSan at -O1 (stop 48, g++,
+# ctest -j 2): 346, 246, 147, 116 and 99 s, 954 s of the suite's 2499 s. Four more (stop 60, to
+# keep CI under 50 min), each the longest of its group and a repetition of what the group's shorter tests run under the sanitizers: the plastic impact
 # oscillator's convergence study over step sizes (MoreauJean: RigidStopConvergesAtFirstOrderInTheStep,
 # EnergyBalanceClosesOverAPeriod), the friction normal load's convergence to time stepping
 # (FrictionNormalLoad.JacobianMatchesCentralDifferences, CentralDifferencesAgreeWithBdfWithoutFriction,
@@ -102,7 +103,9 @@ check-sanitize: sanitize-configure
 # sanitized build above (after check-sanitize, only the two targets are new); seeds are our own
 # scenes and matrices, copied into a fresh corpus so that the source tree is never written. A
 # crash, a sanitizer report, a timeout (10 s per input) or more than 2 GB of memory fails the run
-# and leaves the input in $(SANITIZE_BUILD)/findings/. Prints each target's executions.
+# and leaves the input in $(SANITIZE_BUILD)/findings/. Prints each target's executions. The two
+# targets run at once, one a core (libFuzzer runs one process each): the same FUZZ_SECONDS each in
+# half the wall time (stop 61: 120 -> 60 s of check-fuzz's time).
 FUZZ_SECONDS ?= 60
 FUZZ_DIR      = $(SANITIZE_BUILD)/fuzz-run
 check-fuzz: sanitize-configure
@@ -110,13 +113,21 @@ check-fuzz: sanitize-configure
 	@rm -rf $(FUZZ_DIR) && mkdir -p $(FUZZ_DIR)/corpus/scene $(FUZZ_DIR)/corpus/matrix_market $(FUZZ_DIR)/findings
 	@cp reproduce/scenes/*.toml examples/scenes/*.toml $(FUZZ_DIR)/corpus/scene/
 	@cp examples/scenes/*.mtx $(FUZZ_DIR)/corpus/matrix_market/
-	@for t in scene matrix_market; do \
+	@pids=""; for t in scene matrix_market; do \
 	  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(SANITIZE_BUILD)/tests/fuzz/fuzz_$$t \
 	    -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-	    -artifact_prefix=$(FUZZ_DIR)/findings/$$t- $(FUZZ_DIR)/corpus/$$t > $(FUZZ_DIR)/fuzz_$$t.log 2>&1 \
-	    || { tail -60 $(FUZZ_DIR)/fuzz_$$t.log; echo "check-fuzz: fuzz_$$t found a failure (input in $(FUZZ_DIR)/findings/)"; exit 1; }; \
-	  echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_DIR)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
-	done
+	    -artifact_prefix=$(FUZZ_DIR)/findings/$$t- $(FUZZ_DIR)/corpus/$$t > $(FUZZ_DIR)/fuzz_$$t.log 2>&1 & \
+	  pids="$$pids $$!"; \
+	done; \
+	fail=0; set -- $$pids; for t in scene matrix_market; do \
+	  if wait $$1; then \
+	    echo "check-fuzz: fuzz_$$t: $$(grep -o 'number_of_executed_units: [0-9]*' $(FUZZ_DIR)/fuzz_$$t.log | grep -o '[0-9]*') executions in $(FUZZ_SECONDS) s, no failure"; \
+	  else \
+	    tail -60 $(FUZZ_DIR)/fuzz_$$t.log; echo "check-fuzz: fuzz_$$t found a failure (input in $(FUZZ_DIR)/findings/)"; fail=1; \
+	  fi; \
+	  shift; \
+	done; \
+	exit $$fail
 
 # The reproduce executables run JOBS at a time (one target each), then plot.py and report.py.
 reproduce: build
