@@ -9,9 +9,9 @@ CMAKE_ARGS ?=
 # builds a target only after the targets it links have linked, so on 2 cores the last unity unit
 # of wbm_solvers or wbm_scene compiled alone while the tests waited; Ninja starts a target's
 # compiles at once and waits only to link. Measured on 2 cores (stop 61): the sanitizer build
-# 1067 -> 852 s, the Release build 955 -> 771 s (the tests passed alike). Ninja starts ready
-# commands in the order of build.ninja, which is the order of definition: the reproductions still
-# start longest first.
+# about 1080 -> 852 and 949 s (two runs), the Release build 955 -> 771 s (the tests passed
+# alike). Ninja starts ready commands in the order of build.ninja, which is the order of
+# definition: the reproductions still start longest first.
 export CMAKE_GENERATOR ?= Ninja
 
 .PHONY: deps configure build test sanitize-configure check-sanitize check-fuzz reproduce bench clean
