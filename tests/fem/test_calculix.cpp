@@ -21,7 +21,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
-#include <unistd.h>
+#include "scratch.hpp"
 
 #include "testing.hpp"
 
@@ -29,18 +29,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Scratch {
-  fs::path dir = fs::temp_directory_path() / ("wbm_test_calculix_" + std::to_string(::getpid()));
-  Scratch() { fs::create_directories(dir / "mesh"); }
-  ~Scratch() {
-    std::error_code ignored;
-    fs::remove_all(dir, ignored);
-  }
-};
-
 const fs::path& work() {
-  static const Scratch scratch;
-  return scratch.dir;
+  static const wbm::testing::ScratchDir scratch("calculix");
+  static const bool mesh = fs::create_directories(scratch.path() / "mesh");
+  (void)mesh;
+  return scratch.path();
 }
 
 fs::path write(const std::string& name, const std::string& text) {

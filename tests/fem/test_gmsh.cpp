@@ -17,7 +17,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
-#include <unistd.h>
+#include "scratch.hpp"
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/craig_bampton.hpp>
@@ -28,18 +28,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct GmshScratch {
-  fs::path dir = fs::temp_directory_path() / ("wbm_test_gmsh_" + std::to_string(::getpid()));
-  GmshScratch() { fs::create_directories(dir); }
-  ~GmshScratch() {
-    std::error_code ignored;
-    fs::remove_all(dir, ignored);
-  }
-};
-
 const fs::path& gmsh_work() {
-  static const GmshScratch scratch;
-  return scratch.dir;
+  static const wbm::testing::ScratchDir scratch("gmsh");
+  return scratch.path();
 }
 
 fs::path write_file(const std::string& name, const std::string& text) {

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <unistd.h>
+#include "scratch.hpp"
 
 #include <Eigen/Core>
 
@@ -22,18 +22,9 @@
 namespace wbm::testing {
 
 // Files of this process's tests, in one folder removed at exit.
-struct Scratch {
-  std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("wbm_test_scene_" + std::to_string(::getpid()));
-  ~Scratch() {
-    std::error_code ignored;
-    std::filesystem::remove_all(dir, ignored);
-  }
-};
-
 inline std::filesystem::path temp(const std::string& name) {
-  static const Scratch scratch;
-  return scratch.dir / name;
+  static const ScratchDir scratch("scene");
+  return scratch.path() / name;
 }
 
 inline std::filesystem::path write(const std::string& name, const std::string& text) {

@@ -19,7 +19,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
-#include <unistd.h>
+#include "scratch.hpp"
 
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
@@ -38,18 +38,9 @@ struct Outcome {
 };
 
 // A scratch folder per process, removed at exit.
-struct CliScratch {
-  fs::path dir = fs::temp_directory_path() / ("wbm_test_cli_" + std::to_string(::getpid()));
-  CliScratch() { fs::create_directories(dir); }
-  ~CliScratch() {
-    std::error_code ignored;
-    fs::remove_all(dir, ignored);
-  }
-};
-
-fs::path cli_work() {
-  static const CliScratch scratch;
-  return scratch.dir;
+const fs::path& cli_work() {
+  static const wbm::testing::ScratchDir scratch("cli");
+  return scratch.path();
 }
 
 std::string slurp(const fs::path& p) {
