@@ -2,7 +2,8 @@
 // the bordered matrix it represents against the matrix formed entry by entry, its solves against
 // a dense LU of that matrix (at a fold too, where J is singular and the bordered matrix is not),
 // and forced-response branches through it against the same branches through dense linearizations
-// (the path every branch took before).
+// (the path every branch took before). The sparse bordered matrix, written in compressed form,
+// against the dense one and against setFromTriplets.
 #include <wbm/solvers/newton.hpp>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
+#include <wbm/solvers/detail/continuation_corrector.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -215,5 +217,47 @@ TEST(BorderedWoodbury, ForcedResponseBranchesEqualTheDensePath) {
       for (const auto& p : low_rank.points) low_rank_points += family.linearize(p.x, p.parameter).jacobian.dense_form() ? 0 : 1;
       EXPECT_GT(low_rank_points, 0) << what;
     }
+  }
+}
+
+// The sparse bordered matrix [[J xs, ∂R/∂λ ls]; [t_xᵀ/n, t_λ]] of the continuation corrector,
+// written column by column (continuation_corrector.hpp): entry for entry the dense bordered
+// matrix of the same J, and equal, pattern included, to setFromTriplets of J's entries and the
+// border's. J has an empty column and an explicit zero (kept: the pattern must not depend on
+// values, for the reuse of the symbolic analysis).
+TEST(BorderedSparse, EqualsTheDenseBorderedMatrixAndSetFromTriplets) {
+  const int n = 6;
+  std::vector<Eigen::Triplet<double>> entries{{0, 0, 2.0}, {3, 0, -1.5}, {5, 0, 0.25}, {1, 1, 4.0}, {2, 1, 0.0},
+                                              {4, 3, 1.0}, {0, 3, 3.0},  {5, 4, -2.0}, {2, 5, 7.0}, {5, 5, 1.0}};
+  solvers::SparseLinearization sl;
+  sl.jacobian.resize(n, n);
+  sl.jacobian.setFromTriplets(entries.begin(), entries.end());  // column 2 empty
+  sl.residual = Eigen::VectorXd::Zero(n);
+  sl.parameter_derivative = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n + 1, 0.3, -0.9);
+  const double xs = 1.7, ls = 0.45;
+  const Eigen::SparseMatrix<double> b = solvers::detail::bordered(sl, t, xs, ls);
+
+  solvers::Linearization dl;
+  dl.jacobian = Eigen::MatrixXd(sl.jacobian);
+  dl.residual = sl.residual;
+  dl.parameter_derivative = sl.parameter_derivative;
+  EXPECT_EQ(Eigen::MatrixXd(b), solvers::detail::bordered(dl, t, xs, ls));
+
+  std::vector<Eigen::Triplet<double>> all;
+  for (const auto& e : entries) all.emplace_back(e.row(), e.col(), e.value() * xs);
+  for (int i = 0; i < n; ++i) {
+    all.emplace_back(i, n, sl.parameter_derivative(i) * ls);
+    all.emplace_back(n, i, t(i) / n);
+  }
+  all.emplace_back(n, n, t(n));
+  Eigen::SparseMatrix<double> reference(n + 1, n + 1);
+  reference.setFromTriplets(all.begin(), all.end());
+  ASSERT_TRUE(b.isCompressed());
+  ASSERT_EQ(b.nonZeros(), reference.nonZeros());
+  for (int c = 0; c <= n + 1; ++c) EXPECT_EQ(b.outerIndexPtr()[c], reference.outerIndexPtr()[c]) << "column " << c;
+  for (Eigen::Index k = 0; k < b.nonZeros(); ++k) {
+    EXPECT_EQ(b.innerIndexPtr()[k], reference.innerIndexPtr()[k]) << "entry " << k;
+    EXPECT_EQ(b.valuePtr()[k], reference.valuePtr()[k]) << "entry " << k;
   }
 }

@@ -286,8 +286,10 @@ TEST(NonlinearModes, TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether) 
 // The structured KKT solver (block-diagonal harmonic balance + Schur complement on the active
 // samples) against a slow reference path, full-pivoting LU of the dense J: three stops (the tip,
 // and two along directions over two DOFs each, one of them through the phase DOF), samples on
-// both sides of the Signorini switch, the plain and the continuation-bordered J. The linear mode
-// (A_1 = K̂ − M̂ singular at ω = ω₀) and the penalty system (harmonics coupled) have no usable
+// both sides of the Signorini switch, the plain and the continuation-bordered J. The penalty
+// system of the same stops (harmonics coupled at the stops' DOFs: its Schur complement on the
+// harmonics of the stops in contact), plain and bordered, against the same reference. The linear
+// mode (A_1 = K̂ − M̂ singular at ω = ω₀) and penalty stops that share a DOF have no usable
 // structure: they must go to SparseLu and still solve.
 TEST(NonlinearModes, KktSolverSolvesLikeADenseLuAndFallsBackWithoutStructure) {
   const std::vector<solvers::RigidStop> stops{{tip_dof(), 1e-3},
@@ -323,11 +325,38 @@ TEST(NonlinearModes, KktSolverSolvesLikeADenseLuAndFallsBackWithoutStructure) {
   EXPECT_EQ(c.fallback_solves, 0);
   EXPECT_EQ(c.max_active, 9);  // the Schur complement held the active samples only
 
-  const Eigen::SparseMatrix<double> linear = system.linearize(system.linear_state(0.8), 0.8).jacobian;
-  const solvers::NonlinearModes::BackboneSystem penalty(nm, 3e9);
+  // Penalty: three stops on disjoint DOFs (the one along DOFs 10 and 11 through the phase DOF),
+  // amplitudes that press two of them on part of the period (checked by the Schur complement's
+  // size: F = 9 unknowns per stop in contact).
+  const std::vector<solvers::RigidStop> disjoint{{tip_dof(), 1e-3},
+                                                 {10, 2e-3, {{10, 0.6}, {11, 0.8}}},
+                                                 {17, 1.5e-3, {{16, -0.8}, {17, 0.6}}}};
+  const solvers::NonlinearModes nm_disjoint(ll11_system(), disjoint, {.harmonics = 4, .samples = 32, .phase_dof = 11});
+  const solvers::NonlinearModes::BackboneSystem penalty(nm_disjoint, 3e9);
   Eigen::VectorXd xp = x.head(penalty.size());
-  const Eigen::SparseMatrix<double> soft = penalty.linearize(xp, 1.4).jacobian;
-  for (const auto& [j, sys] : {std::pair{&linear, &system}, std::pair{&soft, &penalty}}) {
+  xp.head(ny) *= 6.0;
+  const auto lin_p = penalty.linearize(xp, 1.4);
+  Eigen::VectorXd tangent_p = Eigen::VectorXd::LinSpaced(penalty.size() + 1, 0.5, -0.3);
+  const Eigen::SparseMatrix<double> bordered_p = solvers::detail::bordered(lin_p, tangent_p, 1.0, 1.0);
+  auto penalty_solver = penalty.linear_solver();
+  expected_structured = 0;
+  for (const Eigen::SparseMatrix<double>* j : {&lin_p.jacobian, &bordered_p}) {
+    const Eigen::MatrixXd dense(*j);
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0).array().sin();
+    const Eigen::VectorXd reference = dense.fullPivLu().solve(rhs);
+    ASSERT_TRUE(penalty_solver.factorize(*j));
+    EXPECT_EQ(penalty_solver.counts().structured, ++expected_structured) << "penalty, rows " << j->rows();
+    EXPECT_LT((penalty_solver.solve(rhs) - reference).norm(), 1e-10 * reference.norm()) << "penalty, rows " << j->rows();
+  }
+  const auto cp = penalty_solver.counts();
+  EXPECT_EQ(cp.sparse_lu, 0);
+  EXPECT_EQ(cp.fallback_solves, 0);
+  EXPECT_EQ(cp.max_active, 2 * 9);
+
+  const Eigen::SparseMatrix<double> linear = system.linearize(system.linear_state(0.8), 0.8).jacobian;
+  const solvers::NonlinearModes::BackboneSystem penalty_sharing(nm, 3e9);  // the tip DOF in two stops
+  const Eigen::SparseMatrix<double> soft = penalty_sharing.linearize(x.head(penalty_sharing.size()), 1.4).jacobian;
+  for (const auto& [j, sys] : {std::pair{&linear, &system}, std::pair{&soft, &penalty_sharing}}) {
     auto s = sys->linear_solver();
     const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0);
     const Eigen::VectorXd reference = Eigen::MatrixXd(*j).fullPivLu().solve(rhs);

@@ -1,6 +1,7 @@
 // NonlinearModes::BackboneSystem::KktSolver (nonlinear_modes.hpp): the KKT Jacobian of the
 // exact-contact backbone solved through its block-diagonal harmonic balance and a Schur
-// complement on the active contact samples, verified against J and backed by SparseLu.
+// complement on the active contact samples; the penalty backbone's through the same blocks and a
+// Schur complement on the harmonics of the stops in contact. Verified against J, backed by SparseLu.
 #include <wbm/solvers/nonlinear_modes.hpp>
 
 #include <algorithm>
@@ -27,6 +28,8 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   std::vector<Eigen::Index> local_of;       // … and its index inside the block
   std::vector<Eigen::MatrixXd> dirs;        // N_k (length_k × nc): the stop directions in block k
   Eigen::MatrixXd dir_norm2;                // nc × f: ‖N_k(:, c)‖²
+  std::vector<std::vector<int>> stop_at;    // per block, per local index: the stop whose direction holds it (−1: none)
+  bool disjoint_stops = true;               // no DOF in two stops' directions (the penalty path needs it)
 
   // The last factorization.
   bool structured = false;
@@ -41,6 +44,8 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   Eigen::MatrixXd beta_a, gamma_a;             // active rows of beta, gamma
   Eigen::MatrixXd bd, cd, xd;                  // ny × nd: dense columns (ω², E), dense rows (normalization, border), A⁻¹ bd
   Eigen::PartialPivLU<Eigen::MatrixXd> schur;
+  std::vector<Eigen::MatrixXd> chat;           // penalty: per stop, Ĉ_c (f × f, zero diagonal)
+  std::vector<int> touching;                   // penalty: the stops with Ĉ_c ≠ 0, in order
   double norm_inf = 0.0;
   SparseLu sparse;
   bool sparse_ready = false;
@@ -61,7 +66,13 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
     return sparse_ready;
   }
   bool factorize(const Eigen::SparseMatrix<double>& jac);
+  bool factorize_penalty(const Eigen::SparseMatrix<double>& jac);
+  // A_k = LU (rcond checked), V_k, G_k and xd = A⁻¹ bd from a[] and bd; false: not usable.
+  bool factorize_blocks();
+  // S singular to working precision: J singular (false); ill conditioned: SparseLu; else structured.
+  bool accept_schur(const Eigen::SparseMatrix<double>& jac, Eigen::Index schur_unknowns);
   [[nodiscard]] Eigen::VectorXd core_solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] Eigen::VectorXd core_solve_penalty(const Eigen::VectorXd& rhs) const;
   [[nodiscard]] double backward_error(const Eigen::VectorXd& rhs, const Eigen::VectorXd& x) const {
     const double denominator = norm_inf * x.lpNorm<Eigen::Infinity>() + rhs.lpNorm<Eigen::Infinity>();
     const double r = (rhs - j * x).lpNorm<Eigen::Infinity>();
@@ -103,6 +114,15 @@ NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& syste
       }
       s.dir_norm2(c, k) = dk.col(c).squaredNorm();
     }
+    std::vector<int> at(static_cast<size_t>(s.length.back()), -1);
+    for (int c = 0; c < s.nc; ++c) {
+      for (Eigen::Index i = 0; i < dk.rows(); ++i) {
+        if (dk(i, c) == 0.0) continue;
+        if (at[static_cast<size_t>(i)] >= 0) s.disjoint_stops = false;
+        at[static_cast<size_t>(i)] = c;
+      }
+    }
+    s.stop_at.push_back(std::move(at));
     s.dirs.push_back(std::move(dk));
   }
 }
@@ -125,10 +145,11 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::solve(const Eigen::Ve
   if (!s.structured) {
     return s.sparse_ready ? s.sparse.solve(rhs) : Eigen::VectorXd::Constant(rhs.size(), NAN);
   }
-  Eigen::VectorXd x = s.core_solve(rhs);
+  auto core = [&s](const Eigen::VectorXd& r) { return s.exact ? s.core_solve(r) : s.core_solve_penalty(r); };
+  Eigen::VectorXd x = core(rhs);
   if (s.backward_error(rhs, x) <= kMaxBackwardError) return x;
   ++s.counts.refined;  // one step of iterative refinement on J's own residual
-  x += s.core_solve(rhs - s.j * x);
+  x += core(rhs - s.j * x);
   if (s.backward_error(rhs, x) <= kMaxBackwardError) return x;
   ++s.counts.fallback_solves;
   if (!s.sparse_ready) s.sparse_ready = s.sparse.factorize(s.j);
@@ -143,7 +164,8 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   rows = jac.rows();
   structured = false;  // until this J is factorized (a failed factorize() leaves nothing to solve with)
   sparse_ready = false;
-  if (!exact || jac.cols() != rows || (rows != size && rows != size + 1)) return factorize_sparse(jac);
+  if (jac.cols() != rows || (rows != size && rows != size + 1)) return factorize_sparse(jac);
+  if (!exact) return disjoint_stops ? factorize_penalty(jac) : factorize_sparse(jac);
   border = rows == size + 1 ? rows - 1 : -1;
   nd = border >= 0 ? 2 : 1;
   a.resize(static_cast<size_t>(f));
@@ -225,17 +247,7 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   }
   const auto na = static_cast<Eigen::Index>(active.size());
   // Blocks, receptances at the stop directions, dense columns.
-  lu.resize(static_cast<size_t>(f));
-  v.resize(static_cast<size_t>(f));
-  g.resize(static_cast<size_t>(f));
-  for (int k = 0; k < f; ++k) {
-    const auto kk = static_cast<size_t>(k);
-    lu[kk].compute(a[kk]);
-    if (!(lu[kk].rcond() >= kMinRcond)) return factorize_sparse(jac);
-    v[kk] = lu[kk].solve(dirs[kk]);
-    g[kk] = dirs[kk].transpose() * v[kk];
-  }
-  xd = block_solve(bd);
+  if (!factorize_blocks()) return factorize_sparse(jac);
   // S = D − C A⁻¹ B on [ω², (E), active samples] × [normalization row, (border row), active rows].
   const Eigen::Index m = nd + na;
   Eigen::MatrixXd schur_matrix = Eigen::MatrixXd::Zero(m, m);
@@ -285,6 +297,26 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
     }
   }
   schur.compute(schur_matrix);
+  return accept_schur(jac, na);
+}
+
+bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize_blocks() {
+  lu.resize(static_cast<size_t>(f));
+  v.resize(static_cast<size_t>(f));
+  g.resize(static_cast<size_t>(f));
+  for (int k = 0; k < f; ++k) {
+    const auto kk = static_cast<size_t>(k);
+    lu[kk].compute(a[kk]);
+    if (!(lu[kk].rcond() >= kMinRcond)) return false;
+    v[kk] = lu[kk].solve(dirs[kk]);
+    g[kk] = dirs[kk].transpose() * v[kk];
+  }
+  xd = block_solve(bd);
+  return true;
+}
+
+bool NonlinearModes::BackboneSystem::KktSolver::Impl::accept_schur(const Eigen::SparseMatrix<double>& jac,
+                                                                    Eigen::Index schur_unknowns) {
   // det J = Π_k det A_k · det S · Π (inactive J_ss): with every A_k well conditioned, an S
   // singular to working precision is a singular J (e.g. more active samples on a stop than its F
   // coefficients can meet, in a corrector far from the branch); an S merely ill conditioned
@@ -298,7 +330,7 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   j = jac;
   structured = true;
   ++counts.structured;
-  counts.max_active = std::max(counts.max_active, static_cast<int>(na));
+  counts.max_active = std::max(counts.max_active, static_cast<int>(schur_unknowns));
   return true;
 }
 
@@ -334,6 +366,129 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::Impl::core_solve(cons
   x(ny) = u(0);
   if (border >= 0) x(border) = u(1);
   for (Eigen::Index q = 0; q < na; ++q) x(ny + 1 + active[static_cast<size_t>(q)]) = u(nd + q);
+  return x;
+}
+
+// The penalty backbone (no multipliers: J is [Y, ω², (E)] square). Its harmonic-balance block is
+// blockdiag(Ã_k) + P Ĉ Pᵀ: Ã_k = A_k plus each stop's curvature within harmonic k (read off J's
+// diagonal blocks), and between two harmonics k ≠ l only the stops couple, stop c by
+// C_c(k, l) N_k(:, c) N_l(:, c)ᵀ with C_c = Θᵀ diag(κ_c) Θ (NonlinearModes::contact_curvature).
+// P holds the columns N_k(:, c), one per (stop, harmonic); Ĉ = blockdiag_c(Ĉ_c), Ĉ_c = C_c with
+// its diagonal zeroed (it already sits in Ã_k). With z = Pᵀ y for the stops in contact, and u the
+// dense unknowns (ω², E):
+//   [ D − cdᵀ Ã⁻¹ bd    −cdᵀ Ã⁻¹ P Ĉ ] [u]   [r_u − cdᵀ y0]
+//   [ Pᵀ Ã⁻¹ bd         I + G Ĉ      ] [z] = [Pᵀ y0       ],  y0 = Ã⁻¹ r_y,
+// G = Pᵀ Ã⁻¹ P, whose (c, k), (c', l) entry is δ_kl G_k(c, c'); then y = y0 − Ã⁻¹ bd u − Ã⁻¹ P Ĉ z.
+// det J = Π_k det Ã_k · det S as for exact contact. C_c(k, l) is the least-squares multiple of
+// N_k(:, c) N_l(:, c)ᵀ in J's (k, l) block, exact when no DOF lies in two stops' directions (the
+// constructor checks; otherwise SparseLu); an entry between two harmonics at any other DOF pair
+// also goes to SparseLu.
+bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize_penalty(const Eigen::SparseMatrix<double>& jac) {
+  border = rows == size + 1 ? rows - 1 : -1;
+  nd = border >= 0 ? 2 : 1;
+  a.resize(static_cast<size_t>(f));
+  for (int k = 0; k < f; ++k) a[static_cast<size_t>(k)].setZero(length[k], length[k]);
+  bd.setZero(ny, nd);
+  cd.setZero(ny, nd);
+  std::vector<Eigen::MatrixXd> coupling(static_cast<size_t>(nc), Eigen::MatrixXd::Zero(f, f));
+  Eigen::MatrixXd tail = Eigen::MatrixXd::Zero(nd, nd);
+  Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(rows);
+  auto dense = [&](Eigen::Index i) -> Eigen::Index { return i == ny ? 0 : 1; };  // ω² or E
+  for (Eigen::Index c = 0; c < jac.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(jac, c); it; ++it) {
+      const Eigen::Index i = it.row();
+      const double val = it.value();
+      if (!std::isfinite(val)) return false;
+      if (val == 0.0) continue;
+      row_sum(i) += std::abs(val);
+      if (c < ny && i < ny) {
+        const int kc = block_of[static_cast<size_t>(c)], ki = block_of[static_cast<size_t>(i)];
+        const Eigen::Index lc = local_of[static_cast<size_t>(c)], li = local_of[static_cast<size_t>(i)];
+        if (ki == kc) {
+          a[static_cast<size_t>(kc)](li, lc) = val;
+          continue;
+        }
+        const int st = stop_at[static_cast<size_t>(ki)][static_cast<size_t>(li)];
+        if (st < 0 || stop_at[static_cast<size_t>(kc)][static_cast<size_t>(lc)] != st) return factorize_sparse(jac);
+        coupling[static_cast<size_t>(st)](ki, kc) +=
+            dirs[static_cast<size_t>(ki)](li, st) * dirs[static_cast<size_t>(kc)](lc, st) * val;
+      } else if (c < ny) {
+        cd(c, dense(i)) = val;
+      } else if (i < ny) {
+        bd(i, dense(c)) = val;
+      } else {
+        tail(dense(i), dense(c)) += val;
+      }
+    }
+  }
+  norm_inf = row_sum.maxCoeff();
+  chat.assign(static_cast<size_t>(nc), Eigen::MatrixXd());
+  touching.clear();
+  for (int st = 0; st < nc; ++st) {
+    Eigen::MatrixXd& ch = coupling[static_cast<size_t>(st)];
+    for (int k = 0; k < f; ++k) {
+      for (int l = 0; l < f; ++l) {
+        const double d2 = dir_norm2(st, k) * dir_norm2(st, l);
+        ch(k, l) = k != l && d2 > 0.0 ? ch(k, l) / d2 : 0.0;
+      }
+    }
+    if (ch.isZero(0.0)) continue;
+    chat[static_cast<size_t>(st)] = std::move(ch);
+    touching.push_back(st);
+  }
+  if (!factorize_blocks()) return factorize_sparse(jac);
+  const auto nt = static_cast<Eigen::Index>(touching.size());
+  const Eigen::Index m = nd + nt * f;
+  Eigen::MatrixXd schur_matrix = Eigen::MatrixXd::Zero(m, m);
+  schur_matrix.topLeftCorner(nd, nd) = tail - cd.transpose() * xd;
+  schur_matrix.diagonal().tail(nt * f).setOnes();
+  for (int k = 0; k < f; ++k) {
+    const auto kk = static_cast<size_t>(k);
+    const Eigen::MatrixXd q = v[kk].transpose() * cd.middleRows(start[k], length[k]);    // nc × nd: V_kᵀ c_e
+    const Eigen::MatrixXd pd = dirs[kk].transpose() * xd.middleRows(start[k], length[k]);  // nc × nd: N_kᵀ A_k⁻¹ b_u
+    for (Eigen::Index t = 0; t < nt; ++t) {
+      const int st = touching[static_cast<size_t>(t)];
+      for (Eigen::Index e = 0; e < nd; ++e) {
+        schur_matrix.row(e).segment(nd + t * f, f) -= q(st, e) * chat[static_cast<size_t>(st)].row(k);
+        schur_matrix(nd + t * f + k, e) += pd(st, e);
+      }
+    }
+  }
+  Eigen::VectorXd gk(f);
+  for (Eigen::Index t1 = 0; t1 < nt; ++t1) {
+    for (Eigen::Index t2 = 0; t2 < nt; ++t2) {
+      const int c1 = touching[static_cast<size_t>(t1)], c2 = touching[static_cast<size_t>(t2)];
+      for (int k = 0; k < f; ++k) gk(k) = g[static_cast<size_t>(k)](c1, c2);
+      schur_matrix.block(nd + t1 * f, nd + t2 * f, f, f).noalias() += gk.asDiagonal() * chat[static_cast<size_t>(c2)];
+    }
+  }
+  schur.compute(schur_matrix);
+  return accept_schur(jac, nt * f);
+}
+
+Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::Impl::core_solve_penalty(const Eigen::VectorXd& rhs) const {
+  const Eigen::VectorXd y0 = block_solve(rhs.head(ny));
+  const auto nt = static_cast<Eigen::Index>(touching.size());
+  Eigen::VectorXd rs(nd + nt * f);
+  rs(0) = rhs(ny) - cd.col(0).dot(y0);
+  if (border >= 0) rs(1) = rhs(border) - cd.col(1).dot(y0);
+  for (Eigen::Index t = 0; t < nt; ++t) {
+    const int st = touching[static_cast<size_t>(t)];
+    for (int k = 0; k < f; ++k) {
+      rs(nd + t * f + k) = dirs[static_cast<size_t>(k)].col(st).dot(y0.segment(start[k], length[k]));
+    }
+  }
+  const Eigen::VectorXd u = schur.solve(rs);
+  Eigen::VectorXd x(rows);
+  Eigen::VectorXd y = y0 - xd * u.head(nd);
+  for (Eigen::Index t = 0; t < nt; ++t) {
+    const int st = touching[static_cast<size_t>(t)];
+    const Eigen::VectorXd cz = chat[static_cast<size_t>(st)] * u.segment(nd + t * f, f);  // (Ĉ z)_(c, k)
+    for (int k = 0; k < f; ++k) y.segment(start[k], length[k]) -= v[static_cast<size_t>(k)].col(st) * cz(k);
+  }
+  x.head(ny) = y;
+  x(ny) = u(0);
+  if (border >= 0) x(border) = u(1);
   return x;
 }
 

@@ -431,9 +431,18 @@ class NonlinearModes {
 /// The cost follows the F blocks of n DOFs and the active contact unknowns a, not the F n + m c
 /// unknowns of the sparse LU (SparseLu, KLU) that it replaces (bench_reduction:
 /// BM_KktFactorization: 2–4× faster on the blade, 6 to 48 contact nodes).
+/// Penalty stops (BackboneSystem with penalty_stiffness > 0: unknowns [Y; ω²/ω₀²; E], no
+/// multipliers) couple the harmonics, but only at the stops: between harmonics k ≠ l stop c adds
+/// C_c(k, l) N_k(:, c) N_l(:, c)ᵀ, C_c = Θᵀ diag(κ_c) Θ (F × F), so the harmonic-balance block is
+/// blockdiag(Ã_k) + P Ĉ Pᵀ (Ã_k: J's diagonal block k, the curvature within harmonic k included;
+/// P: the columns N_k(:, c); Ĉ: the C_c with zero diagonal). The Schur complement is then taken
+/// on z = Pᵀ Y for the stops in contact (Ĉ_c ≠ 0): r = F t + 1 or + 2 unknowns for t stops in
+/// contact, S = [D − C Ã⁻¹ B, −C Ã⁻¹ P Ĉ; Pᵀ Ã⁻¹ B, I + G Ĉ] with G = Pᵀ Ã⁻¹ P block diagonal
+/// in the harmonics (G_k); the cost follows the stops in contact, not the F n unknowns. It needs
+/// every DOF in at most one stop's direction (checked once; otherwise SparseLu).
 /// Every solve is verified: its normwise backward error ‖b − J x‖∞ / (‖J‖∞ ‖x‖∞ + ‖b‖∞) must be
 /// ≤ 1e-11 after at most one step of iterative refinement; otherwise (and whenever the structure
-/// is absent: penalty stops, other sizes, entries outside the blocks; or an A_k or S with a
+/// is absent: penalty stops sharing a DOF, other sizes, entries outside the blocks; or an A_k or S with a
 /// reciprocal condition estimate below 1e-13, e.g. the linear mode, where A_1 is singular) the
 /// solve falls back to SparseLu on the same J. Since det J = Π det A_k · det S (inactive rows
 /// are the identity), an S whose condition estimate is below machine epsilon while every A_k is
@@ -456,7 +465,7 @@ class NonlinearModes::BackboneSystem::KktSolver {
     int refined = 0;           // structured solves that needed the refinement step
     int fallback_solves = 0;   // structured solves whose backward error stayed too large: SparseLu
     int singular = 0;          // factorizations refused: S singular to working precision, so J is
-    int max_active = 0;        // the largest number of active samples a Schur complement held
+    int max_active = 0;        // the most Schur unknowns besides ω², E: active samples (penalty: F per stop in contact)
   };
   [[nodiscard]] Counts counts() const;
 

@@ -30,23 +30,37 @@ inline Eigen::MatrixXd bordered(const Linearization& l, const Eigen::VectorXd& t
   return b;
 }
 
+// Sparse: written column by column in compressed form (J's columns with the border's row
+// appended, then the border's column), the same matrix as setFromTriplets would assemble from
+// J's entries and the border's (J has no duplicates; its rows sorted within each column, as
+// setFromTriplets and insert() leave them), in O(nnz) without a sort.
 inline Eigen::SparseMatrix<double> bordered(const SparseLinearization& l, const Eigen::VectorXd& t, double xs,
                                             double ls) {
   const auto n = l.jacobian.rows();
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(l.jacobian.nonZeros() + 2 * n + 1));
-  for (Eigen::Index c = 0; c < l.jacobian.outerSize(); ++c) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(l.jacobian, c); it; ++it) {
-      entries.emplace_back(it.row(), it.col(), it.value() * xs);
-    }
-  }
-  for (Eigen::Index i = 0; i < n; ++i) {
-    entries.emplace_back(i, n, l.parameter_derivative(i) * ls);
-    entries.emplace_back(n, i, t(i) / static_cast<double>(n));
-  }
-  entries.emplace_back(n, n, t(n));
   Eigen::SparseMatrix<double> b(n + 1, n + 1);
-  b.setFromTriplets(entries.begin(), entries.end());
+  const auto nnz = l.jacobian.nonZeros() + 2 * n + 1;
+  b.resizeNonZeros(nnz);
+  int* outer = b.outerIndexPtr();
+  int* inner = b.innerIndexPtr();
+  double* value = b.valuePtr();
+  int k = 0;
+  for (Eigen::Index c = 0; c < n; ++c) {
+    outer[c] = k;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(l.jacobian, c); it; ++it) {
+      inner[k] = static_cast<int>(it.row());
+      value[k++] = it.value() * xs;
+    }
+    inner[k] = static_cast<int>(n);
+    value[k++] = t(c) / static_cast<double>(n);
+  }
+  outer[n] = k;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    inner[k] = static_cast<int>(i);
+    value[k++] = l.parameter_derivative(i) * ls;
+  }
+  inner[k] = static_cast<int>(n);
+  value[k++] = t(n);
+  outer[n + 1] = k;
   return b;
 }
 
