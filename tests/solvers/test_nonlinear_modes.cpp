@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -307,20 +308,25 @@ TEST(NonlinearModes, KktSolverSolvesLikeADenseLuAndFallsBackWithoutStructure) {
   for (int c = 0; c < 3; ++c) {
     for (int smp : {2, 9, 20 + c}) x(ny + 1 + 32 * c + smp) = 5.0;
   }
-  const auto lin = system.linearize(x, 1.4);
-  Eigen::VectorXd tangent = Eigen::VectorXd::LinSpaced(system.size() + 1, 0.5, -0.3);
-  const Eigen::SparseMatrix<double> bordered = solvers::detail::bordered(lin, tangent, 1.0, 1.0);
-  auto solver = system.linear_solver();
-  int expected_structured = 0;
-  for (const Eigen::SparseMatrix<double>* j : {&lin.jacobian, &bordered}) {
-    const Eigen::MatrixXd dense(*j);
-    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0).array().sin();
-    const Eigen::VectorXd reference = dense.fullPivLu().solve(rhs);
-    ASSERT_TRUE(solver.factorize(*j));
-    EXPECT_EQ(solver.counts().structured, ++expected_structured) << "rows " << j->rows();
-    EXPECT_LT((solver.solve(rhs) - reference).norm(), 1e-10 * reference.norm()) << "rows " << j->rows();
-  }
-  const auto c = solver.counts();
+  // The plain J at `at` and its continuation-bordered form must both take the structured path
+  // and solve as a full-pivoting LU of the dense J does; returns the solver's counts.
+  auto solves_like_dense_lu = [](const solvers::NonlinearModes::BackboneSystem& sys, const Eigen::VectorXd& at,
+                                 const std::string& label) {
+    const auto lin = sys.linearize(at, 1.4);
+    const Eigen::VectorXd tangent = Eigen::VectorXd::LinSpaced(sys.size() + 1, 0.5, -0.3);
+    const Eigen::SparseMatrix<double> bordered = solvers::detail::bordered(lin, tangent, 1.0, 1.0);
+    auto solver = sys.linear_solver();
+    int expected_structured = 0;
+    for (const Eigen::SparseMatrix<double>* j : {&lin.jacobian, &bordered}) {
+      const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0).array().sin();
+      const Eigen::VectorXd reference = Eigen::MatrixXd(*j).fullPivLu().solve(rhs);
+      EXPECT_TRUE(solver.factorize(*j)) << label << ", rows " << j->rows();
+      EXPECT_EQ(solver.counts().structured, ++expected_structured) << label << ", rows " << j->rows();
+      EXPECT_LT((solver.solve(rhs) - reference).norm(), 1e-10 * reference.norm()) << label << ", rows " << j->rows();
+    }
+    return solver.counts();
+  };
+  const auto c = solves_like_dense_lu(system, x, "exact");
   EXPECT_EQ(c.sparse_lu, 0);
   EXPECT_EQ(c.fallback_solves, 0);
   EXPECT_EQ(c.max_active, 9);  // the Schur complement held the active samples only
@@ -335,20 +341,7 @@ TEST(NonlinearModes, KktSolverSolvesLikeADenseLuAndFallsBackWithoutStructure) {
   const solvers::NonlinearModes::BackboneSystem penalty(nm_disjoint, 3e9);
   Eigen::VectorXd xp = x.head(penalty.size());
   xp.head(ny) *= 6.0;
-  const auto lin_p = penalty.linearize(xp, 1.4);
-  Eigen::VectorXd tangent_p = Eigen::VectorXd::LinSpaced(penalty.size() + 1, 0.5, -0.3);
-  const Eigen::SparseMatrix<double> bordered_p = solvers::detail::bordered(lin_p, tangent_p, 1.0, 1.0);
-  auto penalty_solver = penalty.linear_solver();
-  expected_structured = 0;
-  for (const Eigen::SparseMatrix<double>* j : {&lin_p.jacobian, &bordered_p}) {
-    const Eigen::MatrixXd dense(*j);
-    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(j->rows(), 1.0, -2.0).array().sin();
-    const Eigen::VectorXd reference = dense.fullPivLu().solve(rhs);
-    ASSERT_TRUE(penalty_solver.factorize(*j));
-    EXPECT_EQ(penalty_solver.counts().structured, ++expected_structured) << "penalty, rows " << j->rows();
-    EXPECT_LT((penalty_solver.solve(rhs) - reference).norm(), 1e-10 * reference.norm()) << "penalty, rows " << j->rows();
-  }
-  const auto cp = penalty_solver.counts();
+  const auto cp = solves_like_dense_lu(penalty, xp, "penalty");
   EXPECT_EQ(cp.sparse_lu, 0);
   EXPECT_EQ(cp.fallback_solves, 0);
   EXPECT_EQ(cp.max_active, 2 * 9);

@@ -165,13 +165,14 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   structured = false;  // until this J is factorized (a failed factorize() leaves nothing to solve with)
   sparse_ready = false;
   if (jac.cols() != rows || (rows != size && rows != size + 1)) return factorize_sparse(jac);
-  if (!exact) return disjoint_stops ? factorize_penalty(jac) : factorize_sparse(jac);
+  if (!exact && !disjoint_stops) return factorize_sparse(jac);
   border = rows == size + 1 ? rows - 1 : -1;
   nd = border >= 0 ? 2 : 1;
   a.resize(static_cast<size_t>(f));
   for (int k = 0; k < f; ++k) a[static_cast<size_t>(k)].setZero(length[k], length[k]);
   bd.setZero(ny, nd);
   cd.setZero(ny, nd);
+  if (!exact) return factorize_penalty(jac);
   beta.setZero(nl, f);
   gamma.setZero(nl, f);
   diag.setZero(nl);
@@ -384,12 +385,7 @@ Eigen::VectorXd NonlinearModes::BackboneSystem::KktSolver::Impl::core_solve(cons
 // constructor checks; otherwise SparseLu); an entry between two harmonics at any other DOF pair
 // also goes to SparseLu.
 bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize_penalty(const Eigen::SparseMatrix<double>& jac) {
-  border = rows == size + 1 ? rows - 1 : -1;
-  nd = border >= 0 ? 2 : 1;
-  a.resize(static_cast<size_t>(f));
-  for (int k = 0; k < f; ++k) a[static_cast<size_t>(k)].setZero(length[k], length[k]);
-  bd.setZero(ny, nd);
-  cd.setZero(ny, nd);
+  // border, nd, the zeroed blocks a and the dense columns bd, cd: set by factorize().
   std::vector<Eigen::MatrixXd> coupling(static_cast<size_t>(nc), Eigen::MatrixXd::Zero(f, f));
   Eigen::MatrixXd tail = Eigen::MatrixXd::Zero(nd, nd);
   Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(rows);
