@@ -18,7 +18,7 @@
 // matrix of the 224-state blade costs about a second per point; with rigid stops it needs
 // saltation matrices).
 // Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
-// About 3 min on one core, two thirds of it the two backbones (KKT continuation; stop 62: 265 s
+// About 3 min on one core, about 60 % of it the two backbones (KKT continuation; stop 62: 229 s
 // before KktSolver took the penalty backbone). --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
 #include <algorithm>
 #include <chrono>
