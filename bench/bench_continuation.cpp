@@ -60,6 +60,11 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_Continuation_Fig12Branch)->ArgsProduct({{32, 64}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+// Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
+// 1238 Hz and the branch is cut there (ResponseCurve's check), so that pair only reported an error.
+BENCHMARK(BM_Continuation_Fig12Branch)
+    ->ArgsProduct({{64}, {0, 1}, {0, 1}})
+    ->ArgsProduct({{32}, {1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Floquet_OnePoint)->RangeMultiplier(2)->Range(256, 2048)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -567,8 +567,8 @@ FIGURES = {}
 def main():
     """Each reproduction's figures are independent (each writes only into its own folder; one
     also reads jl14_fig12's CSV, written before this runs), so they are drawn by one process per
-    core this process may use. One after the other they took about 51 s (with report.py) of one
-    core at the end of `make reproduce` (stop 62), while the other core idled."""
+    core this process may use. One after the other they took 68 s of one core at the end of
+    `make reproduce` while the other idled, and 36 s so on 2 cores (stop 63)."""
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "out")
     plt.rcParams.update(STYLE)
     FIGURES.update(figures())

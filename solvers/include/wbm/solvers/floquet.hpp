@@ -27,7 +27,7 @@
 /// #19: a stop 100× stiffer than its spring had |μ| up to 1.6 instead of 0.94 at P = 512).
 /// e^{A₀h}: Eigen's matrix exponential (unsupported/MatrixFunctions, scaling and squaring Padé),
 /// of the balanced state (δu, δu̇/σ), σ = √‖M⁻¹K‖₁, whose matrix has both off-diagonal blocks of
-/// the order of the highest natural frequency: ‖A₀h‖₁ is its square, which took ~12 squarings
+/// the order of the highest natural frequency: ‖A₀h‖₁ is its square, which took ~11 squarings
 /// and cost 3 digits in e^{A₀h} for a 25-element rod at h = T/8192 (floquet.cpp). The
 /// multipliers are those of the similar matrix D Φ D⁻¹, D = diag(I, I/σ); `monodromy` is Φ.
 
