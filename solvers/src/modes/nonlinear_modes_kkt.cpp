@@ -298,9 +298,57 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   out.parameter_derivative(ny_) = -1.0;
   if (!jacobian) return out;
 
+  // The harmonic-balance blocks w_k (K̂ − ν_k² s M̂), written straight into compressed storage
+  // (column-major: block k's columns in order, each column's rows those of K̂'s and M̂'s patterns
+  // merged, the phase row and column left out). Each entry is fl(w k) + fl(−w ν² s m), the value
+  // a K̂ triplet followed by an M̂ triplet summed to; TripletPattern puts them first at their
+  // positions, before the triplets below.
+  Eigen::SparseMatrix<double> blocks(size_, size_);
+  blocks.resizeNonZeros(static_cast<Eigen::Index>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros()));
+  {
+    int* outer = blocks.outerIndexPtr();
+    int* inner = blocks.innerIndexPtr();
+    double* value = blocks.valuePtr();
+    int q = 0;
+    Eigen::Index column = 0;
+    for (int k = 0; k < f; ++k) {
+      const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
+      const double mass_factor = -w * nu2 * s;
+      const Eigen::Index first = static_cast<Eigen::Index>(k) * n;
+      for (Eigen::Index col = 0; col < n; ++col) {
+        if (first + col == p) continue;
+        outer[column++] = q;
+        Eigen::SparseMatrix<double>::InnerIterator ik(nm.ks_, col), im(nm.ms_, col);
+        while (ik || im) {
+          Eigen::Index row = 0;
+          double v = 0.0;
+          if (ik && (!im || ik.row() < im.row())) {
+            row = ik.row();
+            v = w * ik.value();
+            ++ik;
+          } else if (!ik || im.row() < ik.row()) {
+            row = im.row();
+            v = mass_factor * im.value();
+            ++im;
+          } else {
+            row = ik.row();
+            v = w * ik.value() + mass_factor * im.value();
+            ++ik;
+            ++im;
+          }
+          const Eigen::Index r = reduced(first + row);
+          if (r < 0) continue;
+          inner[q] = static_cast<int>(r);
+          value[q++] = v;
+        }
+      }
+    }
+    while (column <= size_) outer[column++] = q;
+    blocks.resizeNonZeros(q);
+  }
   std::vector<Eigen::Triplet<double>> t;
-  t.reserve(static_cast<size_t>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros() + 2 * n) +
-            static_cast<size_t>(n_stops * ms) * (f + 2) + static_cast<size_t>(f * f * n_stops));
+  t.reserve(static_cast<size_t>(f) * 2 * n + static_cast<size_t>(n_stops * ms) * (f + 2) +
+            static_cast<size_t>(f * f * n_stops));
   auto add = [&](Eigen::Index row_full, Eigen::Index col_full, double v) {
     const Eigen::Index r = reduced(row_full), c = reduced(col_full);
     if (r >= 0 && c >= 0) t.emplace_back(r, c, v);
@@ -311,15 +359,6 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   };
   for (int k = 0; k < f; ++k) {
     const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
-    for (int pass = 0; pass < 2; ++pass) {
-      const Eigen::SparseMatrix<double>& a = pass == 0 ? nm.ks_ : nm.ms_;
-      const double factor = pass == 0 ? w : -w * nu2 * s;
-      for (Eigen::Index col = 0; col < a.outerSize(); ++col) {
-        for (Eigen::SparseMatrix<double>::InnerIterator it(a, col); it; ++it) {
-          add(static_cast<Eigen::Index>(k) * n + it.row(), static_cast<Eigen::Index>(k) * n + it.col(), factor * it.value());
-        }
-      }
-    }
     for (int i = 0; i < n; ++i) {
       const Eigen::Index row = static_cast<Eigen::Index>(k) * n + i;
       add_row(row, ny_, -w * nu2 * my(i, k));                                         // ∂/∂s
@@ -350,7 +389,10 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   } else {  // penalty: ∂HB(k, i)/∂Y(l, j) = w_i w_j Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
     for (const auto& e : nm.contact_curvature(state.penalty_stiffness)) add(e.row(), e.col(), e.value());
   }
-  out.jacobian = pattern_->assemble(size_, size_, t);  // setFromTriplets, the pattern reused
+  // setFromTriplets of the blocks then t, the pattern reused; swapped in (Eigen 3.4's SparseMatrix
+  // has no move assignment: operator= would copy the temporary).
+  Eigen::SparseMatrix<double> jacobian_matrix = pattern_->assemble(blocks, t);
+  out.jacobian.swap(jacobian_matrix);
   return out;
 }
 

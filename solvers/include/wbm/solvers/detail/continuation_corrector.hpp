@@ -99,6 +99,19 @@ inline bool finite(const SparseLinearization& l) {
          l.parameter_derivative.allFinite();
 }
 
+// `to` takes `from`'s contents. Eigen 3.4's SparseMatrix has no move assignment (its operator=
+// copies a matrix that is not marked as a temporary), so a sparse linearization is swapped in,
+// member by member, rather than copied (a few MB per corrector iteration on a blade).
+inline void take(SparseLinearization& to, SparseLinearization&& from) {
+  to.residual.swap(from.residual);
+  to.jacobian.swap(from.jacobian);
+  to.parameter_derivative.swap(from.parameter_derivative);
+}
+template <class Lin>
+void take(Lin& to, Lin&& from) {
+  to = std::move(from);
+}
+
 inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   const auto n = a.size() - 1;
   return a.head(n).dot(b.head(n)) / static_cast<double>(n) + a(n) * b(n);
@@ -119,7 +132,7 @@ struct Corrector {
   [[nodiscard]] const Lin& at(const Eigen::VectorXd& z) const {
     if (cached_z.size() != z.size() || cached_z != z) {
       const auto n = z.size() - 1;
-      cached = system->linearize(z.head(n) * xs, z(n) * ls);
+      take(cached, system->linearize(z.head(n) * xs, z(n) * ls));
       cached_z = z;
     }
     return cached;
