@@ -28,12 +28,6 @@ int position_of(const Eigen::SparseMatrix<double>& m, int row, int col) {
 }
 }  // namespace
 
-Eigen::SparseMatrix<double> TripletPattern::assemble(Eigen::Index rows, Eigen::Index cols, const Triplets& t) const {
-  Eigen::SparseMatrix<double> empty(rows, cols);
-  empty.makeCompressed();
-  return assemble(empty, t);
-}
-
 Eigen::SparseMatrix<double> TripletPattern::assemble(const Eigen::SparseMatrix<double>& base, const Triplets& t) const {
   if (!base.isCompressed()) throw std::invalid_argument("TripletPattern::assemble: the base matrix is not compressed");
   const Eigen::Index rows = base.rows(), cols = base.cols(), nb = base.nonZeros();

@@ -21,12 +21,10 @@ namespace wbm::solvers::detail {
 class TripletPattern {
  public:
   using Triplets = std::vector<Eigen::Triplet<double>>;
-  // rows × cols from the triplets `t` (indices in range: Eigen's own assertion).
-  [[nodiscard]] Eigen::SparseMatrix<double> assemble(Eigen::Index rows, Eigen::Index cols, const Triplets& t) const;
-  // base's size, from base's entries first (column-major order, at most one per position: a
-  // compressed matrix) and then the triplets `t`: setFromTriplets of base's entries followed by
-  // t. A base whose pattern repeats (a block-diagonal harmonic balance, filled straight into
-  // compressed storage) costs a comparison of its index arrays and one scatter of its values,
+  // A matrix of base's size: setFromTriplets of base's entries (column-major order, at most one
+  // per position: a compressed matrix) followed by the triplets `t` (indices in range: Eigen's own
+  // assertion). A base whose pattern repeats (a block-diagonal harmonic balance, filled straight
+  // into compressed storage) costs a comparison of its index arrays and one scatter of its values,
   // instead of one triplet per entry. Throws std::invalid_argument for a base not compressed.
   [[nodiscard]] Eigen::SparseMatrix<double> assemble(const Eigen::SparseMatrix<double>& base, const Triplets& t) const;
 
