@@ -121,7 +121,8 @@ TEST(PeriodizedBasis, DiscreteInnerProductsConvergeToConnectionMatrices) {
 // The tabulation by support (values) against the direct periodization sum (value), one function
 // and one time at a time — including non-dyadic τ, negative τ and levels where the support wraps.
 TEST(PeriodizedBasis, TabulatedValuesMatchTheDirectPeriodizationSum) {
-  const Eigen::VectorXd tau = (Eigen::VectorXd(6) << 0.0, 0.1, 0.3125, 0.77, 0.999, -0.4).finished();
+  Eigen::VectorXd tau(6);  // not a copy of .finished(): g++ -O1 (the tests' level) warns of it in Eigen's copy
+  tau << 0.0, 0.1, 0.3125, 0.77, 0.999, -0.4;
   for (const auto& family : {ww::Family::haar(), ww::Family::daubechies(6), ww::Family::orthogonal_cubic_bspline()}) {
     for (int level : {0, 1, 2, 5}) {
       const ww::PeriodizedBasis basis(family, level, {.normalization = ww::Normalization::UnitIntegral});
