@@ -6,6 +6,10 @@
 //   wbm check SCENE [--json]           validate only (runs no tool: a deck is read, not reduced);
 //                                      print the resolved scene
 //   wbm bases [-M M]                   bases and the formulations each admits
+//   wbm study STUDY [-o DIR] [--workers N] [--scheduler ADDR] [-q]
+//                                      a parametric or Monte Carlo study on Dask: this process
+//                                      becomes `python3 -m wbm_study` (python/wbm_study.py,
+//                                      docs/studies.md), which runs each case with this wbm
 //   wbm --version
 // Exit status: 0 converged (or valid, for check); 1 not converged, a failed write, or a tool that
 // failed (CalculiX, in `wbm reduce` and in a deck scene alike); 2 bad input (scene file, command
@@ -19,6 +23,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -126,6 +131,34 @@ void draw_after_run(const std::string& folder, bool quiet) {
     std::cerr << "wbm: warning: drawing the pictures failed (" << WBM_PYTHON << " " << plot_script() << " " << folder
               << ", exit " << status << "); the result files are complete\n";
   }
+}
+
+// `wbm study`: replaces this process by `python3 -m wbm_study ARGS` with the wbm module's folder
+// first on PYTHONPATH (the install's, <prefix>/WBM_PYTHON_INSTALL_DIR, if it holds wbm_study.py;
+// else the build tree's) and WBM_CLI naming this executable, which the cases then run. Returns
+// only if the interpreter cannot be started.
+int study(const std::vector<std::string>& arguments) {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::filesystem::path folder = WBM_PYTHON_BUILD_DIR;
+  if (!ec) {
+    const auto installed = exe.parent_path().parent_path() / WBM_PYTHON_INSTALL_DIR;
+    if (std::filesystem::exists(installed / "wbm_study.py")) folder = installed;
+    ::setenv("WBM_CLI", exe.c_str(), 1);
+  }
+  const char* path = std::getenv("PYTHONPATH");
+  const std::string python_path = folder.string() + (path && *path ? ":" + std::string(path) : "");
+  ::setenv("PYTHONPATH", python_path.c_str(), 1);
+  std::vector<std::string> args = {WBM_PYTHON, "-m", "wbm_study"};
+  args.insert(args.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  ::execvp(WBM_PYTHON, argv.data());
+  std::cerr << "wbm study: cannot start " << WBM_PYTHON << " -m wbm_study (" << std::strerror(errno)
+            << "); install python3 with python3-dask and python3-distributed\n";
+  return kNotConverged;
 }
 
 void print_warnings(const wbm::scene::Scene& s) {
@@ -423,6 +456,20 @@ int main(int argc, char** argv) {
                          "default: the deck's units, unconverted");
   auto* reduce_out = reduce_cmd->add_option("-o,--output", out, "Output folder (default: wbm-out/<deck>-reduced)");
   reduce_cmd->add_flag("-q,--quiet", quiet, "No summary");
+  std::string study_path, scheduler;
+  int workers = 0;
+  auto* study_cmd = app.add_subcommand(
+      "study", "Run a parametric or Monte Carlo study of a scene on Dask (docs/studies.md): study.csv, "
+               "study.json, study.png and one result folder per case");
+  study_cmd->add_option("study", study_path, "Study file (.toml)")->required();
+  auto* study_out = study_cmd->add_option("-o,--output", out, "Study folder (default wbm-study/<title>); the cases "
+                                                              "complete there are not run again");
+  auto* study_workers = study_cmd->add_option("--workers", workers, "Worker processes of the local Dask cluster "
+                                                                    "(default: one per core)")
+                            ->check(CLI::PositiveNumber);
+  auto* study_scheduler = study_cmd->add_option("--scheduler", scheduler, "tcp://HOST:PORT of a running Dask "
+                                                                         "scheduler, instead of a local cluster");
+  study_cmd->add_flag("-q,--quiet", quiet, "No progress lines");
   auto* bases_cmd = app.add_subcommand("bases", "List the time bases and the formulations each admits");
   bases_cmd->add_option("-M,--dimension", dimension, "Dimension M = 2^J used for the check")->capture_default_str();
 
@@ -448,6 +495,14 @@ int main(int argc, char** argv) {
     }
     if (*check_cmd) return check(scene_path, json);
     if (*bases_cmd) return bases(dimension);
+    if (*study_cmd) {
+      std::vector<std::string> args = {study_path};
+      if (study_out->count() > 0) args.insert(args.end(), {"--output", out});
+      if (study_workers->count() > 0) args.insert(args.end(), {"--workers", std::to_string(workers)});
+      if (study_scheduler->count() > 0) args.insert(args.end(), {"--scheduler", scheduler});
+      if (quiet) args.emplace_back("--quiet");
+      return study(args);
+    }
     if (*reduce_cmd) {
       reduction.deck = deck_path;
       return reduce(reduction, out, reduce_out->count() > 0, quiet);

@@ -153,8 +153,33 @@ diagnostics (dict: statuses, iterations, residuals, timings), tables ({file name
 table has one). Nothing is written to disk. Raises ValueError for a bad scene, with the file, line,
 key, allowed range and a way out, as `wbm check` prints it.)");
   m.def(
-      "scene_json", [](const py::object& source) { return to_python(scene::to_json(scene_of(source))); },
-      py::arg("source"), "The resolved scene (every default filled in) as a dict, accepted back by run_scene.");
+      "scene_json",
+      [](const py::object& source, const py::object& file) {
+        if (!file.is_none() && py::isinstance<py::dict>(source)) {  // a dict read from that file
+          const auto anchor = py::module_::import("os").attr("fspath")(file).cast<std::string>();
+          return to_python(scene::to_json(scene::scene_from_json(python::json_of(source, ""), anchor)));
+        }
+        return to_python(scene::to_json(scene_of(source)));
+      },
+      py::arg("source"), py::arg("file") = py::none(),
+      "The resolved scene (every default filled in) as a dict, accepted back by run_scene. file: for a dict "
+      "source, the scene file it was read from: it names the scene in messages and anchors relative paths "
+      "(Matrix Market files, decks), as if the dict were that file. Raises ValueError as run_scene.");
+  m.def(
+      "study",
+      [](py::args args, py::kwargs kwargs) { return py::module_::import("wbm_study").attr("study")(*args, **kwargs); },
+      R"(Runs a parametric or Monte Carlo study of a scene on Dask and returns its table as a pandas
+DataFrame: study(source, output=None, workers=None, scheduler=None, quiet=True, cli=None).
+
+source: a study .toml path or a dict of its keys (docs/studies.md: a base scene, [[axis]] tables
+of dotted scene keys with values, a range or random draws, `combine` and `collect`). Each case
+runs as `wbm run` on a worker of an embedded LocalCluster (`workers` processes on 127.0.0.1,
+default one per core) or of the cluster at `scheduler` (tcp://HOST:PORT), and writes
+output/cases/<id>/ (default output: wbm-study/<title>); output/study.csv, study.json and
+study.png hold the table. Cases complete in `output` are not run again. The DataFrame has
+study.csv's columns (units in the headers; NaN where a quantity is missing). Raises ValueError
+for a bad study or axis, with the scene parser's message, before any case runs (nothing is
+written). Implemented in wbm_study.py beside this module (issue #37).)");
 
   // Time bases.
   py::class_<solvers::TimeBasis>(m, "TimeBasis", "A family of M periodic trial or weighting functions on τ ∈ [0, 1).")
