@@ -37,6 +37,7 @@
 #include <wbm/solvers/response_curve.hpp>
 
 #include "blade.hpp"
+#include "blade_forced.hpp"
 #include "combinations.hpp"
 #include "parameters.hpp"
 #include "run.hpp"
@@ -135,53 +136,22 @@ int main(int argc, char** argv) {
     auto t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, modes);
     timing["craig_bampton_s"] = models::seconds_since(t);
-    // Coordinates scaled to unit diagonal mass, q = D q̂, D = diag(M_r)^(-1/2): the interface
-    // DOFs (metres, each with a small share of the mass) and the mass-normalized modal
-    // coordinates then weigh alike,
-    // which brings the condition estimate of G from 1.1e9 to 3.1e7 (measured on the --quick mesh;
-    // 1.0e7 scaled on the full one, meta.json).
-    // Stops, load and amplitudes are mapped accordingly; every number written is physical.
-    const Eigen::MatrixXd k_r = 0.5 * (cb.stiffness + cb.stiffness.transpose()), m_r = 0.5 * (cb.mass + cb.mass.transpose());
-    const Eigen::VectorXd d = m_r.diagonal().cwiseSqrt().cwiseInverse();
-    solvers::MechanicalSystem reduced;
-    reduced.stiffness = (d.asDiagonal() * k_r * d.asDiagonal()).sparseView();
-    reduced.mass = (d.asDiagonal() * m_r * d.asDiagonal()).sparseView();
+    // The forced model (reproduce/common/blade_forced.hpp): coordinates scaled to unit diagonal
+    // mass, q = D q̂ (the condition estimate of G from 1.1e9 to 3.1e7 on the --quick mesh; 1.0e7
+    // scaled on the full one, meta.json), the radial stops, C = β K̂, the load along the first
+    // mode and the penalty stiffness. Every number written is physical.
+    auto model = reproduce::blade_forced_model(
+        blade, cb,
+        {.gap = gap, .zeta = zeta, .overload = overload, .stiffness_ratio = stiffness_ratio, .from_f1 = from,
+         .mode_harmonics = mode_harmonics, .mode_samples = mode_samples});
+    const auto& reduced = model.reduced;
     const auto n = static_cast<Eigen::Index>(reduced.mass.rows());
-    auto stops = models::radial_stops(blade, gap);
-    for (auto& st : stops) {
-      for (auto& [j, w] : st.along) w *= d(j);
-    }
-
-    // First mode, onset node, damping, load.
-    const solvers::NonlinearModes nnm(
-        [&] { auto s = reduced; s.damping.resize(n, n); return s; }(), stops,
-        {.harmonics = mode_harmonics, .samples = mode_samples});
-    const double f1 = nnm.linear_frequency_hz(), omega1 = 2.0 * std::numbers::pi * f1;
-    const int onset = nnm.onset_stop();
-    const int observed = 3 * onset + 1;  // y DOF of the onset node (circumferential)
-    const double unit = d(observed) / gap;  // scaled coordinate → gaps
-    const Eigen::MatrixXd m_dense = Eigen::MatrixXd(reduced.mass), k_dense = Eigen::MatrixXd(reduced.stiffness);  // scaled
-    Eigen::VectorXd phi = nnm.onset_mode();
-    phi /= std::sqrt(phi.dot(m_dense * phi));  // φ₁ᵀ M φ₁ = 1
-    const auto& onset_stop = stops[static_cast<size_t>(onset)];
-    double phi_c = 0.0;  // e_cᵀ φ₁ at the onset stop
-    for (const auto& [j, w] : onset_stop.terms()) phi_c += w * phi(j);
-    const double beta = 2.0 * zeta / omega1;
-    reduced.damping = (beta * k_dense).sparseView();
-    // Linear resonance of the first mode: η = s / (2 ζ ω₁²); radial peak η |φ_c| = overload · g0.
-    const double s = overload * gap * 2.0 * zeta * omega1 * omega1 / std::abs(phi_c);
-    const Eigen::VectorXd load = s * (m_dense * phi);
-    Eigen::Index lead = 0;
-    load.cwiseAbs().maxCoeff(&lead);
-    solvers::HarmonicForcing forcing{static_cast<int>(lead), load(lead), from * f1, {}};
-    for (Eigen::Index j = 0; j < n; ++j) {
-      if (j != lead && load(j) != 0.0) forcing.more.push_back({static_cast<int>(j), load(j)});
-    }
-    // Penalty stiffness: `stiffness_ratio` × the static radial stiffness 1/(e_cᵀ K_r⁻¹ e_c) at the onset node.
-    Eigen::VectorXd e_c = Eigen::VectorXd::Zero(n);
-    for (const auto& [j, w] : onset_stop.terms()) e_c(j) = w;
-    const double radial_stiffness = 1.0 / e_c.dot(k_dense.ldlt().solve(e_c));
-    const double k_pen = stiffness_ratio * radial_stiffness;
+    const auto& stops = model.stops;
+    auto& nnm = *model.modes;
+    const double f1 = model.f1, beta = model.beta, s = model.load_scale, unit = model.unit;
+    const int onset = model.onset, observed = model.observed;
+    const auto& forcing = model.forcing;
+    const double radial_stiffness = model.radial_stiffness, k_pen = model.penalty_stiffness;
 
     std::vector<solvers::ContactPoint> contacts, rigid_contacts;
     const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{k_pen, gap});
