@@ -472,11 +472,14 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
         unique.setdefault(c["id"], c)
     todo = [c for c in unique.values() if not (folder / c["id"] / "case.json").is_file()]
     client = cluster = None
+    cluster_start_s = 0.0
     if todo:  # connected before anything is written: a bad --scheduler writes nothing
         import cloudpickle
         if run_case.__module__ != "__main__":  # remote workers need not have this file
             cloudpickle.register_pickle_by_value(sys.modules[run_case.__module__])
+        started = time.monotonic()
         client, cluster = _client(workers, scheduler, study["retries"])
+        cluster_start_s = time.monotonic() - started
     start = time.monotonic()
     outcomes, failures = {}, {}
     progress = _Progress(len(todo), quiet)
@@ -528,9 +531,9 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
         "axes": [{k: a[k] for k in ("key", "kind", "spec", "unit", "values")} for a in study["axes"]],
         "cases": len(cases), "distinct_scenes": len(unique), "run": len(outcomes), "failed": len(failures),
         "resumed": len(unique) - len(todo), "workers": n_workers, "scheduler": scheduler or "local",
-        "wall_time_s": elapsed, "case_run_time_s": sum(run_times),
+        "cluster_start_s": cluster_start_s, "wall_time_s": elapsed, "case_run_time_s": sum(run_times),
         "overhead_per_case_s": (elapsed * n_workers - sum(run_times)) / len(run_times) if run_times else None,
-        "wbm": exe, "statuses": {s: sum(1 for r in table_rows if r[len(study['axes']) + 1] == s)
+        "wbm": exe, "table": {"header": header, "rows": table_rows}, "statuses": {s: sum(1 for r in table_rows if r[len(study['axes']) + 1] == s)
                                  for s in sorted({r[len(study['axes']) + 1] for r in table_rows})},
     }
     table.write_table(out / "study.csv", header, table_rows)

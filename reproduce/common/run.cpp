@@ -57,6 +57,14 @@ void Run::table(const std::string& file, const std::vector<std::string>& header,
   }
 }
 
+void Run::text(const std::string& file, const std::string& content) {
+  try {
+    scene::write_text(staging_ / file, content);
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+}
+
 void Run::meta(const nlohmann::json& meta) { meta_.merge_patch(meta); }
 void Run::report(const std::string& markdown) { report_ += markdown; }
 void Run::fail(const std::string& why) { failures_.push_back(why); }

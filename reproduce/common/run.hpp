@@ -28,6 +28,9 @@ class Run {
   /// nothing. With `status` (one entry per row) NaN is a missing value, written as an empty cell.
   void table(const std::string& file, const std::vector<std::string>& header,
              const std::vector<Eigen::VectorXd>& columns, const std::vector<std::string>& status = {});
+  /// A file of the run other than a table (a scene, a Matrix Market file, a picture made by a
+  /// tool) into the staging folder (scene::write_text); a failed write fails the run.
+  void text(const std::string& file, const std::string& content);
   /// meta.json: merged with wall time and "build" (scene::build_information()) at finish().
   void meta(const nlohmann::json& meta);
   /// Markdown fragment for out/REPORT.md (appended).
