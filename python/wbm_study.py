@@ -436,20 +436,20 @@ def _client(workers, scheduler, retries):
     import logging
     import dask
     from dask.distributed import Client, LocalCluster
-    dask.config.set({"distributed.scheduler.allowed-failures": retries})
-    if scheduler:
+    if scheduler:  # its own allowed-failures setting applies
         try:
             return Client(scheduler, timeout="20s"), None
         except (OSError, TimeoutError) as e:
             raise StudyError(f"--scheduler {scheduler}: cannot connect ({e}); start one with `dask-scheduler`, "
                              "or leave --scheduler out for a local cluster") from None
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None, silence_logs=logging.ERROR)
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}):  # read when the scheduler starts
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=None, silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
-def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli=None, resolve=None):
+def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli=None):
     """Runs a study (a .toml path or a dict) into `output` (default wbm-study/<title>). Returns
     (header, rows, summary): the rows of study.csv (one per case, in case order) and study.json's
     content. Raises StudyError for bad input before anything is written; KeyboardInterrupt
@@ -462,7 +462,7 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
                          "give one of them")
     study = load_study(source)
     exe = find_cli(cli)
-    cases = make_cases(study, resolve or _resolver())
+    cases = make_cases(study, _resolver())
     out = Path(output) if output else Path("wbm-study") / study["title"]
     if out.exists() and not out.is_dir():
         raise StudyError(f"-o {out}: exists and is not a folder; give another output folder")
