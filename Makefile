@@ -94,6 +94,16 @@ sanitize-configure:
 # and FloquetMultipliersEqualThoseOfTheTransformedProblem run the same residual).
 # `make check-sanitize SANITIZE_SKIP=` runs them all.
 SANITIZE_SKIP  ?= NonlinearModes\.(BackboneThroughItsCornersDoesNotDependOnRounding|BackboneEntersAnIllConditionedPieceWithoutTurningBack|AugmentedLagrangianAndKktContinuationAgree|AboveContactConstraintsHoldAndFrequencyHardens)|Continuation\.ExtremesCompleteOrStopWithAReasonAndValidPoints|MoreauJean\.PlasticImpactOscillatorConvergesToTheClosedFormOrbit|FrictionNormalLoad\.WeightedResidualConvergesToTheTimeSteppingReference|NonlinearModes\.TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether|scene\.(friction_normal_load|rod_continuation|friction_damper|friction_damper_coulomb)$$|BorderedWoodbury\.ForcedResponseBranchesEqualTheDensePath|ContactDirection\.ANormalContactEqualsTheTransformedWallContact|RelativeContact\.WeightedResidualEqualsTheTransformedObstacleProblem
+# SANITIZE_PYTEST_SKIP: Python tests left to `make test`, by test function name (pytest -k). The two Dask-process tests of
+# tests/python/test_study.py (issue #37) run twelve and eight rod continuations through the
+# sanitized `wbm run` (148 and 81 s under ASan + UBSan, stop 66, against 16 s in Release): the
+# sanitizers see nothing there that test_a_linear_study_gives_the_closed_form_peak (the same
+# `wbm study` path, the binding's scene_json(dict, file), a LocalCluster, `wbm run` of a sweep: 2 s)
+# and the C++ tests of continuation do not. `make check-sanitize SANITIZE_PYTEST_SKIP=` runs them.
+empty :=
+space := $(empty) $(empty)
+SANITIZE_PYTEST_SKIP ?= test_a_scheduler_and_two_workers_finish_a_study_when_one_worker_is_killed \
+  test_an_interrupted_study_resumes_without_recomputing
 check-sanitize: sanitize-configure
 	@cmake --build $(SANITIZE_BUILD) -j $(JOBS) --target test_wavelets test_spectral test_fem test_contact \
 	  test_solvers test_scene wbm wbm_python
@@ -106,7 +116,8 @@ check-sanitize: sanitize-configure
 	@cd $(SANITIZE_BUILD) && LD_PRELOAD="$(SANITIZE_RT)" \
 	  ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  PYTHONPATH=$(CURDIR)/$(SANITIZE_BUILD)/python WBM_CLI=$(CURDIR)/$(SANITIZE_BUILD)/cli/wbm PYTHONDONTWRITEBYTECODE=1 \
-	  "$$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' CMakeCache.txt)" -m pytest -q -p no:cacheprovider $(CURDIR)/tests/python
+	  "$$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' CMakeCache.txt)" -m pytest -q -p no:cacheprovider $(CURDIR)/tests/python \
+	  $(if $(strip $(SANITIZE_PYTEST_SKIP)),-k 'not ($(subst $(space), or ,$(strip $(SANITIZE_PYTEST_SKIP))))')
 
 # libFuzzer on the scene parser and the Matrix Market reader, each for FUZZ_SECONDS, in the
 # sanitized build above (after check-sanitize, only the two targets are new); seeds are our own
