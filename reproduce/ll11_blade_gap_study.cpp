@@ -296,8 +296,8 @@ int main(int argc, char** argv) {
     md << "## Beyond LL11: the blade's resonance peak against random clearances, a study on Dask (`ll11_blade_gap_study`)\n\n"
        << "Files: `out/ll11_blade_gap_study/cases.csv` (one row per case), `study.png` (drawn by `wbm study`: each quantity "
        << "against the gap, and their histograms), `blade_scene.json` with `blade_stiffness.mtx`, `blade_mass.mtx` (the scene), "
-       << "`study.toml`, `study_full.toml`, `meta.json` (both study.json files). The blade of `ll11_blade_forced` (mesh "
-       << format("%g", mesh_size * 1e3) << " mm, Craig–Bampton " << n << " DOFs, f1 = " << format("%.2f", model.f1)
+       << "`study.toml`, `study_full.toml`, `meta.json` (both study.json files). The blade of `ll11_blade_forced`, meshed at "
+       << format("%g", mesh_size * 1e3) << " mm (Craig–Bampton " << n << " DOFs, f1 = " << format("%.2f", model.f1)
        << " Hz), written as a wbm scene: " << contacts.size() << " linear penalty stops of " << format("%.3g", model.penalty_stiffness)
        << " N/m along the tip nodes' radial directions, C = β K_r with β = " << format("%.3g", model.beta)
        << " s, the load of `ll11_blade_forced` at the nominal clearance g0 = " << format("%g", gap * 1e3)
@@ -324,7 +324,8 @@ int main(int argc, char** argv) {
       row("peak amplitude / g0", a_over, "%.3f");
       row("peak amplitude / g (its own clearance)", a_own, "%.3f");
     }
-    md << "\n" << converged << " of " << samples << " cases converged. **Time** (2 cores, embedded LocalCluster): 1 worker "
+    md << "\n" << converged << " of " << samples << " cases converged. **Time** (embedded LocalCluster on this machine; "
+       << "under `make reproduce` other runs share its cores): 1 worker "
        << format("%.1f", t1) << " s, 2 workers " << format("%.1f", t2) << " s (speed-up " << format("%.2f", t1 / t2)
        << "); a case's `wbm run` " << format("%.2f", case_time) << " s on average; Dask's overhead per case (workers × wall − "
        << "Σ run times, over the cases) " << format("%.2f", overhead(one)) << " s with 1 worker, " << format("%.2f", overhead(two))
