@@ -94,8 +94,8 @@ sanitize-configure:
 # and FloquetMultipliersEqualThoseOfTheTransformedProblem run the same residual).
 # `make check-sanitize SANITIZE_SKIP=` runs them all.
 SANITIZE_SKIP  ?= NonlinearModes\.(BackboneThroughItsCornersDoesNotDependOnRounding|BackboneEntersAnIllConditionedPieceWithoutTurningBack|AugmentedLagrangianAndKktContinuationAgree|AboveContactConstraintsHoldAndFrequencyHardens)|Continuation\.ExtremesCompleteOrStopWithAReasonAndValidPoints|MoreauJean\.PlasticImpactOscillatorConvergesToTheClosedFormOrbit|FrictionNormalLoad\.WeightedResidualConvergesToTheTimeSteppingReference|NonlinearModes\.TwinSamplesWhoseMultipliersAreIllDeterminedSwitchTogether|scene\.(friction_normal_load|rod_continuation|friction_damper|friction_damper_coulomb)$$|BorderedWoodbury\.ForcedResponseBranchesEqualTheDensePath|ContactDirection\.ANormalContactEqualsTheTransformedWallContact|RelativeContact\.WeightedResidualEqualsTheTransformedObstacleProblem
-# SANITIZE_PYTEST_SKIP: Python tests left to `make test`, by test function name (pytest -k). The two Dask-process tests of
-# tests/python/test_study.py (issue #37) run twelve and eight rod continuations through the
+# SANITIZE_PYTEST_SKIP: Python tests left to `make test`, by test function name (pytest -k). The
+# two Dask-process tests of tests/python/test_study.py (issue #37) run twelve and eight rod continuations through the
 # sanitized `wbm run` (148 and 81 s under ASan + UBSan, stop 66, against 16 s in Release): the
 # sanitizers see nothing there that test_a_linear_study_gives_the_closed_form_peak (the same
 # `wbm study` path, the binding's scene_json(dict, file), a LocalCluster, `wbm run` of a sweep: 2 s)

@@ -155,8 +155,13 @@ def _load_scene_file(path, where):
     if not path.is_file():
         raise StudyError(f"{where} = \"{path}\": no such file (paths are relative to the study file)")
     if path.suffix == ".json":
-        data = json.loads(path.read_text())
-        return data.get("scene", data) if isinstance(data, dict) else data
+        try:
+            data = json.loads(path.read_text())
+        except ValueError as e:
+            raise StudyError(f"{path}: JSON syntax: {e}") from None
+        if not isinstance(data, dict):
+            raise StudyError(f"{path}: expected a JSON object holding a scene (or a result.json)")
+        return data.get("scene", data)
     try:
         with open(path, "rb") as f:
             return tomllib.load(f)
@@ -576,6 +581,9 @@ def main(argv=None):
     except StudyError as e:
         print(f"wbm study: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as e:  # a folder or file that cannot be written, a tool that cannot start
+        print(f"wbm study: {e}", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
     except KeyboardInterrupt:
         print("wbm study: interrupted; the finished cases are kept, run the same command again to resume",
               file=sys.stderr)
