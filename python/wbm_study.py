@@ -22,8 +22,8 @@ as `wbm run case.json --no-plots -q` on a Dask worker, so that its files equal t
 `scene.json` and `case.json`), is written by the client, staged and renamed into place; a study
 run again skips the cases whose folders exist. A case whose run does not converge is a row with
 its status; a worker that dies has its case rerun on another (Dask reschedules it, up to
-`retries` deaths), and a case that still fails is a row with its status and no folder, run again
-on the next resume.
+`retries` deaths); a case that still fails, or whose `wbm run` was killed (a signal, or
+`case_timeout_s`), is a row with its status and no folder, run again on the next resume.
 
 Outputs of a study folder: study.csv (one row per case: `case`, the axes' keys, `status`, the
 summary quantities with their units, `message`; an empty cell where a quantity does not exist),
@@ -504,8 +504,13 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
                 try:
                     outcome = future.result()
                 except Exception as e:  # a worker that died `retries` times, or the task itself
-                    failures[c["id"]] = f"{type(e).__name__}: {e}"
+                    failures[c["id"]] = ("failed", f"{type(e).__name__}: {e}", None)
                     progress(c, "failed", 0.0, "-")
+                    continue
+                if outcome["exit_code"] not in (0, 1, 2):  # killed (a signal, case_timeout_s): no folder,
+                    status = outcome_status(outcome["exit_code"])  # so that the next run tries it again
+                    failures[c["id"]] = (status, _message(outcome), outcome["wall_time_s"])
+                    progress(c, status, outcome["wall_time_s"], outcome["worker"])
                     continue
                 outcomes[c["id"]] = _write_case(folder, c, outcome, study)
                 progress(c, outcomes[c["id"]]["status"], outcome["wall_time_s"], outcome["worker"])
@@ -518,7 +523,8 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
     first_files = None
     for c in cases:
         if c["id"] in failures:
-            rows.append((c, {"status": "failed", "message": failures[c["id"]], "wall_time_s": None}, {}))
+            status, message, seconds = failures[c["id"]]
+            rows.append((c, {"status": status, "message": message, "wall_time_s": seconds}, {}))
             continue
         record = outcomes.get(c["id"]) or json.loads((folder / c["id"] / "case.json").read_text())
         files = table.folder_files(folder / c["id"])

@@ -69,6 +69,18 @@ def test_a_linear_study_gives_the_closed_form_peak(tmp_path):
     csv = (tmp_path / "s" / "study.csv").read_text().splitlines()
     assert csv[0].startswith("case,forcing.amplitude [N],status,")
     assert csv[1].split(",")[6] == ""
+    assert (tmp_path / "s" / "study.png").stat().st_size > 0
+
+
+def test_a_case_past_its_time_limit_is_a_row_with_the_key_to_raise(tmp_path):
+    study = {"scene": str(rod_scene(tmp_path)), "collect": ["folds"], "case_timeout_s": 0.05,
+             "axis": [{"key": "contact.gap", "values": [14.5e-3]}]}
+    table = wbm.study(study, output=tmp_path / "s", workers=1)
+    assert list(table["status"]) == ["killed by signal 9"]
+    assert "raise case_timeout_s" in table["message"][0] and table["folds [-]"].isna().all()
+    assert not (tmp_path / "s" / "cases").exists() or not any((tmp_path / "s" / "cases").iterdir())
+    study["case_timeout_s"] = 0  # no folder was written: raising the limit runs the case again
+    assert list(wbm.study(study, output=tmp_path / "s", workers=1)["status"]) == ["converged"]
 
 
 def test_keys_reach_every_table_of_an_array_or_one_entry():
