@@ -593,22 +593,4 @@ double KroneckerFactorization::norm1() const {
   return norm1_;
 }
 
-double KroneckerFactorization::frobenius_norm() const {
-  const MechanicalSystem& system = *operator_.system;
-  const TimeOperators& ops = *operator_.ops;
-  const double fr = operator_.frequency_hz;
-  const std::array<double, 3> c = {fr * fr, fr, 1.0};
-  const std::array<const Eigen::MatrixXd*, 3> a = {&ops.mass, &ops.damping, &ops.stiffness};
-  const std::array<const Eigen::SparseMatrix<double>*, 3> x = {&system.mass, &system.damping, &system.stiffness};
-  double sum = 0.0;
-  for (size_t s = 0; s < 3; ++s) {
-    for (size_t r = s; r < 3; ++r) {  // the pairs (s, r) and (r, s) alike
-      const double time = a[s]->cwiseProduct(*a[r]).sum();
-      if (time == 0.0) continue;
-      sum += (r == s ? 1.0 : 2.0) * c[s] * c[r] * time * x[s]->cwiseProduct(*x[r]).sum();
-    }
-  }
-  return std::sqrt(std::max(sum, 0.0));
-}
-
 }  // namespace wbm::solvers::detail

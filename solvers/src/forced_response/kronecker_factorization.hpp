@@ -81,10 +81,6 @@ class KroneckerFactorization {
   /// ‖G(f)‖₁ of the last factorized operator: from the assembled G (sparse LU path) or from the
   /// Kronecker factors (modal path, computed on first use).
   [[nodiscard]] double norm1() const;
-  /// ‖G(f)‖_F of the operator last given to factorize(), from its Kronecker factors, G not formed:
-  /// ‖G‖_F² = Σ_{s,s'} c_s c_s' ⟨A_s, A_s'⟩_F ⟨X_s, X_s'⟩_F, c = (f², f, 1), A = (A_M, A_C, A_K),
-  /// X = (M, C, K); O(M²) for dense time operators plus O(nnz(X)). An upper bound of ‖G‖₂.
-  [[nodiscard]] double frobenius_norm() const;
 
  private:
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;

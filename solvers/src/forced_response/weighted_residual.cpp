@@ -58,7 +58,7 @@ double WeightedResidual::backward_error(const Eigen::VectorXd& a, const Eigen::V
   p.require_factorized();
   const double rnorm = r.norm();
   if (rnorm == 0.0) return 0.0;
-  const double gamma = p.g->frobenius_norm();  // ≥ ‖G‖₂
+  const double gamma = p.frobenius_norm();  // ≥ ‖G‖₂
   const double contact = (r - p.linear_residual(a)).norm();        // ‖n‖: r = (G a − b) + n
   return rnorm / (gamma * a.norm() + p.b.norm() + contact);
 }

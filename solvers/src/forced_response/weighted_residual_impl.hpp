@@ -190,6 +190,10 @@ struct WeightedResidual::Impl {
   struct OperatorProducts {
     std::array<Eigen::SparseMatrix<double>, 3> transposed;
     bool sparse = false;
+    // ⟨A_s, A_r⟩_F for s ≤ r in the order (M,M), (M,C), (M,K), (C,C), (C,K), (K,K): the time
+    // factors of ‖G(f)‖_F (frobenius_norm), the same at every frequency; over the nonzeros of the
+    // sparse transposes when sparse (O(nnz), not O(M²) per product).
+    std::array<double, 6> time_inner{};
   };
   std::shared_ptr<const OperatorProducts> operator_products;
 
@@ -416,6 +420,11 @@ struct WeightedResidual::Impl {
   }
 
   void set_operator_products();
+  /// ‖G(f)‖_F at this frequency from the Kronecker factors, G not formed: ‖G‖_F² = Σ_{s,r}
+  /// c_s c_r ⟨A_s, A_r⟩_F ⟨X_s, X_r⟩_F, c = (f², f, 1), A = (A_M, A_C, A_K), X = (M, C, K); the
+  /// time factors from operator_products, the space ones O(nnz(X)). An upper bound of ‖G‖₂
+  /// (backward_error's γ).
+  [[nodiscard]] double frobenius_norm() const;
 
   // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
   [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,

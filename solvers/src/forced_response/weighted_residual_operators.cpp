@@ -378,7 +378,32 @@ void WeightedResidual::Impl::set_operator_products() {
   if (products->sparse) {
     for (int t = 0; t < 3; ++t) products->transposed[static_cast<size_t>(t)] = a[t]->transpose().sparseView();
   }
+  size_t k = 0;
+  for (size_t s = 0; s < 3; ++s) {
+    for (size_t r = s; r < 3; ++r, ++k) {
+      products->time_inner[k] = products->sparse
+                                    ? products->transposed[s].cwiseProduct(products->transposed[r]).sum()
+                                    : a[s]->cwiseProduct(*a[r]).sum();
+    }
+  }
   operator_products = products;
+}
+
+
+double WeightedResidual::Impl::frobenius_norm() const {
+  const double fr = forcing.frequency_hz;
+  const std::array<double, 3> c = {fr * fr, fr, 1.0};
+  const std::array<const Eigen::SparseMatrix<double>*, 3> x = {&system.mass, &system.damping, &system.stiffness};
+  double sum = 0.0;
+  size_t k = 0;
+  for (size_t s = 0; s < 3; ++s) {
+    for (size_t r = s; r < 3; ++r, ++k) {  // the pairs (s, r) and (r, s) alike
+      const double time = operator_products->time_inner[k];
+      if (time == 0.0) continue;
+      sum += (r == s ? 1.0 : 2.0) * c[s] * c[r] * time * x[s]->cwiseProduct(*x[r]).sum();
+    }
+  }
+  return std::sqrt(std::max(sum, 0.0));
 }
 
 
