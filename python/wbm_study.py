@@ -35,9 +35,7 @@ did not (or failed), 2 bad input (nothing written), 130 interrupted (the finishe
 """
 import argparse
 import copy
-import csv
 import hashlib
-import io
 import itertools
 import json
 import math
@@ -48,6 +46,8 @@ import sys
 import time
 import tomllib
 from pathlib import Path
+
+import wbm_study_table as table
 
 STUDY_KEYS = ("title", "scene", "combine", "collect", "axis", "retries", "case_timeout_s")
 AXIS_KEYS = ("key", "values", "range", "random", "unit")
@@ -419,9 +419,8 @@ def _resolver():
 
 
 def _row(case, record, files, study):
-    from wbm_study_table import quantities
     return ([case["id"]] + [case["parameters"][a["key"]] for a in study["axes"]] + [record["status"]] +
-            quantities(study["collect"], files, record.get("wall_time_s")) + [record["message"]])
+            table.quantities(study["collect"], files, record.get("wall_time_s")) + [record["message"]])
 
 
 class _Progress:
@@ -459,7 +458,6 @@ def run_study(source, output=None, workers=None, scheduler=None, quiet=True, cli
     (header, rows, summary): the rows of study.csv (one per case, in case order) and study.json's
     content. Raises StudyError for bad input before anything is written; KeyboardInterrupt
     leaves the finished cases in place (a rerun resumes)."""
-    import wbm_study_table as table
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise StudyError(f"workers = {workers!r}: expected an integer ≥ 1 (worker processes of the local cluster)")
     if workers is not None and scheduler:

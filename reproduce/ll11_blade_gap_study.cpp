@@ -233,12 +233,8 @@ int main(int argc, char** argv) {
     const auto& header = table.at("header");
     const auto status_col = static_cast<size_t>(std::find(header.begin(), header.end(), "status") - header.begin());
     for (const auto& row : table.at("rows")) status.push_back(row[status_col].get<std::string>());
-    std::vector<double> freq_f1(freq.size()), amp_gaps(amp.size()), amp_own(amp.size());
-    for (size_t k = 0; k < freq.size(); ++k) {
-      freq_f1[k] = freq[k] / model.f1;
-      amp_gaps[k] = amp[k] / gap;
-      amp_own[k] = amp[k] / gaps[k];
-    }
+    std::vector<double> freq_f1(freq.size());
+    for (size_t k = 0; k < freq.size(); ++k) freq_f1[k] = freq[k] / model.f1;
     run.table("cases.csv",
               {"gap [m]", "peak_amplitude [m]", "peak_frequency [Hz]", "peak_frequency_over_f1 [-]", "max_contact_force [N]"},
               {reproduce::as_column(gaps), reproduce::as_column(amp), reproduce::as_column(freq),
