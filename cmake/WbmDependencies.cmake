@@ -30,6 +30,10 @@ find_package(KLU QUIET)  # cmake/FindKLU.cmake
 find_package(CHOLMOD QUIET)  # cmake/FindCHOLMOD.cmake (Craig–Bampton)
 wbm_require(CHOLMOD_FOUND libsuitesparse-dev "SuiteSparse CHOLMOD")
 wbm_require(KLU_FOUND libsuitesparse-dev "SuiteSparse KLU")
+# Siconos Numerics: the fc2d friction-contact solvers of the Moreau–Jean reference with Coulomb
+# friction (solvers/src/reference/friction_contact_step.cpp).
+find_package(SiconosNumerics QUIET)  # cmake/FindSiconosNumerics.cmake
+wbm_require(SiconosNumerics_FOUND libsiconos-numerics-dev "Siconos Numerics")
 
 # Scenes and the `wbm` command.
 find_package(tomlplusplus QUIET)

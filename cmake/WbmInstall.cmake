@@ -25,4 +25,5 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/wbmConfig.cmake.in
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/wbmConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/wbmConfig.cmake ${PROJECT_BINARY_DIR}/wbmConfigVersion.cmake
               ${PROJECT_SOURCE_DIR}/cmake/FindKLU.cmake ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/FindSiconosNumerics.cmake
         DESTINATION ${wbm_cmake_dir})

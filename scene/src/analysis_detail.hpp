@@ -40,13 +40,15 @@ std::string way_out(const Scene& scene, solvers::StopReason stop);
 // The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
 std::string contact_label(const Scene& scene, size_t c);
 // diagnostics.friction of an exact Coulomb contact from its multipliers λ_k [N] at the instants τ_k
-// and its tangential displacements w_k = w(τ_k) [m]: stick_fraction (the instants with
-// |λ_k| < μN (1 − 1e-9): the slip rows hold |λ| = μN exactly), slip_amplitude_m ((max w − min w)/2:
+// (the weighted residual) or its mean forces over the output intervals [τ_k, τ_{k+1}) (Moreau–Jean),
+// its tangential displacements w_k = w(τ_k) [m] and its slip forces F_k [N] (μN, or μ times the
+// normal stop's reaction over the same interval): stick_fraction (the instants with
+// |λ_k| < F_k (1 − 1e-9): the slip rows hold |λ| = F exactly), slip_amplitude_m ((max w − min w)/2:
 // the rigid-plastic slider moves with the point), dissipated_energy_per_cycle_J
 // (Σ_k λ_k (w_{k+1} − w_k) ≥ 0, the work of the slips paired with the impulses) and
-// dissipated_power_W (that times f).
+// dissipated_power_W (that times f). All vectors have one entry per instant.
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   double slip_force, double frequency_hz);
+                                   const Eigen::VectorXd& slip_force, double frequency_hz);
 
 // A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
 // equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).

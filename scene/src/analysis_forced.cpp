@@ -74,7 +74,9 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
         for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k));
         f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
         f.columns.push_back(w);
-        friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, coulomb->slip_force(), forcing.frequency_hz));
+        friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w,
+                                               Eigen::VectorXd::Constant(m, coulomb->slip_force()),
+                                               forcing.frequency_hz));
       }
     }
     if (!friction.empty()) out.diagnostics["friction"] = friction;
@@ -249,6 +251,39 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
   if (!out.converged()) return;
   period_tables(scene, contacts, system, forcing.frequency_hz, response.tau, response.displacement,
                 &response.velocity, out);
+  if (!rigid) return;
+  // The scheme's own energy account over the last period (PeriodicResponse): input − damping −
+  // contacts (the stops' absorption and the friction's dissipation) ≈ 0 once periodic.
+  out.diagnostics["timestep"]["powers_W"] = {{"input", response.input_power},
+                                             {"damping", response.damping_power},
+                                             {"contacts", response.stop_power}};
+  // Moreau–Jean's impulses over each output interval [τ_p, τ_{p+1}) divided by its duration: the
+  // mean contact forces; a Coulomb contact's tangential displacement at τ_p beside it.
+  const Eigen::VectorXd& tau = response.tau;
+  const auto p = tau.size();
+  Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, tau / forcing.frequency_hz}};
+  nlohmann::json friction = nlohmann::json::array();
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    const Eigen::VectorXd force = response.contact_force.row(static_cast<Eigen::Index>(c)).transpose();
+    f.header.push_back("f_c_" + contact_label(scene, c) + " [N]");
+    f.columns.push_back(force);
+    const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get());
+    if (coulomb == nullptr) continue;
+    Eigen::VectorXd w(p);
+    for (Eigen::Index k = 0; k < p; ++k) w(k) = contacts[c].displacement(response.displacement.col(k));
+    f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
+    f.columns.push_back(w);
+    // The slip force μ N, or μ times the normal stop's mean reaction over the same interval.
+    const double mu = coulomb->parameters().friction_coefficient;
+    const Eigen::VectorXd slip = contacts[c].normal >= 0
+                                     ? Eigen::VectorXd(mu * response.contact_force.row(contacts[c].normal).transpose())
+                                     : Eigen::VectorXd::Constant(p, coulomb->slip_force());
+    friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, slip, forcing.frequency_hz));
+    friction.back().erase("collocation_instants");
+    friction.back()["output_samples"] = p;
+  }
+  if (!friction.empty()) out.diagnostics["friction"] = friction;
+  out.tables.push_back(std::move(f));
 }
 
 void basis_plot(const Scene& scene, AnalysisResult& out) {

@@ -183,12 +183,12 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
 }
 
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   double slip_force, double frequency_hz) {
+                                   const Eigen::VectorXd& slip_force, double frequency_hz) {
   const Eigen::Index m = force.size();
   int stuck = 0;
   double energy = 0.0;
   for (Eigen::Index k = 0; k < m; ++k) {
-    if (std::abs(force(k)) < slip_force * (1.0 - 1e-9)) ++stuck;
+    if (std::abs(force(k)) < slip_force(k) * (1.0 - 1e-9)) ++stuck;
     energy += force(k) * (w((k + 1) % m) - w(k));
   }
   return {{"contact", label},

@@ -47,12 +47,16 @@ void Parser::contacts(const toml::table& root) {
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
     }
-    if (friction && (modes || s_.analysis.kind == AnalysisKind::Timestep)) {
+    const bool timestep = s_.analysis.kind == AnalysisKind::Timestep;
+    if (friction && modes) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"" + law + "\" (friction) is for the weighted residual: solve, sweep and continuation; analysis \"" +
-                   std::string(to_string(s_.analysis.kind)) + "\" has no friction law (" +
-                   (modes ? "nonlinear modes are conservative" : "the time-stepping reference carries no slider state") +
-                   ")");
+               "\"" + law + "\" (friction) is for forced responses: solve, sweep, continuation and timestep; analysis "
+               "\"nnm\" has no friction law (nonlinear modes are conservative)");
+    }
+    if (c.law == ContactLawKind::Jenkins && timestep) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"jenkins\" with analysis \"timestep\": the time-stepping reference of scenes (Moreau–Jean) takes "
+               "exact friction; use law = \"coulomb\", or a weighted-residual analysis (solve, sweep, continuation)");
     }
     if (friction && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
@@ -79,9 +83,23 @@ void Parser::contacts(const toml::table& root) {
     // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
     read_keys(r_, *t, section, contact_keys(), c, "", law);
     if (friction) {  // a constant normal load, or one that follows a normal contact (jenkins)
-      const bool varying = c.law == ContactLawKind::Jenkins && t->contains("normal_contact");
+      // Jenkins: a penalty normal contact (any forced response); coulomb: a rigid one, in
+      // analysis "timestep" only (Moreau–Jean's 2D contact; the weighted residual has none).
+      const bool varying = (c.law == ContactLawKind::Jenkins || (c.law == ContactLawKind::Coulomb && timestep)) &&
+                           t->contains("normal_contact");
+      if (c.law == ContactLawKind::Coulomb && !timestep && t->contains("normal_contact")) {
+        r_.error(Reader::source_of(*t, "normal_contact"), section + ".normal_contact",
+                 "\"coulomb\" under a varying normal load is solved by time stepping only: set analysis.type = "
+                 "\"timestep\", or use a \"jenkins\" law on a \"linear\" or \"exponential\" normal contact");
+      }
       c.normal_load = r_.number(*t, section, "normal_load", non_negative("N"),
                                 varying ? std::optional<double>(0.0) : std::nullopt);
+      if (varying && c.law == ContactLawKind::Coulomb && c.normal_load != 0.0) {
+        r_.error(Reader::source_of(*t, "normal_load"), section + ".normal_load",
+                 "= " + detail::number_text(c.normal_load) + " beside normal_contact: the rigid normal contact's reaction "
+                 "is the normal load; remove normal_load and press the normal DOF with a static load "
+                 "(a [[forcing.loads]] table with harmonic = 0)");
+      }
       if (varying) {
         c.normal_contact = static_cast<int>(r_.integer(*t, section, "normal_contact", 0,
                                                        static_cast<long long>(tables.size()) - 1, std::nullopt,
@@ -151,6 +169,23 @@ void Parser::normal_contacts(const std::vector<std::pair<const toml::table*, std
       continue;
     }
     const ContactLawKind law = s_.contacts[static_cast<size_t>(index)].law;
+    if (c.law == ContactLawKind::Coulomb) {
+      if (law != ContactLawKind::Rigid) {
+        r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second + " of law \"" +
+                              std::string(to_string(law)) + "\"; a \"coulomb\" contact takes its normal load from a "
+                              "\"rigid\" contact on the normal DOF (Moreau–Jean's 2D contact)");
+        continue;
+      }
+      for (const Contact& other : s_.contacts) {
+        if (&other != &c && other.law == ContactLawKind::Coulomb && other.normal_index == index) {
+          r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second +
+                                ", which another \"coulomb\" contact already takes its normal load from; one tangent "
+                                "per rigid contact");
+        }
+      }
+      c.normal_index = index;
+      continue;
+    }
     if (law != ContactLawKind::Linear && law != ContactLawKind::Exponential) {
       r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second + " of law \"" +
                             std::string(to_string(law)) + "\"; the normal load comes from a \"linear\" or \"exponential\" "

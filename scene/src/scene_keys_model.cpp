@@ -150,8 +150,8 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                     "the contact's direction, a spring k_t in series with a Coulomb slider of slip force μN (solve, "
                     "sweep, continuation without stability; Midpoint quadrature), or exact Coulomb friction along it "
                     "(\"coulomb\": the k_t → ∞ limit, its force a multiplier at the collocation instants as a rigid "
-                    "stop's, first order in 1/M; solve, sweep, continuation without stability; all contacts of the "
-                    "forced response \"rigid\" or \"coulomb\", or none)")
+                    "stop's, first order in 1/M; solve, sweep, continuation without stability; timestep by Moreau–Jean "
+                    "with Siconos; all contacts of the forced response \"rigid\" or \"coulomb\", or none)")
           .is_required()
           .read_by_section(),
       number_key<C>("gap", [](auto& c) -> auto& { return c.gap; }, finite("m"), "g0 [m]; < 0 is a prestress")
@@ -183,13 +183,16 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
           .only_in({"jenkins", "coulomb"})
           .read_by_section(),
       compound_key<C>("normal_contact", "integer", "none (a constant normal load)",
-                      "the index (0-based, in file order) of another `[[contact]]`, a `\"linear\"` or "
-                      "`\"exponential\"` one located by `node` or `dof`",
+                      "the index (0-based, in file order) of another `[[contact]]` located by `node` or `dof`: "
+                      "`\"linear\"` or `\"exponential\"` for jenkins; `\"rigid\"` for coulomb (analysis "
+                      "`\"timestep\"` only, at most one coulomb per rigid contact)",
                       "a normal load that varies with the normal gap: the slip force at each instant is μ (N + n), n "
                       "the force of that normal contact (its `gap` < 0 is a preload; n = 0 where it opens, and the "
-                      "element then slides freely)",
+                      "element then slides freely). For coulomb the normal contact's reaction is the normal load "
+                      "(a 2D contact, Moreau–Jean with Siconos' fc2d): N must be 0, and a static load presses the "
+                      "normal DOF",
                       [](const C& c) { return c.normal_contact >= 0 ? nlohmann::json(c.normal_contact) : nlohmann::json(); })
-          .only_in({"jenkins"}),
+          .only_in({"jenkins", "coulomb"}),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),
       compound_key<C>("dof", kLocation, "1-DOF matrices: `0`", "see Locations", "matrices only: the contact DOF"),
       compound_key<C>("nodes", "node set name or list of node numbers", "none",

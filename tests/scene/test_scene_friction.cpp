@@ -155,7 +155,8 @@ TEST(SceneFriction, KeysAreReadEchoedAndRefusedWhereFrictionIsNotComputed) {
   refused("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 20.0] }\n" +
               law + " }\nanalysis = { type = \"continuation\" }\n",
           {"contact.law", "stability = true", "set stability = false"});
-  refused(base + law + " }\nanalysis = { type = \"timestep\" }\n", {"contact.law", "analysis \"timestep\" has no friction law"});
+  refused(base + law + " }\nanalysis = { type = \"timestep\" }\n",
+          {"contact.law", "\"jenkins\" with analysis \"timestep\"", "use law = \"coulomb\""});
   refused(base + law + " }\nbasis = { harmonics = 8, contact_quadrature = \"cell-average\" }\n",
           {"basis.contact_quadrature", "\"jenkins\"", "\"midpoint\""});
 }
@@ -215,8 +216,8 @@ TEST(SceneFriction, AnExactCoulombSolveBalancesTheEnergyOfLoadViscosityAndFricti
   EXPECT_LT((w - at_instants).cwiseAbs().maxCoeff(), 1e-12 * w.cwiseAbs().maxCoeff());
 }
 
-// law = "coulomb": its keys, echo and round trip; mixing it with a penalty or Jenkins contact, the
-// time-stepping reference and stability are refused by name.
+// law = "coulomb": its keys, echo and round trip; mixing it with a penalty or Jenkins contact and
+// stability are refused by name; time stepping takes it, with normal_contact on a rigid contact.
 TEST(SceneFriction, CoulombKeysAreReadEchoedAndRefusedWhereNotComputed) {
   const std::string base = "structure = { mass = [[1.0, 0.0], [0.0, 1.0]], stiffness = [[4e4, -1e4], [-1e4, 4e4]] }\n"
                            "forcing = { amplitude = 1.0, frequency_hz = 8.0, dof = 0 }\n";
@@ -243,5 +244,51 @@ TEST(SceneFriction, CoulombKeysAreReadEchoedAndRefusedWhereNotComputed) {
   refused(base + law + "[[contact]]\nlaw = \"jenkins\"\ndof = 1\ntangential_stiffness = 4e7\nfriction_coefficient = 0.3\n"
                        "normal_load = 2.0\n",
           {"mixes exact contacts", "\"coulomb\" ones a stiff \"jenkins\" law"});
-  refused(base + "analysis = { type = \"timestep\" }\n" + law, {"\"coulomb\" (friction)", "analysis \"timestep\" has no friction law"});
+  // Time stepping takes it (Moreau–Jean with Siconos), with a constant load or a rigid normal
+  // contact's reaction (normal_contact); the weighted residual only the former.
+  (void)parse(base + "analysis = { type = \"timestep\" }\n" + law);
+  const std::string two_d = "[[contact]]\nlaw = \"rigid\"\ndof = 1\ngap = 0.0\n[[contact]]\nlaw = \"coulomb\"\ndof = 0\n"
+                            "friction_coefficient = 0.3\nnormal_contact = 0\n";
+  const Scene pressed = parse(base + "analysis = { type = \"timestep\" }\n" + two_d);
+  ASSERT_EQ(pressed.contact_points().size(), 2u);
+  EXPECT_EQ(pressed.contact_points()[1].normal, 0);
+  EXPECT_EQ(wbm::scene::to_json(pressed)["contact"][1]["normal_contact"], 0);
+  refused(base + two_d, {"contact[1].normal_contact", "solved by time stepping only", "analysis.type = \"timestep\""});
+  refused(base + "analysis = { type = \"timestep\" }\n" + two_d + "normal_load = 0.5\n",
+          {"contact[1].normal_load", "= 0.5 beside normal_contact", "harmonic = 0"});
+  refused(base + "analysis = { type = \"timestep\" }\n" + two_d +
+              "[[contact]]\nlaw = \"coulomb\"\ndof = 1\ndirection = { dof0 = 1.0, dof1 = 1.0 }\nfriction_coefficient = 0.3\n"
+              "normal_contact = 0\n",
+          {"contact[2].normal_contact", "already takes its normal load"});
+  std::string on_penalty = two_d;
+  const std::string rigid_law = "law = \"rigid\"";
+  on_penalty.replace(on_penalty.find(rigid_law), rigid_law.size(), "law = \"linear\"\nstiffness = 1e6");
+  refused(base + "analysis = { type = \"timestep\" }\n" + on_penalty,
+          {"contact[1].normal_contact", "from a \"rigid\" contact"});
+}
+
+// examples/scenes/friction_timestep_normal_load.toml: the scheme's energy account over the last
+// period closes (input = damping + contacts, the identity of θ = ½ once periodic), and the
+// friction's dissipated power summed over the output samples, Σ f_p Δw_p (diagnostics.friction),
+// is the contacts' power summed over the steps to within the output sampling (the normal stop
+// does no work: y rests on the plane). The slip force follows the stop: |f_t| ≤ μ f_n in every
+// output interval.
+TEST(SceneFriction, TimeSteppingWithARigidNormalContactBalancesItsEnergy) {
+  const Scene s = parse(slurp(std::string(WBM_EXAMPLES) + "/friction_timestep_normal_load.toml"));
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  const auto& powers = r.diagnostics.at("timestep").at("powers_W");
+  const double input = powers.at("input").get<double>(), damping = powers.at("damping").get<double>(),
+               contacts = powers.at("contacts").get<double>();
+  EXPECT_NEAR(input, damping + contacts, 1e-6 * input);  // measured 8.7e-8
+  const double friction = r.diagnostics.at("friction").at(0).at("dissipated_power_W").get<double>();
+  EXPECT_GT(friction, 0.3 * input);  // friction takes a good share: the test is not vacuous
+  EXPECT_NEAR(friction, contacts, 1e-4 * contacts);  // measured 4.1e-6
+  const auto* table = find_table(r, "contact_force.csv");
+  ASSERT_NE(table, nullptr);
+  ASSERT_EQ(table->header.size(), 5u);  // tau, time, f_c of y, f_c of x, w_c of x
+  const Eigen::VectorXd& normal = table->columns[2];
+  const Eigen::VectorXd& tangent = table->columns[3];
+  EXPECT_GT(normal.minCoeff(), 0.0);
+  EXPECT_LE((tangent.cwiseAbs() - 0.3 * normal).maxCoeff(), 1e-9);
 }

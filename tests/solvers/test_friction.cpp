@@ -256,7 +256,8 @@ TEST(Friction, ExactCoulombDerivativesMatchCentralDifferences) {
 }
 
 // Exact contacts are not mixed with penalty or Jenkins laws in one problem, and the integrators
-// that need f(u) or a slider state refuse Coulomb friction by name.
+// that need f(u) refuse Coulomb friction by name, pointing to Moreau–Jean (which takes it:
+// test_moreau_jean_friction.cpp).
 TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
   const DenHartog d;
   const TimeBasis fourier = TimeBasis::fourier_harmonics(8);
@@ -270,8 +271,8 @@ TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
       },
       {"1 of the 2 contacts are exact", "Coulomb ones a stiff JenkinsLaw"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::integrate_moreau_jean_to_periodic(d.system(), {0, d.p0, 15.0}, {{0, d.coulomb()}}, {}); },
-      {"Coulomb friction (exact)", "rigid stops (contact::RigidStop) only"});
+      [&] { (void)solvers::integrate_to_periodic(d.system(), {0, d.p0, 15.0}, {{0, d.coulomb()}}); },
+      {"Coulomb friction (exact)", "integrate_moreau_jean_to_periodic for exact Coulomb friction"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::floquet_multipliers(d.system(), {{0, d.coulomb()}}, Eigen::MatrixXd::Zero(1, 64), 15.0); },
       {"Coulomb friction (exact)", "stability is not computed for friction"});

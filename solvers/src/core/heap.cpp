@@ -1,6 +1,7 @@
 #include <wbm/solvers/heap.hpp>
 
 #include <cstdlib>
+#include <initializer_list>
 
 #if defined(__GLIBC__)
 #include <malloc.h>

@@ -27,9 +27,6 @@ void TimeIntegrationOptions::validate() const {
 
 namespace {
 
-// Projected Gauss–Seidel sweeps on the contact LCP of one Moreau–Jean step, at most.
-constexpr int kLcpSweeps = 1000;
-
 // Right-hand side data, dense (n is small for the systems this reference is for).
 struct Ode {
   int n;
@@ -123,7 +120,8 @@ void refuse_rigid_stops(const std::vector<ContactPoint>& contacts, const char* w
     if (c.law->hysteretic()) {
       throw std::invalid_argument(std::string(where) + ": the contact at DOF " + std::to_string(c.dof) + " is a " +
                                   c.law->describe() + ", a hysteretic law with a slider state that this integrator "
-                                  "does not carry: friction has no time-stepping reference here yet");
+                                  "does not carry: use integrate_central_difference_to_periodic for a Jenkins element, "
+                                  "integrate_moreau_jean_to_periodic for exact Coulomb friction");
     }
     if (c.law->rigid()) {
       throw std::invalid_argument(std::string(where) + ": the contact at DOF " + std::to_string(c.dof) + " is a " +
@@ -134,162 +132,6 @@ void refuse_rigid_stops(const std::vector<ContactPoint>& contacts, const char* w
 }
 
 }  // namespace
-
-void MoreauJeanOptions::validate() const {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("MoreauJeanOptions." + what); };
-  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
-  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
-    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
-         std::to_string(samples_per_period));
-  }
-  if (!(theta >= 0.5 && theta <= 1.0)) fail("theta = " + std::to_string(theta) + ": must lie in [0.5, 1]");
-  if (!(restitution >= 0.0 && restitution <= 1.0)) fail("restitution = " + std::to_string(restitution) + ": must lie in [0, 1]");
-  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
-  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
-}
-
-PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
-                                                   const std::vector<ContactPoint>& contacts,
-                                                   const MoreauJeanOptions& options) {
-  system.validate();
-  forcing.validate(system.dofs());
-  ContactPoint::validate(contacts, system.dofs());
-  options.validate();
-  forcing.require_resolved(options.samples_per_period,
-                           "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
-                           "raise MoreauJeanOptions.samples_per_period (and steps_per_period, a multiple of it)");
-  for (const auto& c : contacts) {
-    if (!c.law->rigid() || c.law->hysteretic()) {
-      throw std::invalid_argument("integrate_moreau_jean_to_periodic: the contact at DOF " + std::to_string(c.dof) +
-                                  " is a " + c.law->describe() + "; this scheme takes rigid stops (contact::RigidStop) "
-                                  "only: use integrate_to_periodic for penalty laws");
-    }
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const int n = system.dofs();
-  const auto nc = static_cast<Eigen::Index>(contacts.size());
-  const double period = 1.0 / forcing.frequency_hz;
-  const int steps = options.steps_per_period, p_count = options.samples_per_period;
-  const int stride = steps / p_count;
-  const double h = period / steps, th = options.theta, e = options.restitution;
-  const Eigen::MatrixXd m = Eigen::MatrixXd(system.mass), c = Eigen::MatrixXd(system.damping),
-                        k = Eigen::MatrixXd(system.stiffness);
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(m + h * th * c + h * h * th * th * k);
-  Eigen::MatrixXd e_cols = Eigen::MatrixXd::Zero(n, nc);
-  for (Eigen::Index i = 0; i < nc; ++i) e_cols.col(i) = contacts[static_cast<size_t>(i)].direction(n);
-  // Eigen's triangular solve takes the address of the first entry, so an n × 0 right-hand side
-  // (no contacts) is undefined behaviour there: skip it.
-  const Eigen::MatrixXd minv_e = nc > 0 ? Eigen::MatrixXd(lu.solve(e_cols)) : Eigen::MatrixXd(n, 0);  // M̂⁻¹ E
-  const Eigen::MatrixXd delassus = e_cols.transpose() * minv_e;     // W
-  // v_free = M̂⁻¹ [(M − h(1−θ)C − h²θ(1−θ)K) v − hK q + h f_θ]
-  const Eigen::MatrixXd a_v = lu.solve(m - h * (1.0 - th) * c - h * h * th * (1.0 - th) * k);
-  const Eigen::MatrixXd a_q = lu.solve(-h * k);
-  const std::vector<HarmonicLoad> loads = forcing.loads();
-  const auto nl = static_cast<Eigen::Index>(loads.size());
-  Eigen::MatrixXd e_loads = Eigen::MatrixXd::Zero(n, nl);
-  for (Eigen::Index j = 0; j < nl; ++j) e_loads(loads[static_cast<size_t>(j)].dof, j) = h;
-  const Eigen::MatrixXd a_f = lu.solve(e_loads);  // h M̂⁻¹ e_{dof_j}
-  const double omega = 2.0 * std::numbers::pi * forcing.frequency_hz;
-  Eigen::VectorXd f_theta(nl);  // θ F_j cos(ω h_j t1 + φ_j) + (1 − θ) F_j cos(ω h_j t0 + φ_j)
-
-  PeriodicResponse out;
-  out.frequency_hz = forcing.frequency_hz;
-  out.tau = Eigen::VectorXd::LinSpaced(p_count, 0.0, 1.0 - 1.0 / p_count);
-  Eigen::VectorXd q = Eigen::VectorXd::Zero(n), v = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
-  Eigen::VectorXd previous_tip, impulse(nc), u_free(nc), u_old(nc);
-  auto& rep = out.report;
-  const Eigen::SparseMatrix<double>& damping = system.damping;
-  for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
-    double input = 0.0, dissipated = 0.0, absorbed = 0.0;  // work over this period [J]
-    for (int step = 0; step < steps; ++step) {
-      if (step % stride == 0) {
-        disp.col(step / stride) = q;
-        vel.col(step / stride) = v;
-        force.col(step / stride).setZero();
-      }
-      const double t0 = static_cast<double>(step) * h, t1 = t0 + h;  // the forcing has period T
-      for (Eigen::Index j = 0; j < nl; ++j) {
-        const auto& l = loads[static_cast<size_t>(j)];
-        f_theta(j) = l.amplitude * (th * std::cos(omega * l.harmonic * t1 + l.phase_rad) +
-                                    (1.0 - th) * std::cos(omega * l.harmonic * t0 + l.phase_rad));
-      }
-      Eigen::VectorXd v_new = a_v * v + a_q * q + a_f * f_theta;
-      impulse.setZero();
-      if (nc > 0) {
-        std::vector<Eigen::Index> active;
-        for (Eigen::Index i = 0; i < nc; ++i) {
-          const auto& ct = contacts[static_cast<size_t>(i)];
-          u_old(i) = ct.displacement(v);
-          u_free(i) = ct.displacement(v_new);
-          if (ct.law->gap() - ct.displacement(q) - 0.5 * h * u_old(i) <= 0.0) active.push_back(i);
-        }
-        // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0, by projected
-        // Gauss–Seidel until the impulses change by at most 1e-14 of the largest, or kLcpSweeps
-        // sweeps (counted in the report when they end unsettled).
-        bool settled = active.empty();
-        double change = 0.0, size = 0.0;
-        for (int sweep = 0; sweep < kLcpSweeps && !active.empty(); ++sweep) {
-          change = 0.0;
-          size = 0.0;
-          for (Eigen::Index i : active) {
-            double r = -(u_free(i) + e * u_old(i));
-            for (Eigen::Index j : active) if (j != i) r += delassus(i, j) * impulse(j);
-            const double p_new = std::max(0.0, -r / delassus(i, i));
-            change = std::max(change, std::abs(p_new - impulse(i)));
-            size = std::max(size, std::abs(p_new));
-            impulse(i) = p_new;
-          }
-          if (active.size() == 1 || change <= 1e-14 * size) {
-            settled = true;
-            break;
-          }
-        }
-        if (!settled) {
-          ++rep.unsettled_lcp_steps;
-          rep.largest_lcp_change = std::max(rep.largest_lcp_change, size > 0.0 ? change / size : change);
-        }
-        v_new.noalias() -= minv_e * impulse;
-        force.col(step / stride) += impulse / (h * stride);
-      }
-      const Eigen::VectorXd v_theta = th * v_new + (1.0 - th) * v;
-      for (Eigen::Index j = 0; j < nl; ++j) input += h * f_theta(j) * v_theta(loads[static_cast<size_t>(j)].dof);
-      dissipated += h * v_theta.dot(damping * v_theta);
-      for (Eigen::Index i = 0; i < nc; ++i) absorbed += impulse(i) * contacts[static_cast<size_t>(i)].displacement(v_theta);
-      q += h * v_theta;
-      v = std::move(v_new);
-    }
-    out.input_power = input / period;
-    out.damping_power = dissipated / period;
-    out.stop_power = absorbed / period;
-    if (!q.allFinite() || !v.allFinite()) {
-      rep.status = SolveStatus::NonFinite;
-      rep.message = "non-finite state in period " + std::to_string(period_index);
-      rep.periods = period_index;
-      break;
-    }
-    rep.periods = period_index;
-    rep.steps += steps;
-    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep)) break;
-  }
-  out.displacement = std::move(disp);
-  out.velocity = std::move(vel);
-  out.contact_force = std::move(force);
-  if (rep.message.empty()) {
-    std::ostringstream os;
-    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of "
-       << steps << " Moreau–Jean steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
-    rep.message = os.str();
-  }
-  if (rep.unsettled_lcp_steps > 0) {
-    rep.message += "; in " + std::to_string(rep.unsettled_lcp_steps) + " steps the contact LCP was still changing by " +
-                   format_number(rep.largest_lcp_change) + " of its largest impulse after " +
-                   std::to_string(kLcpSweeps) + " projected Gauss–Seidel sweeps";
-  }
-  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return out;
-}
 
 PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,
                                        const std::vector<ContactPoint>& contacts,

@@ -31,9 +31,12 @@ struct TimeIntegrationReport {
   long steps = 0;                       // BDF steps attempted (gsl evolve count)
   std::vector<double> periodicity;      // δ_i for i = 2..periods
   double wall_time_s = 0.0;
-  /// Moreau–Jean only: the steps whose contact LCP (projected Gauss–Seidel, at most 1000 sweeps)
-  /// ended with impulses still changing by more than 1e-14 of the largest, and the largest such
-  /// relative change; the message says so when there are any.
+  /// Moreau–Jean only: the steps whose contact problem did not settle, and the largest such
+  /// departure; the message says so when there are any. Without friction: the LCP's projected
+  /// Gauss–Seidel (at most 1000 sweeps) ended with impulses still changing by more than 1e-14 of
+  /// the largest (the departure is that relative change). With friction: Siconos' fc2d returned
+  /// a failure or an error (fc2d_compute_error relative to ‖q‖) above 1e-10 (the departure is that
+  /// error).
   long unsettled_lcp_steps = 0;
   double largest_lcp_change = 0.0;
   std::string message;
@@ -51,8 +54,8 @@ struct PeriodicResponse {
   /// forces at τ_p [N]. BDF: empty.
   Eigen::MatrixXd contact_force;
   /// Moreau–Jean only (else NaN): the mean powers over the last period [W], summed per step with
-  /// v_{k+θ}: input h f_{k+θ}·v, damping h vᵀ C v, and the stops' absorption Σ_c P_c v_c (the
-  /// impulse times the velocity towards the stop). For θ = ½ the scheme's energy identity makes
+  /// v_{k+θ}: input h f_{k+θ}·v, damping h vᵀ C v, and the contacts' absorption Σ_c P_c v_c (the
+  /// impulse times the velocity along e_c: the stops' and the friction's). For θ = ½ the scheme's energy identity makes
   /// input − damping − stop the change of energy over the period (≈ 0 once periodic).
   double input_power = std::numeric_limits<double>::quiet_NaN();
   double damping_power = std::numeric_limits<double>::quiet_NaN();
@@ -90,21 +93,36 @@ struct MoreauJeanOptions {
   void validate() const;                // throws std::invalid_argument naming the field
 };
 
-/// Periodic steady state with rigid stops by the Moreau–Jean time-stepping scheme
-/// [Jean 1999, CMAME 177 235–257; Acary & Brogliato 2008, Numerical Methods for Nonsmooth
-/// Dynamical Systems, Springer, Sec. 10.1], from rest, in physical time with fixed step h = T/N:
+/// Periodic steady state with rigid stops and exact Coulomb friction by the Moreau–Jean
+/// time-stepping scheme [Jean 1999, CMAME 177 235–257; Acary & Brogliato 2008, Numerical Methods
+/// for Nonsmooth Dynamical Systems, Springer, Sec. 10.1], from rest, in physical time with fixed
+/// step h = T/N:
 ///   M (v_{k+1} − v_k) + h (C v_{k+θ} + K q_{k+θ}) = h f_{k+θ} − Σ_c e_c P_c,
 ///   q_{k+1} = q_k + h v_{k+θ},   x_{k+θ} = θ x_{k+1} + (1 − θ) x_k,
-/// with, for every contact c whose predicted gap g0 − q_c − (h/2) U_c ≤ 0 (U_c = e_cᵀ v_k, the
+/// with, for every stop c whose predicted gap g0 − q_c − (h/2) U_c ≤ 0 (U_c = e_cᵀ v_k, the
 /// velocity towards the stop), Newton's impact law at the velocity level,
 ///   0 ≤ P_c ⊥ −(U_c,k+1 + e U_c,k) ≥ 0   (P_c ≥ 0 [N·s], the impulse of the step),
-/// a small LCP with the Delassus matrix W = Eᵀ (M + hθC + h²θ²K)⁻¹ E, solved exactly for one
-/// contact and by projected Gauss–Seidel (to 1e-14 relative) for several; P_c = 0 otherwise.
-/// First order in h through impacts (the velocity jumps), second order elsewhere for θ = ½.
-/// Periods, samples and the periodicity test δ_i are those of integrate_to_periodic. Every
-/// contact must be a rigid stop (contact::RigidStop): penalty laws go to integrate_to_periodic.
-/// Throws std::invalid_argument for invalid inputs (a load at 2h ≥ P included); a run that hits
-/// max_periods is reported.
+/// and P_c = 0 otherwise. The contacts (`contacts`, any order):
+///   - rigid stops (contact::RigidStop);
+///   - exact Coulomb friction (contact::CoulombFriction) along its direction e_t, either under its
+///     constant normal load N (ContactPoint::normal = −1): |P_t| ≤ μ N h; or with
+///     ContactPoint::normal naming a rigid stop of the list, a 2D contact whose normal load is
+///     that stop's reaction: |P_t| ≤ μ P_n, active only while the stop is (its normal_load must
+///     be 0: press the normal DOF with a static load, a HarmonicLoad of harmonic 0). In slip
+///     P_t = ±μ P_n opposes U_t,k+1 = e_tᵀ v_{k+1}; in stick U_t,k+1 = 0.
+/// Without friction the step's problem is the LCP with the Delassus matrix
+/// W = Eᵀ (M + hθC + h²θ²K)⁻¹ E on the active stops, solved exactly for one stop and by projected
+/// Gauss–Seidel (to 1e-14 relative) for several. With friction it is the 2D frictional contact
+/// problem u = W r + q of the active stops (normal and tangent rows; a stop without friction
+/// gets μ = 0) and of the constant-load Coulomb contacts (a decoupled normal row that makes
+/// r_n = h N), solved by Siconos Numerics' fc2d_driver with Lemke's method (finite pivoting, no
+/// iteration tolerance) and checked by fc2d_compute_error. First order in h through impacts and
+/// stick–slip switches, second order elsewhere for θ = ½. Periods, samples and the periodicity
+/// test δ_i are those of integrate_to_periodic. Penalty laws go to integrate_to_periodic,
+/// Jenkins elements to integrate_central_difference_to_periodic. Throws std::invalid_argument
+/// for invalid inputs (a load at 2h ≥ P included; a `normal` that is out of range, names a
+/// contact that is not a rigid stop, beside a normal_load ≠ 0, or names a stop another friction
+/// contact already names); a run that hits max_periods is reported.
 [[nodiscard]] PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system,
                                                                  const HarmonicForcing& forcing,
                                                                  const std::vector<ContactPoint>& contacts,
