@@ -148,25 +148,12 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
       rhs = f_end;
       rhs.noalias() -= c * v;
     }
-    rep.periods = period_index;
-    if (!q.allFinite() || !v.allFinite()) {
-      rep.status = SolveStatus::NonFinite;
-      rep.message = "non-finite state in period " + std::to_string(period_index);
+    if (detail::end_of_period(q, v, period_index, steps, disp, forcing.dof, previous_tip, options.periodicity_tolerance,
+                              rep)) {
       break;
     }
-    rep.steps += steps;
-    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep)) break;
   }
-  out.displacement = std::move(disp);
-  out.velocity = std::move(vel);
-  out.contact_force = std::move(force);
-  if (rep.message.empty()) {
-    std::ostringstream os;
-    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of " << steps
-       << " central-difference steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
-    rep.message = os.str();
-  }
+  detail::finish_run(out, std::move(disp), std::move(vel), std::move(force), steps, "central-difference");
   rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

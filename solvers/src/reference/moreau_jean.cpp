@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -299,26 +298,12 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
     out.input_power = input / period;
     out.damping_power = dissipated / period;
     out.stop_power = absorbed / period;
-    if (!q.allFinite() || !v.allFinite()) {
-      rep.status = SolveStatus::NonFinite;
-      rep.message = "non-finite state in period " + std::to_string(period_index);
-      rep.periods = period_index;
+    if (detail::end_of_period(q, v, period_index, steps, disp, forcing.dof, previous_tip, options.periodicity_tolerance,
+                              rep)) {
       break;
     }
-    rep.periods = period_index;
-    rep.steps += steps;
-    const Eigen::VectorXd tip = disp.row(forcing.dof).transpose();
-    if (detail::periodic(tip, previous_tip, options.periodicity_tolerance, rep)) break;
   }
-  out.displacement = std::move(disp);
-  out.velocity = std::move(vel);
-  out.contact_force = std::move(force);
-  if (rep.message.empty()) {
-    std::ostringstream os;
-    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of "
-       << steps << " Moreau–Jean steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
-    rep.message = os.str();
-  }
+  detail::finish_run(out, std::move(disp), std::move(vel), std::move(force), steps, "Moreau–Jean");
   if (rep.unsettled_lcp_steps > 0 && pairs.empty()) {
     rep.message += "; in " + std::to_string(rep.unsettled_lcp_steps) + " steps the contact LCP was still changing by " +
                    format_number(rep.largest_lcp_change) + " of its largest impulse after " +

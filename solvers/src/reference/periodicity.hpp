@@ -4,6 +4,9 @@
 //   δ_i = rms(u_i − u_{i−1}) / rms(u_i)   (rms(u_i − u_{i−1}) when u_i vanishes),
 // appended to the report; Converged once δ_i < tolerance [JL14 Sec. 4].
 #include <cmath>
+#include <sstream>
+#include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -28,6 +31,39 @@ inline bool periodic(const Eigen::VectorXd& tip, Eigen::VectorXd& previous, doub
   }
   previous = tip;
   return false;
+}
+
+// The end of period `index` of a fixed-step scheme with `steps` steps a period: a non-finite
+// state (q, v) ends the run NonFinite; otherwise the steps are counted and δ_i of the forced DOF's
+// row of `disp` recorded (periodic above). Returns true when the run ends.
+inline bool end_of_period(const Eigen::VectorXd& q, const Eigen::VectorXd& v, int index, int steps,
+                          const Eigen::MatrixXd& disp, int forced_dof, Eigen::VectorXd& previous, double tolerance,
+                          TimeIntegrationReport& rep) {
+  rep.periods = index;
+  if (!q.allFinite() || !v.allFinite()) {
+    rep.status = SolveStatus::NonFinite;
+    rep.message = "non-finite state in period " + std::to_string(index);
+    return true;
+  }
+  rep.steps += steps;
+  const Eigen::VectorXd tip = disp.row(forced_dof).transpose();
+  return periodic(tip, previous, tolerance, rep);
+}
+
+// Moves the last period's samples into `out` and, unless a message is set, writes "periodic
+// (or not periodic) after i periods of N <scheme> steps, delta = δ_i".
+inline void finish_run(PeriodicResponse& out, Eigen::MatrixXd&& disp, Eigen::MatrixXd&& vel, Eigen::MatrixXd&& force,
+                       int steps, const std::string& scheme) {
+  out.displacement = std::move(disp);
+  out.velocity = std::move(vel);
+  out.contact_force = std::move(force);
+  auto& rep = out.report;
+  if (rep.message.empty()) {
+    std::ostringstream os;
+    os << (rep.converged() ? "periodic" : "not periodic") << " after " << rep.periods << " periods of " << steps << " "
+       << scheme << " steps, delta = " << (rep.periodicity.empty() ? NAN : rep.periodicity.back());
+    rep.message = os.str();
+  }
 }
 
 }  // namespace wbm::solvers::detail
