@@ -1,6 +1,5 @@
 #include "reference/friction_contact_step.hpp"
 
-#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -52,7 +51,7 @@ FrictionContactStep::Outcome FrictionContactStep::solve(const Eigen::MatrixXd& w
   FrictionContactProblem problem{2, static_cast<int>(m), matrix, q_copy.data(), mu_copy.data()};
   Outcome out;
   out.info = fc2d_driver(&problem, r.data(), s_->u.data(), s_->options);
-  const double norm = std::max(q.norm(), 1.0);
+  const double norm = q.norm() > 0.0 ? q.norm() : 1.0;  // relative to ‖q‖ [m/s]
   fc2d_compute_error(&problem, r.data(), s_->u.data(), 1e-14, norm, &out.error);
   // NM_create_from_data keeps our pointer as matrix0: detach it before freeing the wrapper.
   matrix->matrix0 = nullptr;

@@ -17,8 +17,8 @@ namespace wbm::solvers::detail {
 /// W the 2m × 2m Delassus matrix [1/kg] (symmetric positive definite), q [m/s], r [N·s]. Solved by
 /// Siconos Numerics' fc2d_driver with SICONOS_FRICTION_2D_LEMKE: the problem is written as an LCP
 /// (fc2d_tolcp) and solved by Lemke's pivoting, exact up to rounding (no iteration tolerance).
-/// The solution is checked by fc2d_compute_error (its natural-map residual, relative to
-/// max(‖q‖, 1) as `norm`).
+/// The solution is checked by fc2d_compute_error (its natural-map residual, relative to ‖q‖, or
+/// absolute [m/s] when q = 0).
 class FrictionContactStep {
  public:
   FrictionContactStep();
