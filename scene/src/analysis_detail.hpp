@@ -46,9 +46,10 @@ std::string contact_label(const Scene& scene, size_t c);
 // |λ_k| < F_k (1 − 1e-9): the slip rows hold |λ| = F exactly), slip_amplitude_m ((max w − min w)/2:
 // the rigid-plastic slider moves with the point), dissipated_energy_per_cycle_J
 // (Σ_k λ_k (w_{k+1} − w_k) ≥ 0, the work of the slips paired with the impulses) and
-// dissipated_power_W (that times f). All vectors have one entry per instant.
+// dissipated_power_W (that times f), and the number of instants under `count_key`
+// ("collocation_instants", "output_samples"). All vectors have one entry per instant.
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   const Eigen::VectorXd& slip_force, double frequency_hz);
+                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key);
 
 // A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
 // equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).

@@ -76,7 +76,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
         f.columns.push_back(w);
         friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w,
                                                Eigen::VectorXd::Constant(m, coulomb->slip_force()),
-                                               forcing.frequency_hz));
+                                               forcing.frequency_hz, "collocation_instants"));
       }
     }
     if (!friction.empty()) out.diagnostics["friction"] = friction;
@@ -278,9 +278,7 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
     const Eigen::VectorXd slip = contacts[c].normal >= 0
                                      ? Eigen::VectorXd(mu * response.contact_force.row(contacts[c].normal).transpose())
                                      : Eigen::VectorXd::Constant(p, coulomb->slip_force());
-    friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, slip, forcing.frequency_hz));
-    friction.back().erase("collocation_instants");
-    friction.back()["output_samples"] = p;
+    friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, slip, forcing.frequency_hz, "output_samples"));
   }
   if (!friction.empty()) out.diagnostics["friction"] = friction;
   out.tables.push_back(std::move(f));

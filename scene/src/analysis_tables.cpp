@@ -183,7 +183,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
 }
 
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   const Eigen::VectorXd& slip_force, double frequency_hz) {
+                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key) {
   const Eigen::Index m = force.size();
   int stuck = 0;
   double energy = 0.0;
@@ -196,7 +196,7 @@ nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::Vector
           {"slip_amplitude_m", 0.5 * (w.maxCoeff() - w.minCoeff())},
           {"dissipated_energy_per_cycle_J", energy},
           {"dissipated_power_W", energy * frequency_hz},
-          {"collocation_instants", m}};
+          {count_key, m}};
 }
 
 // Per point of a sweep or branch: A_h and φ_h of each observed DOF (rows: points). `samples[i]` is

@@ -33,8 +33,8 @@ FrictionContactStep::FrictionContactStep() : s_(std::make_unique<Siconos>()) {
 
 FrictionContactStep::~FrictionContactStep() = default;
 
-FrictionContactStep::Outcome FrictionContactStep::solve(const Eigen::MatrixXd& w, const Eigen::VectorXd& q,
-                                                        const Eigen::VectorXd& mu, Eigen::VectorXd& r) {
+FrictionContactStep::Outcome FrictionContactStep::solve(Eigen::MatrixXd& w, Eigen::VectorXd& q, Eigen::VectorXd& mu,
+                                                        Eigen::VectorXd& r) {
   const auto m = mu.size();
   if (w.rows() != 2 * m || w.cols() != 2 * m || q.size() != 2 * m) {
     throw std::invalid_argument("FrictionContactStep::solve: W is " + std::to_string(w.rows()) + " x " +
@@ -44,14 +44,11 @@ FrictionContactStep::Outcome FrictionContactStep::solve(const Eigen::MatrixXd& w
   r = Eigen::VectorXd::Zero(2 * m);
   s_->u = Eigen::VectorXd::Zero(2 * m);
   if (m == 0) return {};
-  // Siconos reads the data in place: a dense NumericsMatrix over copies it may not write to ours.
-  Eigen::MatrixXd w_copy = w;  // column-major, as NM_DENSE stores
-  Eigen::VectorXd q_copy = q, mu_copy = mu;
-  NumericsMatrix* matrix = NM_create_from_data(NM_DENSE, static_cast<int>(2 * m), static_cast<int>(2 * m), w_copy.data());
-  FrictionContactProblem problem{2, static_cast<int>(m), matrix, q_copy.data(), mu_copy.data()};
+  const double norm = q.norm() > 0.0 ? q.norm() : 1.0;  // relative to ‖q‖ [m/s]
+  NumericsMatrix* matrix = NM_create_from_data(NM_DENSE, static_cast<int>(2 * m), static_cast<int>(2 * m), w.data());
+  FrictionContactProblem problem{2, static_cast<int>(m), matrix, q.data(), mu.data()};
   Outcome out;
   out.info = fc2d_driver(&problem, r.data(), s_->u.data(), s_->options);
-  const double norm = q.norm() > 0.0 ? q.norm() : 1.0;  // relative to ‖q‖ [m/s]
   fc2d_compute_error(&problem, r.data(), s_->u.data(), 1e-14, norm, &out.error);
   // NM_create_from_data keeps our pointer as matrix0: detach it before freeing the wrapper.
   matrix->matrix0 = nullptr;

@@ -30,9 +30,11 @@ class FrictionContactStep {
     int info = 0;       // Siconos's return code: 0 when the solver reports success
     double error = 0.0;  // fc2d_compute_error of the returned (r, u)
   };
-  /// Solves the problem above for w (2m × 2m), q and mu (m entries, >= 0); r gets the impulses.
-  /// Throws nothing for a well-posed problem; std::invalid_argument for sizes that differ.
-  Outcome solve(const Eigen::MatrixXd& w, const Eigen::VectorXd& q, const Eigen::VectorXd& mu, Eigen::VectorXd& r);
+  /// Solves the problem above for w (2m × 2m, column-major as Siconos' dense storage), q and mu
+  /// (m entries, >= 0); r gets the impulses. Siconos reads w, q and mu in place and may use them
+  /// as it likes: they are the caller's per-step data, not to be read afterwards (no copies here,
+  /// one call a time step). Throws std::invalid_argument for sizes that differ.
+  Outcome solve(Eigen::MatrixXd& w, Eigen::VectorXd& q, Eigen::VectorXd& mu, Eigen::VectorXd& r);
 
  private:
   struct Siconos;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -186,7 +187,8 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
                            "the P = " + std::to_string(options.samples_per_period) + " output samples per period",
                            "raise MoreauJeanOptions.samples_per_period (and steps_per_period, a multiple of it)");
   const std::vector<FrictionalContact> pairs = frictional_contacts(contacts);
-  detail::FrictionContactStep fc2d;
+  std::optional<detail::FrictionContactStep> fc2d;  // Siconos' solver options, with friction only
+  if (!pairs.empty()) fc2d.emplace();
   const auto start = std::chrono::steady_clock::now();
   const int n = system.dofs();
   const auto nc = static_cast<Eigen::Index>(contacts.size());
@@ -257,7 +259,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
               act.push_back(a);
             }
           }
-          if (!act.empty()) frictional_step(pairs, act, delassus, u_free, u_old, e, h, fc2d, impulse, rep);
+          if (!act.empty()) frictional_step(pairs, act, delassus, u_free, u_old, e, h, *fc2d, impulse, rep);
         } else {
           // LCP on the active set: w = W P − (U_free + e U_old) ≥ 0, P ≥ 0, wᵀP = 0, by projected
           // Gauss–Seidel until the impulses change by at most 1e-14 of the largest, or kLcpSweeps
