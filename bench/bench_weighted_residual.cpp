@@ -3,7 +3,8 @@
 // operators, modal factorization of G, condensation H = P G⁻¹ Pᵀ), one condensed residual +
 // Jacobian, and a full solve (assembly + Newton + recovery). Goal (issue #4): every
 // combination's Case 1 solve at M = 64 in < 20 ms on one core. The full solve with a rigid stop
-// against the penalty law at M = 64 and 256 (issue #16). The assembly on the assembled-G path
+// against the penalty law at M = 64 and 256 (issue #16), and the Delassus operator's formation at
+// a new frequency (issue #39: Fourier:Fourier by its shift structure). The assembly on the assembled-G path
 // (LinearSolverPath::SparseLU: one sparse LU of the n·M Kronecker sum, the path of non-Rayleigh
 // damping), whose factorization is the SparseLu policy (KLU) since issue #41.
 #include <benchmark/benchmark.h>
@@ -131,6 +132,36 @@ void BM_WeightedResidual_FullSolveRigidVsPenalty(benchmark::State& state) {
   state.SetLabel(p.first + ":" + p.second + (rigid ? ", rigid stop" : ", exponential penalty"));
 }
 
+// The Delassus operator D = V H W at a new frequency (WeightedResidual::at_frequency: G factorized
+// again, H, then D and u_lin), rigid stop of Case 1: Fourier:Fourier forms D from its first block
+// column (H commutes with time shifts, O(M²)), the wavelet pairs by the dense products (O(M³));
+// issue #39 item 3. range(0) = M, range(1) the pair.
+void BM_WeightedResidual_DelassusAtFrequency(benchmark::State& state) {
+  const int m = static_cast<int>(state.range(0));
+  const auto& s = case1();
+  const auto& p = kPairs[static_cast<size_t>(state.range(1))];
+  std::vector<wbm::solvers::ContactPoint> contacts = s.contact_points();
+  contacts.front().law = std::make_shared<wbm::contact::RigidStop>(contacts.front().law->gap());
+  const wbm::solvers::WeightedResidual wr(s.system(), s.harmonic_forcing(), contacts,
+                                          wbm::solvers::TimeBasis::from_name(p.first, m),
+                                          wbm::solvers::TimeBasis::from_name(p.second, m));
+  const double f = 1.01 * s.harmonic_forcing().frequency_hz;
+  for (auto _ : state) {
+    const wbm::solvers::WeightedResidual at = wr.at_frequency(f);
+    benchmark::DoNotOptimize(at.delassus().data());
+  }
+  state.SetLabel(p.first + ":" + p.second);
+}
+
+void delassus_arguments(benchmark::internal::Benchmark* b) {
+  for (int pair : {0, 1, 2}) {
+    for (int m : {64, 256, 1024}) {
+      if (pair == 0 || m <= 256) b->Args({m, pair});
+    }
+  }
+  b->Unit(benchmark::kMillisecond);
+}
+
 void rigid_arguments(benchmark::internal::Benchmark* b) {
   for (int pair = 0; pair < 6; ++pair) {
     for (int m : {64, 256}) {
@@ -163,4 +194,5 @@ BENCHMARK(BM_WeightedResidual_Residual)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolveRigidVsPenalty)->Apply(rigid_arguments);
+BENCHMARK(BM_WeightedResidual_DelassusAtFrequency)->Apply(delassus_arguments);
 BENCHMARK_MAIN();

@@ -15,6 +15,7 @@
 #include <gsl/gsl_roots.h>
 #include <gtest/gtest.h>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/floquet.hpp>
@@ -223,6 +224,43 @@ TEST(RigidContact, DelassusOperatorIsTheImpulseResponseOfTheFullSystem) {
     const Eigen::VectorXd base = samples(Eigen::VectorXd::Zero(2 * m));
     Eigen::MatrixXd d(2 * m, 2 * m);
     for (int j = 0; j < 2 * m; ++j) d.col(j) = base - samples(Eigen::VectorXd::Unit(2 * m, j));
+    EXPECT_LE((d - wr.delassus()).norm(), 1e-9 * d.norm()) << pair.trial << ":" << pair.weighting;
+  }
+}
+
+// The same with exact Coulomb friction on the second contact: its rows are the slips
+// u(τ_{k+1}) − u(τ_k) per unit impulse, again from full solves with G. Fourier:Fourier forms D
+// from its first block column (H commutes with time shifts: set_delassus_circulant), the other
+// pairs by the dense products; both against the same impulse responses. Fourier with M even puts
+// the impulses at k/M (its top function vanishes at the midpoints), so the circulant path is
+// checked on both grids by these two tests.
+TEST(RigidContact, DelassusOperatorWithFrictionIsTheImpulseResponseOfTheFullSystem) {
+  const RigidCase1 c;
+  const int m = 16;
+  std::vector<solvers::ContactPoint> contacts{
+      {c.tip, std::make_shared<contact::RigidStop>(1.0)},
+      {c.tip - 5, std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.3, 2.0})}};
+  for (const Pair& pair : {Pair{"fourier", "fourier"}, Pair{"db6", "db6"}}) {
+    const auto trial = TimeBasis::from_name(pair.trial, m);
+    const solvers::WeightedResidual wr(c.system, c.forcing, contacts, trial, TimeBasis::from_name(pair.weighting, m));
+    const Eigen::VectorXd times = wr.collocation_times();
+    Eigen::VectorXd next(m);
+    for (int k = 0; k < m; ++k) next(k) = times((k + 1) % m);
+    auto rows = [&](const Eigen::VectorXd& lambda) {  // gap displacement (stop), slip (friction)
+      const Eigen::MatrixXd a = spectral::as_coefficients(wr.expand_forces(lambda), wr.dofs());
+      const Eigen::VectorXd u0 = solvers::evaluate_trial(trial, a, contacts[0].dof, next, 1.0);
+      const Eigen::VectorXd u1 = solvers::evaluate_trial(trial, a, contacts[1].dof, next, 1.0) -
+                                 solvers::evaluate_trial(trial, a, contacts[1].dof, times, 1.0);
+      Eigen::VectorXd u(2 * m);
+      for (int k = 0; k < m; ++k) {
+        u(2 * k) = u0(k);
+        u(2 * k + 1) = u1(k);
+      }
+      return u;
+    };
+    const Eigen::VectorXd base = rows(Eigen::VectorXd::Zero(2 * m));
+    Eigen::MatrixXd d(2 * m, 2 * m);
+    for (int j = 0; j < 2 * m; ++j) d.col(j) = base - rows(Eigen::VectorXd::Unit(2 * m, j));
     EXPECT_LE((d - wr.delassus()).norm(), 1e-9 * d.norm()) << pair.trial << ":" << pair.weighting;
   }
 }

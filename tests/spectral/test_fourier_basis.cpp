@@ -38,6 +38,63 @@ TEST(FourierBasis, HarmonicFormHasEveryHarmonicWithItsPair) {
   EXPECT_FALSE(FourierBasis(8).is_sine(7));  // the top function of M = 2^J is a cosine
 }
 
+// values() (one phase per harmonic for its cosine and sine) against the closed forms
+// (2πh)^d cos(2πhτ + dπ/2) and (2πh)^d sin(2πhτ + dπ/2) written here, and entry for entry the
+// same bits as value(): the rigid stops' collocation matrices moved to values() must not move
+// any result (both M forms, derivatives 0 to 2).
+TEST(FourierBasis, ValuesMatchTheClosedFormsAndValueBitForBit) {
+  const double pi = std::numbers::pi;
+  for (const int dim : {2, 16, 17}) {
+    const FourierBasis basis(dim);
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(37, -0.31, 1.73);
+    for (int d = 0; d <= 2; ++d) {
+      const Eigen::MatrixXd v = basis.values(tau, d);
+      ASSERT_EQ(v.rows(), tau.size());
+      ASSERT_EQ(v.cols(), dim);
+      for (Eigen::Index p = 0; p < tau.size(); ++p) {
+        EXPECT_EQ(v(p, 0), d == 0 ? 1.0 : 0.0);
+        for (int k = 1; k < dim; ++k) {
+          const int h = (dim % 2 == 0 && k == dim - 1) ? dim / 2 : (k + 1) / 2;
+          const bool sine = k % 2 == 0 && !(dim % 2 == 0 && k == dim - 1);
+          const double phase = 2 * pi * h * tau(p) + d * pi / 2;
+          const double closed = std::pow(2 * pi * h, d) * (sine ? std::sin(phase) : std::cos(phase));
+          EXPECT_NEAR(v(p, k), closed, 1e-13 * std::pow(2 * pi * h, d)) << "M=" << dim << " k=" << k << " d=" << d;
+          EXPECT_EQ(v(p, k), basis.value(k, tau(p), d)) << "M=" << dim << " k=" << k << " d=" << d;
+        }
+      }
+    }
+  }
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [] { (void)FourierBasis(8).values(Eigen::VectorXd::Zero(2), -1); }, {"derivative order -1"});
+}
+
+// grid_values against values() at the same τ_p = (p + s/2)/P (agreement to the rounding of
+// values()' own argument, 4·eps·2πh), both grids and both M forms, with P ≠ M as well; the top
+// function vanishes exactly at the midpoints of P = M, and cos 2πhτ at τ = 1/4 (h = 1, P = 4)
+// is exactly 0 (a multiple of π/2 read exactly).
+TEST(FourierBasis, GridValuesMatchValuesOnTheSameGrid) {
+  for (const int dim : {8, 9, 256}) {
+    const FourierBasis basis(dim);
+    for (const int points : {dim, 3, 64}) {
+      for (const bool midpoints : {false, true}) {
+        Eigen::VectorXd tau(points);
+        for (int p = 0; p < points; ++p) tau(p) = (p + (midpoints ? 0.5 : 0.0)) / points;
+        const Eigen::MatrixXd grid = basis.grid_values(points, midpoints);
+        const Eigen::MatrixXd direct = basis.values(tau, 0);
+        for (int k = 0; k < dim; ++k) {
+          const double bound = 4 * 2.2e-16 * 2 * std::numbers::pi * (basis.harmonic(k) + 1);
+          EXPECT_LE((grid.col(k) - direct.col(k)).lpNorm<Eigen::Infinity>(), bound)
+              << "M=" << dim << " P=" << points << " midpoints=" << midpoints << " k=" << k;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(FourierBasis(8).grid_values(8, true).col(7).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(FourierBasis(8).grid_values(4, false)(1, 1), 0.0);
+  wbm::testing::expect_throw_with<std::invalid_argument>([] { (void)FourierBasis(8).grid_values(0, false); },
+                                                         {"points = 0", "[1, 2^28]"});
+}
+
 // The top function's damping row is zero for M = 2^J (its derivative leaves the span), while
 // every harmonic of M = 2H + 1 has A₁ = ±πm on its (cos, sin) pair.
 TEST(FourierBasis, OnlyTheTopFunctionEscapesTheFirstDerivativeOperator) {

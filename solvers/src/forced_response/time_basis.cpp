@@ -95,6 +95,17 @@ Eigen::MatrixXd TimeBasis::values(const Eigen::VectorXd& tau, int derivative) co
   return wavelet_->values(tau, derivative);
 }
 
+Eigen::MatrixXd TimeBasis::grid_values(int points, bool midpoints) const {
+  if (is_fourier()) return spectral::FourierBasis(dimension_).grid_values(points, midpoints);
+  if (points < 1) {
+    throw std::invalid_argument("TimeBasis::grid_values(points = " + std::to_string(points) +
+                                "): the number of grid points must be >= 1");
+  }
+  Eigen::VectorXd tau(points);
+  for (int p = 0; p < points; ++p) tau(p) = (p + (midpoints ? 0.5 : 0.0)) / points;
+  return wavelet_->values(tau, 0);
+}
+
 Eigen::SparseMatrix<double> TimeBasis::exact_operator(int d1, int d2) const {
   if (d1 < 0 || d2 < 0) {
     throw std::invalid_argument("TimeBasis::exact_operator: derivative orders d1 = " + std::to_string(d1) +

@@ -70,21 +70,49 @@ Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& 
 }
 
 
+bool WeightedResidual::Impl::couples_only_within_harmonics(double tol) const {
+  if (!trial.is_fourier() || !weighting.is_fourier() || !h_is_sparse) return false;
+  const spectral::FourierBasis basis(m);
+  for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
+      const int row_harmonic = basis.harmonic(static_cast<int>(it.row() / nc));
+      const int col_harmonic = basis.harmonic(static_cast<int>(it.col() / nc));
+      if (std::abs(it.value()) > tol && row_harmonic != col_harmonic) return false;
+    }
+  }
+  return true;
+}
+
+
+bool WeightedResidual::Impl::commutes_with_shifts() const {
+  if (!trial.is_fourier() || !weighting.is_fourier() || !h_is_sparse) return false;
+  const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
+  if (!couples_only_within_harmonics(tol)) return false;
+  const spectral::FourierBasis basis(m);
+  const int paired = basis.has_top_function() ? m / 2 - 1 : (m - 1) / 2;
+  for (int hh = 1; hh <= paired; ++hh) {  // cos hτ at 2h − 1, sin hτ at 2h (fourier_basis.hpp)
+    const Eigen::Index ci = static_cast<Eigen::Index>(2 * hh - 1) * nc, si = static_cast<Eigen::Index>(2 * hh) * nc;
+    for (int c = 0; c < nc; ++c) {
+      for (int d = 0; d < nc; ++d) {
+        if (std::abs(h(ci + c, ci + d) - h(si + c, si + d)) > tol || std::abs(h(ci + c, si + d) + h(si + c, ci + d)) > tol) {
+          return false;
+        }
+      }
+    }
+  }
+  return true;
+}
+
+
 std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift_kernel() const {
-  if (!trial.is_fourier() || !weighting.is_fourier() || cell_average_rule || !h_is_sparse) return std::nullopt;
+  if (cell_average_rule) return std::nullopt;
+  const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
+  if (!couples_only_within_harmonics(tol)) return std::nullopt;
   const spectral::FourierBasis basis(m);
   const bool top = basis.has_top_function();
   const int harmonics = top ? m / 2 : (m - 1) / 2;
   std::vector<int> cos_index(static_cast<size_t>(harmonics) + 1, -1), sin_index = cos_index;
   for (int k = 0; k < m; ++k) (basis.is_sine(k) ? sin_index : cos_index)[static_cast<size_t>(basis.harmonic(k))] = k;
-  const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
-  for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
-      const int row_harmonic = basis.harmonic(static_cast<int>(it.row() / nc));
-      const int col_harmonic = basis.harmonic(static_cast<int>(it.col() / nc));
-      if (std::abs(it.value()) > tol && row_harmonic != col_harmonic) return std::nullopt;
-    }
-  }
   const int paired = top ? harmonics - 1 : harmonics;
   ShiftKernel k;
   k.kappa.resize(static_cast<size_t>(nc) * nc);

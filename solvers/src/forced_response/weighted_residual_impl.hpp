@@ -327,6 +327,9 @@ struct WeightedResidual::Impl {
   // D = V H W and u_lin = V x_lin (rigid stops) at this frequency, and c = mean |D_ii| if asked
   // (at the base frequency only; at_frequency copies keep it, as they keep s_r).
   void set_delassus(bool set_force_compliance);
+  // set_delassus's path for H commuting with shifts (commutes_with_shifts): D from its first
+  // block column; v_hw0 = (V ⊗ I) H (W ⊗ I)'s first block column when there is friction.
+  void set_delassus_circulant(Eigen::MatrixXd& v_hw0);
 
   void require_rigid(const char* what) const {
     if (!rigid) {
@@ -391,6 +394,12 @@ struct WeightedResidual::Impl {
   // not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
   // other coupling (discrete operators, another basis) gives no kernel.
   [[nodiscard]] std::optional<ShiftKernel> shift_kernel() const;
+  // Fourier:Fourier: no entry of H above tol couples two different harmonics (H sparse).
+  [[nodiscard]] bool couples_only_within_harmonics(double tol) const;
+  // Fourier:Fourier: H commutes with time shifts (every harmonic's block of H_cd is the rotation
+  // [[a_h, b_h], [−b_h, a_h]], the top function on its own; to 1e-12 of H's largest entry). Then
+  // D = V H W is block circulant on uniform instants: D_cd(j, k) depends on j − k mod M only.
+  [[nodiscard]] bool commutes_with_shifts() const;
 
   // WeightedResidualOptions::harmonics: validated, sorted, and the mask `keep` built.
   void select_harmonics();

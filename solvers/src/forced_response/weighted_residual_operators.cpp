@@ -224,12 +224,22 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
 
   if (rigid) {
     auto col = std::make_shared<Collocation>();
+    // V (trial functions at τ_{k+1}), W (weighting functions at τ_k, over M) and the trial
+    // functions at τ_k (friction's increments), on the uniform grid of the impulses (TimeBasis::
+    // grid_values: Fourier's arguments reduced exactly). V is the table at τ_k with its rows
+    // rotated by one; with one family for both, W is that table too: one table of M² values.
+    Eigen::MatrixXd trial_at_tau;
+    const auto set_collocation_values = [&](Collocation& cl, bool midpoints) {
+      trial_at_tau = trial.grid_values(m, midpoints);
+      cl.trial_values.resize(m, m);
+      cl.trial_values.topRows(m - 1) = trial_at_tau.bottomRows(m - 1);
+      cl.trial_values.row(m - 1) = trial_at_tau.row(0);
+      cl.weights = (trial.same_family(weighting) ? trial_at_tau : weighting.grid_values(m, midpoints)).transpose() /
+                   static_cast<double>(m);
+    };
     col->tau.resize(m);
     for (int k = 0; k < m; ++k) col->tau(k) = (k + 0.5) / m;
-    Eigen::VectorXd next(m);  // τ_{k+1}: the instant whose gap λ_k keeps open
-    for (int k = 0; k < m; ++k) next(k) = col->tau((k + 1) % m);
-    col->trial_values = trial.values(next, 0);
-    col->weights = weighting.values(col->tau, 0).transpose() / static_cast<double>(m);
+    set_collocation_values(*col, true);  // row k of V: τ_{k+1}, the instant whose gap λ_k keeps open
     col->gaps.resize(static_cast<Eigen::Index>(nc) * m);
     for (int k = 0; k < m; ++k) {
       for (int c = 0; c < nc; ++c) col->gaps(static_cast<Eigen::Index>(k) * nc + c) = contacts[c].law->gap();
@@ -254,12 +264,8 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
         return lu.dimensionOfKernel() > 0;
       };
       if (singular(col->weights)) {
-        for (int k = 0; k < m; ++k) {
-          col->tau(k) = static_cast<double>(k) / m;
-          next(k) = static_cast<double>((k + 1) % m) / m;
-        }
-        col->trial_values = trial.values(next, 0);
-        col->weights = weighting.values(col->tau, 0).transpose() / static_cast<double>(m);
+        for (int k = 0; k < m; ++k) col->tau(k) = static_cast<double>(k) / m;
+        set_collocation_values(*col, false);
         if (singular(col->weights)) {
           throw std::invalid_argument("exact Coulomb friction (law \"coulomb\"): the weighting basis " + weighting.name() +
                                       " of M = " + std::to_string(m) + " functions does not see every pattern of M "
@@ -268,7 +274,7 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
                                       "Jenkins element (law \"jenkins\")");
         }
       }
-      col->increments = col->trial_values - trial.values(col->tau, 0);
+      col->increments = col->trial_values - trial_at_tau;
     }
     collocation = col;
   }

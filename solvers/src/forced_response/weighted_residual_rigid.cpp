@@ -27,11 +27,46 @@ Eigen::MatrixXd WeightedResidual::Impl::kinematic(const Eigen::MatrixXd& y) cons
 }
 
 
+// Fourier:Fourier, H commuting with shifts: D (and a stuck row) from H W's first block column
+// (the impulses at τ_0), O(n_c² M²) instead of the O(n_c² M³) products of the general path. The
+// impulses are uniform (midpoints or k/M), V's rows sit at τ_{k+1} and the increments' at τ_{k+1}
+// and τ_k, so the response at row j to the impulse at k depends on j − k mod M only:
+//   D(j·n_c + c, k·n_c + d) = D(((j − k) mod M)·n_c + c, d).
+// This holds with the top function cos πMτ as well (its values at k/M are (−1)^k, at the
+// midpoints 0). The same numbers as the general path to rounding (tests: the full system's
+// impulse response, and this path against that one).
+void WeightedResidual::Impl::set_delassus_circulant(Eigen::MatrixXd& v_hw0) {
+  const Collocation& col = *collocation;
+  const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+  Eigen::MatrixXd w0 = Eigen::MatrixXd::Zero(size, nc);  // (W ⊗ I) at the impulses of τ_0
+  for (int l = 0; l < m; ++l) {
+    for (int d = 0; d < nc; ++d) w0(static_cast<Eigen::Index>(l) * nc + d, d) = col.weights(l, 0);
+  }
+  const Eigen::MatrixXd hw0 = compliance_times(w0);
+  const Eigen::MatrixXd d0 = kinematic(hw0);
+  delassus.resize(size, size);
+  for (int k = 0; k < m; ++k) {
+    const Eigen::Index shift = static_cast<Eigen::Index>(k) * nc;
+    for (int d = 0; d < nc; ++d) {
+      auto column = delassus.col(shift + d);
+      column.segment(shift, size - shift) = d0.col(d).head(size - shift);
+      column.head(shift) = d0.col(d).tail(shift);
+    }
+  }
+  if (col.any_coulomb) v_hw0 = per_contact(col.trial_values, hw0);
+}
+
+
 void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   const Collocation& col = *collocation;
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
-  Eigen::MatrixXd hw;  // H (W ⊗ I_{n_c})
-  if (nc == 1) {
+  // Fourier:Fourier: V (H W)'s first block column, for the stuck rows (friction only).
+  Eigen::MatrixXd v_hw0;
+  const bool circulant = commutes_with_shifts();
+  Eigen::MatrixXd hw;  // H (W ⊗ I_{n_c}), the general path
+  if (circulant) {
+    set_delassus_circulant(v_hw0);
+  } else if (nc == 1) {
     hw = compliance_times(col.weights);
   } else {
     // Column j·n_c + d of H (W ⊗ I) is Σ_b H(:, b·n_c + d) W(b, j): one dense (n_c·M × M)(M × M)
@@ -44,7 +79,7 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
       hw(Eigen::all, cols) = Eigen::MatrixXd(h(Eigen::all, cols)) * col.weights;
     }
   }
-  delassus = kinematic(hw);
+  if (!circulant) delassus = kinematic(hw);
   u_lin = kinematic(x_lin);
   if (set_force_compliance) {
     // c over the stops' rows, c_f over the friction rows; with one kind only both are the mean over
@@ -76,10 +111,16 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
   for (int c = 0; c < nc; ++c) {
     if (col.coulomb[static_cast<size_t>(c)] == 0) continue;
     const auto rows_c = Eigen::seq(c, Eigen::last, nc);
-    const Eigen::MatrixXd hw_c = hw(rows_c, Eigen::all);
     const Eigen::VectorXd x_c = x_lin(rows_c);
     const auto e = static_cast<Eigen::Index>(stuck_row_of.size());
-    stuck_rows.row(e) = col.trial_values.row(0) * hw_c;
+    if (circulant) {  // u_c(τ_1) per impulse k·n_c + d: row ((0 − k) mod M)·n_c + c of V H W's first block column
+      for (int k = 0; k < m; ++k) {
+        const Eigen::Index from = static_cast<Eigen::Index>((m - k) % m) * nc + c;
+        stuck_rows.row(e).segment(static_cast<Eigen::Index>(k) * nc, nc) = v_hw0.row(from);
+      }
+    } else {
+      stuck_rows.row(e) = col.trial_values.row(0) * Eigen::MatrixXd(hw(rows_c, Eigen::all));
+    }
     stuck_lin(e) = col.trial_values.row(0).dot(x_c);
     stuck_row_of.push_back(c);
     stuck_contact.push_back(c);

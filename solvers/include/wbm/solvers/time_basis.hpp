@@ -54,6 +54,10 @@ class TimeBasis {
   /// Values (rows = times, columns = basis functions): V(p, k) = q_k^{(d)}(τ_p). Throws
   /// std::invalid_argument for d > max_derivative(), naming the alternative.
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
+  /// values(τ) on the uniform grid τ_p = (p + s/2)/P, p = 0 … P − 1 (s = 1: `midpoints`):
+  /// Fourier through spectral::FourierBasis::grid_values (its arguments reduced exactly),
+  /// wavelets through values(). Throws std::invalid_argument unless P ≥ 1.
+  [[nodiscard]] Eigen::MatrixXd grid_values(int points, bool midpoints) const;
   /// Exact operator E(j, k) = ∫₀¹ q_j^{(d1)} q_k^{(d2)} dτ (M × M, sparse) between two functions of
   /// this basis: Fourier analytically (periodic integration by parts, (−1)^{d1} A_{d1+d2}),
   /// wavelets by connection coefficients. Throws std::invalid_argument if d1 + d2 exceeds the

@@ -41,6 +41,13 @@ class FourierBasis {
   /// Matrix of values (rows = times, columns = basis functions): V(p, k) = q_k^{(d)}(τ_p).
   /// Throws std::invalid_argument for a non-finite τ_p (naming p).
   [[nodiscard]] Eigen::MatrixXd values(const Eigen::VectorXd& tau, int derivative = 0) const;
+  /// values() on the uniform grid τ_p = (p + s/2)/P, p = 0 … P − 1 (P = `points` rows, M
+  /// columns), s = 1 for the cell midpoints (`midpoints`), else 0. Entry (p, k) of harmonic h is
+  /// read from a table of cos(πi/P) and sin(πi/P), i = 0 … 2P − 1, at i = h(2p + s) mod 2P: the
+  /// argument is reduced exactly, in integers (values() rounds 2πhτ_p, an error growing like
+  /// h·eps), the multiples of π/2 are exact (cos πMτ is exactly 0 at the midpoints of P = M), and
+  /// it costs 2P libm calls instead of P·M/2. Throws std::invalid_argument unless P ≥ 1.
+  [[nodiscard]] Eigen::MatrixXd grid_values(int points, bool midpoints) const;
 
   /// The derivative in coefficient space, D (M × M, sparse): q_k' = Σ_l D(k, l) q_l, i.e.
   /// D(cos_h, sin_h) = −2πh and D(sin_h, cos_h) = 2πh, so that (Σ_k a_k q_k)' has coefficients
