@@ -15,7 +15,8 @@ them with the rest of the old result. Figures (each only when its CSV is listed)
   harmonics.png        amplitudes A_h of harmonics.csv (log scale)
   frequency_response.png  max/min displacement per output DOF of a sweep (restarts marked)
   response_curve.png   amplitude along a continuation branch, stable solid, unstable dashed,
-                       folds marked (a fold of the dynamics filled, of the truncation open)
+                       folds marked (a fold of the dynamics filled, of the truncation open),
+                       and bifurcations.csv's changes of stability by kind
   backbone.png         frequency against energy of an nnm backbone, folds marked
   mode_E<E>.png        displacement of the output DOFs over one period at each written level
   basis_functions.png  the functions of a basis-plot
@@ -212,6 +213,20 @@ def response_curve(folder, title, written):
                 y = amplitude[min(range(len(f)), key=lambda i: abs(f[i] - hz))]
             ax.plot(hz, y, "o", color="C3", fillstyle="full" if crossing == 1.0 else "none")
         ax.plot([], [], "o", color="C3", label="fold")
+    if listed(folder, "bifurcations.csv"):
+        # Each change of stability at its interpolated state, one marker per kind (the status
+        # column): a multiplier through +1, through -1, or a complex pair.
+        crossings = read_csv(folder / "bifurcations.csv")
+        at = crossings.get(name)
+        markers = {"fold": ("s", "C2"), "period-doubling": ("D", "C4"), "Neimark-Sacker": ("*", "C5")}
+        shown = set()
+        for k, kind in enumerate(crossings["status"]):
+            marker, color = markers.get(kind, ("x", "k"))
+            hz = crossings["frequency [Hz]"][k]
+            y = at[k] if at is not None else amplitude[min(range(len(f)), key=lambda i: abs(f[i] - hz))]
+            ax.plot(hz, y, marker, color=color, fillstyle="none", markersize=9,
+                    label=None if kind in shown else f"stability change: {kind}")
+            shown.add(kind)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(name if len(amplitudes) == 1 else "amplitude [m]")
     mark(ax, title, NOTE)

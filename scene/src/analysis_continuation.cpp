@@ -15,6 +15,54 @@
 
 namespace wbm::scene::detail {
 
+namespace {
+
+// Each change of stability along the branch (issue #39): between points i − 1 and i the number of
+// Floquet multipliers outside the unit circle changed (ResponsePoint::crossing). Its frequency
+// and amplitude are interpolated linearly where the largest |μ| passes 1 between the two
+// points; the multiplier is the unstable side's largest, whose argument gives the kind
+// (classify_crossing: fold / period doubling / Neimark–Sacker). bifurcations.csv gets a row per
+// crossing (written only when there is one); result.json the same list, empty when none.
+nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std::string& dof, AnalysisResult& out) {
+  nlohmann::json list = nlohmann::json::array();
+  std::vector<double> hz, before, after, amplitude, modulus, argument, lost;
+  std::vector<std::string> kind;
+  for (size_t i = 1; i < curve.points.size(); ++i) {
+    const solvers::ResponsePoint& b = curve.points[i];
+    if (b.crossing == solvers::Bifurcation::None) continue;
+    const solvers::ResponsePoint& a = curve.points[i - 1];
+    const double span = b.max_multiplier - a.max_multiplier;
+    const double t = std::abs(span) > 0.0 ? std::clamp((1.0 - a.max_multiplier) / span, 0.0, 1.0) : 0.5;
+    const solvers::ResponsePoint& unstable = b.stable ? a : b;
+    hz.push_back(a.frequency_hz + t * (b.frequency_hz - a.frequency_hz));
+    before.push_back(a.frequency_hz);
+    after.push_back(b.frequency_hz);
+    amplitude.push_back(a.amplitude + t * (b.amplitude - a.amplitude));
+    modulus.push_back(std::abs(unstable.leading_multiplier));
+    argument.push_back(std::arg(unstable.leading_multiplier));
+    lost.push_back(b.stable ? 0.0 : 1.0);
+    kind.emplace_back(solvers::to_string(b.crossing));
+    list.push_back({{"kind", kind.back()},
+                    {"frequency_hz", hz.back()},
+                    {"between_hz", {before.back(), after.back()}},
+                    {"amplitude_m", {{dof, amplitude.back()}}},
+                    {"multiplier", {{"modulus", modulus.back()}, {"argument_rad", argument.back()}}},
+                    {"stability", lost.back() == 1.0 ? "lost" : "regained"}});
+  }
+  if (!hz.empty()) {
+    const auto column = [](const std::vector<double>& v) { return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()))); };
+    out.tables.push_back({"bifurcations.csv",
+                          {"frequency [Hz]", "frequency_before [Hz]", "frequency_after [Hz]", "amplitude_" + dof + " [m]",
+                           "floquet_multiplier_modulus [-]", "floquet_multiplier_argument [rad]", "stability_lost [-]"},
+                          {column(hz), column(before), column(after), column(amplitude), column(modulus), column(argument),
+                           column(lost)},
+                          kind});
+  }
+  return list;
+}
+
+}  // namespace
+
 void continuation(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const auto started = std::chrono::steady_clock::now();
   const auto& range = *scene.forcing->range;
@@ -157,6 +205,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     }
     out.tables.push_back({"folds.csv", header, columns});
   }
+  const nlohmann::json bifurcations = o.stability ? write_bifurcations(curve, dof, out) : nlohmann::json();
   out.stop = curve.stop;
   out.status = curve.status();
   out.diagnostics["continuation"] = {{"points", curve.points.size()},
@@ -171,6 +220,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                      {"continuation_time_s", curve.wall_time_s},
                                      {"stability_time_s", curve.stability_time_s},
                                      {"unsettled_stability_points", curve.unsettled_points}};
+  if (o.stability) out.diagnostics["continuation"]["bifurcations"] = bifurcations;
   if (curve.unsettled_points > 0) {
     out.warnings.push_back("continuation: at " + std::to_string(curve.unsettled_points) +
                            " point(s) a Floquet multiplier lies within twice its error estimate of the unit circle "

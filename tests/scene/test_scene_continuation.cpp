@@ -111,6 +111,35 @@ TEST(Scene, StiffStopContinuationRunsWithDefaults) {
     }
     EXPECT_LT(nearest, 0.01 * fold_amplitude(k)) << "fold " << k << " at " << hz(k) << " Hz";
   }
+  // The changes of stability (bifurcations.csv, issue #39): at a turning point of a branch a real
+  // Floquet multiplier passes +1 (the saddle-node theorem), so the branch loses stability at the
+  // upper fold and regains it at the lower one, each a "fold" whose crossing lies within four
+  // points of the fold (the truncated orbit's crossing may lag it: ResponseCurve::fold_confirmed),
+  // here within 0.2 Hz, with |μ| > 1 and arg μ = 0 on the unstable side; result.json lists the same.
+  const wbm::scene::Table* crossings = nullptr;
+  for (const auto& t : r.tables) {
+    if (t.file == "bifurcations.csv") crossings = &t;
+  }
+  ASSERT_TRUE(crossings != nullptr);
+  ASSERT_EQ(crossings->status.size(), 2u);
+  ASSERT_EQ(crossings->header.at(0), "frequency [Hz]");
+  ASSERT_EQ(crossings->header.at(6), "stability_lost [-]");
+  for (Eigen::Index k = 0; k < 2; ++k) {
+    EXPECT_EQ(crossings->status[static_cast<size_t>(k)], "fold") << k;
+    EXPECT_NEAR(crossings->columns[0](k), hz(k), 0.2) << k;
+    EXPECT_GT(crossings->columns[4](k), 1.0) << k;
+    EXPECT_LT(std::abs(crossings->columns[5](k)), 1e-6) << k;
+    EXPECT_LE(std::min(crossings->columns[1](k), crossings->columns[2](k)), crossings->columns[0](k)) << k;
+    EXPECT_GE(std::max(crossings->columns[1](k), crossings->columns[2](k)), crossings->columns[0](k)) << k;
+  }
+  EXPECT_EQ(crossings->columns[6](0), 1.0);  // lost at the upper fold
+  EXPECT_EQ(crossings->columns[6](1), 0.0);  // regained at the lower one
+  const auto& listed = r.diagnostics.at("continuation").at("bifurcations");
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(listed[0].at("kind"), "fold");
+  EXPECT_EQ(listed[0].at("stability"), "lost");
+  EXPECT_EQ(listed[1].at("stability"), "regained");
+  EXPECT_DOUBLE_EQ(listed[1].at("frequency_hz").get<double>(), crossings->columns[0](1));
   for (const std::string basis : {"basis = { harmonics = 32, time_samples = 1024 }\n", "basis = { harmonics = 64 }\n"}) {
     const auto finer = wbm::scene::run_analysis(parse(head + basis));
     ASSERT_TRUE(finer.converged()) << basis << finer.summary;

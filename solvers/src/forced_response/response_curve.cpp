@@ -440,6 +440,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       r.max_multiplier_error = fl.multiplier_errors.size() > 0 ? fl.multiplier_errors.maxCoeff() : 0.0;
       r.max_multiplier = fl.max_modulus;
       r.stable = fl.stable();
+      if (fl.multipliers.size() > 0) r.leading_multiplier = fl.multipliers(0);
       if (i > 0) r.crossing = classify_crossing(results[i - 1], fl);
     }
     curve.stability_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

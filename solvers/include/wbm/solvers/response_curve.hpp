@@ -6,6 +6,7 @@
 /// with the compliance and an (r + 2) bordered Woodbury LU, r the contact samples that carry rank
 /// (issue #39; an (n_c·M + 1) dense LU once r > 3/4 n_c·M). Units: SI, Hz.
 
+#include <complex>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -106,6 +107,9 @@ struct ResponsePoint {
   bool stability_settled = true;       // FloquetResult::settled() at monodromy_steps
   bool stable = true;                  // every |μ| < 1 + 1e-6
   Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
+  /// The Floquet multiplier of largest modulus (FloquetResult::multipliers(0)); its argument
+  /// tells a crossing's kind (classify_crossing: near 0 fold, near π period doubling).
+  std::complex<double> leading_multiplier = 0.0;
   /// The trial coefficients of ResponseCurveOptions::keep_dofs at this point (row i = DOF
   /// keep_dofs[i], column = trial function) [m]; empty when keep_dofs is.
   Eigen::MatrixXd kept_coefficients;
