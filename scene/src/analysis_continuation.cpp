@@ -50,7 +50,9 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
                     {"stability", lost.back() == 1.0 ? "lost" : "regained"}});
   }
   if (!hz.empty()) {
-    const auto column = [](const std::vector<double>& v) { return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()))); };
+    const auto column = [](const std::vector<double>& v) {
+      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+    };
     out.tables.push_back({"bifurcations.csv",
                           {"frequency [Hz]", "frequency_before [Hz]", "frequency_after [Hz]", "amplitude_" + dof + " [m]",
                            "floquet_multiplier_modulus [-]", "floquet_multiplier_argument [rad]", "stability_lost [-]"},

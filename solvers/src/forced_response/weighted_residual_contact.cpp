@@ -94,9 +94,9 @@ bool WeightedResidual::Impl::commutes_with_shifts() const {
     const Eigen::Index ci = static_cast<Eigen::Index>(2 * hh - 1) * nc, si = static_cast<Eigen::Index>(2 * hh) * nc;
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
-        if (std::abs(h(ci + c, ci + d) - h(si + c, si + d)) > tol || std::abs(h(ci + c, si + d) + h(si + c, ci + d)) > tol) {
-          return false;
-        }
+        const bool rotation = std::abs(h(ci + c, ci + d) - h(si + c, si + d)) <= tol &&
+                              std::abs(h(ci + c, si + d) + h(si + c, ci + d)) <= tol;
+        if (!rotation) return false;
       }
     }
   }

@@ -33,8 +33,8 @@ Eigen::MatrixXd WeightedResidual::Impl::kinematic(const Eigen::MatrixXd& y) cons
 // and τ_k, so the response at row j to the impulse at k depends on j − k mod M only:
 //   D(j·n_c + c, k·n_c + d) = D(((j − k) mod M)·n_c + c, d).
 // This holds with the top function cos πMτ as well (its values at k/M are (−1)^k, at the
-// midpoints 0). The same numbers as the general path to rounding (tests: the full system's
-// impulse response, and this path against that one).
+// midpoints 0). The same numbers as the general path to rounding (tests: both paths against
+// the full system's impulse responses, with and without friction rows).
 void WeightedResidual::Impl::set_delassus_circulant(Eigen::MatrixXd& v_hw0) {
   const Collocation& col = *collocation;
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
