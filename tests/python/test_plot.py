@@ -86,3 +86,34 @@ def test_a_friction_contact_draws_its_hysteresis_loop_with_its_area(tmp_path):
     (text,) = legends["hysteresis.png"]
     assert text.startswith("x: loop area ")
     assert float(text.split("loop area ")[1].split(" J")[0]) == pytest.approx(math.pi * a * f0, rel=1e-4)
+
+
+def test_each_kind_of_stability_change_is_marked_once_in_the_legend(tmp_path):
+    # bifurcations.csv's status column names the kind; each kind gets one legend entry at its
+    # interpolated state, whatever the number of its rows (a kind the plot does not know still
+    # draws, with a neutral marker).
+    write_csv(tmp_path / "branch.csv", ["frequency [Hz]", "amplitude_x1 [m]", "stable [-]"],
+              [(30.0, 1e-3, 1.0), (35.0, 2e-3, 0.0), (40.0, 1.5e-3, 0.0), (45.0, 1e-3, 1.0)])
+    header = ["frequency [Hz]", "frequency_before [Hz]", "frequency_after [Hz]", "amplitude_x1 [m]",
+              "floquet_multiplier_modulus [-]", "floquet_multiplier_argument [rad]", "stability_lost [-]", "status"]
+    write_csv(tmp_path / "bifurcations.csv", header,
+              [(32.0, 30.0, 35.0, 1.4e-3, 1.2, 1.4, 1.0, "Neimark-Sacker"),
+               (42.0, 40.0, 45.0, 1.2e-3, 1.1, 1.3, 0.0, "Neimark-Sacker"),
+               (36.0, 35.0, 40.0, 1.8e-3, 1.05, math.pi, 1.0, "period-doubling")])
+    result = {"converged": True, "files": ["branch.csv", "bifurcations.csv"], "scene": {"title": "2 DOF"},
+              "diagnostics": {}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    legends = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        legends[path.name] = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    entries = legends["response_curve.png"]
+    assert entries.count("stability change: Neimark-Sacker") == 1
+    assert entries.count("stability change: period-doubling") == 1
+    assert (tmp_path / "response_curve.png").exists()
