@@ -438,6 +438,32 @@ Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool tra
   return spectral::stacked(setup_->phi * y);
 }
 
+bool KroneckerFactorization::modal_blocks() const { return setup_->modal && !setup_->fourier_weighting; }
+
+Eigen::MatrixXd KroneckerFactorization::modal_projection(const Eigen::MatrixXd& v,
+                                                         const std::vector<Eigen::Index>& sources) const {
+  const Eigen::MatrixXd& phi = setup_->phi;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(phi.cols(), v.cols());
+  for (const Eigen::Index dof : sources) out += phi.row(dof).transpose() * v.row(dof);
+  return out;
+}
+
+Eigen::MatrixXd KroneckerFactorization::modal_block_solve(const Eigen::MatrixXd& r) const {
+  Eigen::MatrixXd y(r.rows(), r.cols());
+  for (Eigen::Index i = 0; i < r.rows(); ++i) y.row(i) = blocks_[static_cast<size_t>(i)]->solve(r.row(i).transpose(), false).transpose();
+  return y;
+}
+
+Eigen::MatrixXd KroneckerFactorization::modal_rows(const Eigen::MatrixXd& y, const std::vector<Eigen::Index>& rows) const {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), y.cols());
+  for (size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = setup_->phi.row(rows[r]) * y;
+  return out;
+}
+
+Eigen::VectorXd KroneckerFactorization::modal_damping() const {
+  return (setup_->c_m + setup_->c_k * setup_->lambda.array()).matrix();
+}
+
 Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
                                                    const std::vector<StackedTerms>& rows) {
   const int nc = static_cast<int>(directions.size());

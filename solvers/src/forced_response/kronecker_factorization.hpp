@@ -78,6 +78,21 @@ class KroneckerFactorization {
   /// circulant H_cd by FFT, or A_K⁻¹ (Σ_d S_cd v_d) by one inverse real DFT per column.
   /// Requires fast_compliance_product().
   [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v) const;
+  /// The modal path solved mode by mode (modal(), without the Fourier-weighting form), in pieces
+  /// for a solve that reads and writes a few DOFs only (issue #39: the cost of a continuation
+  /// point then grows like n, not n²):
+  ///  - modal_projection: Φ_Sᵀ V_S (n modes × M) for V (n DOFs × M) whose rows outside
+  ///    `sources` are zero, O(n·M·|S|) instead of Φᵀ V's O(n² M);
+  ///  - modal_block_solve: Y (modes × M), row i = (A + λ_i B)⁻¹ applied to row i of R;
+  ///  - modal_rows: Φ_R Y (|R| × M), the DOFs `rows` of Φ Y;
+  ///  - modal_damping: Φᵀ C Φ = diag(c_M + c_K λ_i) (length n), with Φᵀ M Φ = I.
+  /// G⁻¹ V on the DOFs R is modal_rows(modal_block_solve(modal_projection(V, S)), R).
+  /// Require factorized() and modal_blocks().
+  [[nodiscard]] bool modal_blocks() const;
+  [[nodiscard]] Eigen::MatrixXd modal_projection(const Eigen::MatrixXd& v, const std::vector<Eigen::Index>& sources) const;
+  [[nodiscard]] Eigen::MatrixXd modal_block_solve(const Eigen::MatrixXd& r) const;
+  [[nodiscard]] Eigen::MatrixXd modal_rows(const Eigen::MatrixXd& y, const std::vector<Eigen::Index>& rows) const;
+  [[nodiscard]] Eigen::VectorXd modal_damping() const;
   /// ‖G(f)‖₁ of the last factorized operator: from the assembled G (sparse LU path) or from the
   /// Kronecker factors (modal path, computed on first use).
   [[nodiscard]] double norm1() const;

@@ -99,7 +99,7 @@ Eigen::MatrixXd WeightedResidual::jacobian(const Eigen::VectorXd& a) const {
 
 Eigen::VectorXd WeightedResidual::linear_response() const {
   impl_->require_factorized();
-  return impl_->a_lin;
+  return impl_->linear_coefficients();
 }
 
 Eigen::VectorXd WeightedResidual::contact_unknowns(const Eigen::VectorXd& a) const { return impl_->gather(a); }
@@ -150,6 +150,7 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
     const Eigen::VectorXd nx = p.contact_forces(x, nullptr);
     p.scatter(rhs, nx, -1.0);
   }
+  if (const auto gathered = p.gathered_solve(rhs, true)) return *gathered / p.scale;
   const Eigen::MatrixXd a = spectral::as_coefficients(p.solve_stacked(rhs, false), p.n);  // n × M
   return p.gather(p.solve_stacked(p.frequency_derivative_times(a), false)) / p.scale;
 }

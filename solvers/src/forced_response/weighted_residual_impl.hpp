@@ -233,7 +233,7 @@ struct WeightedResidual::Impl {
   std::optional<detail::KroneckerFactorization> g;
   bool factorized = false;
 
-  Eigen::VectorXd b, a_lin, x_lin;
+  Eigen::VectorXd b, x_lin;  // the linear response's coefficients: linear_coefficients()
   // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 25 % of it is nonzero (the 1 × 1
   // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
   // Otherwise the structured blocks the factorization kept (circulant, or A_K⁻¹ Σ S with a
@@ -259,6 +259,7 @@ struct WeightedResidual::Impl {
   // Row j = k·n_c + c of P (contact c at instant k): its nonzeros (row in a, weight), the
   // direction e_c of ContactPoint::terms() at coefficient k.
   std::vector<detail::StackedTerms> contact_terms;
+  std::vector<Eigen::Index> contact_dofs;  // the DOFs contact_terms read, ascending, once each
 
   // Rigid stops (every contact a RigidStop): the trial functions at τ_{k+1} (M × M, row k: the
   // instant whose gap impulse k keeps open) and the weighting functions at the impulse instants
@@ -423,6 +424,15 @@ struct WeightedResidual::Impl {
     }
   }
 
+  // G⁻¹ b: the linear response's coefficients (stacked, n·M), one full solve.
+  [[nodiscard]] Eigen::VectorXd linear_coefficients() const { return g->solve(b); }
+  // P G⁻¹ v, or P G⁻¹ G' G⁻¹ v with G' = ∂G/∂f = 2f A_M ⊗ M + A_C ⊗ C (`frequency_derivative`),
+  // through the modal blocks (KroneckerFactorization::modal_blocks) reading only the DOFs where
+  // v is not zero and writing only the contact DOFs: O(n·M) per source DOF and contact DOF plus
+  // the n block solves, instead of the two O(n² M) modal transforms of a full solve (issue #39,
+  // item 5). In modal coordinates G' is 2f A_M ⊗ I + A_C ⊗ diag(c_M + c_K λ_i). std::nullopt when
+  // G is not solved mode by mode (the caller then takes the full solve).
+  [[nodiscard]] std::optional<Eigen::VectorXd> gathered_solve(const Eigen::VectorXd& v, bool frequency_derivative) const;
   // G⁻¹ v (or G⁻ᵀ v) for a stacked v of length n·M.
   [[nodiscard]] Eigen::VectorXd solve_stacked(const Eigen::VectorXd& v, bool transposed) const {
     return transposed ? g->solve_transposed(v) : g->solve(v);
@@ -436,6 +446,8 @@ struct WeightedResidual::Impl {
   [[nodiscard]] double frobenius_norm() const;
 
   // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
+  // U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
+  [[nodiscard]] Eigen::MatrixXd time_product(const Eigen::MatrixXd& u, int t) const;
   [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
                                                  int t) const;
 

@@ -222,6 +222,12 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
     }
   }
 
+  for (const auto& terms : contact_terms) {
+    for (const auto& [row, w] : terms) contact_dofs.push_back(row % n);
+  }
+  std::sort(contact_dofs.begin(), contact_dofs.end());
+  contact_dofs.erase(std::unique(contact_dofs.begin(), contact_dofs.end()), contact_dofs.end());
+
   if (rigid) {
     auto col = std::make_shared<Collocation>();
     // V (trial functions at τ_{k+1}), W (weighting functions at τ_k, over M) and the trial
@@ -281,9 +287,9 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
 
   factorized = g->factorize({&system, &ops, forcing.frequency_hz});
   if (!factorized) return;
-  a_lin = g->solve(b);
-  x_lin = gather(a_lin);
   if (nc > 0) {
+    const auto gathered = gathered_solve(b, false);
+    x_lin = gathered ? *gathered : gather(linear_coefficients());
     set_compliance();
     if (rigid) set_delassus(true);
     double gmax = 0.0;
@@ -302,14 +308,17 @@ WeightedResidual::Impl::Impl(const Impl& base, double frequency_hz)
       ops(base.ops), operator_products(base.operator_products), sampling(base.sampling),
       cell_average_rule(base.cell_average_rule), keep(base.keep),
       g(base.g->unfactorized()), b(base.b), scale(base.scale),
-      contact_terms(base.contact_terms), rigid(base.rigid), collocation(base.collocation) {
+      contact_terms(base.contact_terms), contact_dofs(base.contact_dofs), rigid(base.rigid),
+      collocation(base.collocation) {
   forcing.frequency_hz = frequency_hz;
   forcing.validate(n);
   factorized = g->factorize({&system, &ops, forcing.frequency_hz});
   if (!factorized) return;
-  a_lin = g->solve(b);
-  x_lin = gather(a_lin);
-  if (nc > 0) set_compliance();
+  if (nc > 0) {
+    const auto gathered = gathered_solve(b, false);
+    x_lin = gathered ? *gathered : gather(linear_coefficients());
+    set_compliance();
+  }
   force_compliance = base.force_compliance;  // like s_r: residuals at different f comparable
   friction_compliance = base.friction_compliance;
   if (nc > 0 && rigid) set_delassus(false);
@@ -413,12 +422,35 @@ double WeightedResidual::Impl::frobenius_norm() const {
 }
 
 
+Eigen::MatrixXd WeightedResidual::Impl::time_product(const Eigen::MatrixXd& u, int t) const {
+  if (operator_products->sparse) return u * operator_products->transposed[static_cast<size_t>(t)];
+  const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+  return u * a[t]->transpose();
+}
+
+
 Eigen::MatrixXd WeightedResidual::Impl::operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
                                                          int t) const {
-  const Eigen::MatrixXd xu = x * u;
-  if (operator_products->sparse) return xu * operator_products->transposed[static_cast<size_t>(t)];
-  const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
-  return xu * a[t]->transpose();
+  return time_product(x * u, t);
+}
+
+
+std::optional<Eigen::VectorXd> WeightedResidual::Impl::gathered_solve(const Eigen::VectorXd& v,
+                                                                      bool frequency_derivative) const {
+  if (!g->modal_blocks()) return std::nullopt;
+  const Eigen::MatrixXd vm = spectral::as_coefficients(v, n);  // n × M
+  std::vector<Eigen::Index> sources;
+  for (Eigen::Index dof = 0; dof < n; ++dof) {
+    if ((vm.row(dof).array() != 0.0).any()) sources.push_back(dof);
+  }
+  Eigen::MatrixXd y = g->modal_block_solve(g->modal_projection(vm, sources));
+  if (frequency_derivative) {
+    const double f = forcing.frequency_hz;
+    y = g->modal_block_solve(2.0 * f * time_product(y, 0) + g->modal_damping().asDiagonal() * time_product(y, 1));
+  }
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, m);
+  a(contact_dofs, Eigen::all) = g->modal_rows(y, contact_dofs);
+  return gather(spectral::stacked(a));
 }
 
 

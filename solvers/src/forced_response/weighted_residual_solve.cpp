@@ -228,7 +228,7 @@ WeightedResidualSolution WeightedResidual::solve(const Eigen::VectorXd* x0) cons
     s.path = SolutionPath::Linear;
     s.report.message = "linear problem (no contact): one solve";
   }
-  const Eigen::VectorXd a = p.nc > 0 ? expand(x) : p.a_lin;
+  const Eigen::VectorXd a = p.nc > 0 ? expand(x) : p.linear_coefficients();
   s.coefficients = spectral::as_coefficients(a, p.n);
   const double bnorm = p.b.norm();
   const Eigen::VectorXd full = residual(a);
