@@ -2,9 +2,13 @@
 // ≤ 2 Hz, M = 64, distributional) for the paper's two combinations, without and with the Floquet
 // stability of every point (third argument), and the monodromy matrix of one point. Counters:
 // points on the branch and points per second. Goals: the whole branch, at least 300 points,
-// under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17).
+// under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17). And a rod
+// branch against the number of elements (issue #39: its cost should grow like n).
 #include <benchmark/benchmark.h>
 
+#include <string>
+
+#include <wbm/scene/scene.hpp>
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
 
@@ -58,6 +62,39 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
   }
 }
 
+// The branch's cost against the structure's size (issue #39, item 5): the rod of
+// examples/scenes/rod_continuation.toml (clamped-free, one exponential tip stop, 1150–1450 Hz)
+// with range(0) elements, harmonic balance with H = 15, no stability. With one contact DOF a
+// point costs O(n): the linear response and the tangent read and write the forced and contact
+// DOFs only (gathered_solve); the modal basis (one dense eigenproblem, O(n³)) is set up once.
+void BM_Continuation_RodElements(benchmark::State& state) {
+  const int elements = static_cast<int>(state.range(0));
+  const std::string text =
+      "[structure]\nyoung_modulus = 70e9\ndensity = 2700.0\narea = 25e-4\nlength = 1.0\nelements = " +
+      std::to_string(elements) +
+      "\n[damping]\nbeta = 5e-6\n[forcing]\namplitude = 250e3\nfrequency_hz = [1150.0, 1450.0]\n"
+      "[contact]\nlaw = \"exponential\"\ncoefficient = 1e8\nexponent = 20.0\ngap = 14.5e-3\n"
+      "[basis]\nharmonics = 15\n[analysis]\ntype = \"continuation\"\nstability = false\n";
+  const auto scene = wbm::scene::parse_scene(text, "rod.toml");
+  const auto& range = *scene.forcing->range;
+  wbm::solvers::ResponseCurveOptions o;
+  o.parameter_min = range.from_hz;
+  o.parameter_max = range.to_hz;
+  o.stability = false;
+  o.max_parameter_step = 2.0;  // as the example scene's max_frequency_step_hz
+  size_t points = 0;
+  for (auto _ : state) {
+    const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz),
+                                              scene.contact_points(), scene.trial(), scene.weighting(),
+                                              scene.weighted_residual_options());
+    const auto curve = wbm::solvers::trace_response(base, o);
+    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+    points = curve.points.size();
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["dofs"] = elements;
+}
+
 }  // namespace
 
 // Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
@@ -67,4 +104,5 @@ BENCHMARK(BM_Continuation_Fig12Branch)
     ->ArgsProduct({{32}, {1}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Floquet_OnePoint)->RangeMultiplier(2)->Range(256, 2048)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Continuation_RodElements)->RangeMultiplier(4)->Range(20, 1280)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();
