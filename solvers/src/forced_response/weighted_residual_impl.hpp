@@ -233,7 +233,7 @@ struct WeightedResidual::Impl {
   std::optional<detail::KroneckerFactorization> g;
   bool factorized = false;
 
-  Eigen::VectorXd b, x_lin;  // the linear response's coefficients: linear_coefficients()
+  Eigen::VectorXd b, x_lin;  // x_lin = P G⁻¹ b (contact unknowns); G⁻¹ b itself: linear_coefficients()
   // H = P G⁻¹ Pᵀ (n_c·M square), and a sparse copy when at most 25 % of it is nonzero (the 1 × 1
   // and 2 × 2 harmonic blocks of Fourier:Fourier): H N and H n then cost O(nnz(H) · n_c M).
   // Otherwise the structured blocks the factorization kept (circulant, or A_K⁻¹ Σ S with a
@@ -445,9 +445,9 @@ struct WeightedResidual::Impl {
   /// (backward_error's γ).
   [[nodiscard]] double frobenius_norm() const;
 
-  // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
   // U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
   [[nodiscard]] Eigen::MatrixXd time_product(const Eigen::MatrixXd& u, int t) const;
+  // X U Aᵀ for the n × M coefficients U and operator t (0: A_M, 1: A_C, 2: A_K).
   [[nodiscard]] Eigen::MatrixXd operator_product(const Eigen::SparseMatrix<double>& x, const Eigen::MatrixXd& u,
                                                  int t) const;
 
