@@ -70,8 +70,12 @@ Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& 
 }
 
 
+bool WeightedResidual::Impl::fourier_sparse_compliance() const {
+  return trial.is_fourier() && weighting.is_fourier() && h_is_sparse;
+}
+
+
 bool WeightedResidual::Impl::couples_only_within_harmonics(double tol) const {
-  if (!trial.is_fourier() || !weighting.is_fourier() || !h_is_sparse) return false;
   const spectral::FourierBasis basis(m);
   for (Eigen::Index col = 0; col < h_sparse->outerSize(); ++col) {
     for (Eigen::SparseMatrix<double>::InnerIterator it(*h_sparse, col); it; ++it) {
@@ -85,7 +89,7 @@ bool WeightedResidual::Impl::couples_only_within_harmonics(double tol) const {
 
 
 bool WeightedResidual::Impl::commutes_with_shifts() const {
-  if (!trial.is_fourier() || !weighting.is_fourier() || !h_is_sparse) return false;
+  if (!fourier_sparse_compliance()) return false;
   const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
   if (!couples_only_within_harmonics(tol)) return false;
   const spectral::FourierBasis basis(m);
@@ -105,7 +109,7 @@ bool WeightedResidual::Impl::commutes_with_shifts() const {
 
 
 std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift_kernel() const {
-  if (cell_average_rule) return std::nullopt;
+  if (!fourier_sparse_compliance() || cell_average_rule) return std::nullopt;
   const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
   if (!couples_only_within_harmonics(tol)) return std::nullopt;
   const spectral::FourierBasis basis(m);

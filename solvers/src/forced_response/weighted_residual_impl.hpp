@@ -395,7 +395,9 @@ struct WeightedResidual::Impl {
   // not shift invariant). The structure is checked on H to 1e-12 of its largest entry; any
   // other coupling (discrete operators, another basis) gives no kernel.
   [[nodiscard]] std::optional<ShiftKernel> shift_kernel() const;
-  // Fourier:Fourier: no entry of H above tol couples two different harmonics (H sparse).
+  // Fourier trial and weighting with H kept sparse: the precondition of the two checks below.
+  [[nodiscard]] bool fourier_sparse_compliance() const;
+  // No entry of H above tol couples two different harmonics (requires fourier_sparse_compliance).
   [[nodiscard]] bool couples_only_within_harmonics(double tol) const;
   // Fourier:Fourier: H commutes with time shifts (every harmonic's block of H_cd is the rotation
   // [[a_h, b_h], [−b_h, a_h]], the top function on its own; to 1e-12 of H's largest entry). Then

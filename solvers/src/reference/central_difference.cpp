@@ -20,13 +20,7 @@ namespace wbm::solvers {
 
 void CentralDifferenceOptions::validate() const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("CentralDifferenceOptions." + what); };
-  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
-  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
-    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
-         std::to_string(samples_per_period));
-  }
-  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
-  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
+  detail::validate_fixed_step(samples_per_period, steps_per_period, periodicity_tolerance, max_periods, fail);
 }
 
 namespace {

@@ -159,15 +159,9 @@ void frictional_step(const std::vector<FrictionalContact>& pairs, const std::vec
 
 void MoreauJeanOptions::validate() const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("MoreauJeanOptions." + what); };
-  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
-  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
-    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
-         std::to_string(samples_per_period));
-  }
+  detail::validate_fixed_step(samples_per_period, steps_per_period, periodicity_tolerance, max_periods, fail);
   if (!(theta >= 0.5 && theta <= 1.0)) fail("theta = " + std::to_string(theta) + ": must lie in [0.5, 1]");
   if (!(restitution >= 0.0 && restitution <= 1.0)) fail("restitution = " + std::to_string(restitution) + ": must lie in [0, 1]");
-  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
-  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
 }
 
 PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system, const HarmonicForcing& forcing,

@@ -14,6 +14,21 @@
 
 namespace wbm::solvers::detail {
 
+// The checks both fixed-step schemes' options share: P ≥ 4 samples, N a positive multiple of P,
+// a positive periodicity tolerance and at least 2 periods. `fail` throws with the option's text
+// (prefixed by the options' type name).
+template <class Fail>
+void validate_fixed_step(int samples_per_period, int steps_per_period, double periodicity_tolerance, int max_periods,
+                         const Fail& fail) {
+  if (samples_per_period < 4) fail("samples_per_period = " + std::to_string(samples_per_period) + ": must be >= 4");
+  if (steps_per_period < samples_per_period || steps_per_period % samples_per_period != 0) {
+    fail("steps_per_period = " + std::to_string(steps_per_period) + ": must be a positive multiple of samples_per_period = " +
+         std::to_string(samples_per_period));
+  }
+  if (!(periodicity_tolerance > 0.0)) fail("periodicity_tolerance: must be > 0");
+  if (max_periods < 2) fail("max_periods = " + std::to_string(max_periods) + ": must be >= 2");
+}
+
 // Records δ_i of `tip` against `previous` (nothing for the first period, when `previous` is
 // empty), sets the report Converged when δ_i < tolerance, and keeps `tip` as the next previous.
 // Returns true when converged.
