@@ -45,8 +45,11 @@ bool rayleigh_fit(const MechanicalSystem& s, double& c_m, double& c_k) {
 }
 
 // Connected components of the graph i ~ j if any of the time operators couples i and j
-// (union-find); a single component is returned as an empty list.
-std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops) {
+// (union-find); a single component is returned as an empty list. The couplings are read from
+// the operators' sparse transposes when the caller has them (the undirected graph is the same),
+// O(nnz), else from the M² dense entries.
+std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops,
+                                                        const std::array<Eigen::SparseMatrix<double>, 3>* transposed) {
   const Eigen::Index m = ops.mass.rows();
   std::vector<Eigen::Index> parent(static_cast<size_t>(m));
   for (Eigen::Index i = 0; i < m; ++i) parent[static_cast<size_t>(i)] = i;
@@ -54,10 +57,20 @@ std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops
     while (parent[static_cast<size_t>(i)] != i) i = parent[static_cast<size_t>(i)];
     return i;
   };
-  for (Eigen::Index j = 0; j < m; ++j) {
-    for (Eigen::Index i = 0; i < m; ++i) {
-      if (ops.mass(i, j) != 0.0 || ops.damping(i, j) != 0.0 || ops.stiffness(i, j) != 0.0) {
-        parent[static_cast<size_t>(find(i))] = find(j);
+  if (transposed != nullptr) {
+    for (const auto& t : *transposed) {
+      for (Eigen::Index j = 0; j < t.outerSize(); ++j) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(t, j); it; ++it) {
+          if (it.value() != 0.0) parent[static_cast<size_t>(find(it.row()))] = find(j);
+        }
+      }
+    }
+  } else {
+    for (Eigen::Index j = 0; j < m; ++j) {
+      for (Eigen::Index i = 0; i < m; ++i) {
+        if (ops.mass(i, j) != 0.0 || ops.damping(i, j) != 0.0 || ops.stiffness(i, j) != 0.0) {
+          parent[static_cast<size_t>(find(i))] = find(j);
+        }
       }
     }
   }
@@ -69,6 +82,16 @@ std::vector<std::vector<Eigen::Index>> block_components(const TimeOperators& ops
   }
   if (out.size() == 1) out.clear();
   return out;
+}
+
+// Entries of the joint pattern of (A_M, A_C, A_K), from the sparse transposes when given.
+Eigen::Index joint_nonzeros(const TimeOperators& ops, const std::array<Eigen::SparseMatrix<double>, 3>* transposed) {
+  if (transposed == nullptr) {
+    return (ops.mass.array() != 0.0 || ops.damping.array() != 0.0 || ops.stiffness.array() != 0.0).count();
+  }
+  Eigen::SparseMatrix<double> joint = (*transposed)[0].cwiseAbs() + (*transposed)[1].cwiseAbs() + (*transposed)[2].cwiseAbs();
+  joint.prune([](Eigen::Index, Eigen::Index, double v) { return v != 0.0; });
+  return joint.nonZeros();
 }
 
 // ‖G‖₁ from the Kronecker factors t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed:
@@ -144,11 +167,16 @@ class KroneckerFactorization::ModeBlock {
  public:
   using Components = std::vector<std::vector<Eigen::Index>>;
 
-  /// Block a + λ bb, split along `components` (≥ 2 of them), each inverted densely. The
-  /// inverses are stored flat (row-major, concatenated): a Fourier:Fourier block has M/2 of them,
-  /// and continuation builds one block per mode per frequency.
-  ModeBlock(const Eigen::MatrixXd& a, const Eigen::MatrixXd& bb, double lambda, const Components& components)
-      : m_(a.rows()), component_(&components) {
+  /// Block a + λ bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K (the time operators
+  /// `ops` at frequency f, Rayleigh coefficients c_M, c_K), split along `components` (≥ 2 of
+  /// them), each inverted densely; only the components' entries are read. The inverses are
+  /// stored flat (row-major, concatenated): a Fourier:Fourier block has M/2 of them, and
+  /// continuation builds one block per mode per frequency.
+  ModeBlock(const TimeOperators& ops, double f, double c_m, double c_k, double lambda, const Components& components)
+      : m_(ops.mass.rows()), component_(&components) {
+    const double f2 = f * f, fcm = f * c_m, fck = f * c_k;
+    const auto a = [&](Eigen::Index i, Eigen::Index j) { return f2 * ops.mass(i, j) + fcm * ops.damping(i, j); };
+    const auto bb = [&](Eigen::Index i, Eigen::Index j) { return fck * ops.damping(i, j) + ops.stiffness(i, j); };
     ok_ = true;
     offset_.reserve(components.size() + 1);
     size_t total = 0;
@@ -308,7 +336,8 @@ struct KroneckerFactorization::ComplianceStructure {
 KroneckerFactorization::KroneckerFactorization(std::shared_ptr<const Setup> setup) : setup_(std::move(setup)) {}
 
 KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops,
-                                               LinearSolverPath path, bool fourier_weighting) {
+                                               LinearSolverPath path, bool fourier_weighting,
+                                               const std::array<Eigen::SparseMatrix<double>, 3>* transposed) {
   auto setup = std::make_shared<Setup>();
   const bool rayleigh = rayleigh_fit(system, setup->c_m, setup->c_k);
   switch (path) {
@@ -331,7 +360,7 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     }
     setup->phi = eig.eigenvectors();
     setup->lambda = eig.eigenvalues();
-    setup->components = block_components(ops);
+    setup->components = block_components(ops, transposed);
     if (fourier_weighting) setup->fourier_weighting = FourierWeighting::detect(ops);
     setup->circulant = setup->components.empty() && !setup->fourier_weighting &&
                        spectral::Circulant::is_circulant(ops.mass) && spectral::Circulant::is_circulant(ops.damping) &&
@@ -339,8 +368,7 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
   }
   // Nonzeros of the joint pattern of (A_M, A_C, A_K) against M²: above ¼, G's factors fill in
   // densely and the supernodal LU is faster (bench_weighted_residual, newton.hpp SupernodalLu).
-  const auto joint = (ops.mass.array() != 0.0 || ops.damping.array() != 0.0 || ops.stiffness.array() != 0.0);
-  setup->supernodal = 4 * joint.count() > ops.mass.size();
+  setup->supernodal = 4 * joint_nonzeros(ops, transposed) > ops.mass.size();
   setup_ = std::move(setup);
 }
 
@@ -361,8 +389,19 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
   factorized_ = false;
   blocks_.clear();
   if (su.modal) {
-    const Eigen::MatrixXd a = fr * fr * ops.mass + fr * su.c_m * ops.damping;
-    const Eigen::MatrixXd bb = fr * su.c_k * ops.damping + ops.stiffness;
+    // Mode i's block is a + λ_i bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K, formed
+    // only where read: densely for a dense block, on the first column for a circulant one, on the
+    // components' entries for a block-diagonal one (ModeBlock), not at all for the Fourier-
+    // weighting form.
+    const bool dense_blocks = !su.fourier_weighting && su.components.empty() && !su.circulant;
+    Eigen::MatrixXd a, bb;
+    if (dense_blocks) {
+      a = fr * fr * ops.mass + fr * su.c_m * ops.damping;
+      bb = fr * su.c_k * ops.damping + ops.stiffness;
+    } else if (su.circulant) {
+      a = fr * fr * ops.mass.col(0) + fr * su.c_m * ops.damping.col(0);
+      bb = fr * su.c_k * ops.damping.col(0) + ops.stiffness.col(0);
+    }
     const auto n = su.lambda.size();
     blocks_.reserve(static_cast<size_t>(n));
     factorized_ = true;
@@ -371,7 +410,7 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
         blocks_.push_back(std::make_shared<const ModeBlock>(
             su.fourier_weighting->core(fr, su.c_m + su.lambda(i) * su.c_k, su.lambda(i)), &su.fourier_weighting->ak_inv));
       } else if (!su.components.empty()) {
-        blocks_.push_back(std::make_shared<const ModeBlock>(a, bb, su.lambda(i), su.components));
+        blocks_.push_back(std::make_shared<const ModeBlock>(ops, fr, su.c_m, su.c_k, su.lambda(i), su.components));
       } else if (su.circulant) {
         blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::VectorXd(a.col(0) + su.lambda(i) * bb.col(0))));
       } else {

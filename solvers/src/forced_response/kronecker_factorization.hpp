@@ -10,6 +10,7 @@
 // operators' joint pattern holds at most a quarter of its entries (Fourier:Fourier, Galerkin DB6),
 // with SupernodalLu otherwise (dense or wide time operators fill G's factors densely).
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -42,10 +43,12 @@ class KroneckerFactorization {
   /// the modal basis K Φ = M Φ Λ, Φᵀ M Φ = I, the components of the time operators' sparsity
   /// graph, and (if `fourier_weighting` — distributional form, Fourier weighting, wavelet trial)
   /// the factored Fourier-weighting structure when its identities hold. Nothing is factorized.
+  /// `transposed`, if not null, holds A_Mᵀ, A_Cᵀ, A_Kᵀ sparse (the caller's copies of `ops`): the
+  /// sparsity graph and the joint pattern's size are then read from them, O(nnz) instead of O(M²).
   /// Throws std::invalid_argument for LinearSolverPath::Modal with non-Rayleigh C, or if the
   /// generalized eigenproblem fails.
   KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops, LinearSolverPath path,
-                         bool fourier_weighting);
+                         bool fourier_weighting, const std::array<Eigen::SparseMatrix<double>, 3>* transposed = nullptr);
   /// The same set-up (shared, not recomputed), not factorized: for another frequency.
   [[nodiscard]] KroneckerFactorization unfactorized() const;
 

@@ -440,7 +440,10 @@ struct WeightedResidual::Impl {
     return transposed ? g->solve_transposed(v) : g->solve(v);
   }
 
-  void set_operator_products();
+  /// operator_products from ops; `sparse` holds (A_M, A_C, A_K) without stored zeros when the
+  /// assembly produced them sparse (exact Fourier and wavelet Galerkin rules), so that the
+  /// transposes and nonzero counts are read from them instead of from M² dense entries.
+  void set_operator_products(const std::array<std::optional<Eigen::SparseMatrix<double>>, 3>& sparse);
   /// ‖G(f)‖_F at this frequency from the Kronecker factors, G not formed: ‖G‖_F² = Σ_{s,r}
   /// c_s c_r ⟨A_s, A_r⟩_F ⟨X_s, X_r⟩_F, c = (f², f, 1), A = (A_M, A_C, A_K), X = (M, C, K); the
   /// time factors from operator_products, the space ones O(nnz(X)). An upper bound of ‖G‖₂

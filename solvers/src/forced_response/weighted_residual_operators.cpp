@@ -201,7 +201,8 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
   assemble_time_operators();
   if (keep.size() > 0) require_block_diagonal_operators();
   g.emplace(system, ops, options.linear_solver,
-            weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional);
+            weighting.is_fourier() && !trial.is_fourier() && options.formulation == Formulation::Distributional,
+            operator_products->sparse ? &operator_products->transposed : nullptr);
 
   // b: the weighted projections of every load F_j cos(2π h_j τ + φ_j) on its DOF.
   Eigen::MatrixXd bm = Eigen::MatrixXd::Zero(n, m);
@@ -384,14 +385,18 @@ void WeightedResidual::Impl::require_block_diagonal_operators() const {
 }
 
 
-void WeightedResidual::Impl::set_operator_products() {
+void WeightedResidual::Impl::set_operator_products(const std::array<std::optional<Eigen::SparseMatrix<double>>, 3>& sparse) {
   auto products = std::make_shared<OperatorProducts>();
   const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
+  const bool from_sparse = sparse[0] && sparse[1] && sparse[2];
   Eigen::Index nonzeros = 0;
-  for (const auto* op : a) nonzeros += (op->array() != 0.0).count();
+  for (int t = 0; t < 3; ++t) nonzeros += from_sparse ? sparse[t]->nonZeros() : (a[t]->array() != 0.0).count();
   products->sparse = static_cast<double>(nonzeros) <= 0.25 * 3.0 * static_cast<double>(m) * m;
   if (products->sparse) {
-    for (int t = 0; t < 3; ++t) products->transposed[static_cast<size_t>(t)] = a[t]->transpose().sparseView();
+    for (int t = 0; t < 3; ++t) {
+      products->transposed[static_cast<size_t>(t)] =
+          from_sparse ? Eigen::SparseMatrix<double>(sparse[t]->transpose()) : a[t]->transpose().sparseView();
+    }
   }
   size_t k = 0;
   for (size_t s = 0; s < 3; ++s) {
@@ -459,6 +464,13 @@ void WeightedResidual::Impl::assemble_time_operators() {
   const bool exact = exact_rule(trial, weighting, options.operators);
   const Eigen::VectorXd& tau = sampling->tau;
   std::array<Eigen::MatrixXd, 3> a;
+  std::array<std::optional<Eigen::SparseMatrix<double>>, 3> a_sparse;  // when the rule gives them sparse
+  // Without stored zeros, so that their pattern is that of the dense operator's nonzeros.
+  const auto keep_sparse = [&](int t, Eigen::SparseMatrix<double> s) {
+    s.prune([](Eigen::Index, Eigen::Index, double v) { return v != 0.0; });
+    a[t] = Eigen::MatrixXd(s);
+    a_sparse[t] = std::move(s);
+  };
   std::array<Eigen::MatrixXd, 3> pw, qt;                // dense values by derivative order (fallback)
   std::array<std::optional<SparseRows>, 3> ws, tsparse;  // sparse values by derivative order
   std::array<Eigen::MatrixXd, 3> projected;              // Fourier weighting: A^{(0)} by trial derivative
@@ -469,8 +481,7 @@ void WeightedResidual::Impl::assemble_time_operators() {
   for (int t = 0; t < 3; ++t) {
     const Term& term = ts[t];
     if (exact) {
-      a[t] = Eigen::MatrixXd(trial.exact_operator(term.weighting, term.trial));
-      a[t] *= term.sign;
+      keep_sparse(t, term.sign * trial.exact_operator(term.weighting, term.trial));
     } else if (weighting.is_fourier() && !trial.is_fourier()) {
       Eigen::MatrixXd& base = projected[term.trial];
       if (base.size() == 0) {
@@ -481,7 +492,8 @@ void WeightedResidual::Impl::assemble_time_operators() {
     } else if (!weighting.is_fourier() && !trial.is_fourier()) {
       const SparseRows& w = sparse_of(ws, weighting, term.weighting);
       const SparseRows& v = sparse_of(tsparse, trial, term.trial);
-      a[t] = (term.sign / q) * Eigen::MatrixXd(Eigen::SparseMatrix<double>(w.transpose()) * Eigen::SparseMatrix<double>(v));
+      keep_sparse(t, (term.sign / q) * Eigen::SparseMatrix<double>(Eigen::SparseMatrix<double>(w.transpose()) *
+                                                                Eigen::SparseMatrix<double>(v)));
     } else {
       if (pw[term.weighting].size() == 0) pw[term.weighting] = weighting.values(tau, term.weighting);
       if (qt[term.trial].size() == 0) qt[term.trial] = trial.values(tau, term.trial);
@@ -491,7 +503,7 @@ void WeightedResidual::Impl::assemble_time_operators() {
   ops.mass = std::move(a[0]);
   ops.damping = std::move(a[1]);
   ops.stiffness = std::move(a[2]);
-  set_operator_products();
+  set_operator_products(a_sparse);
   ops.rule = exact ? (trial.is_fourier() ? "exact (analytic)" : "exact (connection coefficients)")
                    : "discrete, Q = " + std::to_string(q) + " midpoints";
 }
