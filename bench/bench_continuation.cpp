@@ -3,9 +3,12 @@
 // stability of every point (third argument), and the monodromy matrix of one point. Counters:
 // points on the branch and points per second. Goals: the whole branch, at least 300 points,
 // under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17). And a rod
-// branch against the number of elements (issue #39: its cost should grow like n).
+// branch against the number of elements (issue #39: its cost should grow like n), and NLvib's
+// unit rod as `wbm run` traces examples/scenes/nlvib_rod.toml (issue #39, item 7).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
 #include <string>
 
 #include <wbm/scene/scene.hpp>
@@ -95,6 +98,38 @@ void BM_Continuation_RodElements(benchmark::State& state) {
   state.counters["dofs"] = elements;
 }
 
+// NLvib's unit rod (issue #39, item 7): examples/scenes/nlvib_rod.toml as `wbm run` traces it
+// (H = 15, 1 % modal damping: the modal path of a classical C), without and with the stability
+// of every point (range(0)). Counters: points, and wall time per point [ms].
+void BM_Continuation_NLvibRod(benchmark::State& state) {
+  static const auto scene = wbm::models::load_scene(
+      (wbm::models::scene_directory() / ".." / ".." / "examples" / "scenes" / "nlvib_rod.toml").string());
+  const auto& range = *scene.forcing->range;
+  wbm::solvers::ResponseCurveOptions o;
+  o.parameter_min = range.from_hz;
+  o.parameter_max = range.to_hz;
+  o.max_step = scene.analysis.max_step;
+  o.initial_step = std::min(o.initial_step, o.max_step);
+  o.max_parameter_step = scene.analysis.max_frequency_step_hz;
+  o.corrector_tolerance = scene.solver.newton.tolerance;
+  o.stability = state.range(0) != 0;
+  state.SetLabel(o.stability ? "with Floquet stability" : "without stability");
+  size_t points = 0;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const auto started = std::chrono::steady_clock::now();
+    const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz),
+                                              scene.contact_points(), scene.trial(), scene.weighting(),
+                                              scene.weighted_residual_options());
+    const auto curve = wbm::solvers::trace_response(base, o);
+    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+    points = curve.points.size();
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["ms_per_point"] = 1e3 * seconds / static_cast<double>(std::max<size_t>(points, 1));
+}
+
 }  // namespace
 
 // Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
@@ -105,4 +140,5 @@ BENCHMARK(BM_Continuation_Fig12Branch)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Floquet_OnePoint)->RangeMultiplier(2)->Range(256, 2048)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_RodElements)->RangeMultiplier(4)->Range(20, 1280)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Continuation_NLvibRod)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -128,9 +128,10 @@ solvers::MechanicalSystem Scene::system() const {
                            "reduce_structure first (run_analysis does)");
   }
   solvers::MechanicalSystem sys;
-  if (condensation) {  // C = C_mm + αM_mm + βK̃ (Rayleigh damping of the condensed model)
+  if (condensation) {  // C = C_mm + αM_mm + βK̃ (+ modal damping) of the condensed model
     sys = condensation->system;
     sys.damping += damping.beta * sys.stiffness + damping.alpha * sys.mass;
+    if (damping.modal_ratio > 0.0) sys.damping += solvers::modal_damping(sys, damping.modal_ratio);
     sys.validate();
     return sys;
   }
@@ -143,6 +144,7 @@ solvers::MechanicalSystem Scene::system() const {
     if (structure->damping.size() > 0) sys.damping += structure->damping;
   }
   if (damping.alpha != 0.0) sys.damping += damping.alpha * sys.mass;
+  if (damping.modal_ratio > 0.0) sys.damping += solvers::modal_damping(sys, damping.modal_ratio);
   sys.validate();
   return sys;
 }

@@ -155,6 +155,8 @@ const std::vector<DeclaredKey<Damping>>& damping_keys() {
                           "mass-proportional part, C += α M [1/s]"),
       number_key<Damping>("beta", [](auto& d) -> auto& { return d.beta; }, non_negative("s"),
                           "stiffness-proportional part, C += β K [s] (the paper's C = βK)"),
+      number_key<Damping>("modal_ratio", [](auto& d) -> auto& { return d.modal_ratio; }, non_negative(""),
+                          "damping ratio ζ of every mode, C += M Φ diag(2ζω_i) Φᵀ M [-] (0.01: 1 % of critical)"),
   };
   return keys;
 }
@@ -169,7 +171,7 @@ const std::vector<DeclaredKey<Solver>>& solver_keys() {
       choice_key<Solver>("linear_solver", names(linear_solver_table()),
                          [](const Solver& s) { return linear_solver_name(s.linear_solver); },
                          [](Solver& s, const std::string& v) { s.linear_solver = value_of(linear_solver_table(), v); },
-                         "factorization of the linear operator (modal needs Rayleigh damping)"),
+                         "factorization of the linear operator (modal needs a C the undamped modes diagonalize: Rayleigh or modal_ratio)"),
       number_key<Solver>(
           "residual_tolerance", [](auto& s) -> auto& { return s.residual_tolerance; }, positive(""),
           "a solve (every point of a sweep or branch) is converged only if the normwise backward error of its full "

@@ -207,7 +207,8 @@ void Parser::solver(const toml::table& root) {
   if (s_.solver.linear_solver == solvers::LinearSolverPath::Modal && s_.structure &&
       s_.structure->kind == StructureKind::Matrices && s_.structure->damping.nonZeros() > 0) {
     r_.warn(Reader::source_of(*t, "linear_solver"),
-            "linear_solver = \"modal\" needs Rayleigh damping; the solve fails if the given C is not αM + βK");
+            "linear_solver = \"modal\" needs a damping matrix the undamped modes diagonalize; the solve fails if the "
+            "given C is not (C M⁻¹ K ≠ K M⁻¹ C): use \"automatic\"");
   }
 }
 

@@ -11,9 +11,11 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseLU>
 
 #include <wbm/solvers/model_checks.hpp>
+#include <wbm/solvers/status.hpp>
 
 namespace wbm::solvers {
 
@@ -248,6 +250,30 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
   Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
   contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal, normal_stiffness);
   point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity);
+}
+
+Eigen::SparseMatrix<double> modal_damping(const MechanicalSystem& system, double ratio) {
+  if (!(ratio >= 0.0) || !std::isfinite(ratio)) {
+    throw std::invalid_argument("modal damping ratio zeta = " + format_number(ratio) +
+                                ": must be finite and >= 0 (0.01 is 1 % of critical damping in every mode)");
+  }
+  system.validate();
+  const auto n = system.mass.rows();
+  if (ratio == 0.0 || n == 0) return Eigen::SparseMatrix<double>(n, n);
+  const Eigen::MatrixXd m(system.mass);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness), m);
+  if (eig.info() != Eigen::Success || !eig.eigenvalues().allFinite()) {
+    throw std::invalid_argument("modal damping: K phi = M phi omega^2 failed; M must be symmetric positive definite "
+                                "(condense massless DOFs first, or give C as alpha M + beta K)");
+  }
+  const Eigen::VectorXd& w2 = eig.eigenvalues();
+  const double floor = 1e-12 * w2.cwiseAbs().maxCoeff();
+  Eigen::VectorXd c(n);
+  for (Eigen::Index i = 0; i < n; ++i) c(i) = w2(i) > floor ? 2.0 * ratio * std::sqrt(w2(i)) : 0.0;
+  const Eigen::MatrixXd mp = m * eig.eigenvectors();
+  Eigen::MatrixXd dense = mp * c.asDiagonal() * mp.transpose();
+  dense = 0.5 * (dense + dense.transpose()).eval();  // symmetric to the last bit
+  return dense.sparseView(0.0, 0.0);
 }
 
 }  // namespace wbm::solvers

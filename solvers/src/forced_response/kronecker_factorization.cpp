@@ -44,6 +44,36 @@ bool rayleigh_fit(const MechanicalSystem& s, double& c_m, double& c_k) {
   return std::sqrt(dot(rest, rest)) <= 1e-12 * std::sqrt(cc);
 }
 
+// Caughey & O'Kelly [1965, J. Appl. Mech. 32(3) 583–588]: with M positive definite, C is
+// diagonalized by the undamped modes (classical damping) iff C M⁻¹ K = K M⁻¹ C. Probed on three
+// fixed vectors before the O(n³) eigenproblem is paid for: false when M cannot be factorized or
+// a probe differs by more than 1e-8 of its size (a non-classical C differs by O(1)).
+bool classical_damping_probe(const MechanicalSystem& s) {
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(s.mass);
+  if (ldlt.info() != Eigen::Success) return false;
+  const Eigen::Index n = s.mass.rows();
+  for (int probe = 1; probe <= 3; ++probe) {
+    Eigen::VectorXd v(n);
+    for (Eigen::Index i = 0; i < n; ++i) v(i) = std::sin(static_cast<double>(probe * (i + 1)));  // fixed, not random
+    const Eigen::VectorXd ckv = s.damping * ldlt.solve(s.stiffness * v).eval();
+    const Eigen::VectorXd kcv = s.stiffness * ldlt.solve(s.damping * v).eval();
+    if (!ckv.allFinite() || !kcv.allFinite()) return false;
+    if (!((ckv - kcv).norm() <= 1e-8 * (ckv.norm() + kcv.norm()))) return false;
+  }
+  return true;
+}
+
+// Φᵀ C Φ's diagonal when its off-diagonal part is below 1e-10 of it in the Frobenius norm
+// (classical damping in the modes Φ, Φᵀ M Φ = I); nothing otherwise (e.g. a repeated frequency
+// whose modes C couples).
+std::optional<Eigen::VectorXd> modal_damping_of(const MechanicalSystem& s, const Eigen::MatrixXd& phi) {
+  const Eigen::MatrixXd d = phi.transpose() * (s.damping * phi);
+  Eigen::MatrixXd off = d;
+  off.diagonal().setZero();  // its norm directly: ‖D‖² − ‖diag D‖² would cancel to √eps
+  if (!(off.norm() <= 1e-10 * d.norm())) return std::nullopt;
+  return Eigen::VectorXd(d.diagonal());
+}
+
 // Connected components of the graph i ~ j if any of the time operators couples i and j
 // (union-find); a single component is returned as an empty list. The couplings are read from
 // the operators' sparse transposes when the caller has them (the undirected graph is the same),
@@ -168,7 +198,7 @@ class KroneckerFactorization::ModeBlock {
   using Components = std::vector<std::vector<Eigen::Index>>;
 
   /// Block a + λ bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K (the time operators
-  /// `ops` at frequency f, Rayleigh coefficients c_M, c_K), split along `components` (≥ 2 of
+  /// `ops` at frequency f; the mode's damping c_M + c_K λ, Setup), split along `components` (≥ 2 of
   /// them), each inverted densely; only the components' entries are read. The inverses are
   /// stored flat (row-major, concatenated): a Fourier:Fourier block has M/2 of them, and
   /// continuation builds one block per mode per frequency.
@@ -314,7 +344,11 @@ class KroneckerFactorization::ModeBlock {
 // keeps pointers into it, so it lives on the heap and never moves).
 struct KroneckerFactorization::Setup {
   bool modal = false;
-  double c_m = 0.0, c_k = 0.0;     // C = c_M M + c_K K (modal path)
+  double c_m = 0.0, c_k = 0.0;     // C = c_M M + c_K K (modal path, Rayleigh)
+  Eigen::VectorXd mode_damping;    // Φᵀ C Φ's diagonal (modal path, classical C that is not Rayleigh); else empty
+  // Mode i's damping as c_M,i + c_K,i λ_i: (c_M, c_K) for Rayleigh, (Φᵀ C Φ)_ii and 0 otherwise.
+  [[nodiscard]] double mass_part(Eigen::Index i) const { return mode_damping.size() > 0 ? mode_damping(i) : c_m; }
+  [[nodiscard]] double stiffness_part() const { return mode_damping.size() > 0 ? 0.0 : c_k; }
   Eigen::MatrixXd phi;             // n × n, Φᵀ M Φ = I (modal path)
   Eigen::VectorXd lambda;
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
@@ -340,17 +374,15 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
                                                const std::array<Eigen::SparseMatrix<double>, 3>* transposed) {
   auto setup = std::make_shared<Setup>();
   const bool rayleigh = rayleigh_fit(system, setup->c_m, setup->c_k);
-  switch (path) {
-    case LinearSolverPath::Automatic: setup->modal = rayleigh; break;
-    case LinearSolverPath::SparseLU: setup->modal = false; break;
-    case LinearSolverPath::Modal:
-      if (!rayleigh) {
-        throw std::invalid_argument("LinearSolverPath::Modal needs Rayleigh damping C = c_M M + c_K K; this C is "
-                                    "not (use LinearSolverPath::SparseLU or Automatic)");
-      }
-      setup->modal = true;
-      break;
+  // A classical C that is not Rayleigh (modal damping ratios, Caughey series) is diagonal in the
+  // modes too: mode i is damped by (Φᵀ C Φ)_ii. Checked on Φᵀ C Φ itself once the modes exist.
+  const bool classical = !rayleigh && path != LinearSolverPath::SparseLU && classical_damping_probe(system);
+  if (path == LinearSolverPath::Modal && !rayleigh && !classical) {
+    throw std::invalid_argument("LinearSolverPath::Modal needs a damping matrix that the undamped modes diagonalize "
+                                "(Rayleigh C = c_M M + c_K K, or modal damping); this C is not (C M⁻¹ K ≠ K M⁻¹ C): "
+                                "use LinearSolverPath::SparseLU or Automatic");
   }
+  setup->modal = path != LinearSolverPath::SparseLU && (rayleigh || classical);
   if (setup->modal) {
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
                                                                         Eigen::MatrixXd(system.mass));
@@ -360,6 +392,20 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     }
     setup->phi = eig.eigenvectors();
     setup->lambda = eig.eigenvalues();
+    if (classical) {
+      auto d = modal_damping_of(system, setup->phi);
+      if (d) {
+        setup->mode_damping = std::move(*d);
+      } else if (path == LinearSolverPath::Modal) {
+        throw std::invalid_argument("LinearSolverPath::Modal: the modes K Φ = M Φ Λ do not diagonalize C (Φᵀ C Φ has "
+                                    "off-diagonal entries above 1e-10 of it, e.g. at a repeated frequency): use "
+                                    "LinearSolverPath::SparseLU or Automatic");
+      } else {
+        setup->modal = false;  // the sparse LU of the assembled G, as for any other C
+      }
+    }
+  }
+  if (setup->modal) {
     setup->components = block_components(ops, transposed);
     if (fourier_weighting) setup->fourier_weighting = FourierWeighting::detect(ops);
     setup->circulant = setup->components.empty() && !setup->fourier_weighting &&
@@ -389,28 +435,35 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
   factorized_ = false;
   blocks_.clear();
   if (su.modal) {
-    // Mode i's block is a + λ_i bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K, formed
-    // only where read: densely for a dense block, on the first column for a circulant one, on the
-    // components' entries for a block-diagonal one (ModeBlock), not at all for the Fourier-
-    // weighting form.
+    // Mode i's block is a + λ_i bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K (c_M,
+    // c_K: Setup::mass_part, stiffness_part), formed only where read: densely for a dense block,
+    // on the first column for a circulant one, on the components' entries for a block-diagonal
+    // one (ModeBlock), not at all for the Fourier-weighting form. Rayleigh damping shares a and
+    // bb between the modes; a classical C has its own c_M,i per mode.
     const bool dense_blocks = !su.fourier_weighting && su.components.empty() && !su.circulant;
+    const bool per_mode = su.mode_damping.size() > 0;
     Eigen::MatrixXd a, bb;
-    if (dense_blocks) {
-      a = fr * fr * ops.mass + fr * su.c_m * ops.damping;
-      bb = fr * su.c_k * ops.damping + ops.stiffness;
-    } else if (su.circulant) {
-      a = fr * fr * ops.mass.col(0) + fr * su.c_m * ops.damping.col(0);
-      bb = fr * su.c_k * ops.damping.col(0) + ops.stiffness.col(0);
-    }
+    const auto form = [&](double cm, double ck) {
+      if (dense_blocks) {
+        a = fr * fr * ops.mass + fr * cm * ops.damping;
+        bb = fr * ck * ops.damping + ops.stiffness;
+      } else if (su.circulant) {
+        a = fr * fr * ops.mass.col(0) + fr * cm * ops.damping.col(0);
+        bb = fr * ck * ops.damping.col(0) + ops.stiffness.col(0);
+      }
+    };
+    if (!per_mode) form(su.c_m, su.c_k);
     const auto n = su.lambda.size();
     blocks_.reserve(static_cast<size_t>(n));
     factorized_ = true;
     for (Eigen::Index i = 0; i < n; ++i) {
+      const double cm = su.mass_part(i), ck = su.stiffness_part();
+      if (per_mode) form(cm, ck);
       if (su.fourier_weighting) {
-        blocks_.push_back(std::make_shared<const ModeBlock>(
-            su.fourier_weighting->core(fr, su.c_m + su.lambda(i) * su.c_k, su.lambda(i)), &su.fourier_weighting->ak_inv));
+        blocks_.push_back(std::make_shared<const ModeBlock>(su.fourier_weighting->core(fr, cm + su.lambda(i) * ck, su.lambda(i)),
+                                                            &su.fourier_weighting->ak_inv));
       } else if (!su.components.empty()) {
-        blocks_.push_back(std::make_shared<const ModeBlock>(ops, fr, su.c_m, su.c_k, su.lambda(i), su.components));
+        blocks_.push_back(std::make_shared<const ModeBlock>(ops, fr, cm, ck, su.lambda(i), su.components));
       } else if (su.circulant) {
         blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::VectorXd(a.col(0) + su.lambda(i) * bb.col(0))));
       } else {
@@ -500,6 +553,7 @@ Eigen::MatrixXd KroneckerFactorization::modal_rows(const Eigen::MatrixXd& y, con
 }
 
 Eigen::VectorXd KroneckerFactorization::modal_damping() const {
+  if (setup_->mode_damping.size() > 0) return setup_->mode_damping;
   return (setup_->c_m + setup_->c_k * setup_->lambda.array()).matrix();
 }
 

@@ -107,6 +107,7 @@ struct Structure {
 struct Damping {
   double alpha = 0.0;  // mass-proportional [1/s]
   double beta = 0.0;   // stiffness-proportional [s] (the paper's C = βK)
+  double modal_ratio = 0.0;  // ζ of every mode [-]: C += M Φ diag(2ζω_i) Φᵀ M (solvers::modal_damping)
 };
 
 struct FrequencyRange {

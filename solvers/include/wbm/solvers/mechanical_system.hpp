@@ -30,6 +30,19 @@ struct MechanicalSystem {
 /// β ≥ 0 and finite.
 [[nodiscard]] MechanicalSystem beta_damped(const fem::Rod& rod, double beta);
 
+/// Modal damping of one ratio ζ for every mode [Géradin & Rixen 2015, Mechanical Vibrations,
+/// 3rd ed., Sec. 2.9; the damping NLvib's examples use]:
+///   C_ζ = (M Φ) diag(2 ζ ω_i) (M Φ)ᵀ,   K Φ = M Φ Ω², Φᵀ M Φ = I,
+/// so that Φᵀ C_ζ Φ = diag(2 ζ ω_i): mode i of the undamped system decays at the ratio ζ of its
+/// circular frequency ω_i [rad/s]. Rigid-body modes (ω_i = 0, and eigenvalues below 1e-12 of the
+/// largest, rounding) are not damped. n × n [N·s/m], symmetric, dense in general (stored sparse).
+/// O(n³): one dense generalized eigenproblem of (K, M). `ratio` ζ ≥ 0 [-], finite; ζ = 0 gives
+/// the zero matrix. The result is classical, so the weighted-residual solvers keep their modal
+/// path (LinearSolverPath). Throws std::invalid_argument if ζ is negative or not finite, if the
+/// matrices are invalid (validate()), or if M is not positive definite (a massless DOF: condense
+/// it first, solvers/condensation.hpp).
+[[nodiscard]] Eigen::SparseMatrix<double> modal_damping(const MechanicalSystem& system, double ratio);
+
 /// One load F cos(2π h f t + φ) on a DOF: amplitude F [N], phase φ [rad], harmonic order h ≥ 0
 /// of the forcing frequency f (h = 0: a constant load F cos φ, e.g. a static preload).
 struct HarmonicLoad {

@@ -43,12 +43,14 @@ enum class Formulation { Strong, Weak, Distributional };
 enum class OperatorRule { Automatic, Discrete };
 
 /// How G is factorized (G = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K, size n·M).
-///  - Automatic: Modal when C = c_M M + c_K K (Rayleigh; the rod's β-damping is c_K = β),
-///    SparseLU otherwise.
+///  - Automatic: Modal when the undamped modes diagonalize C: Rayleigh C = c_M M + c_K K (the
+///    rod's β-damping is c_K = β), or any classical C such as modal damping ratios (Caughey &
+///    O'Kelly 1965: C M⁻¹ K = K M⁻¹ C; then Φᵀ C Φ = diag(c_i) checked to 1e-10); SparseLU otherwise.
 ///  - SparseLU: Eigen::SparseLU of the assembled Kronecker sum (any damping; slow for wavelet
 ///    and dense time operators, whose periodic wrap-around defeats the fill-reducing ordering).
 ///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (Eigen's generalized self-adjoint eigensolver),
 ///      G = (I ⊗ Φ⁻ᵀ) blockdiag_i(A + λ_i B) (I ⊗ Φ⁻¹),  A = f² A_M + f c_M A_C,  B = f c_K A_C + A_K,
+///    (a classical C that is not Rayleigh: c_M = c_i = (Φᵀ C Φ)_ii per mode and c_K = 0),
 ///    i.e. n independent M × M blocks, each inverted in the form its time operators allow:
 ///    harmonic 1 × 1 and 2 × 2 components (Fourier:Fourier, O(M)), circulant by one FFT
 ///    (spectral::Circulant; a wavelet basis with itself, exact or on Q = multiple-of-M samples,
@@ -56,7 +58,7 @@ enum class OperatorRule { Automatic, Discrete };
 ///    Fourier weighting, distributional form; A_K⁻¹ dense, once per set-up), sparse or dense LU
 ///    otherwise; and H = Σ_i φ_i(c) φ_i(c') (A + λ_i B)⁻¹ in O(M²) per contact pair
 ///    (docs/design.md, "Speed").
-///    Throws std::invalid_argument if C is not Rayleigh.
+///    Throws std::invalid_argument if the modes do not diagonalize C.
 enum class LinearSolverPath { Automatic, SparseLU, Modal };
 
 /// Empty if the pair (trial, weighting) can be assembled in `formulation` under `rule`; else
