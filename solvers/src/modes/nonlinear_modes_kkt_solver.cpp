@@ -57,7 +57,8 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
     for (int k = 0; k < f; ++k) y.middleRows(start[k], length[k]) = lu[k].solve(r.middleRows(start[k], length[k]));
     return y;
   }
-  [[nodiscard]] Eigen::Index stop_of(Eigen::Index l) const { return l / ms; }
+  std::vector<int> stop_index;              // per multiplier l: its stop, l / ms (no division per entry)
+  [[nodiscard]] Eigen::Index stop_of(Eigen::Index l) const { return stop_index[static_cast<size_t>(l)]; }
 
   bool factorize_sparse(const Eigen::SparseMatrix<double>& jac) {
     structured = false;
@@ -92,6 +93,8 @@ NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& syste
   s.ms = nm.options_.samples;
   s.nc = static_cast<int>(nm.stops_.size());
   s.nl = static_cast<Eigen::Index>(s.nc) * s.ms;
+  s.stop_index.resize(static_cast<size_t>(s.nl));
+  for (Eigen::Index l = 0; l < s.nl; ++l) s.stop_index[static_cast<size_t>(l)] = static_cast<int>(l / s.ms);
   auto reduced = [p](Eigen::Index i) { return i < p ? i : i - 1; };  // full stacked index (≠ p) → state index
   s.block_of.assign(static_cast<size_t>(s.ny), 0);
   s.local_of.assign(static_cast<size_t>(s.ny), 0);
@@ -227,8 +230,8 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   norm_inf = row_sum.maxCoeff();
   // β_k, γ_k: the least-squares multiples of N_c (a column or row of another shape leaves a
   // residual that the verified solves catch).
-  for (Eigen::Index l = 0; l < nl; ++l) {
-    for (int k = 0; k < f; ++k) {
+  for (int k = 0; k < f; ++k) {  // column by column: β and γ are stored by columns
+    for (Eigen::Index l = 0; l < nl; ++l) {
       const double d2 = dir_norm2(stop_of(l), k);
       beta(l, k) = d2 > 0.0 ? beta(l, k) / d2 : 0.0;
       gamma(l, k) = d2 > 0.0 ? gamma(l, k) / d2 : 0.0;
