@@ -292,8 +292,20 @@ std::string_view to_string(Bifurcation b) noexcept {
 Bifurcation classify_crossing(const FloquetResult& before, const FloquetResult& after, double tolerance) {
   const int a = count_outside(before, tolerance), b = count_outside(after, tolerance);
   if (a == b) return Bifurcation::None;
+  // The crossing multiplier: of those outside the circle at the less stable point, the one
+  // nearest it. The largest could have left earlier (a Neimark–Sacker pair far outside while a
+  // real multiplier passes +1 at a fold).
   const FloquetResult& unstable = b > a ? after : before;
-  const std::complex<double> mu = unstable.multipliers(0);
+  Eigen::Index nearest = 0;
+  double modulus = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < unstable.multipliers.size(); ++i) {
+    const double r = std::abs(unstable.multipliers(i));
+    if (r > 1.0 + tolerance && r < modulus) {
+      modulus = r;
+      nearest = i;
+    }
+  }
+  const std::complex<double> mu = unstable.multipliers(nearest);
   const double arg = std::abs(std::arg(mu));
   if (arg < 0.05) return Bifurcation::Fold;
   if (arg > std::numbers::pi - 0.05) return Bifurcation::PeriodDoubling;
