@@ -65,6 +65,18 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
   }
 }
 
+// A continuation scene's branch as `wbm run` sets it up (the weighted residual at the range's
+// start, then trace_response with `o`); an error unless it reaches the range's end. Returns the
+// number of points.
+size_t trace_scene(benchmark::State& state, const wbm::scene::Scene& scene, const wbm::solvers::ResponseCurveOptions& o) {
+  const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(scene.forcing->range->from_hz),
+                                            scene.contact_points(), scene.trial(), scene.weighting(),
+                                            scene.weighted_residual_options());
+  const auto curve = wbm::solvers::trace_response(base, o);
+  if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+  return curve.points.size();
+}
+
 // The branch's cost against the structure's size (issue #39, item 5): the rod of
 // examples/scenes/rod_continuation.toml (clamped-free, one exponential tip stop, 1150–1450 Hz)
 // with range(0) elements, harmonic balance with H = 15, no stability. With one contact DOF a
@@ -86,14 +98,7 @@ void BM_Continuation_RodElements(benchmark::State& state) {
   o.stability = false;
   o.max_parameter_step = 2.0;  // as the example scene's max_frequency_step_hz
   size_t points = 0;
-  for (auto _ : state) {
-    const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz),
-                                              scene.contact_points(), scene.trial(), scene.weighting(),
-                                              scene.weighted_residual_options());
-    const auto curve = wbm::solvers::trace_response(base, o);
-    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
-    points = curve.points.size();
-  }
+  for (auto _ : state) points = trace_scene(state, scene, o);
   state.counters["points"] = static_cast<double>(points);
   state.counters["dofs"] = elements;
 }
@@ -118,12 +123,7 @@ void BM_Continuation_NLvibRod(benchmark::State& state) {
   double seconds = 0.0;
   for (auto _ : state) {
     const auto started = std::chrono::steady_clock::now();
-    const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz),
-                                              scene.contact_points(), scene.trial(), scene.weighting(),
-                                              scene.weighted_residual_options());
-    const auto curve = wbm::solvers::trace_response(base, o);
-    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
-    points = curve.points.size();
+    points = trace_scene(state, scene, o);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   }
   state.counters["points"] = static_cast<double>(points);
