@@ -68,7 +68,8 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
 // A continuation scene's branch as `wbm run` sets it up (the weighted residual at the range's
 // start, then trace_response with `o`); an error unless it reaches the range's end. Returns the
 // number of points.
-size_t trace_scene(benchmark::State& state, const wbm::scene::Scene& scene, const wbm::solvers::ResponseCurveOptions& o) {
+size_t trace_scene(benchmark::State& state, const wbm::scene::Scene& scene,
+                   const wbm::solvers::ResponseCurveOptions& o) {
   const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(scene.forcing->range->from_hz),
                                             scene.contact_points(), scene.trial(), scene.weighting(),
                                             scene.weighted_residual_options());

@@ -171,7 +171,8 @@ const std::vector<DeclaredKey<Solver>>& solver_keys() {
       choice_key<Solver>("linear_solver", names(linear_solver_table()),
                          [](const Solver& s) { return linear_solver_name(s.linear_solver); },
                          [](Solver& s, const std::string& v) { s.linear_solver = value_of(linear_solver_table(), v); },
-                         "factorization of the linear operator (modal needs a C the undamped modes diagonalize: Rayleigh or modal_ratio)"),
+                         "factorization of the linear operator (modal needs a C the undamped modes diagonalize: "
+                         "Rayleigh or modal_ratio)"),
       number_key<Solver>(
           "residual_tolerance", [](auto& s) -> auto& { return s.residual_tolerance; }, positive(""),
           "a solve (every point of a sweep or branch) is converged only if the normwise backward error of its full "

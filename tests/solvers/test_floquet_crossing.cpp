@@ -34,7 +34,8 @@ TEST(FloquetCrossing, TheMultiplierNearestTheCircleNamesTheKind) {
   // … and back inside: the fold again, read at the less stable point (the earlier one).
   EXPECT_EQ(wbm::solvers::classify_crossing(with_multipliers({pair, conj, 1.05}), before), Bifurcation::Fold);
   // A real multiplier passes −1: period doubling.
-  EXPECT_EQ(wbm::solvers::classify_crossing(with_multipliers({pair, conj, -0.95}), with_multipliers({pair, conj, -1.05})),
+  EXPECT_EQ(wbm::solvers::classify_crossing(with_multipliers({pair, conj, -0.95}),
+                                            with_multipliers({pair, conj, -1.05})),
             Bifurcation::PeriodDoubling);
   // A second complex pair leaves beside a real multiplier already far outside: Neimark–Sacker.
   const std::complex<double> second = std::polar(1.1, 0.7);

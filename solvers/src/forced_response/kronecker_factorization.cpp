@@ -69,7 +69,8 @@ Eigen::Index joint_nonzeros(const TimeOperators& ops, const std::array<Eigen::Sp
   if (transposed == nullptr) {
     return (ops.mass.array() != 0.0 || ops.damping.array() != 0.0 || ops.stiffness.array() != 0.0).count();
   }
-  Eigen::SparseMatrix<double> joint = (*transposed)[0].cwiseAbs() + (*transposed)[1].cwiseAbs() + (*transposed)[2].cwiseAbs();
+  const auto& t = *transposed;
+  Eigen::SparseMatrix<double> joint = t[0].cwiseAbs() + t[1].cwiseAbs() + t[2].cwiseAbs();
   joint.prune([](Eigen::Index, Eigen::Index, double v) { return v != 0.0; });
   return joint.nonZeros();
 }
@@ -410,8 +411,8 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
       const double cm = su.mass_part(i), ck = su.stiffness_part();
       if (per_mode) form(cm, ck);
       if (su.fourier_weighting) {
-        blocks_.push_back(std::make_shared<const ModeBlock>(su.fourier_weighting->core(fr, cm + su.lambda(i) * ck, su.lambda(i)),
-                                                            &su.fourier_weighting->ak_inv));
+        blocks_.push_back(std::make_shared<const ModeBlock>(
+            su.fourier_weighting->core(fr, cm + su.lambda(i) * ck, su.lambda(i)), &su.fourier_weighting->ak_inv));
       } else if (!su.components.empty()) {
         blocks_.push_back(std::make_shared<const ModeBlock>(ops, fr, cm, ck, su.lambda(i), su.components));
       } else if (su.circulant) {

@@ -42,15 +42,17 @@ class KroneckerFactorization {
   /// Frequency-independent set-up: whether the modal path applies (LinearSolverPath, and C
   /// diagonal in the undamped modes: Rayleigh C = c_M M + c_K K, or any classical C, found by
   /// Caughey and O'Kelly's C M⁻¹ K = K M⁻¹ C on three probes and then Φᵀ C Φ diagonal to 1e-10,
-  /// each mode then damped by (Φᵀ C Φ)_ii), the modal basis K Φ = M Φ Λ, Φᵀ M Φ = I, the components of the time operators' sparsity
-  /// graph, and (if `fourier_weighting` — distributional form, Fourier weighting, wavelet trial)
-  /// the factored Fourier-weighting structure when its identities hold. Nothing is factorized.
+  /// each mode then damped by (Φᵀ C Φ)_ii), the modal basis K Φ = M Φ Λ, Φᵀ M Φ = I, the
+  /// components of the time operators' sparsity graph, and (if `fourier_weighting` —
+  /// distributional form, Fourier weighting, wavelet trial) the factored Fourier-weighting
+  /// structure when its identities hold. Nothing is factorized.
   /// `transposed`, if not null, holds A_Mᵀ, A_Cᵀ, A_Kᵀ sparse (the caller's copies of `ops`): the
   /// sparsity graph and the joint pattern's size are then read from them, O(nnz) instead of O(M²).
   /// Throws std::invalid_argument for LinearSolverPath::Modal with a C the modes do not
   /// diagonalize, or if the generalized eigenproblem fails.
   KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops, LinearSolverPath path,
-                         bool fourier_weighting, const std::array<Eigen::SparseMatrix<double>, 3>* transposed = nullptr);
+                         bool fourier_weighting,
+                         const std::array<Eigen::SparseMatrix<double>, 3>* transposed = nullptr);
   /// The same set-up (shared, not recomputed), not factorized: for another frequency.
   [[nodiscard]] KroneckerFactorization unfactorized() const;
 

@@ -385,7 +385,8 @@ void WeightedResidual::Impl::require_block_diagonal_operators() const {
 }
 
 
-void WeightedResidual::Impl::set_operator_products(const std::array<std::optional<Eigen::SparseMatrix<double>>, 3>& sparse) {
+void WeightedResidual::Impl::set_operator_products(
+    const std::array<std::optional<Eigen::SparseMatrix<double>>, 3>& sparse) {
   auto products = std::make_shared<OperatorProducts>();
   const Eigen::MatrixXd* a[3] = {&ops.mass, &ops.damping, &ops.stiffness};
   const bool from_sparse = sparse[0] && sparse[1] && sparse[2];

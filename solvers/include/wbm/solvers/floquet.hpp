@@ -79,8 +79,9 @@ enum class Bifurcation { None, Fold, PeriodDoubling, NeimarkSacker };
 
 /// Compares two consecutive points' multipliers: if the number outside the unit circle
 /// (|μ| > 1 + tolerance) changed, the crossing multiplier (of those outside at the less stable
-/// point, the one nearest the circle: another may have left earlier) classifies it: near +1 Fold (real, the branch turns), near −1
-/// PeriodDoubling, a complex pair NeimarkSacker (|arg μ| in (0.05, π − 0.05)).
+/// point, the one nearest the circle: another may have left earlier) classifies it: near +1
+/// Fold (real, the branch turns), near −1 PeriodDoubling, a complex pair NeimarkSacker
+/// (|arg μ| in (0.05, π − 0.05)).
 [[nodiscard]] Bifurcation classify_crossing(const FloquetResult& before, const FloquetResult& after,
                                             double tolerance = 1e-6);
 
