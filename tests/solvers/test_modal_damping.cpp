@@ -93,11 +93,22 @@ TEST(ModalDamping, ModalPathOfAClassicalDampingMatrixAgreesWithTheSparseLu) {
   const wbm::solvers::HarmonicForcing forcing{19, 0.05, 0.25};  // the linear tip motion is ~20 gaps
   const std::vector<wbm::solvers::ContactPoint> stops = {
       {19, std::make_shared<wbm::contact::LinearPenalty>(wbm::contact::LinearPenaltyParameters{10.0, 0.1})}};
-  for (const char* pair : {"fourier", "db6"}) {
-    const auto basis = TimeBasis::from_name(pair, 32);
-    const auto automatic = wbm::solvers::solve_weighted_residual(s, forcing, stops, basis, basis);
-    const auto sparse = wbm::solvers::solve_weighted_residual(s, forcing, stops, basis, basis,
-                                                              {.linear_solver = LinearSolverPath::SparseLU});
+  // The three block forms, each with a per-mode damping: harmonic components (Fourier), circulant
+  // (DB6 with itself), dense (DB6 trial, Fourier weighting, weak form: neither shift-invariant
+  // nor the distributional form's factored Fourier weighting).
+  struct Case {
+    const char *trial, *weighting;
+    wbm::solvers::Formulation form;
+  };
+  using wbm::solvers::Formulation;
+  for (const auto& [trial, weighting, form] : {Case{"fourier", "fourier", Formulation::Distributional},
+                                               Case{"db6", "db6", Formulation::Distributional},
+                                               Case{"db6", "fourier", Formulation::Weak}}) {
+    const std::string pair = std::string(trial) + ":" + weighting;
+    const auto tb = TimeBasis::from_name(trial, 32), wb = TimeBasis::from_name(weighting, 32);
+    const auto automatic = wbm::solvers::solve_weighted_residual(s, forcing, stops, tb, wb, {.formulation = form});
+    const auto sparse = wbm::solvers::solve_weighted_residual(
+        s, forcing, stops, tb, wb, {.formulation = form, .linear_solver = LinearSolverPath::SparseLU});
     ASSERT_TRUE(automatic.converged() && sparse.converged()) << pair;
     EXPECT_EQ(automatic.linear_solver, "modal") << pair;
     EXPECT_EQ(sparse.linear_solver, "sparse-lu") << pair;
@@ -131,11 +142,19 @@ TEST(ModalDamping, SceneKeyAddsModalDampingToTheRod) {
   const auto s = scene.system();
   const Eigen::VectorXcd ev = state_eigenvalues(s);
   for (Eigen::Index i = 0; i < ev.size(); ++i) EXPECT_NEAR(-ev(i).real() / std::abs(ev(i)), 0.01, 1e-9);
-  EXPECT_THROW((void)wbm::scene::parse_scene(
-                   "[structure]\nyoung_modulus = 1.0\ndensity = 1.0\narea = 1.0\nlength = 1.0\nelements = 2\n"
-                   "[damping]\nmodal_ratio = -0.01\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n",
-                   "bad.toml"),
-               std::exception);
+  // A negative ratio is refused when the scene is read, naming the key (the same scene with
+  // 0.01 reads).
+  const std::string bad =
+      "[structure]\nyoung_modulus = 1.0\ndensity = 1.0\narea = 1.0\nlength = 1.0\nelements = 2\n"
+      "[damping]\nmodal_ratio = RATIO\n[forcing]\namplitude = 1.0\nfrequency_hz = 1.0\n";
+  const auto with_ratio = [&](const std::string& r) { return std::string(bad).replace(bad.find("RATIO"), 5, r); };
+  EXPECT_NO_THROW((void)wbm::scene::parse_scene(with_ratio("0.01"), "good.toml"));
+  try {
+    (void)wbm::scene::parse_scene(with_ratio("-0.01"), "bad.toml");
+    ADD_FAILURE() << "modal_ratio = -0.01 was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("modal_ratio"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

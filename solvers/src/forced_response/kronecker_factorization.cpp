@@ -389,27 +389,31 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
     // Mode i's block is a + λ_i bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K (c_M,
     // c_K: Setup::mass_part, stiffness_part), formed only where read: densely for a dense block,
     // on the first column for a circulant one, on the components' entries for a block-diagonal
-    // one (ModeBlock), not at all for the Fourier-weighting form. Rayleigh damping shares a and
-    // bb between the modes; a classical C has its own c_M,i per mode.
+    // one (ModeBlock), not at all for the Fourier-weighting form. c_K is the same for every mode,
+    // so bb is formed once; a too with Rayleigh damping, per mode for a classical C (its c_M,i).
     const bool dense_blocks = !su.fourier_weighting && su.components.empty() && !su.circulant;
     const bool per_mode = su.mode_damping.size() > 0;
+    const double ck = su.stiffness_part();
     Eigen::MatrixXd a, bb;
-    const auto form = [&](double cm, double ck) {
+    if (dense_blocks) {
+      bb = fr * ck * ops.damping + ops.stiffness;
+    } else if (su.circulant) {
+      bb = fr * ck * ops.damping.col(0) + ops.stiffness.col(0);
+    }
+    const auto form_a = [&](double cm) {
       if (dense_blocks) {
         a = fr * fr * ops.mass + fr * cm * ops.damping;
-        bb = fr * ck * ops.damping + ops.stiffness;
       } else if (su.circulant) {
         a = fr * fr * ops.mass.col(0) + fr * cm * ops.damping.col(0);
-        bb = fr * ck * ops.damping.col(0) + ops.stiffness.col(0);
       }
     };
-    if (!per_mode) form(su.c_m, su.c_k);
+    if (!per_mode) form_a(su.c_m);
     const auto n = su.lambda.size();
     blocks_.reserve(static_cast<size_t>(n));
     factorized_ = true;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const double cm = su.mass_part(i), ck = su.stiffness_part();
-      if (per_mode) form(cm, ck);
+      const double cm = su.mass_part(i);
+      if (per_mode) form_a(cm);
       if (su.fourier_weighting) {
         blocks_.push_back(std::make_shared<const ModeBlock>(
             su.fourier_weighting->core(fr, cm + su.lambda(i) * ck, su.lambda(i)), &su.fourier_weighting->ak_inv));
@@ -493,7 +497,9 @@ Eigen::MatrixXd KroneckerFactorization::modal_projection(const Eigen::MatrixXd& 
 
 Eigen::MatrixXd KroneckerFactorization::modal_block_solve(const Eigen::MatrixXd& r) const {
   Eigen::MatrixXd y(r.rows(), r.cols());
-  for (Eigen::Index i = 0; i < r.rows(); ++i) y.row(i) = blocks_[static_cast<size_t>(i)]->solve(r.row(i).transpose(), false).transpose();
+  for (Eigen::Index i = 0; i < r.rows(); ++i) {
+    y.row(i) = blocks_[static_cast<size_t>(i)]->solve(r.row(i).transpose(), false).transpose();
+  }
   return y;
 }
 
