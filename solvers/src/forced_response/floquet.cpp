@@ -11,6 +11,8 @@
 #include <Eigen/LU>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "floquet_stepping.hpp"
+
 namespace wbm::solvers {
 namespace {
 
@@ -63,156 +65,32 @@ Eigen::MatrixXd unbalanced(Eigen::MatrixXd phi, double sigma) {
   return phi;
 }
 
-// Φ̃ = Ỹ(T), of the balanced state, by the stepping of floquet.hpp on the P =
-// contact_displacement.cols() samples.
-Eigen::MatrixXd monodromy_of(const Balanced& balanced, const std::vector<ContactPoint>& contacts,
-                             const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
-  const auto nc = static_cast<Eigen::Index>(contacts.size());
-  const Eigen::Index p_count = contact_displacement.cols();
-  const Eigen::Index n = balanced.a0.rows() / 2;
-  const Eigen::MatrixXd& a0 = balanced.a0;
-  const Eigen::MatrixXd& u = balanced.u;
-  const double h = 1.0 / (frequency_hz * static_cast<double>(p_count));
-  const Eigen::MatrixXd step = (a0 * h).exp();  // e^{Ã₀h}
-  auto stiffness = [&](Eigen::Index p) {  // k_c(t_p), periodic in p
-    Eigen::VectorXd k(nc);
-    const Eigen::Index q = p % p_count;
-    for (Eigen::Index c = 0; c < nc; ++c) k(c) = contacts[static_cast<size_t>(c)].law->stiffness(contact_displacement(c, q));
-    return k;
-  };
-  // Rows e_cᵀ Y (n_c × 2n).
-  auto rows = [&](const Eigen::MatrixXd& y) {
-    Eigen::MatrixXd r(nc, y.cols());
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      r.row(c).setZero();
-      for (const auto& [dof, w] : contacts[static_cast<size_t>(c)].terms()) r.row(c) += w * y.row(dof);
+// The balanced state as floquet_stepping.hpp's linear part: e^{Ã₀h} by Eigen's Padé exponential
+// of the dense 2n × 2n matrix, the contact rows from the contacts' sparse directions.
+struct BalancedLinearPart {
+  const Balanced& balanced;
+  const std::vector<ContactPoint>& contacts;
+  static constexpr bool kExactFreeRuns = false;  // e^{A₀h}'s binary powers, as before the modal path
+  [[nodiscard]] Eigen::Index states() const { return balanced.a0.rows(); }
+  [[nodiscard]] Eigen::MatrixXd flight(double hs) const { return (balanced.a0 * hs).exp(); }
+  void apply(const Eigen::MatrixXd& flight, Eigen::MatrixXd& z) const { z = flight * z; }
+  [[nodiscard]] const Eigen::MatrixXd& u() const { return balanced.u; }
+  [[nodiscard]] Eigen::MatrixXd rows(const Eigen::MatrixXd& y) const {  // e_cᵀ Y, n_c × cols
+    Eigen::MatrixXd r(static_cast<Eigen::Index>(contacts.size()), y.cols());
+    for (size_t c = 0; c < contacts.size(); ++c) {
+      const auto row = static_cast<Eigen::Index>(c);
+      r.row(row).setZero();
+      for (const auto& [dof, w] : contacts[c].terms()) r.row(row) += w * y.row(dof);
     }
     return r;
-  };
-  // e_cᵀ b_d (n_c × n_c) for the Woodbury solve.
-  const Eigen::MatrixXd eu = rows(u);
-
-  Eigen::MatrixXd y = Eigen::MatrixXd::Identity(2 * n, 2 * n);
-  // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end), applied to z:
-  //   (I − (hs/2) K_b) Z ← e^{A₀ hs} (I + (hs/2) K_a) Z, the inverse by Woodbury.
-  auto trapezoid_on = [&](Eigen::MatrixXd& z, const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka,
-                          const Eigen::VectorXd& kb) {
-    if (!ka.isZero(0.0)) z += u * ((0.5 * hs) * ka.asDiagonal() * rows(z));
-    z = exp_step * z;
-    if (!kb.isZero(0.0)) {
-      const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
-      const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
-      z += u * small.partialPivLu().solve(d * rows(z));
-    }
-  };
-  auto trapezoid = [&](const Eigen::MatrixXd& exp_step, double hs, const Eigen::VectorXd& ka, const Eigen::VectorXd& kb) {
-    trapezoid_on(y, exp_step, hs, ka, kb);
-  };
-  // Runs of whole steps over which no contact crosses its gap and every contact's stiffness is
-  // the same at both ends of each step: each step is one matrix T_k, e^{A₀h} without contact
-  // stiffness, the trapezoidal step at k otherwise (a linear penalty stop keeps k over a whole
-  // contact phase). A run of L steps is T_k^L by binary powers T_k^{2^j}, kept per k (at most
-  // kMaxRuns of them): O(log L) products instead of L.
-  struct RunPowers {
-    Eigen::VectorXd k;
-    std::vector<Eigen::MatrixXd> powers;  // T_k^{2^j}
-  };
-  constexpr size_t kMaxRuns = 8;
-  std::vector<RunPowers> runs = {{Eigen::VectorXd::Zero(nc), {step}}};
-  Eigen::VectorXd run_k = Eigen::VectorXd::Zero(nc);
-  Eigen::Index run_length = 0;
-  auto advance_run = [&] {
-    if (run_length == 0) return;
-    if (run_length == 1 && !run_k.isZero(0.0)) {
-      trapezoid(step, h, run_k, run_k);  // one step: no power to form
-      run_length = 0;
-      return;
-    }
-    auto it = std::find_if(runs.begin(), runs.end(), [&](const RunPowers& r) { return r.k == run_k; });
-    if (it == runs.end()) {
-      if (runs.size() == kMaxRuns) runs.resize(1);  // e^{A₀h}'s powers are kept
-      Eigen::MatrixXd t = Eigen::MatrixXd::Identity(2 * n, 2 * n);
-      trapezoid_on(t, step, h, run_k, run_k);
-      runs.push_back({run_k, {std::move(t)}});
-      it = runs.end() - 1;
-    }
-    std::vector<Eigen::MatrixXd>& powers = it->powers;
-    for (size_t j = 0; run_length > 0; ++j, run_length >>= 1) {
-      if (j == powers.size()) powers.push_back(powers.back() * powers.back());
-      if (run_length & 1) y = powers[j] * y;
-    }
-  };
-  // Fractions θ ∈ (0, 1) of step p where a contact displacement, interpolated linearly between
-  // the samples, crosses its gap (where the law's stiffness jumps), sorted.
-  auto crossings = [&](Eigen::Index p) {
-    std::vector<double> theta;
-    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      const double g = contacts[static_cast<size_t>(c)].law->gap();
-      const double d0 = contact_displacement(c, q0) - g, d1 = contact_displacement(c, q1) - g;
-      if ((d0 > 0.0) != (d1 > 0.0) && d0 != d1) {
-        const double t = d0 / (d0 - d1);
-        if (t > 0.0 && t < 1.0) theta.push_back(t);
-      }
-    }
-    std::sort(theta.begin(), theta.end());
-    return theta;
-  };
-  // Stiffnesses at fraction θ of step p, from the linear interpolant of the samples.
-  auto stiffness_at = [&](Eigen::Index p, double theta) {
-    Eigen::VectorXd k(nc);
-    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
-    for (Eigen::Index c = 0; c < nc; ++c) {
-      const double uc = (1.0 - theta) * contact_displacement(c, q0) + theta * contact_displacement(c, q1);
-      k(c) = contacts[static_cast<size_t>(c)].law->stiffness(uc);
-    }
-    return k;
-  };
-  Eigen::VectorXd k_now = stiffness(0);
-  for (Eigen::Index p = 0; p < p_count; ++p) {
-    const Eigen::VectorXd k_next = stiffness(p + 1);
-    const std::vector<double> theta = crossings(p);
-    if (!theta.empty()) {
-      // A contact opens or closes inside the step: the jump of its stiffness is placed at the
-      // interpolated crossing, each piece integrated with one-sided stiffnesses (evaluated a
-      // relative 1e-9 inside the piece). Without this split the switch sits at a sample, which
-      // is first order in h, with an error growing with the stop's stiffness (issue #19).
-      advance_run();
-      std::vector<double> edges = {0.0};
-      edges.insert(edges.end(), theta.begin(), theta.end());
-      edges.push_back(1.0);
-      for (size_t i = 0; i + 1 < edges.size(); ++i) {
-        const double a = edges[i], b = edges[i + 1], inside = 1e-9 * (b - a);
-        if (!(b > a)) continue;
-        const double hs = (b - a) * h;
-        trapezoid((a0 * hs).exp(), hs, i == 0 ? k_now : stiffness_at(p, a + inside),
-                  i + 2 == edges.size() ? k_next : stiffness_at(p, b - inside));
-      }
-      k_now = k_next;
-      continue;
-    }
-    if (k_now == k_next) {
-      if (run_length > 0 && k_now != run_k) advance_run();
-      run_k = k_now;
-      ++run_length;
-      continue;
-    }
-    advance_run();
-    // (I + (h/2) K_p), e^{A₀h}, then (I − (h/2) K_{p+1})⁻¹ Z = Z + U (I − D E U)⁻¹ D E Z,
-    // D = (h/2) diag(k_{p+1}) (Woodbury)
-    trapezoid(step, h, k_now, k_next);
-    k_now = k_next;
   }
-  advance_run();
+};
 
-  return y;
-}
 }  // namespace
 
-FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
-                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
-  system.validate();
-  ContactPoint::validate(contacts, system.dofs());
+namespace detail {
+
+void check_floquet_contacts(const std::vector<ContactPoint>& contacts) {
   for (const auto& c : contacts) {
     if (c.law->hysteretic()) {
       throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
@@ -226,6 +104,10 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
                                   "rigid stops (use a LinearPenalty for a stiff-stop stability estimate)");
     }
   }
+}
+
+void check_floquet_input(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
+                         double frequency_hz) {
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   const Eigen::Index p_count = contact_displacement.cols();
   if (p_count < 8) {
@@ -241,13 +123,9 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
   if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz)) {
     throw std::invalid_argument("floquet_multipliers: f = " + std::to_string(frequency_hz) + " Hz; must be > 0");
   }
-  FloquetResult out;
-  out.steps = static_cast<int>(p_count);
-  // Φ̃ = D Φ D⁻¹ has Φ's eigenvalues; its eigenvectors and error estimate are those of the
-  // balanced state, which the first-order perturbation below maps alike.
-  const Balanced balanced = balanced_system(system, contacts);
-  const Eigen::MatrixXd phi = monodromy_of(balanced, contacts, contact_displacement, frequency_hz);
-  out.monodromy = unbalanced(phi, balanced.sigma);
+}
+
+void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_half, FloquetResult& out) {
   const Eigen::EigenSolver<Eigen::MatrixXd> eig(phi, true);
   const Eigen::VectorXcd mu = eig.eigenvalues();
   std::vector<Eigen::Index> order(static_cast<size_t>(mu.size()));
@@ -262,10 +140,8 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
   // estimate grows, as the multipliers' sensitivity does. Comparing |μ| of P and P/2 would not
   // do: a complex pair has |μ|² = det Φ, which is nearly the same for every P.
   out.multiplier_errors = Eigen::VectorXd::Constant(mu.size(), std::numeric_limits<double>::infinity());
-  if (p_count % 2 == 0 && p_count >= 16 && mu.size() > 0) {
-    Eigen::MatrixXd half(contact_displacement.rows(), p_count / 2);
-    for (Eigen::Index q = 0; q < p_count / 2; ++q) half.col(q) = contact_displacement.col(2 * q);
-    const Eigen::MatrixXcd delta = (phi - monodromy_of(balanced, contacts, half, frequency_hz)).cast<std::complex<double>>() / 3.0;
+  if (phi_half.size() > 0 && mu.size() > 0) {
+    const Eigen::MatrixXcd delta = (phi - phi_half).cast<std::complex<double>>() / 3.0;
     const Eigen::MatrixXcd v = eig.eigenvectors();
     const Eigen::PartialPivLU<Eigen::MatrixXcd> vlu(v);
     const double rcond = vlu.rcond();
@@ -276,6 +152,30 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
       }
     }
   }
+}
+
+}  // namespace detail
+
+FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
+                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+  system.validate();
+  ContactPoint::validate(contacts, system.dofs());
+  detail::check_floquet_contacts(contacts);
+  detail::check_floquet_input(contacts, contact_displacement, frequency_hz);
+  const Eigen::Index p_count = contact_displacement.cols();
+  FloquetResult out;
+  out.steps = static_cast<int>(p_count);
+  // Φ̃ = D Φ D⁻¹ has Φ's eigenvalues; its eigenvectors and error estimate are those of the
+  // balanced state, which the first-order perturbation maps alike.
+  const Balanced balanced = balanced_system(system, contacts);
+  const BalancedLinearPart linear{balanced, contacts};
+  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts, contact_displacement, frequency_hz);
+  out.monodromy = unbalanced(phi, balanced.sigma);
+  Eigen::MatrixXd phi_half;
+  if (p_count % 2 == 0 && p_count >= 16) {
+    phi_half = detail::stepped_monodromy(linear, contacts, detail::even_samples(contact_displacement), frequency_hz);
+  }
+  detail::analyse_monodromy(phi, phi_half, out);
   return out;
 }
 

@@ -407,12 +407,16 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     // stealing balances them. Each point's computation does not depend on the others, so the
     // results are the same for any thread count. An exception in any task cancels the others and
     // is rethrown here (TBB's exception propagation).
+    //
+    // The modes of a classical C are set up once for the branch (FloquetAnalysis); the points
+    // read the multipliers only.
     const auto t0 = std::chrono::steady_clock::now();
+    const FloquetAnalysis floquet(base.system(), contacts, {.monodromy = false});
     std::vector<FloquetResult> results(curve.points.size());
     auto stability_of = [&](size_t i) {
       const ResponsePoint& r = curve.points[i];
       const Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
-      FloquetResult fl = floquet_multipliers(base.system(), contacts, uc.transpose(), r.frequency_hz);
+      FloquetResult fl = floquet(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
       // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
       for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
@@ -420,7 +424,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
         const Eigen::MatrixXd ucf =
             base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
-        fl = floquet_multipliers(base.system(), contacts, ucf.transpose(), r.frequency_hz);
+        fl = floquet(ucf.transpose(), r.frequency_hz);
       }
       results[i] = std::move(fl);
     };

@@ -32,6 +32,7 @@
 /// multipliers are those of the similar matrix D Φ D⁻¹, D = diag(I, I/σ); `monodromy` is Φ.
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -72,6 +73,53 @@ struct FloquetResult {
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,
                                                 const Eigen::MatrixXd& contact_displacement, double frequency_hz);
+
+/// Which coordinates FloquetAnalysis steps the monodromy matrix in.
+enum class FloquetPath {
+  Automatic,  ///< Modal when C is classical and M positive definite, Balanced otherwise
+  Balanced,   ///< floquet_multipliers: the physical state, e^{A₀h} by a dense Padé exponential per step length
+  Modal,      ///< the undamped modes; std::invalid_argument at construction if C is not classical
+};
+
+struct FloquetOptions {
+  FloquetPath path = FloquetPath::Automatic;
+  /// Fill FloquetResult::monodromy on the modal path (4 products of n × n by n × 2n per point);
+  /// a continuation that reads the multipliers only leaves it empty.
+  bool monodromy = true;
+};
+
+/// The stability of the points of one branch (one structure, one set of contacts): what does not
+/// depend on the point is set up once, and each call returns floquet_multipliers' result for one
+/// point (the same scheme, steps, error estimate and exceptions). Const calls are thread-safe.
+///
+/// When the damping matrix is classical (Rayleigh, modal ratios, any C with C M⁻¹ K = K M⁻¹ C and
+/// Φᵀ C Φ diagonal; solvers/src/forced_response/modal_damping_structure.hpp) the stepping runs in
+/// the undamped modes' coordinates x = (q, q̇/ω), u = Φ q, Φᵀ M Φ = I: the linear part's flight
+/// e^{A₀h} is then one 2 × 2 block per mode in closed form,
+///   e^{A_i t} = e^{−d_i t/2} (cos ν_i t I + (sin ν_i t / ν_i)(A_i + (d_i/2) I)),
+///   A_i = [[0, 1], [−ω_i², −d_i]],  ν_i² = ω_i² − d_i²/4  (cosh/sinh when ν_i² < 0),
+/// applied in O(n) per column, instead of a dense Padé exponential of 2n × 2n for every step
+/// length (each contact crossing splits a step) and a dense LU of M per point. A contact-free run
+/// of L steps is e^{A₀Lh} itself. Set-up: one dense generalized eigenproblem of (K, M), O(n³),
+/// once. The multipliers are those of the similar matrix T⁻¹ Φ T, T = diag(Φ, Φ Ω); `monodromy`
+/// is Φ in (δu, δu̇) when options.monodromy. Otherwise (Balanced) each call is floquet_multipliers.
+/// Throws std::invalid_argument as floquet_multipliers does (friction and rigid stops at
+/// construction), and for FloquetPath::Modal with a non-classical C.
+class FloquetAnalysis {
+ public:
+  FloquetAnalysis(const MechanicalSystem& system, std::vector<ContactPoint> contacts, FloquetOptions options = {});
+  /// contact_displacement: n_c × P, as floquet_multipliers; frequency_hz > 0 [Hz].
+  [[nodiscard]] FloquetResult operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const;
+  /// True when the modal path is used.
+  [[nodiscard]] bool modal() const noexcept;
+  struct Modes;
+
+ private:
+  MechanicalSystem system_;
+  std::vector<ContactPoint> contacts_;
+  FloquetOptions options_;
+  std::shared_ptr<const Modes> modes_;  // null: the balanced path
+};
 
 /// How a multiplier crossed the unit circle between two solutions of a branch.
 enum class Bifurcation { None, Fold, PeriodDoubling, NeimarkSacker };

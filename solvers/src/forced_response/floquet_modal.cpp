@@ -1,0 +1,168 @@
+// FloquetAnalysis (floquet.hpp): the monodromy stepping of floquet_stepping.hpp in the undamped
+// modes' coordinates when the damping matrix is classical, set up once per branch.
+#include <wbm/solvers/floquet.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Eigenvalues>
+
+#include "floquet_stepping.hpp"
+#include "modal_damping_structure.hpp"
+
+namespace wbm::solvers {
+
+// The modal state x = (q, p), q = Φᵀ M δu, p = q̇ / s (mode by mode, s_i its circular frequency,
+// so that both halves of each mode's 2 × 2 flight are of order 1): u = Φ q, u̇ = Φ S p.
+struct FloquetAnalysis::Modes {
+  Eigen::MatrixXd phi;     // Φ, n × n, Φᵀ M Φ = I
+  Eigen::ArrayXd omega2;   // ω_i² [rad²/s²], ≥ 0
+  Eigen::ArrayXd damping;  // (Φᵀ C Φ)_ii [1/s]
+  Eigen::ArrayXd scale;    // s_i [rad/s] > 0
+  Eigen::MatrixXd b;       // e_cᵀ Φ, n_c × n
+  Eigen::MatrixXd u;       // the kick per unit contact force, (0, −S⁻¹ Φᵀ e_c), 2n × n_c
+  Eigen::MatrixXd mass_phi;  // M Φ (n × n), for the physical monodromy
+};
+
+namespace {
+
+// e^{A t} of one mode, A = [[0, 1], [−ω², −d]] in (q, q̇), as the entries of the scaled flight
+// (q, q̇/s): with μ = −d/2 and β² = d²/4 − ω², (A − μI)² = β² I, so
+//   e^{At} = e^{μt} (ch I + sh (A − μI)),  ch = cosh βt, sh = sinh(βt)/β  (β² ≥ 0),
+//                                          ch = cos νt,  sh = sin(νt)/ν   (ν² = −β² > 0),
+// exact for every damping (rigid-body ω = 0 included: sh = t when d = 0).
+struct ModalFlight {
+  Eigen::ArrayXd a, b, c, d;  // rows q ← a q + b p, p ← c q + d p
+};
+
+ModalFlight modal_flight(const FloquetAnalysis::Modes& m, double t) {
+  const Eigen::Index n = m.omega2.size();
+  ModalFlight f{Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n)};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double mu = -0.5 * m.damping(i), beta2 = 0.25 * m.damping(i) * m.damping(i) - m.omega2(i);
+    double ch = 1.0, sh = t;  // e^{μt} already applied below
+    double decay = std::exp(mu * t);
+    if (beta2 < 0.0) {
+      const double nu = std::sqrt(-beta2);
+      ch = std::cos(nu * t);
+      sh = std::sin(nu * t) / nu;
+    } else if (beta2 > 0.0) {
+      const double beta = std::sqrt(beta2);
+      if (beta * t < 20.0) {
+        ch = std::cosh(beta * t);
+        sh = std::sinh(beta * t) / beta;
+      } else {  // e^{μt} cosh βt as (e^{(μ+β)t} + e^{(μ−β)t}) / 2, without overflow
+        const double up = std::exp((mu + beta) * t), down = std::exp((mu - beta) * t);
+        ch = 0.5 * (up + down);
+        sh = 0.5 * (up - down) / beta;
+        decay = 1.0;
+      }
+    }
+    const double e11 = decay * (ch + 0.5 * m.damping(i) * sh), e12 = decay * sh;
+    const double e21 = -decay * m.omega2(i) * sh, e22 = decay * (ch - 0.5 * m.damping(i) * sh);
+    f.a(i) = e11;
+    f.b(i) = e12 * m.scale(i);
+    f.c(i) = e21 / m.scale(i);
+    f.d(i) = e22;
+  }
+  return f;
+}
+
+// floquet_stepping.hpp's linear part in modal coordinates: a flight costs O(n) per column.
+struct ModalLinearPart {
+  const FloquetAnalysis::Modes& modes;
+  static constexpr bool kExactFreeRuns = true;
+  [[nodiscard]] Eigen::Index states() const { return 2 * modes.phi.cols(); }
+  [[nodiscard]] ModalFlight flight(double hs) const { return modal_flight(modes, hs); }
+  void apply(const ModalFlight& f, Eigen::MatrixXd& z) const {
+    const Eigen::Index n = modes.phi.cols();
+    const Eigen::MatrixXd q = z.topRows(n);
+    z.topRows(n) = f.a.matrix().asDiagonal() * q + f.b.matrix().asDiagonal() * z.bottomRows(n);
+    z.bottomRows(n) = (f.c.matrix().asDiagonal() * q + f.d.matrix().asDiagonal() * z.bottomRows(n)).eval();
+  }
+  [[nodiscard]] const Eigen::MatrixXd& u() const { return modes.u; }
+  [[nodiscard]] Eigen::MatrixXd rows(const Eigen::MatrixXd& z) const { return modes.b * z.topRows(modes.phi.cols()); }
+};
+
+// The undamped modes of a classical C, or nothing (C not classical, M not positive definite).
+std::shared_ptr<const FloquetAnalysis::Modes> modes_of(const MechanicalSystem& system,
+                                                       const std::vector<ContactPoint>& contacts) {
+  double c_m = 0.0, c_k = 0.0;
+  const bool rayleigh = detail::rayleigh_fit(system, c_m, c_k);
+  if (!rayleigh && !detail::classical_damping_probe(system)) return nullptr;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
+                                                                      Eigen::MatrixXd(system.mass));
+  if (eig.info() != Eigen::Success) return nullptr;
+  auto m = std::make_shared<FloquetAnalysis::Modes>();
+  m->phi = eig.eigenvectors();
+  const Eigen::Index n = m->phi.cols();
+  const double largest = n > 0 ? eig.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+  // Eigenvalues below 1e-12 of the largest are rigid-body modes to rounding.
+  m->omega2 = eig.eigenvalues().array().unaryExpr([&](double l) { return l > 1e-12 * largest ? l : 0.0; });
+  if (rayleigh) {
+    m->damping = c_m + c_k * eig.eigenvalues().array();
+  } else {
+    auto d = detail::modal_damping_of(system, m->phi);
+    if (!d) return nullptr;
+    m->damping = d->array();
+  }
+  const Eigen::ArrayXd omega = m->omega2.sqrt();
+  const double fallback = n > 0 && omega.maxCoeff() > 0.0 ? omega.maxCoeff() : 1.0;
+  m->scale = omega.unaryExpr([&](double w) { return w > 1e-6 * fallback ? w : fallback; });
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  m->b.resize(nc, n);
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    m->b.row(c) = contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)).transpose() * m->phi;
+  }
+  m->u = Eigen::MatrixXd::Zero(2 * n, nc);
+  m->u.bottomRows(n) = -(m->scale.inverse().matrix().asDiagonal() * m->b.transpose());
+  m->mass_phi = system.mass * m->phi;
+  return m;
+}
+
+}  // namespace
+
+FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<ContactPoint> contacts,
+                                 FloquetOptions options)
+    : system_(system), contacts_(std::move(contacts)), options_(options) {
+  system_.validate();
+  ContactPoint::validate(contacts_, system_.dofs());
+  detail::check_floquet_contacts(contacts_);
+  if (options_.path != FloquetPath::Balanced) modes_ = modes_of(system_, contacts_);
+  if (options_.path == FloquetPath::Modal && !modes_) {
+    throw std::invalid_argument("FloquetPath::Modal needs a damping matrix the undamped modes diagonalize (Rayleigh "
+                                "or classical: C M⁻¹ K = K M⁻¹ C) and M positive definite; use FloquetPath::Automatic "
+                                "(the balanced dense path for any C)");
+  }
+}
+
+FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const {
+  if (!modes_) return floquet_multipliers(system_, contacts_, contact_displacement, frequency_hz);
+  detail::check_floquet_input(contacts_, contact_displacement, frequency_hz);
+  const Eigen::Index p_count = contact_displacement.cols();
+  FloquetResult out;
+  out.steps = static_cast<int>(p_count);
+  const ModalLinearPart linear{*modes_};
+  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts_, contact_displacement, frequency_hz);
+  Eigen::MatrixXd phi_half;
+  if (p_count % 2 == 0 && p_count >= 16) {
+    phi_half = detail::stepped_monodromy(linear, contacts_, detail::even_samples(contact_displacement), frequency_hz);
+  }
+  detail::analyse_monodromy(phi, phi_half, out);
+  if (options_.monodromy) {
+    // Φ = T Φ_x T⁻¹ with T = diag(Φ, Φ S) and T⁻¹ = diag(Φᵀ M, S⁻¹ Φᵀ M).
+    const Eigen::Index n = modes_->phi.cols();
+    Eigen::MatrixXd left(2 * n, 2 * n), right(2 * n, 2 * n);
+    left.topRows(n) = modes_->phi * phi.topRows(n);
+    left.bottomRows(n) = modes_->phi * (modes_->scale.matrix().asDiagonal() * phi.bottomRows(n));
+    right.leftCols(n) = left.leftCols(n) * modes_->mass_phi.transpose();
+    right.rightCols(n) = left.rightCols(n) * (modes_->scale.inverse().matrix().asDiagonal() * modes_->mass_phi.transpose());
+    out.monodromy = std::move(right);
+  }
+  return out;
+}
+
+bool FloquetAnalysis::modal() const noexcept { return modes_ != nullptr; }
+
+}  // namespace wbm::solvers

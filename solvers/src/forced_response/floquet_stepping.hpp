@@ -1,0 +1,189 @@
+#pragma once
+// Private to wbm_solvers: the monodromy stepping of floquet.hpp (trapezoidal rule for the contact
+// stiffness, the linear part exact, a switch split at its interpolated crossing, runs of equal
+// steps by binary powers), written once for any representation of the linear part, and the
+// multipliers' analysis shared by the two representations:
+// - floquet.cpp: the balanced physical state (δu, δu̇/σ), e^{A₀h} by Eigen's Padé exponential of
+//   the dense 2n × 2n matrix (any damping matrix);
+// - floquet_modal.cpp: the undamped modes' coordinates (q, q̇/s) of a classical damping matrix,
+//   where e^{A₀h} is one 2 × 2 block per mode in closed form, set up once per branch.
+// Both are similar to the physical state, so they give the same multipliers.
+
+#include <algorithm>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/mechanical_system.hpp>
+
+namespace wbm::solvers::detail {
+
+/// Multipliers by decreasing modulus, spectral radius and error estimate (FloquetResult's
+/// fields other than `monodromy` and `steps`) of a monodromy matrix `phi` in any coordinates
+/// similar to the physical state, with `phi_half` that of the same orbit on the P/2 even samples
+/// (empty: no estimate, every error inf). floquet.cpp.
+void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_half, FloquetResult& out);
+
+/// Validation shared by both paths: friction and rigid stops refused, P ≥ 8, one row per contact,
+/// finite samples, f > 0 (std::invalid_argument, the messages of floquet_multipliers).
+void check_floquet_input(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
+                         double frequency_hz);
+void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
+
+/// The P/2 even samples of contact_displacement (n_c × P/2).
+[[nodiscard]] inline Eigen::MatrixXd even_samples(const Eigen::MatrixXd& contact_displacement) {
+  Eigen::MatrixXd half(contact_displacement.rows(), contact_displacement.cols() / 2);
+  for (Eigen::Index q = 0; q < half.cols(); ++q) half.col(q) = contact_displacement.col(2 * q);
+  return half;
+}
+
+/// Φ = Y(T) in the coordinates of `linear`, by the stepping of floquet.hpp on the P =
+/// contact_displacement.cols() samples. LinearPart provides:
+///   Eigen::Index states() const;                              2n
+///   Flight flight(double hs) const;                           e^{A₀ hs}, hs [s]
+///   void apply(const Flight&, Eigen::MatrixXd& z) const;      z ← e^{A₀ hs} z
+///   Eigen::MatrixXd rows(const Eigen::MatrixXd& z) const;     e_cᵀ z (n_c × cols): contact displacements
+///   const Eigen::MatrixXd& u() const;                         b_c (2n × n_c): velocity kick per unit force
+///   static constexpr bool kExactFreeRuns;                     a contact-free run of L steps is flight(L h)
+/// e_cᵀ b_d = 0 (the force changes velocities only) is what makes the trapezoidal rule a kick of
+/// (h/2)(k_p + k_{p+1})-weighted forces between exact flights.
+template <class LinearPart>
+Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<ContactPoint>& contacts,
+                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+  using Flight = decltype(linear.flight(1.0));
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  const Eigen::Index p_count = contact_displacement.cols();
+  const Eigen::Index states = linear.states();
+  const Eigen::MatrixXd& u = linear.u();
+  const double h = 1.0 / (frequency_hz * static_cast<double>(p_count));
+  const Flight step = linear.flight(h);
+  auto stiffness = [&](Eigen::Index p) {  // k_c(t_p), periodic in p
+    Eigen::VectorXd k(nc);
+    const Eigen::Index q = p % p_count;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      k(c) = contacts[static_cast<size_t>(c)].law->stiffness(contact_displacement(c, q));
+    }
+    return k;
+  };
+  // e_cᵀ b_d (n_c × n_c) for the Woodbury solve (zero in exact arithmetic; kept as computed).
+  const Eigen::MatrixXd eu = linear.rows(u);
+
+  Eigen::MatrixXd y = Eigen::MatrixXd::Identity(states, states);
+  // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end), applied to z:
+  //   (I − (hs/2) K_b) Z ← e^{A₀ hs} (I + (hs/2) K_a) Z, the inverse by Woodbury.
+  auto trapezoid_on = [&](Eigen::MatrixXd& z, const Flight& exp_step, double hs, const Eigen::VectorXd& ka,
+                          const Eigen::VectorXd& kb) {
+    if (!ka.isZero(0.0)) z += u * ((0.5 * hs) * ka.asDiagonal() * linear.rows(z));
+    linear.apply(exp_step, z);
+    if (!kb.isZero(0.0)) {
+      const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
+      const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
+      z += u * small.partialPivLu().solve(d * linear.rows(z));
+    }
+  };
+  // Runs of whole steps over which no contact crosses its gap and every contact's stiffness is
+  // the same at both ends of each step: each step is one matrix T_k, e^{A₀h} without contact
+  // stiffness, the trapezoidal step at k otherwise (a linear penalty stop keeps k over a whole
+  // contact phase). A run of L steps is T_k^L by binary powers T_k^{2^j}, kept per k (at most
+  // kMaxRuns of them): O(log L) products instead of L; without contact stiffness and an exact
+  // flight, e^{A₀Lh} itself.
+  struct RunPowers {
+    Eigen::VectorXd k;
+    std::vector<Eigen::MatrixXd> powers;  // T_k^{2^j}
+  };
+  constexpr size_t kMaxRuns = 8;
+  std::vector<RunPowers> runs;
+  Eigen::VectorXd run_k = Eigen::VectorXd::Zero(nc);
+  Eigen::Index run_length = 0;
+  auto advance_run = [&] {
+    if (run_length == 0) return;
+    if (run_k.isZero(0.0) && (LinearPart::kExactFreeRuns || run_length == 1)) {
+      linear.apply(run_length == 1 ? step : linear.flight(h * static_cast<double>(run_length)), y);
+      run_length = 0;
+      return;
+    }
+    if (run_length == 1) {
+      trapezoid_on(y, step, h, run_k, run_k);  // one step: no power to form
+      run_length = 0;
+      return;
+    }
+    auto it = std::find_if(runs.begin(), runs.end(), [&](const RunPowers& r) { return r.k == run_k; });
+    if (it == runs.end()) {
+      if (runs.size() == kMaxRuns) runs.clear();
+      Eigen::MatrixXd t = Eigen::MatrixXd::Identity(states, states);
+      trapezoid_on(t, step, h, run_k, run_k);  // e^{A₀h} alone without contact stiffness
+      runs.push_back({run_k, {std::move(t)}});
+      it = runs.end() - 1;
+    }
+    std::vector<Eigen::MatrixXd>& powers = it->powers;
+    for (size_t j = 0; run_length > 0; ++j, run_length >>= 1) {
+      if (j == powers.size()) powers.push_back(powers.back() * powers.back());
+      if (run_length & 1) y = powers[j] * y;
+    }
+  };
+  // Fractions θ ∈ (0, 1) of step p where a contact displacement, interpolated linearly between
+  // the samples, crosses its gap (where the law's stiffness jumps), sorted.
+  auto crossings = [&](Eigen::Index p) {
+    std::vector<double> theta;
+    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const double g = contacts[static_cast<size_t>(c)].law->gap();
+      const double d0 = contact_displacement(c, q0) - g, d1 = contact_displacement(c, q1) - g;
+      if ((d0 > 0.0) != (d1 > 0.0) && d0 != d1) {
+        const double t = d0 / (d0 - d1);
+        if (t > 0.0 && t < 1.0) theta.push_back(t);
+      }
+    }
+    std::sort(theta.begin(), theta.end());
+    return theta;
+  };
+  // Stiffnesses at fraction θ of step p, from the linear interpolant of the samples.
+  auto stiffness_at = [&](Eigen::Index p, double theta) {
+    Eigen::VectorXd k(nc);
+    const Eigen::Index q0 = p % p_count, q1 = (p + 1) % p_count;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const double uc = (1.0 - theta) * contact_displacement(c, q0) + theta * contact_displacement(c, q1);
+      k(c) = contacts[static_cast<size_t>(c)].law->stiffness(uc);
+    }
+    return k;
+  };
+  Eigen::VectorXd k_now = stiffness(0);
+  for (Eigen::Index p = 0; p < p_count; ++p) {
+    const Eigen::VectorXd k_next = stiffness(p + 1);
+    const std::vector<double> theta = crossings(p);
+    if (!theta.empty()) {
+      // A contact opens or closes inside the step: the jump of its stiffness is placed at the
+      // interpolated crossing, each piece integrated with one-sided stiffnesses (evaluated a
+      // relative 1e-9 inside the piece). Without this split the switch sits at a sample, which
+      // is first order in h, with an error growing with the stop's stiffness (issue #19).
+      advance_run();
+      std::vector<double> edges = {0.0};
+      edges.insert(edges.end(), theta.begin(), theta.end());
+      edges.push_back(1.0);
+      for (size_t i = 0; i + 1 < edges.size(); ++i) {
+        const double a = edges[i], b = edges[i + 1], inside = 1e-9 * (b - a);
+        if (!(b > a)) continue;
+        const double hs = (b - a) * h;
+        trapezoid_on(y, linear.flight(hs), hs, i == 0 ? k_now : stiffness_at(p, a + inside),
+                     i + 2 == edges.size() ? k_next : stiffness_at(p, b - inside));
+      }
+      k_now = k_next;
+      continue;
+    }
+    if (k_now == k_next) {
+      if (run_length > 0 && k_now != run_k) advance_run();
+      run_k = k_now;
+      ++run_length;
+      continue;
+    }
+    advance_run();
+    trapezoid_on(y, step, h, k_now, k_next);
+    k_now = k_next;
+  }
+  advance_run();
+  return y;
+}
+
+}  // namespace wbm::solvers::detail

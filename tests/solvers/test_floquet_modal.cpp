@@ -1,0 +1,218 @@
+// FloquetAnalysis's modal path (issue #39, item 2): the monodromy stepping in the undamped modes'
+// coordinates, set up once per branch. Truths: each mode's 2 × 2 transition matrix in closed form
+// from its characteristic roots (long double, another formula than the path's cos/cosh one), and
+// floquet_multipliers, the balanced dense path that never uses modes, as the slow reference
+// (the same scheme in other coordinates: the same multipliers and Φ up to rounding).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include <wbm/contact/penalty.hpp>
+#include <wbm/contact/signorini.hpp>
+#include <wbm/fem/rod.hpp>
+#include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/mechanical_system.hpp>
+
+#include "shipped_scenes.hpp"
+
+namespace {
+
+using namespace wbm;
+using solvers::FloquetAnalysis;
+using solvers::FloquetPath;
+
+// The unit rod of NLvib (E = ρ = A = L = 1, clamped at x = 0) with 1 % modal damping.
+solvers::MechanicalSystem nlvib_rod(int elements) {
+  fem::RodParameters p;
+  p.young_modulus = p.density = p.area = p.length = 1.0;
+  p.elements = elements;
+  auto s = solvers::beta_damped(fem::Rod(p), 0.0);
+  s.damping = solvers::modal_damping(s, 0.01);
+  return s;
+}
+
+// A prescribed contact displacement u_c(τ_p) = g + a cos 2πτ_p + b sin 6πτ_p (n_c = rows): any
+// periodic samples define the linearized system, so no solve is needed to compare two paths.
+Eigen::MatrixXd orbit(int contacts, int samples, double gap, double amplitude) {
+  Eigen::MatrixXd u(contacts, samples);
+  for (int c = 0; c < contacts; ++c) {
+    for (int p = 0; p < samples; ++p) {
+      const double tau = static_cast<double>(p) / samples;
+      u(c, p) = gap + amplitude * (std::cos(2.0 * M_PI * (tau + 0.1 * c)) + 0.3 * std::sin(6.0 * M_PI * tau));
+    }
+  }
+  return u;
+}
+
+// Both paths on one orbit: the same multipliers (sorted by modulus; matched to the nearest, as a
+// complex pair's order is arbitrary), error estimates and monodromy matrix.
+void expect_paths_agree(const solvers::MechanicalSystem& system, const std::vector<solvers::ContactPoint>& contacts,
+                        const Eigen::MatrixXd& u, double hz, double tolerance) {
+  const FloquetAnalysis modal(system, contacts, {.path = FloquetPath::Modal});
+  ASSERT_TRUE(modal.modal());
+  const auto fast = modal(u, hz);
+  const auto slow = solvers::floquet_multipliers(system, contacts, u, hz);
+  ASSERT_EQ(fast.multipliers.size(), slow.multipliers.size());
+  EXPECT_NEAR(fast.max_modulus, slow.max_modulus, tolerance * std::max(1.0, slow.max_modulus));
+  for (Eigen::Index i = 0; i < slow.multipliers.size(); ++i) {
+    double nearest = 1e300;
+    for (Eigen::Index j = 0; j < fast.multipliers.size(); ++j) {
+      nearest = std::min(nearest, std::abs(fast.multipliers(j) - slow.multipliers(i)));
+    }
+    EXPECT_LT(nearest, tolerance * std::max(1.0, std::abs(slow.multipliers(i)))) << "multiplier " << slow.multipliers(i);
+  }
+  // The estimates are first-order perturbations of an O(h²) difference: equal to a few digits.
+  EXPECT_NEAR(fast.multiplier_errors.maxCoeff(), slow.multiplier_errors.maxCoeff(),
+              1e-3 * slow.multiplier_errors.maxCoeff() + tolerance);
+  EXPECT_LT((fast.monodromy - slow.monodromy).norm(), tolerance * slow.monodromy.norm());
+  EXPECT_EQ(fast.steps, slow.steps);
+}
+
+// Without contact Φ = e^{A₀T}: each mode's transition matrix from its roots s_{1,2} = −ζω ± ω√(ζ² − 1),
+// overdamped modes included (C = βK on the JL14 rod: ζ > 1 above 40 kHz, where the path takes
+// cosh and its overflow-free branch), Φ = S blockdiag(Φ_i) S⁻¹. The balanced path reaches 1e-9
+// here (test_continuation.cpp); one exact flight per period is ~1e-13.
+TEST(FloquetModal, LinearRodMonodromyIsTheModalTransitionMatrixToRounding) {
+  const auto s = models::load_scene("jl14_case2");
+  const auto sys = s.system();
+  const Eigen::Index n = sys.dofs();
+  const double f = 1275.0;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(sys.stiffness),
+                                                                      Eigen::MatrixXd(sys.mass));
+  const Eigen::MatrixXd psi = eig.eigenvectors(), psi_inv = psi.transpose() * Eigen::MatrixXd(sys.mass);
+  std::array<Eigen::VectorXd, 4> modal;  // entries (1,1), (1,2), (2,1), (2,2) per mode
+  for (auto& v : modal) v.resize(n);
+  using C = std::complex<long double>;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const long double w = std::sqrt(static_cast<long double>(eig.eigenvalues()(i))), zeta = 0.5L * s.damping.beta * w;
+    const C root = std::sqrt(C(zeta * zeta - 1.0L)), s1 = -zeta * w + w * root, s2 = -zeta * w - w * root;
+    const C e1 = std::exp(s1 / static_cast<long double>(f)), e2 = std::exp(s2 / static_cast<long double>(f)), d = s1 - s2;
+    modal[0](i) = static_cast<double>(std::real((s1 * e2 - s2 * e1) / d));
+    modal[1](i) = static_cast<double>(std::real((e1 - e2) / d));
+    modal[2](i) = static_cast<double>(std::real(s1 * s2 * (e2 - e1) / d));
+    modal[3](i) = static_cast<double>(std::real((s1 * e1 - s2 * e2) / d));
+  }
+  const FloquetAnalysis floquet(sys, {});
+  ASSERT_TRUE(floquet.modal());  // C = βK: Rayleigh
+  for (const int steps : {64, 8192}) {
+    const auto result = floquet(Eigen::MatrixXd(0, steps), f);
+    for (int b = 0; b < 4; ++b) {
+      const Eigen::MatrixXd expected = psi * modal[static_cast<size_t>(b)].asDiagonal() * psi_inv;
+      const Eigen::MatrixXd got = result.monodromy.block((b / 2) * n, (b % 2) * n, n, n);
+      EXPECT_LT((got - expected).norm(), 1e-12 * expected.norm()) << "P = " << steps << ", block " << b;
+    }
+    EXPECT_TRUE(result.stable());
+  }
+}
+
+// The JL14 rod against its exponential stop (Case 2's law), an orbit crossing the gap twice per
+// period: contact runs, crossing splits and the overdamped modes together.
+TEST(FloquetModal, RodWithAnExponentialStopAgreesWithTheBalancedPath) {
+  const auto s = models::load_scene("jl14_case2");
+  const auto contacts = s.contact_points();
+  const double gap = contacts.front().law->gap();
+  for (const int samples : {64, 256}) {
+    expect_paths_agree(s.system(), contacts, orbit(1, samples, gap, 0.5 * gap), 1300.0, 1e-8);
+  }
+}
+
+// NLvib's rod with 1 % modal damping (classical, not Rayleigh: each mode's (Φᵀ C Φ)_ii) and its
+// linear stop of 10 EA/L, and two stops on the same rod (n_c = 2, different phases).
+TEST(FloquetModal, ModallyDampedRodWithLinearStopsAgreesWithTheBalancedPath) {
+  const auto rod = nlvib_rod(20);
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{10.0, 0.1});
+  expect_paths_agree(rod, {{19, law}}, orbit(1, 256, 0.1, 0.15), 0.3, 1e-9);
+  expect_paths_agree(rod, {{19, law}, {9, law}}, orbit(2, 128, 0.1, 0.15), 0.3, 1e-9);
+}
+
+// A free-free pair of masses with a stop between them (a relative contact): the rigid-body mode
+// (ω = 0, flight [[1, t], [0, 1]]) gives a double multiplier 1 with one eigenvector (a Jordan
+// block: translation and drift). Its computed value moves by √eps under rounding in Φ: 9e-8 on
+// the balanced path; the modal path keeps the mode uncoupled and exact. The other multipliers and Φ
+// agree.
+TEST(FloquetModal, FreeFreeBodiesWithARelativeStopKeepTheRigidBodyMultiplierExact) {
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix2d m{{2.0, 0.0}, {0.0, 1.0}}, k{{1e4, -1e4}, {-1e4, 1e4}};
+  s.mass = m.sparseView();
+  s.stiffness = k.sparseView();
+  s.damping = (1e-3 * k).sparseView();
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{5e4, 1e-3});
+  const std::vector<solvers::ContactPoint> between = {{1, law, 0}};
+  const Eigen::MatrixXd u = orbit(1, 128, 1e-3, 2e-3);
+  const FloquetAnalysis modal(s, between);
+  ASSERT_TRUE(modal.modal());
+  const auto fast = modal(u, 20.0);
+  const auto slow = solvers::floquet_multipliers(s, between, u, 20.0);
+  EXPECT_LT((fast.monodromy - slow.monodromy).norm(), 1e-9 * slow.monodromy.norm());
+  int at_one = 0;
+  for (Eigen::Index i = 0; i < fast.multipliers.size(); ++i) {
+    if (std::abs(fast.multipliers(i) - 1.0) < 1e-12) {
+      ++at_one;
+      continue;
+    }
+    double nearest = 1e300;
+    for (Eigen::Index j = 0; j < slow.multipliers.size(); ++j) {
+      nearest = std::min(nearest, std::abs(slow.multipliers(j) - fast.multipliers(i)));
+    }
+    EXPECT_LT(nearest, 1e-9) << fast.multipliers(i);
+  }
+  EXPECT_EQ(at_one, 2);
+  for (Eigen::Index i = 0; i < slow.multipliers.size(); ++i) {
+    if (std::abs(slow.multipliers(i) - 1.0) < 1e-3) {
+      EXPECT_LT(std::abs(slow.multipliers(i) - 1.0), 1e-6);
+    }
+  }
+}
+
+// A damper on one DOF of a chain is not classical (C M⁻¹ K ≠ K M⁻¹ C): Automatic takes the
+// balanced path (the same bits as floquet_multipliers), Modal is refused with the way out.
+TEST(FloquetModal, NonClassicalDampingTakesTheBalancedPathOrIsRefused) {
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d k{{2e4, -1e4, 0.0}, {-1e4, 2e4, -1e4}, {0.0, -1e4, 1e4}};
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  c(2, 2) = 3.0;
+  s.mass = m.sparseView();
+  s.stiffness = k.sparseView();
+  s.damping = c.sparseView();
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e5, 1e-3});
+  const std::vector<solvers::ContactPoint> stop = {{2, law}};
+  const FloquetAnalysis automatic(s, stop);
+  EXPECT_FALSE(automatic.modal());
+  const Eigen::MatrixXd u = orbit(1, 64, 1e-3, 2e-3);
+  const auto a = automatic(u, 15.0), b = solvers::floquet_multipliers(s, stop, u, 15.0);
+  EXPECT_EQ(a.multipliers, b.multipliers);
+  EXPECT_EQ(a.monodromy, b.monodromy);
+  try {
+    (void)FloquetAnalysis(s, stop, {.path = FloquetPath::Modal});
+    ADD_FAILURE() << "a non-classical C was accepted on the modal path";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("FloquetPath::Automatic"), std::string::npos) << e.what();
+  }
+  // With C = 2e-4 K the same chain is Rayleigh, hence modal.
+  s.damping = (2e-4 * k).sparseView();
+  EXPECT_TRUE(FloquetAnalysis(s, stop).modal());
+}
+
+// The same refusals as floquet_multipliers, at construction or per point.
+TEST(FloquetModal, RefusesWhatFloquetMultipliersRefuses) {
+  const auto rod = nlvib_rod(4);
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{10.0, 0.1});
+  const FloquetAnalysis floquet(rod, {{3, law}});
+  ASSERT_TRUE(floquet.modal());
+  EXPECT_THROW((void)floquet(orbit(1, 4, 0.1, 0.1), 0.3), std::invalid_argument);   // P < 8
+  EXPECT_THROW((void)floquet(orbit(2, 64, 0.1, 0.1), 0.3), std::invalid_argument);  // a row per contact
+  EXPECT_THROW((void)floquet(orbit(1, 64, 0.1, 0.1), 0.0), std::invalid_argument);  // f > 0
+  Eigen::MatrixXd bad = orbit(1, 64, 0.1, 0.1);
+  bad(0, 3) = std::nan("");
+  EXPECT_THROW((void)floquet(bad, 0.3), std::invalid_argument);
+  EXPECT_THROW((void)FloquetAnalysis(rod, {{3, std::make_shared<contact::RigidStop>(0.1)}}), std::invalid_argument);
+}
+
+}  // namespace
