@@ -60,8 +60,15 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
   const Eigen::MatrixXd uc =
       (wbm::solvers::TimeBasis::fourier(64).values(tau, 0) * sol.coefficients.row(s.forcing->dof).transpose()).transpose();
+  const bool modal = state.range(1) != 0;
+  state.SetLabel(modal ? "modal path, set up once" : "balanced path (floquet_multipliers)");
+  const wbm::solvers::FloquetAnalysis floquet(s.system(), s.contact_points(), {.monodromy = false});
   for (auto _ : state) {
-    benchmark::DoNotOptimize(wbm::solvers::floquet_multipliers(s.system(), s.contact_points(), uc, 1300.0));
+    if (modal) {
+      benchmark::DoNotOptimize(floquet(uc, 1300.0));
+    } else {
+      benchmark::DoNotOptimize(wbm::solvers::floquet_multipliers(s.system(), s.contact_points(), uc, 1300.0));
+    }
   }
 }
 
@@ -80,7 +87,8 @@ size_t trace_scene(benchmark::State& state, const wbm::scene::Scene& scene,
 
 // The branch's cost against the structure's size (issue #39, item 5): the rod of
 // examples/scenes/rod_continuation.toml (clamped-free, one exponential tip stop, 1150–1450 Hz)
-// with range(0) elements, harmonic balance with H = 15, no stability. With one contact DOF a
+// with range(0) elements, harmonic balance with H = 15, without or with (range(1)) the stability of
+// every point (FloquetAnalysis: the modal path, C = βK). With one contact DOF a
 // point costs O(n): the linear response and the tangent read and write the forced and contact
 // DOFs only (gathered_solve); the modal basis (one dense eigenproblem, O(n³)) is set up once.
 void BM_Continuation_RodElements(benchmark::State& state) {
@@ -90,13 +98,14 @@ void BM_Continuation_RodElements(benchmark::State& state) {
       std::to_string(elements) +
       "\n[damping]\nbeta = 5e-6\n[forcing]\namplitude = 250e3\nfrequency_hz = [1150.0, 1450.0]\n"
       "[contact]\nlaw = \"exponential\"\ncoefficient = 1e8\nexponent = 20.0\ngap = 14.5e-3\n"
-      "[basis]\nharmonics = 15\n[analysis]\ntype = \"continuation\"\nstability = false\n";
+      "[basis]\nharmonics = 15\n[analysis]\ntype = \"continuation\"\n";
   const auto scene = wbm::scene::parse_scene(text, "rod.toml");
   const auto& range = *scene.forcing->range;
   wbm::solvers::ResponseCurveOptions o;
   o.parameter_min = range.from_hz;
   o.parameter_max = range.to_hz;
-  o.stability = false;
+  o.stability = state.range(1) != 0;
+  state.SetLabel(o.stability ? "with Floquet stability" : "without stability");
   o.max_parameter_step = 2.0;  // as the example scene's max_frequency_step_hz
   size_t points = 0;
   for (auto _ : state) points = trace_scene(state, scene, o);
@@ -139,7 +148,10 @@ BENCHMARK(BM_Continuation_Fig12Branch)
     ->ArgsProduct({{64}, {0, 1}, {0, 1}})
     ->ArgsProduct({{32}, {1}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Floquet_OnePoint)->RangeMultiplier(2)->Range(256, 2048)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Continuation_RodElements)->RangeMultiplier(4)->Range(20, 1280)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Floquet_OnePoint)->ArgsProduct({{256, 512, 1024, 2048}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Continuation_RodElements)
+    ->ArgsProduct({{20, 80, 320, 1280}, {0}})
+    ->ArgsProduct({{20, 80, 320}, {1}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_NLvibRod)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

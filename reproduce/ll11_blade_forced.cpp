@@ -14,9 +14,10 @@
 // displacement of the first tip node to touch, in gaps. The same 24 stops rigid (Signorini at the
 // 2H + 1 impulse instants, Fourier:Fourier at the file's rigid_harmonics), continued piece by
 // piece (solvers::SignoriniResponseFamily, issue #38): the corner continuation stalled on this
-// blade at 0.9806 f1 after 9 points (issue #15). Not computed here: stability (a monodromy
-// matrix of the 224-state blade costs about a second per point; with rigid stops it needs
-// saltation matrices).
+// blade at 0.9806 f1 after 9 points (issue #15). Not computed here: stability. The stops vibrate
+// at h ω_c ≈ 29 per step of P = 512 against their mass, so the monodromy needs P ≈ 16 384 to
+// 32 768 steps (floquet_stepping.hpp; FloquetAnalysis's Arnoldi, about 0.2 s per point on the
+// --quick blade, measured at stop 70); with rigid stops it needs saltation matrices.
 // Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
 // About 3 min on one core, about 60 % of it the two backbones (KKT continuation; stop 62: 229 s
 // before KktSolver took the penalty backbone). --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.

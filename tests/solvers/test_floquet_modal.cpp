@@ -216,3 +216,134 @@ TEST(FloquetModal, RefusesWhatFloquetMultipliersRefuses) {
 }
 
 }  // namespace
+
+namespace {
+
+// Above FloquetOptions::dense_states the modal path computes the multipliers of largest modulus
+// by Arnoldi on products Φ v: against every multiplier of the formed Φ (the dense modal path),
+// on NLvib's rod with two stops. The ones it returns are the largest, down to one below 0.9, and
+// each agrees with the dense one to Arnoldi's tolerance; the error estimates are Richardson's too.
+TEST(FloquetModal, ArnoldiFindsTheDominantMultipliersOfTheFormedMonodromy) {
+  const auto rod = nlvib_rod(40);  // 80 states
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{10.0, 0.1});
+  const std::vector<solvers::ContactPoint> stops = {{39, law}, {19, law}};
+  const Eigen::MatrixXd u = orbit(2, 256, 0.1, 0.15);
+  for (const double hz : {0.3, 3.0}) {  // at 3 Hz twenty multipliers lie above 0.9: nev doubles
+    const auto dense = FloquetAnalysis(rod, stops, {.dense_states = 1000})(u, hz);
+    const auto arnoldi = FloquetAnalysis(rod, stops, {.monodromy = false, .dense_states = 0})(u, hz);
+    ASSERT_FALSE(dense.dominant_only);
+    ASSERT_TRUE(arnoldi.dominant_only);
+    EXPECT_EQ(arnoldi.monodromy.size(), 0);
+    const Eigen::Index found = arnoldi.multipliers.size();
+    ASSERT_GE(found, 8);
+    if (hz > 1.0) {
+      EXPECT_GT(found, 8) << "nev did not double";
+    }
+    ASSERT_LT(found, dense.multipliers.size());
+    EXPECT_LT(std::abs(arnoldi.multipliers(found - 1)), 0.9);
+    // Every dense multiplier above the smallest found is found, in the same order of modulus.
+    for (Eigen::Index i = 0; i < found; ++i) {
+      EXPECT_NEAR(std::abs(arnoldi.multipliers(i)), std::abs(dense.multipliers(i)), 1e-9) << hz << " Hz, " << i;
+      double nearest = 1e300;
+      for (Eigen::Index j = 0; j < found; ++j) nearest = std::min(nearest, std::abs(arnoldi.multipliers(j) - dense.multipliers(i)));
+      EXPECT_LT(nearest, 1e-9) << hz << " Hz, " << dense.multipliers(i);
+    }
+    EXPECT_GE(std::abs(arnoldi.multipliers(found - 1)), std::abs(dense.multipliers(found)) - 1e-9);
+    EXPECT_NEAR(arnoldi.max_modulus, dense.max_modulus, 1e-9);
+    EXPECT_EQ(arnoldi.stable(), dense.stable());
+    // Richardson per multiplier against the eigenvector-mapped estimate: the same size (both
+    // estimate |μ_P − μ|, first-order), within a factor of 3 for the largest.
+    EXPECT_GT(arnoldi.multiplier_errors(0), dense.multiplier_errors(0) / 3.0);
+    EXPECT_LT(arnoldi.multiplier_errors(0), dense.multiplier_errors(0) * 3.0);
+  }
+}
+
+// When more than 2n − 2 multipliers lie above 0.9 (an undamped structure) Arnoldi cannot stop
+// below it: the path forms Φ instead, and says so (dominant_only false, every multiplier).
+TEST(FloquetModal, AnUndampedStructureFallsBackToTheFormedMonodromy) {
+  auto rod = nlvib_rod(10);
+  rod.damping = solvers::modal_damping(rod, 0.0);
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{10.0, 0.1});
+  const auto result = FloquetAnalysis(rod, {{9, law}}, {.dense_states = 0})(orbit(1, 128, 0.1, 0.15), 0.3);
+  EXPECT_FALSE(result.dominant_only);
+  EXPECT_EQ(result.multipliers.size(), 20);
+  EXPECT_EQ(result.monodromy.rows(), 20);
+}
+
+}  // namespace
+
+namespace {
+
+// A stop 10⁴ times stiffer than its spring (m = 1 kg, k = 4e4 N/m, c = 5 N·s/m, k_c = 4e8 N/m at
+// g0 = 2 mm; ω_c = 2e4 rad/s) on the orbit u = g0 + 1 mm cos 2πτ at 40 Hz, given at P = 64 samples:
+// h ω_c = 7.8, where the kick scheme is unstable. The samples are refined (by 16, to h ω_c = 0.49)
+// and the spectral radius agrees with the exact piecewise-linear monodromy
+//   Φ = e^{A_c T/4} e^{A_f T/2} e^{A_c T/4}  (in contact for |τ| < 1/4, by the orbit's symmetry),
+// within twice its own error estimate, on both paths.
+TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
+  const double m = 1.0, k = 4e4, c = 5.0, kc = 4e8, g0 = 2e-3, hz = 40.0;
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix<double, 1, 1> one{1.0};
+  s.mass = (m * one).sparseView();
+  s.stiffness = (k * one).sparseView();
+  s.damping = (c * one).sparseView();
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kc, g0});
+  const std::vector<solvers::ContactPoint> stop = {{0, law}};
+  auto samples = [&](int count) {
+    Eigen::MatrixXd u(1, count);
+    for (int p = 0; p < count; ++p) u(0, p) = g0 + 1e-3 * std::cos(2.0 * M_PI * p / count);
+    return u;
+  };
+  auto a_matrix = [&](double stiffness) {
+    Eigen::Matrix2d a;
+    a << 0.0, 1.0, -stiffness / m, -c / m;
+    return a;
+  };
+  const double period = 1.0 / hz;
+  const Eigen::Matrix2d contact_quarter = (a_matrix(k + kc) * (period / 4.0)).exp();
+  const Eigen::Matrix2d exact = contact_quarter * (a_matrix(k) * (period / 2.0)).exp() * contact_quarter;
+  const double radius = Eigen::EigenSolver<Eigen::Matrix2d>(exact, false).eigenvalues().cwiseAbs().maxCoeff();
+  const FloquetAnalysis modal(s, stop);
+  ASSERT_TRUE(modal.modal());
+  // 125 rad of the stop's vibration per contact phase: at h ω_c = 0.49 the phase error is large,
+  // and the estimate says so; at 4 times the steps it is below 2 %.
+  for (const int count : {64, 4096}) {
+    const Eigen::MatrixXd u = samples(count);
+    for (const auto& result : {modal(u, hz), solvers::floquet_multipliers(s, stop, u, hz)}) {
+      EXPECT_EQ(result.steps, std::max(count, 1024));
+      EXPECT_LE(std::abs(result.max_modulus - radius), 2.0 * result.multiplier_errors.maxCoeff())
+          << result.max_modulus << " against the exact " << radius << " at P = " << count;
+      if (count == 4096) {
+        EXPECT_LT(std::abs(result.max_modulus - radius), 0.02 * radius) << result.max_modulus << " against " << radius;
+      }
+    }
+  }
+}
+
+// A stop that would need more than kMaxResolvedSteps steps (k_c = 4e14 N/m: h ω_c = 7.8e3 at
+// P = 64) is refused, with the stiffness named and the way out, rather than answered wrong.
+TEST(FloquetModal, AStopTooStiffToResolveIsRefusedWithTheWayOut) {
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix<double, 1, 1> one{1.0};
+  s.mass = one.sparseView();
+  s.stiffness = (4e4 * one).sparseView();
+  s.damping = (5.0 * one).sparseView();
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{4e14, 2e-3});
+  const Eigen::MatrixXd u = orbit(1, 64, 2e-3, 1e-3);
+  for (const bool modal : {true, false}) {
+    try {
+      if (modal) {
+        (void)FloquetAnalysis(s, {{0, law}})(u, 40.0);
+      } else {
+        (void)solvers::floquet_multipliers(s, {{0, law}}, u, 40.0);
+      }
+      ADD_FAILURE() << "an unresolved stop was answered";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("lower the penalty stiffness"), std::string::npos) << what;
+      EXPECT_NE(what.find("k = 4"), std::string::npos) << what;
+    }
+  }
+}
+
+}  // namespace

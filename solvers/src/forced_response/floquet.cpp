@@ -33,6 +33,7 @@ int count_outside(const FloquetResult& r, double tolerance) {
 struct Balanced {
   Eigen::MatrixXd a0;  // Ã₀, 2n × 2n
   Eigen::MatrixXd u;   // D b_c = (0, −M⁻¹ e_c / σ), 2n × n_c
+  Eigen::MatrixXd flexibility;  // E M⁻¹ Eᵀ, n_c × n_c [1/kg]
   double sigma = 1.0;
 };
 
@@ -53,6 +54,12 @@ Balanced balanced_system(const MechanicalSystem& system, const std::vector<Conta
   b.u = Eigen::MatrixXd::Zero(2 * n, nc);
   for (Eigen::Index c = 0; c < nc; ++c) {
     b.u.col(c).tail(n) = -mlu.solve(contacts[static_cast<size_t>(c)].direction(static_cast<int>(n))) / b.sigma;
+  }
+  b.flexibility.resize(nc, nc);
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    for (Eigen::Index d = 0; d < nc; ++d) {
+      b.flexibility(c, d) = -b.sigma * contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)).dot(b.u.col(d).tail(n));
+    }
   }
   return b;
 }
@@ -125,8 +132,52 @@ void check_floquet_input(const std::vector<ContactPoint>& contacts, const Eigen:
   }
 }
 
+Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
+                                 double frequency_hz, const Eigen::MatrixXd& flexibility) {
+  const Eigen::Index nc = contact_displacement.rows(), p_count = contact_displacement.cols();
+  double omega2 = 0.0, k_worst = 0.0;
+  Eigen::Index worst = -1;
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    double k = 0.0;
+    for (Eigen::Index p = 0; p < p_count; ++p) {
+      k = std::max(k, contacts[static_cast<size_t>(c)].law->stiffness(contact_displacement(c, p)));
+    }
+    const double w2 = k * flexibility.row(c).cwiseAbs().sum();
+    if (w2 > omega2) {
+      omega2 = w2;
+      worst = c;
+      k_worst = k;
+    }
+  }
+  const double phase = std::sqrt(omega2) / (frequency_hz * static_cast<double>(p_count));  // h ω_c
+  Eigen::Index s = 1;
+  while (phase / static_cast<double>(s) > kResolvedPhase && s * p_count <= kMaxResolvedSteps) s *= 2;
+  if (phase / static_cast<double>(s) > kResolvedPhase) {
+    const auto& c = contacts[static_cast<size_t>(worst)];
+    throw std::invalid_argument(
+        "floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " (" + c.law->describe() +
+        ") reaches a stiffness k = " + std::to_string(k_worst) + " N/m on this orbit; with its inverse mass e_c' M^-1 e_c = " +
+        std::to_string(flexibility(worst, worst)) + " 1/kg it vibrates at omega_c = " + std::to_string(std::sqrt(omega2)) +
+        " rad/s, and the monodromy's contact kicks resolve it (h omega_c <= " + std::to_string(kResolvedPhase) +
+        ") only with more than " + std::to_string(kMaxResolvedSteps) + " steps per period (h omega_c = " +
+        std::to_string(phase) + " at P = " + std::to_string(p_count) +
+        "): stability is not computed for a stop this stiff against its mass; lower the penalty stiffness or "
+        "leave stability off");
+  }
+  if (s == 1) return contact_displacement;
+  Eigen::MatrixXd fine(nc, s * p_count);
+  for (Eigen::Index p = 0; p < p_count; ++p) {
+    for (Eigen::Index j = 0; j < s; ++j) {
+      const double t = static_cast<double>(j) / static_cast<double>(s);
+      fine.col(p * s + j) = (1.0 - t) * contact_displacement.col(p) + t * contact_displacement.col((p + 1) % p_count);
+    }
+  }
+  return fine;
+}
+
 void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_half, FloquetResult& out) {
-  const Eigen::EigenSolver<Eigen::MatrixXd> eig(phi, true);
+  const bool estimate = phi_half.size() > 0;
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(phi, estimate);
   const Eigen::VectorXcd mu = eig.eigenvalues();
   std::vector<Eigen::Index> order(static_cast<size_t>(mu.size()));
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
@@ -135,21 +186,31 @@ void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_ha
   for (size_t i = 0; i < order.size(); ++i) out.multipliers(static_cast<Eigen::Index>(i)) = mu(order[i]);
   out.max_modulus = mu.size() > 0 ? std::abs(out.multipliers(0)) : 0.0;
   // Error estimate: Φ_P − Φ_{P/2} ≈ 3 (Φ_P − Φ) for a second-order scheme (Richardson), mapped to
-  // each multiplier by first-order perturbation, δμ_i = (V⁻¹ δΦ V)_ii (V: right eigenvectors,
-  // rows of V⁻¹: left ones). Near a collision of two multipliers V is ill-conditioned and the
-  // estimate grows, as the multipliers' sensitivity does. Comparing |μ| of P and P/2 would not
-  // do: a complex pair has |μ|² = det Φ, which is nearly the same for every P.
+  // each multiplier by first-order perturbation, δμ_i = w_iᵀ δΦ v_i (v_i, w_i right and left
+  // eigenvectors, w_iᵀ v_i = 1). Near a collision of two multipliers the eigenvectors are
+  // ill-conditioned and the estimate grows, as the multipliers' sensitivity does. Comparing |μ|
+  // of P and P/2 would not do: a complex pair has |μ|² = det Φ, nearly the same for every P.
+  // In real arithmetic, from the real pseudo-eigenvectors V (Φ V = V D, D block diagonal with
+  // 1 × 1 blocks μ and 2 × 2 blocks [[a, b], [−b, a]] for a ± ib) and E = V⁻¹ δΦ V: δμ = E_ii for
+  // a real μ, and for a pair (1, ±i) E (1, ±i)ᵀ / 2 = (E_ii + E_jj)/2 ± i (E_ij − E_ji)/2, j = i + 1
+  // (the complex eigenvectors v = x ± i y from V's columns (x, y), their left ones (1, ∓i) V⁻¹ / 2).
   out.multiplier_errors = Eigen::VectorXd::Constant(mu.size(), std::numeric_limits<double>::infinity());
-  if (phi_half.size() > 0 && mu.size() > 0) {
-    const Eigen::MatrixXcd delta = (phi - phi_half).cast<std::complex<double>>() / 3.0;
-    const Eigen::MatrixXcd v = eig.eigenvectors();
-    const Eigen::PartialPivLU<Eigen::MatrixXcd> vlu(v);
-    const double rcond = vlu.rcond();
-    if (rcond > 1e-14) {
-      const Eigen::MatrixXcd projected = vlu.solve(delta * v);
-      for (size_t i = 0; i < order.size(); ++i) {
-        out.multiplier_errors(static_cast<Eigen::Index>(i)) = std::abs(projected(order[i], order[i]));
+  if (estimate && mu.size() > 0) {
+    const Eigen::MatrixXd v = eig.pseudoEigenvectors();
+    const Eigen::MatrixXd d = eig.pseudoEigenvalueMatrix();
+    const Eigen::PartialPivLU<Eigen::MatrixXd> vlu(v);
+    if (vlu.rcond() > 1e-14) {
+      const Eigen::MatrixXd e = vlu.solve((phi - phi_half) * v) / 3.0;
+      Eigen::VectorXd error(mu.size());
+      for (Eigen::Index i = 0; i < mu.size(); ++i) {
+        if (i + 1 < mu.size() && d(i + 1, i) != 0.0) {  // a 2 × 2 block: the pair (i, i + 1)
+          error(i) = error(i + 1) = std::hypot(0.5 * (e(i, i) + e(i + 1, i + 1)), 0.5 * (e(i, i + 1) - e(i + 1, i)));
+          ++i;
+        } else {
+          error(i) = std::abs(e(i, i));
+        }
       }
+      for (size_t i = 0; i < order.size(); ++i) out.multiplier_errors(static_cast<Eigen::Index>(i)) = error(order[i]);
     }
   }
 }
@@ -162,18 +223,20 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
   ContactPoint::validate(contacts, system.dofs());
   detail::check_floquet_contacts(contacts);
   detail::check_floquet_input(contacts, contact_displacement, frequency_hz);
-  const Eigen::Index p_count = contact_displacement.cols();
-  FloquetResult out;
-  out.steps = static_cast<int>(p_count);
   // Φ̃ = D Φ D⁻¹ has Φ's eigenvalues; its eigenvectors and error estimate are those of the
   // balanced state, which the first-order perturbation maps alike.
   const Balanced balanced = balanced_system(system, contacts);
+  const Eigen::MatrixXd samples =
+      detail::resolved_samples(contacts, contact_displacement, frequency_hz, balanced.flexibility);
+  const Eigen::Index p_count = samples.cols();
+  FloquetResult out;
+  out.steps = static_cast<int>(p_count);
   const BalancedLinearPart linear{balanced, contacts};
-  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts, contact_displacement, frequency_hz);
+  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts, samples, frequency_hz);
   out.monodromy = unbalanced(phi, balanced.sigma);
   Eigen::MatrixXd phi_half;
   if (p_count % 2 == 0 && p_count >= 16) {
-    phi_half = detail::stepped_monodromy(linear, contacts, detail::even_samples(contact_displacement), frequency_hz);
+    phi_half = detail::stepped_monodromy(linear, contacts, detail::even_samples(samples), frequency_hz);
   }
   detail::analyse_monodromy(phi, phi_half, out);
   return out;

@@ -2,11 +2,20 @@
 // modes' coordinates when the damping matrix is classical, set up once per branch.
 #include <wbm/solvers/floquet.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
+// GCC 12 reports a use after free inside Spectra's UpperHessenbergEigen (Eigen's aligned_free of
+// a moved-from temporary) at -O3: a false positive of its late warning, in the library's code.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuse-after-free"
+#include <Spectra/GenEigsSolver.h>
+#pragma GCC diagnostic pop
 
 #include "floquet_stepping.hpp"
 #include "modal_damping_structure.hpp"
@@ -75,15 +84,60 @@ struct ModalLinearPart {
   static constexpr bool kExactFreeRuns = true;
   [[nodiscard]] Eigen::Index states() const { return 2 * modes.phi.cols(); }
   [[nodiscard]] ModalFlight flight(double hs) const { return modal_flight(modes, hs); }
-  void apply(const ModalFlight& f, Eigen::MatrixXd& z) const {
+  void apply(const ModalFlight& f, Eigen::MatrixXd& z) const {  // one pass, in place
     const Eigen::Index n = modes.phi.cols();
-    const Eigen::MatrixXd q = z.topRows(n);
-    z.topRows(n) = f.a.matrix().asDiagonal() * q + f.b.matrix().asDiagonal() * z.bottomRows(n);
-    z.bottomRows(n) = (f.c.matrix().asDiagonal() * q + f.d.matrix().asDiagonal() * z.bottomRows(n)).eval();
+    for (Eigen::Index j = 0; j < z.cols(); ++j) {
+      double* q = z.col(j).data();
+      double* p = q + n;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double qi = q[i], pi = p[i];
+        q[i] = f.a(i) * qi + f.b(i) * pi;
+        p[i] = f.c(i) * qi + f.d(i) * pi;
+      }
+    }
   }
   [[nodiscard]] const Eigen::MatrixXd& u() const { return modes.u; }
   [[nodiscard]] Eigen::MatrixXd rows(const Eigen::MatrixXd& z) const { return modes.b * z.topRows(modes.phi.cols()); }
 };
+
+// Φ v for Arnoldi (Spectra's OpType): the stepping applied to one column, Φ never formed.
+struct MonodromyProduct {
+  using Scalar = double;
+  const ModalLinearPart& linear;
+  const std::vector<ContactPoint>& contacts;
+  const Eigen::MatrixXd& contact_displacement;
+  double frequency_hz;
+  [[nodiscard]] Eigen::Index rows() const { return linear.states(); }
+  [[nodiscard]] Eigen::Index cols() const { return linear.states(); }
+  void perform_op(const double* x_in, double* y_out) const {
+    const Eigen::MatrixXd v = Eigen::Map<const Eigen::VectorXd>(x_in, rows());
+    Eigen::Map<Eigen::VectorXd>(y_out, rows()) =
+        detail::stepped_monodromy(linear, contacts, contact_displacement, frequency_hz, &v);
+  }
+};
+
+// The multipliers of largest modulus, sorted by decreasing modulus, enough that the last lies
+// below kDominantBound: nev = 8 by Arnoldi (Spectra::GenEigsSolver, LargestMagn, tolerance 1e-10,
+// its fixed starting vector), doubled while the last does not. Nothing when Arnoldi does not
+// converge or would need nev + 2 > 2n (the caller then forms Φ).
+constexpr double kDominantBound = 0.9;
+
+std::optional<Eigen::VectorXcd> dominant_multipliers(const ModalLinearPart& linear,
+                                                     const std::vector<ContactPoint>& contacts,
+                                                     const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+  MonodromyProduct op{linear, contacts, contact_displacement, frequency_hz};
+  const Eigen::Index states = linear.states();
+  for (Eigen::Index nev = 8; nev + 2 <= states; nev *= 2) {
+    const Eigen::Index ncv = std::min(states, std::max<Eigen::Index>(2 * nev + 1, 20));
+    Spectra::GenEigsSolver<MonodromyProduct> arnoldi(op, nev, ncv);
+    arnoldi.init();
+    arnoldi.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::LargestMagn);
+    if (arnoldi.info() != Spectra::CompInfo::Successful) return std::nullopt;
+    const Eigen::VectorXcd mu = arnoldi.eigenvalues();
+    if (mu.size() > 0 && std::abs(mu(mu.size() - 1)) < kDominantBound) return mu;
+  }
+  return std::nullopt;
+}
 
 // The undamped modes of a classical C, or nothing (C not classical, M not positive definite).
 std::shared_ptr<const FloquetAnalysis::Modes> modes_of(const MechanicalSystem& system,
@@ -140,14 +194,34 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
 FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const {
   if (!modes_) return floquet_multipliers(system_, contacts_, contact_displacement, frequency_hz);
   detail::check_floquet_input(contacts_, contact_displacement, frequency_hz);
-  const Eigen::Index p_count = contact_displacement.cols();
+  // G = E M⁻¹ Eᵀ = B Bᵀ (M⁻¹ = Φ Φᵀ).
+  const Eigen::MatrixXd samples = detail::resolved_samples(contacts_, contact_displacement, frequency_hz,
+                                                           modes_->b * modes_->b.transpose());
+  const Eigen::Index p_count = samples.cols();
   FloquetResult out;
   out.steps = static_cast<int>(p_count);
   const ModalLinearPart linear{*modes_};
-  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts_, contact_displacement, frequency_hz);
+  if (linear.states() > options_.dense_states) {
+    if (auto mu = dominant_multipliers(linear, contacts_, samples, frequency_hz)) {
+      out.multipliers = std::move(*mu);
+      out.max_modulus = std::abs(out.multipliers(0));
+      out.dominant_only = true;
+      // Richardson on each multiplier: μ_P − μ_{P/2} ≈ −3 (μ_P − μ), the P/2 multiplier nearest.
+      out.multiplier_errors = Eigen::VectorXd::Constant(out.multipliers.size(), std::numeric_limits<double>::infinity());
+      if (p_count % 2 == 0 && p_count >= 16) {
+        const auto coarse =
+            dominant_multipliers(linear, contacts_, detail::even_samples(samples), frequency_hz);
+        for (Eigen::Index i = 0; coarse && i < out.multipliers.size(); ++i) {
+          out.multiplier_errors(i) = (coarse->array() - out.multipliers(i)).abs().minCoeff() / 3.0;
+        }
+      }
+      return out;
+    }
+  }
+  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts_, samples, frequency_hz);
   Eigen::MatrixXd phi_half;
   if (p_count % 2 == 0 && p_count >= 16) {
-    phi_half = detail::stepped_monodromy(linear, contacts_, detail::even_samples(contact_displacement), frequency_hz);
+    phi_half = detail::stepped_monodromy(linear, contacts_, detail::even_samples(samples), frequency_hz);
   }
   detail::analyse_monodromy(phi, phi_half, out);
   if (options_.monodromy) {

@@ -32,6 +32,22 @@ void check_floquet_input(const std::vector<ContactPoint>& contacts, const Eigen:
                          double frequency_hz);
 void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
 
+/// The stepping below is explicit in the contact force (e_cᵀ b_d = 0 makes its trapezoidal rule a
+/// kick–flight–kick, Störmer–Verlet in the contact springs): it is stable only while h ω_c < 2,
+/// ω_c² the largest eigenvalue of K_c G, K_c = diag(max over the samples of each contact's
+/// stiffness), G = E M⁻¹ Eᵀ (n_c × n_c, the contacts' inverse mass [1/kg]), bounded here by
+/// Gershgorin: max_c k_c Σ_d |G_cd|. Beyond it the computed multipliers grow without bound (1e13
+/// on LL11's blade at P = 512, h ω_c = 29). Returns contact_displacement refined by linear
+/// interpolation (the interpolant the crossings already use), P → s P with s the smallest power
+/// of two that brings h ω_c to at most kResolvedPhase (so the P/2 estimate stays at ≤ 1), or
+/// unchanged when s = 1. Throws std::invalid_argument naming the contact and its stiffness when
+/// that needs more than kMaxResolvedSteps steps. floquet.cpp.
+inline constexpr double kResolvedPhase = 0.5;
+inline constexpr Eigen::Index kMaxResolvedSteps = 32768;
+[[nodiscard]] Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts,
+                                               const Eigen::MatrixXd& contact_displacement, double frequency_hz,
+                                               const Eigen::MatrixXd& flexibility);
+
 /// The P/2 even samples of contact_displacement (n_c × P/2).
 [[nodiscard]] inline Eigen::MatrixXd even_samples(const Eigen::MatrixXd& contact_displacement) {
   Eigen::MatrixXd half(contact_displacement.rows(), contact_displacement.cols() / 2);
@@ -40,7 +56,9 @@ void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
 }
 
 /// Φ = Y(T) in the coordinates of `linear`, by the stepping of floquet.hpp on the P =
-/// contact_displacement.cols() samples. LinearPart provides:
+/// contact_displacement.cols() samples; with `start` (2n × r), Φ · start instead, stepping the r
+/// columns through every step (O(P n n_c r), no 2n × 2n powers: Arnoldi's products Φ v).
+/// LinearPart provides:
 ///   Eigen::Index states() const;                              2n
 ///   Flight flight(double hs) const;                           e^{A₀ hs}, hs [s]
 ///   void apply(const Flight&, Eigen::MatrixXd& z) const;      z ← e^{A₀ hs} z
@@ -51,7 +69,8 @@ void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
 /// (h/2)(k_p + k_{p+1})-weighted forces between exact flights.
 template <class LinearPart>
 Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<ContactPoint>& contacts,
-                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+                                  const Eigen::MatrixXd& contact_displacement, double frequency_hz,
+                                  const Eigen::MatrixXd* start = nullptr) {
   using Flight = decltype(linear.flight(1.0));
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   const Eigen::Index p_count = contact_displacement.cols();
@@ -67,10 +86,13 @@ Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<Co
     }
     return k;
   };
-  // e_cᵀ b_d (n_c × n_c) for the Woodbury solve (zero in exact arithmetic; kept as computed).
+  // e_cᵀ b_d (n_c × n_c) for the Woodbury solve. It is exactly zero when the kick has no
+  // displacement part (both linear parts here): (I − D E U)⁻¹ = I, and the solve is skipped
+  // (the LU of I solves exactly: the same bits).
   const Eigen::MatrixXd eu = linear.rows(u);
+  const bool kick_is_velocity = eu.isZero(0.0);
 
-  Eigen::MatrixXd y = Eigen::MatrixXd::Identity(states, states);
+  Eigen::MatrixXd y = start != nullptr ? *start : Eigen::MatrixXd::Identity(states, states);
   // One trapezoidal step of length hs from stiffnesses ka (start) to kb (end), applied to z:
   //   (I − (hs/2) K_b) Z ← e^{A₀ hs} (I + (hs/2) K_a) Z, the inverse by Woodbury.
   auto trapezoid_on = [&](Eigen::MatrixXd& z, const Flight& exp_step, double hs, const Eigen::VectorXd& ka,
@@ -78,9 +100,13 @@ Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<Co
     if (!ka.isZero(0.0)) z += u * ((0.5 * hs) * ka.asDiagonal() * linear.rows(z));
     linear.apply(exp_step, z);
     if (!kb.isZero(0.0)) {
-      const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
-      const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
-      z += u * small.partialPivLu().solve(d * linear.rows(z));
+      if (kick_is_velocity) {
+        z += u * ((0.5 * hs) * kb.asDiagonal() * linear.rows(z));
+      } else {
+        const Eigen::MatrixXd d = (0.5 * hs) * kb.asDiagonal();
+        const Eigen::MatrixXd small = Eigen::MatrixXd::Identity(nc, nc) - d * eu;
+        z += u * small.partialPivLu().solve(d * linear.rows(z));
+      }
     }
   };
   // Runs of whole steps over which no contact crosses its gap and every contact's stiffness is
@@ -104,9 +130,8 @@ Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<Co
       run_length = 0;
       return;
     }
-    if (run_length == 1) {
-      trapezoid_on(y, step, h, run_k, run_k);  // one step: no power to form
-      run_length = 0;
+    if (run_length == 1 || start != nullptr) {  // one step, or a few columns: no power to form
+      for (; run_length > 0; --run_length) trapezoid_on(y, step, h, run_k, run_k);
       return;
     }
     auto it = std::find_if(runs.begin(), runs.end(), [&](const RunPowers& r) { return r.k == run_k; });

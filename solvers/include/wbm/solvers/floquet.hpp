@@ -54,6 +54,11 @@ struct FloquetResult {
   /// the P/2 even samples.
   Eigen::VectorXd multiplier_errors;
   int steps = 0;                      // P, the integration steps
+  /// True when `multipliers` holds only those of largest modulus, down to one below 0.9 (and
+  /// `monodromy` is empty): FloquetAnalysis above FloquetOptions::dense_states. The others lie
+  /// inside that modulus, so they cannot change the verdict unless their errors exceed 0.05;
+  /// settled() judges the ones computed.
+  bool dominant_only = false;
   /// A verdict the error estimate cannot overturn: every ||μ_i| − 1| > 2 error_i.
   [[nodiscard]] bool settled() const {
     for (Eigen::Index i = 0; i < multipliers.size(); ++i) {
@@ -86,6 +91,11 @@ struct FloquetOptions {
   /// Fill FloquetResult::monodromy on the modal path (4 products of n × n by n × 2n per point);
   /// a continuation that reads the multipliers only leaves it empty.
   bool monodromy = true;
+  /// Up to this many states (2n) the modal path forms Φ and all its multipliers (O(n³) per
+  /// point). Above, it computes only the multipliers of largest modulus, by Arnoldi on the
+  /// products Φ v (O(P n n_c) each, Φ never formed), enough that the last lies below 0.9 in
+  /// modulus (FloquetResult::dominant_only); it forms Φ where Arnoldi does not converge.
+  Eigen::Index dense_states = 64;
 };
 
 /// The stability of the points of one branch (one structure, one set of contacts): what does not
