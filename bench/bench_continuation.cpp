@@ -59,7 +59,8 @@ void BM_Floquet_OnePoint(benchmark::State& state) {
                                                          wbm::solvers::TimeBasis::fourier(64));
   const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / p);
   const Eigen::MatrixXd uc =
-      (wbm::solvers::TimeBasis::fourier(64).values(tau, 0) * sol.coefficients.row(s.forcing->dof).transpose()).transpose();
+      (wbm::solvers::TimeBasis::fourier(64).values(tau, 0) * sol.coefficients.row(s.forcing->dof).transpose())
+          .transpose();
   const bool modal = state.range(1) != 0;
   state.SetLabel(modal ? "modal path, set up once" : "balanced path (floquet_multipliers)");
   const wbm::solvers::FloquetAnalysis floquet(s.system(), s.contact_points(), {.monodromy = false});

@@ -65,7 +65,8 @@ void expect_paths_agree(const solvers::MechanicalSystem& system, const std::vect
     for (Eigen::Index j = 0; j < fast.multipliers.size(); ++j) {
       nearest = std::min(nearest, std::abs(fast.multipliers(j) - slow.multipliers(i)));
     }
-    EXPECT_LT(nearest, tolerance * std::max(1.0, std::abs(slow.multipliers(i)))) << "multiplier " << slow.multipliers(i);
+    EXPECT_LT(nearest, tolerance * std::max(1.0, std::abs(slow.multipliers(i))))
+        << "multiplier " << slow.multipliers(i);
   }
   // The estimates are first-order perturbations of an O(h²) difference: equal to a few digits.
   EXPECT_NEAR(fast.multiplier_errors.maxCoeff(), slow.multiplier_errors.maxCoeff(),
@@ -92,7 +93,8 @@ TEST(FloquetModal, LinearRodMonodromyIsTheModalTransitionMatrixToRounding) {
   for (Eigen::Index i = 0; i < n; ++i) {
     const long double w = std::sqrt(static_cast<long double>(eig.eigenvalues()(i))), zeta = 0.5L * s.damping.beta * w;
     const C root = std::sqrt(C(zeta * zeta - 1.0L)), s1 = -zeta * w + w * root, s2 = -zeta * w - w * root;
-    const C e1 = std::exp(s1 / static_cast<long double>(f)), e2 = std::exp(s2 / static_cast<long double>(f)), d = s1 - s2;
+    const C e1 = std::exp(s1 / static_cast<long double>(f)), e2 = std::exp(s2 / static_cast<long double>(f));
+    const C d = s1 - s2;
     modal[0](i) = static_cast<double>(std::real((s1 * e2 - s2 * e1) / d));
     modal[1](i) = static_cast<double>(std::real((e1 - e2) / d));
     modal[2](i) = static_cast<double>(std::real(s1 * s2 * (e2 - e1) / d));
@@ -245,7 +247,9 @@ TEST(FloquetModal, ArnoldiFindsTheDominantMultipliersOfTheFormedMonodromy) {
     for (Eigen::Index i = 0; i < found; ++i) {
       EXPECT_NEAR(std::abs(arnoldi.multipliers(i)), std::abs(dense.multipliers(i)), 1e-9) << hz << " Hz, " << i;
       double nearest = 1e300;
-      for (Eigen::Index j = 0; j < found; ++j) nearest = std::min(nearest, std::abs(arnoldi.multipliers(j) - dense.multipliers(i)));
+      for (Eigen::Index j = 0; j < found; ++j) {
+        nearest = std::min(nearest, std::abs(arnoldi.multipliers(j) - dense.multipliers(i)));
+      }
       EXPECT_LT(nearest, 1e-9) << hz << " Hz, " << dense.multipliers(i);
     }
     EXPECT_GE(std::abs(arnoldi.multipliers(found - 1)), std::abs(dense.multipliers(found)) - 1e-9);

@@ -58,7 +58,8 @@ Balanced balanced_system(const MechanicalSystem& system, const std::vector<Conta
   b.flexibility.resize(nc, nc);
   for (Eigen::Index c = 0; c < nc; ++c) {
     for (Eigen::Index d = 0; d < nc; ++d) {
-      b.flexibility(c, d) = -b.sigma * contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)).dot(b.u.col(d).tail(n));
+      const Eigen::VectorXd e_c = contacts[static_cast<size_t>(c)].direction(static_cast<int>(n));
+      b.flexibility(c, d) = -b.sigma * e_c.dot(b.u.col(d).tail(n));
     }
   }
   return b;
@@ -132,8 +133,8 @@ void check_floquet_input(const std::vector<ContactPoint>& contacts, const Eigen:
   }
 }
 
-Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
-                                 double frequency_hz, const Eigen::MatrixXd& flexibility) {
+Eigen::Index resolution_factor(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
+                               double frequency_hz, const Eigen::MatrixXd& flexibility) {
   const Eigen::Index nc = contact_displacement.rows(), p_count = contact_displacement.cols();
   double omega2 = 0.0, k_worst = 0.0;
   Eigen::Index worst = -1;
@@ -156,14 +157,22 @@ Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts, cons
     const auto& c = contacts[static_cast<size_t>(worst)];
     throw std::invalid_argument(
         "floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " (" + c.law->describe() +
-        ") reaches a stiffness k = " + std::to_string(k_worst) + " N/m on this orbit; with its inverse mass e_c' M^-1 e_c = " +
-        std::to_string(flexibility(worst, worst)) + " 1/kg it vibrates at omega_c = " + std::to_string(std::sqrt(omega2)) +
+        ") reaches a stiffness k = " + std::to_string(k_worst) +
+        " N/m on this orbit; with its inverse mass e_c' M^-1 e_c = " + std::to_string(flexibility(worst, worst)) +
+        " 1/kg it vibrates at omega_c = " + std::to_string(std::sqrt(omega2)) +
         " rad/s, and the monodromy's contact kicks resolve it (h omega_c <= " + std::to_string(kResolvedPhase) +
         ") only with more than " + std::to_string(kMaxResolvedSteps) + " steps per period (h omega_c = " +
         std::to_string(phase) + " at P = " + std::to_string(p_count) +
         "): stability is not computed for a stop this stiff against its mass; lower the penalty stiffness or "
         "leave stability off");
   }
+  return s;
+}
+
+Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& contact_displacement,
+                                 double frequency_hz, const Eigen::MatrixXd& flexibility) {
+  const Eigen::Index s = resolution_factor(contacts, contact_displacement, frequency_hz, flexibility);
+  const Eigen::Index nc = contact_displacement.rows(), p_count = contact_displacement.cols();
   if (s == 1) return contact_displacement;
   Eigen::MatrixXd fine(nc, s * p_count);
   for (Eigen::Index p = 0; p < p_count; ++p) {
@@ -181,7 +190,8 @@ void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_ha
   const Eigen::VectorXcd mu = eig.eigenvalues();
   std::vector<Eigen::Index> order(static_cast<size_t>(mu.size()));
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
-  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return std::abs(mu(a)) > std::abs(mu(b)); });
+  std::sort(order.begin(), order.end(),
+            [&](Eigen::Index a, Eigen::Index b) { return std::abs(mu(a)) > std::abs(mu(b)); });
   out.multipliers.resize(mu.size());
   for (size_t i = 0; i < order.size(); ++i) out.multipliers(static_cast<Eigen::Index>(i)) = mu(order[i]);
   out.max_modulus = mu.size() > 0 ? std::abs(out.multipliers(0)) : 0.0;

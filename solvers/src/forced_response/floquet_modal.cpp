@@ -10,6 +10,7 @@
 #include <utility>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 // GCC 12 reports a use after free inside Spectra's UpperHessenbergEigen (Eigen's aligned_free of
 // a moved-from temporary) at -O3: a false positive of its late warning, in the library's code.
 #pragma GCC diagnostic push
@@ -50,7 +51,7 @@ ModalFlight modal_flight(const FloquetAnalysis::Modes& m, double t) {
   ModalFlight f{Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n)};
   for (Eigen::Index i = 0; i < n; ++i) {
     const double mu = -0.5 * m.damping(i), beta2 = 0.25 * m.damping(i) * m.damping(i) - m.omega2(i);
-    double ch = 1.0, sh = t;  // e^{μt} already applied below
+    double ch = 1.0, sh = t;  // without e^{μt}: `decay`, applied below
     double decay = std::exp(mu * t);
     if (beta2 < 0.0) {
       const double nu = std::sqrt(-beta2);
@@ -184,6 +185,15 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
   ContactPoint::validate(contacts_, system_.dofs());
   detail::check_floquet_contacts(contacts_);
   if (options_.path != FloquetPath::Balanced) modes_ = modes_of(system_, contacts_);
+  if (modes_) {
+    flexibility_ = modes_->b * modes_->b.transpose();  // M⁻¹ = Φ Φᵀ
+  } else {
+    const auto n = static_cast<int>(system_.dofs());
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> mass(system_.mass);
+    Eigen::MatrixXd directions(n, static_cast<Eigen::Index>(contacts_.size()));
+    for (size_t c = 0; c < contacts_.size(); ++c) directions.col(static_cast<Eigen::Index>(c)) = contacts_[c].direction(n);
+    flexibility_ = directions.transpose() * mass.solve(directions);
+  }
   if (options_.path == FloquetPath::Modal && !modes_) {
     throw std::invalid_argument("FloquetPath::Modal needs a damping matrix the undamped modes diagonalize (Rayleigh "
                                 "or classical: C M⁻¹ K = K M⁻¹ C) and M positive definite; use FloquetPath::Automatic "
@@ -194,9 +204,8 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
 FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const {
   if (!modes_) return floquet_multipliers(system_, contacts_, contact_displacement, frequency_hz);
   detail::check_floquet_input(contacts_, contact_displacement, frequency_hz);
-  // G = E M⁻¹ Eᵀ = B Bᵀ (M⁻¹ = Φ Φᵀ).
-  const Eigen::MatrixXd samples = detail::resolved_samples(contacts_, contact_displacement, frequency_hz,
-                                                           modes_->b * modes_->b.transpose());
+  const Eigen::MatrixXd samples =
+      detail::resolved_samples(contacts_, contact_displacement, frequency_hz, flexibility_);
   const Eigen::Index p_count = samples.cols();
   FloquetResult out;
   out.steps = static_cast<int>(p_count);
@@ -207,7 +216,8 @@ FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displac
       out.max_modulus = std::abs(out.multipliers(0));
       out.dominant_only = true;
       // Richardson on each multiplier: μ_P − μ_{P/2} ≈ −3 (μ_P − μ), the P/2 multiplier nearest.
-      out.multiplier_errors = Eigen::VectorXd::Constant(out.multipliers.size(), std::numeric_limits<double>::infinity());
+      out.multiplier_errors =
+          Eigen::VectorXd::Constant(out.multipliers.size(), std::numeric_limits<double>::infinity());
       if (p_count % 2 == 0 && p_count >= 16) {
         const auto coarse =
             dominant_multipliers(linear, contacts_, detail::even_samples(samples), frequency_hz);
@@ -231,12 +241,19 @@ FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displac
     left.topRows(n) = modes_->phi * phi.topRows(n);
     left.bottomRows(n) = modes_->phi * (modes_->scale.matrix().asDiagonal() * phi.bottomRows(n));
     right.leftCols(n) = left.leftCols(n) * modes_->mass_phi.transpose();
-    right.rightCols(n) = left.rightCols(n) * (modes_->scale.inverse().matrix().asDiagonal() * modes_->mass_phi.transpose());
+    right.rightCols(n) =
+        left.rightCols(n) * (modes_->scale.inverse().matrix().asDiagonal() * modes_->mass_phi.transpose());
     out.monodromy = std::move(right);
   }
   return out;
 }
 
 bool FloquetAnalysis::modal() const noexcept { return modes_ != nullptr; }
+
+Eigen::Index FloquetAnalysis::resolved_steps(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const {
+  detail::check_floquet_input(contacts_, contact_displacement, frequency_hz);
+  return contact_displacement.cols() *
+         detail::resolution_factor(contacts_, contact_displacement, frequency_hz, flexibility_);
+}
 
 }  // namespace wbm::solvers

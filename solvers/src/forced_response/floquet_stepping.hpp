@@ -44,6 +44,10 @@ void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
 /// that needs more than kMaxResolvedSteps steps. floquet.cpp.
 inline constexpr double kResolvedPhase = 0.5;
 inline constexpr Eigen::Index kMaxResolvedSteps = 32768;
+/// s alone (1 when the samples resolve the contacts), with the same exception.
+[[nodiscard]] Eigen::Index resolution_factor(const std::vector<ContactPoint>& contacts,
+                                             const Eigen::MatrixXd& contact_displacement, double frequency_hz,
+                                             const Eigen::MatrixXd& flexibility);
 [[nodiscard]] Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts,
                                                const Eigen::MatrixXd& contact_displacement, double frequency_hz,
                                                const Eigen::MatrixXd& flexibility);

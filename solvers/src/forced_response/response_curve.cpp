@@ -415,7 +415,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     std::vector<FloquetResult> results(curve.points.size());
     auto stability_of = [&](size_t i) {
       const ResponsePoint& r = curve.points[i];
-      const Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+      Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+      // A contact stiff against its mass needs more steps (floquet.hpp): the orbit is evaluated
+      // there from the trial functions, rather than interpolated between the P samples.
+      const Eigen::Index resolved = floquet.resolved_steps(uc.transpose(), r.frequency_hz);
+      if (resolved > uc.rows()) {
+        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, 1.0 - 1.0 / static_cast<double>(resolved));
+        uc = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+      }
       FloquetResult fl = floquet(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
       // multipliers, or |μ| near 1), at most twice, ×4 steps each time.

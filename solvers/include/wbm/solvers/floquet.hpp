@@ -30,6 +30,20 @@
 /// the order of the highest natural frequency: ‖A₀h‖₁ is its square, which took ~11 squarings
 /// and cost 3 digits in e^{A₀h} for a 25-element rod at h = T/8192 (floquet.cpp). The
 /// multipliers are those of the similar matrix D Φ D⁻¹, D = diag(I, I/σ); `monodromy` is Φ.
+///
+/// Stiff contacts: e_cᵀ b_d = 0 (the contact force changes velocities only) makes the trapezoidal
+/// rule explicit in the contact force, a kick–flight–kick scheme, stable only while h ω_c < 2,
+/// ω_c the contacts' own frequency against their mass (√(k_c e_cᵀ M⁻¹ e_c) for one contact; for
+/// several, Gershgorin's bound on K_c E M⁻¹ Eᵀ). Beyond it the multipliers grow without bound
+/// (LL11's blade at P = 512: h ω_c = 29, |μ| = 1e13). The samples are therefore refined by linear
+/// interpolation (the interpolant the crossings use) by the smallest power of two that brings
+/// h ω_c to 0.5 (FloquetResult::steps is the P used), and a contact that would need more than
+/// 32 768 steps per period is refused (std::invalid_argument naming its stiffness). Accuracy
+/// then comes from the error estimate, as for any P.
+///
+/// FloquetAnalysis (below) sets up once per branch what does not depend on the point, and for a
+/// classical damping matrix steps in modal coordinates, with every multiplier from the formed Φ up
+/// to 64 states and the dominant ones by Arnoldi above.
 
 #include <cmath>
 #include <memory>
@@ -73,8 +87,9 @@ struct FloquetResult {
 /// displacements: contact_displacement is n_c × P, row c = u*_c(τ_p) [m] at τ_p = p/P of one
 /// period (P ≥ 8 steps; the row order of `contacts`). Without contacts pass a 0 × P matrix.
 /// Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples,
-/// f ≤ 0, or a rigid stop (contact::RigidStop: an impacting orbit would need saltation
-/// matrices, not implemented; stability is not computed for rigid stops).
+/// f ≤ 0, a rigid stop (contact::RigidStop: an impacting orbit would need saltation
+/// matrices, not implemented; stability is not computed for rigid stops), friction, or a contact
+/// too stiff to resolve in 32 768 steps (above). P is raised for a stiff contact (above).
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,
                                                 const Eigen::MatrixXd& contact_displacement, double frequency_hz);
@@ -122,6 +137,12 @@ class FloquetAnalysis {
   [[nodiscard]] FloquetResult operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const;
   /// True when the modal path is used.
   [[nodiscard]] bool modal() const noexcept;
+  /// The steps per period a call will use on these samples: P times the smallest power of two
+  /// that resolves the stiffest contact (h ω_c ≤ 0.5, above). A caller that can evaluate its orbit
+  /// exactly (a trial basis) passes that many samples instead of letting the call refine the
+  /// given ones by linear interpolation. Throws std::invalid_argument as a call would (a contact
+  /// too stiff to resolve in 32 768 steps).
+  [[nodiscard]] Eigen::Index resolved_steps(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const;
   struct Modes;
 
  private:
@@ -129,6 +150,7 @@ class FloquetAnalysis {
   std::vector<ContactPoint> contacts_;
   FloquetOptions options_;
   std::shared_ptr<const Modes> modes_;  // null: the balanced path
+  Eigen::MatrixXd flexibility_;         // E M⁻¹ Eᵀ, n_c × n_c [1/kg]
 };
 
 /// How a multiplier crossed the unit circle between two solutions of a branch.
