@@ -13,10 +13,15 @@
 #include <Eigen/SparseCholesky>
 // GCC 12 reports a use after free inside Spectra's UpperHessenbergEigen (Eigen's aligned_free of
 // a moved-from temporary) at -O3: a false positive of its late warning, in the library's code.
+// Clang (the sanitizer build) has no such warning.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuse-after-free"
+#endif
 #include <Spectra/GenEigsSolver.h>
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 #include "floquet_stepping.hpp"
 #include "modal_damping_structure.hpp"
@@ -171,7 +176,9 @@ std::shared_ptr<const FloquetAnalysis::Modes> modes_of(const MechanicalSystem& s
     m->b.row(c) = contacts[static_cast<size_t>(c)].direction(static_cast<int>(n)).transpose() * m->phi;
   }
   m->u = Eigen::MatrixXd::Zero(2 * n, nc);
-  m->u.bottomRows(n) = -(m->scale.inverse().matrix().asDiagonal() * m->b.transpose());
+  if (nc > 0) {  // a block of a matrix without columns has no storage to offset
+    m->u.bottomRows(n) = -(m->scale.inverse().matrix().asDiagonal() * m->b.transpose());
+  }
   m->mass_phi = system.mass * m->phi;
   return m;
 }
@@ -187,7 +194,7 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
   if (options_.path != FloquetPath::Balanced) modes_ = modes_of(system_, contacts_);
   if (modes_) {
     flexibility_ = modes_->b * modes_->b.transpose();  // M⁻¹ = Φ Φᵀ
-  } else {
+  } else if (!contacts_.empty()) {
     const auto n = static_cast<int>(system_.dofs());
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> mass(system_.mass);
     Eigen::MatrixXd directions(n, static_cast<Eigen::Index>(contacts_.size()));

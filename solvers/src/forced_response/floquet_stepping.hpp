@@ -37,17 +37,20 @@ void check_floquet_contacts(const std::vector<ContactPoint>& contacts);
 /// ω_c² the largest eigenvalue of K_c G, K_c = diag(max over the samples of each contact's
 /// stiffness), G = E M⁻¹ Eᵀ (n_c × n_c, the contacts' inverse mass [1/kg]), bounded here by
 /// Gershgorin: max_c k_c Σ_d |G_cd|. Beyond it the computed multipliers grow without bound (1e13
-/// on LL11's blade at P = 512, h ω_c = 29). Returns contact_displacement refined by linear
-/// interpolation (the interpolant the crossings already use), P → s P with s the smallest power
-/// of two that brings h ω_c to at most kResolvedPhase (so the P/2 estimate stays at ≤ 1), or
-/// unchanged when s = 1. Throws std::invalid_argument naming the contact and its stiffness when
-/// that needs more than kMaxResolvedSteps steps. floquet.cpp.
-inline constexpr double kResolvedPhase = 0.5;
-inline constexpr Eigen::Index kMaxResolvedSteps = 32768;
-/// s alone (1 when the samples resolve the contacts), with the same exception.
+/// on LL11's blade at P = 512, h ω_c = 29). floquet.cpp.
+inline constexpr double kResolvedPhase = 0.5;              // the h ω_c the steps are raised to
+inline constexpr Eigen::Index kMaxResolvedSteps = 32768;  // beyond, the contact is refused
+
+/// s, the smallest power of two with h ω_c / s ≤ kResolvedPhase at P s steps (so the P/2
+/// estimate stays at ≤ 1); 1 when the samples resolve the contacts. Throws
+/// std::invalid_argument naming the contact and its stiffness when P s would exceed
+/// kMaxResolvedSteps.
 [[nodiscard]] Eigen::Index resolution_factor(const std::vector<ContactPoint>& contacts,
                                              const Eigen::MatrixXd& contact_displacement, double frequency_hz,
                                              const Eigen::MatrixXd& flexibility);
+
+/// contact_displacement refined by linear interpolation (the interpolant the crossings already
+/// use) to P s samples, s = resolution_factor(...); unchanged when s = 1. Same exception.
 [[nodiscard]] Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts,
                                                const Eigen::MatrixXd& contact_displacement, double frequency_hz,
                                                const Eigen::MatrixXd& flexibility);
