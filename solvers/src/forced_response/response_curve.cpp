@@ -420,7 +420,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       // there from the trial functions, rather than interpolated between the P samples.
       const Eigen::Index resolved = floquet.resolved_steps(uc.transpose(), r.frequency_hz);
       if (resolved > uc.rows()) {
-        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, 1.0 - 1.0 / static_cast<double>(resolved));
+        const double last = 1.0 - 1.0 / static_cast<double>(resolved);
+        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
         uc = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
       }
       FloquetResult fl = floquet(uc.transpose(), r.frequency_hz);
