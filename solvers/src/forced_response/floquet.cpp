@@ -24,18 +24,38 @@ int count_outside(const FloquetResult& r, double tolerance) {
   return k;
 }
 
-// The balanced state ỹ = (δu, δu̇ / σ), σ = √‖M⁻¹K‖₁ [1/s] (1 without stiffness): Ã₀ = D A₀ D⁻¹
-// with D = diag(I, I/σ) has the blocks [[0, σI], [−M⁻¹K/σ, −M⁻¹C]], whose norms are both about the
-// highest natural frequency, while ‖A₀‖₁ is its square. Scaling and squaring takes
-// log₂(‖A₀h‖₁ / 5.4) squarings, each losing accuracy: for the rod of jl14_case2 (25 elements,
-// h = T/8192) ‖A₀h‖₁ = 8.1e3 gave blocks of e^{A₀h} wrong by 3e-13 relative, in 0.63 ms, and
-// ‖Ã₀h‖₁ = 0.057 gives them to 3e-16, in 0.12 ms (Padé without squaring).
-struct Balanced {
-  Eigen::MatrixXd a0;  // Ã₀, 2n × 2n
-  Eigen::MatrixXd u;   // D b_c = (0, −M⁻¹ e_c / σ), 2n × n_c
-  Eigen::MatrixXd flexibility;  // E M⁻¹ Eᵀ, n_c × n_c [1/kg]
-  double sigma = 1.0;
+// Φ = D⁻¹ Φ̃ D: the monodromy matrix of (δu, δu̇) from that of the balanced state.
+Eigen::MatrixXd unbalanced(Eigen::MatrixXd phi, double sigma) {
+  const Eigen::Index n = phi.rows() / 2;
+  phi.topRightCorner(n, n) /= sigma;
+  phi.bottomLeftCorner(n, n) *= sigma;
+  return phi;
+}
+
+// The balanced state as floquet_stepping.hpp's linear part: e^{Ã₀h} by Eigen's Padé exponential
+// of the dense 2n × 2n matrix, the contact rows from the contacts' sparse directions.
+struct BalancedLinearPart {
+  const detail::Balanced& balanced;
+  const std::vector<ContactPoint>& contacts;
+  static constexpr bool kExactFreeRuns = false;  // e^{A₀h}'s binary powers, as before the modal path
+  [[nodiscard]] Eigen::Index states() const { return balanced.a0.rows(); }
+  [[nodiscard]] Eigen::MatrixXd flight(double hs) const { return (balanced.a0 * hs).exp(); }
+  void apply(const Eigen::MatrixXd& flight, Eigen::MatrixXd& z) const { z = flight * z; }
+  [[nodiscard]] const Eigen::MatrixXd& u() const { return balanced.u; }
+  [[nodiscard]] Eigen::MatrixXd rows(const Eigen::MatrixXd& y) const {  // e_cᵀ Y, n_c × cols
+    Eigen::MatrixXd r(static_cast<Eigen::Index>(contacts.size()), y.cols());
+    for (size_t c = 0; c < contacts.size(); ++c) {
+      const auto row = static_cast<Eigen::Index>(c);
+      r.row(row).setZero();
+      for (const auto& [dof, w] : contacts[c].terms()) r.row(row) += w * y.row(dof);
+    }
+    return r;
+  }
 };
+
+}  // namespace
+
+namespace detail {
 
 Balanced balanced_system(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts) {
   const auto nc = static_cast<Eigen::Index>(contacts.size());
@@ -57,46 +77,12 @@ Balanced balanced_system(const MechanicalSystem& system, const std::vector<Conta
   }
   b.flexibility.resize(nc, nc);
   for (Eigen::Index c = 0; c < nc; ++c) {
-    for (Eigen::Index d = 0; d < nc; ++d) {
-      const Eigen::VectorXd e_c = contacts[static_cast<size_t>(c)].direction(static_cast<int>(n));
-      b.flexibility(c, d) = -b.sigma * e_c.dot(b.u.col(d).tail(n));
-    }
+    const Eigen::VectorXd e_c = contacts[static_cast<size_t>(c)].direction(static_cast<int>(n));
+    for (Eigen::Index d = 0; d < nc; ++d) b.flexibility(c, d) = -b.sigma * e_c.dot(b.u.col(d).tail(n));
   }
   return b;
 }
 
-// Φ = D⁻¹ Φ̃ D: the monodromy matrix of (δu, δu̇) from that of the balanced state.
-Eigen::MatrixXd unbalanced(Eigen::MatrixXd phi, double sigma) {
-  const Eigen::Index n = phi.rows() / 2;
-  phi.topRightCorner(n, n) /= sigma;
-  phi.bottomLeftCorner(n, n) *= sigma;
-  return phi;
-}
-
-// The balanced state as floquet_stepping.hpp's linear part: e^{Ã₀h} by Eigen's Padé exponential
-// of the dense 2n × 2n matrix, the contact rows from the contacts' sparse directions.
-struct BalancedLinearPart {
-  const Balanced& balanced;
-  const std::vector<ContactPoint>& contacts;
-  static constexpr bool kExactFreeRuns = false;  // e^{A₀h}'s binary powers, as before the modal path
-  [[nodiscard]] Eigen::Index states() const { return balanced.a0.rows(); }
-  [[nodiscard]] Eigen::MatrixXd flight(double hs) const { return (balanced.a0 * hs).exp(); }
-  void apply(const Eigen::MatrixXd& flight, Eigen::MatrixXd& z) const { z = flight * z; }
-  [[nodiscard]] const Eigen::MatrixXd& u() const { return balanced.u; }
-  [[nodiscard]] Eigen::MatrixXd rows(const Eigen::MatrixXd& y) const {  // e_cᵀ Y, n_c × cols
-    Eigen::MatrixXd r(static_cast<Eigen::Index>(contacts.size()), y.cols());
-    for (size_t c = 0; c < contacts.size(); ++c) {
-      const auto row = static_cast<Eigen::Index>(c);
-      r.row(row).setZero();
-      for (const auto& [dof, w] : contacts[c].terms()) r.row(row) += w * y.row(dof);
-    }
-    return r;
-  }
-};
-
-}  // namespace
-
-namespace detail {
 
 void check_floquet_contacts(const std::vector<ContactPoint>& contacts) {
   for (const auto& c : contacts) {
@@ -214,7 +200,8 @@ void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_ha
       Eigen::VectorXd error(mu.size());
       for (Eigen::Index i = 0; i < mu.size(); ++i) {
         if (i + 1 < mu.size() && d(i + 1, i) != 0.0) {  // a 2 × 2 block: the pair (i, i + 1)
-          error(i) = error(i + 1) = std::hypot(0.5 * (e(i, i) + e(i + 1, i + 1)), 0.5 * (e(i, i + 1) - e(i + 1, i)));
+          const double re = 0.5 * (e(i, i) + e(i + 1, i + 1)), im = 0.5 * (e(i, i + 1) - e(i + 1, i));
+          error(i) = error(i + 1) = std::hypot(re, im);
           ++i;
         } else {
           error(i) = std::abs(e(i, i));
@@ -225,6 +212,25 @@ void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_ha
   }
 }
 
+FloquetResult balanced_floquet(const Balanced& balanced, const std::vector<ContactPoint>& contacts,
+                               const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
+  // Φ̃ = D Φ D⁻¹ has Φ's eigenvalues; its eigenvectors and error estimate are those of the
+  // balanced state, which the first-order perturbation maps alike.
+  const Eigen::MatrixXd samples = resolved_samples(contacts, contact_displacement, frequency_hz, balanced.flexibility);
+  const Eigen::Index p_count = samples.cols();
+  FloquetResult out;
+  out.steps = static_cast<int>(p_count);
+  const BalancedLinearPart linear{balanced, contacts};
+  const Eigen::MatrixXd phi = stepped_monodromy(linear, contacts, samples, frequency_hz);
+  out.monodromy = unbalanced(phi, balanced.sigma);
+  Eigen::MatrixXd phi_half;
+  if (p_count % 2 == 0 && p_count >= 16) {
+    phi_half = stepped_monodromy(linear, contacts, even_samples(samples), frequency_hz);
+  }
+  analyse_monodromy(phi, phi_half, out);
+  return out;
+}
+
 }  // namespace detail
 
 FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
@@ -233,23 +239,8 @@ FloquetResult floquet_multipliers(const MechanicalSystem& system, const std::vec
   ContactPoint::validate(contacts, system.dofs());
   detail::check_floquet_contacts(contacts);
   detail::check_floquet_input(contacts, contact_displacement, frequency_hz);
-  // Φ̃ = D Φ D⁻¹ has Φ's eigenvalues; its eigenvectors and error estimate are those of the
-  // balanced state, which the first-order perturbation maps alike.
-  const Balanced balanced = balanced_system(system, contacts);
-  const Eigen::MatrixXd samples =
-      detail::resolved_samples(contacts, contact_displacement, frequency_hz, balanced.flexibility);
-  const Eigen::Index p_count = samples.cols();
-  FloquetResult out;
-  out.steps = static_cast<int>(p_count);
-  const BalancedLinearPart linear{balanced, contacts};
-  const Eigen::MatrixXd phi = detail::stepped_monodromy(linear, contacts, samples, frequency_hz);
-  out.monodromy = unbalanced(phi, balanced.sigma);
-  Eigen::MatrixXd phi_half;
-  if (p_count % 2 == 0 && p_count >= 16) {
-    phi_half = detail::stepped_monodromy(linear, contacts, detail::even_samples(samples), frequency_hz);
-  }
-  detail::analyse_monodromy(phi, phi_half, out);
-  return out;
+  return detail::balanced_floquet(detail::balanced_system(system, contacts), contacts, contact_displacement,
+                                  frequency_hz);
 }
 
 std::string_view to_string(Bifurcation b) noexcept {

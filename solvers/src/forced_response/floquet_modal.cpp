@@ -10,7 +10,6 @@
 #include <utility>
 
 #include <Eigen/Eigenvalues>
-#include <Eigen/SparseCholesky>
 // GCC 12 reports a use after free inside Spectra's UpperHessenbergEigen (Eigen's aligned_free of
 // a moved-from temporary) at -O3: a false positive of its late warning, in the library's code.
 // Clang (the sanitizer build) has no such warning.
@@ -194,12 +193,9 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
   if (options_.path != FloquetPath::Balanced) modes_ = modes_of(system_, contacts_);
   if (modes_) {
     flexibility_ = modes_->b * modes_->b.transpose();  // M⁻¹ = Φ Φᵀ
-  } else if (!contacts_.empty()) {
-    const auto n = static_cast<int>(system_.dofs());
-    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> mass(system_.mass);
-    Eigen::MatrixXd directions(n, static_cast<Eigen::Index>(contacts_.size()));
-    for (size_t c = 0; c < contacts_.size(); ++c) directions.col(static_cast<Eigen::Index>(c)) = contacts_[c].direction(n);
-    flexibility_ = directions.transpose() * mass.solve(directions);
+  } else {
+    balanced_ = std::make_shared<const detail::Balanced>(detail::balanced_system(system_, contacts_));
+    flexibility_ = balanced_->flexibility;
   }
   if (options_.path == FloquetPath::Modal && !modes_) {
     throw std::invalid_argument("FloquetPath::Modal needs a damping matrix the undamped modes diagonalize (Rayleigh "
@@ -209,8 +205,8 @@ FloquetAnalysis::FloquetAnalysis(const MechanicalSystem& system, std::vector<Con
 }
 
 FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displacement, double frequency_hz) const {
-  if (!modes_) return floquet_multipliers(system_, contacts_, contact_displacement, frequency_hz);
   detail::check_floquet_input(contacts_, contact_displacement, frequency_hz);
+  if (!modes_) return detail::balanced_floquet(*balanced_, contacts_, contact_displacement, frequency_hz);
   const Eigen::MatrixXd samples =
       detail::resolved_samples(contacts_, contact_displacement, frequency_hz, flexibility_);
   const Eigen::Index p_count = samples.cols();

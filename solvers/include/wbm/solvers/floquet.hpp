@@ -56,6 +56,9 @@
 #include <wbm/solvers/mechanical_system.hpp>
 
 namespace wbm::solvers {
+namespace detail {
+struct Balanced;  // floquet_stepping.hpp (private)
+}  // namespace detail
 
 struct FloquetResult {
   Eigen::MatrixXd monodromy;          // Φ, 2n × 2n
@@ -127,7 +130,8 @@ struct FloquetOptions {
 /// length (each contact crossing splits a step) and a dense LU of M per point. A contact-free run
 /// of L steps is e^{A₀Lh} itself. Set-up: one dense generalized eigenproblem of (K, M), O(n³),
 /// once. The multipliers are those of the similar matrix T⁻¹ Φ T, T = diag(Φ, Φ Ω); `monodromy`
-/// is Φ in (δu, δu̇) when options.monodromy. Otherwise (Balanced) each call is floquet_multipliers.
+/// is Φ in (δu, δu̇) when options.monodromy. Otherwise (Balanced) each call gives
+/// floquet_multipliers' result, with its dense LU of M done once.
 /// Throws std::invalid_argument as floquet_multipliers does (friction and rigid stops at
 /// construction), and for FloquetPath::Modal with a non-classical C.
 class FloquetAnalysis {
@@ -150,6 +154,7 @@ class FloquetAnalysis {
   std::vector<ContactPoint> contacts_;
   FloquetOptions options_;
   std::shared_ptr<const Modes> modes_;  // null: the balanced path
+  std::shared_ptr<const detail::Balanced> balanced_;  // the balanced path's set-up (one LU of M)
   Eigen::MatrixXd flexibility_;         // E M⁻¹ Eᵀ, n_c × n_c [1/kg]
 };
 
