@@ -47,7 +47,7 @@ TEST(WeightedResidual, ContactHomotopyLinearizationMatchesFiniteDifferences) {
       solvers::WeightedResidual::ContactHomotopy h;
       double lambda;
       Eigen::VectorXd residual(const Eigen::VectorXd& y) const { return h.residual(y, lambda); }
-      Eigen::MatrixXd jacobian(const Eigen::VectorXd& y) const { return h.linearize(y, lambda).jacobian; }
+      Eigen::MatrixXd jacobian(const Eigen::VectorXd& y) const { return h.linearize(y, lambda).jacobian.dense(); }
     };
     wbm::testing::expect_jacobian_matches_fd(AtLambda{homotopy, lambda}, x, 1e-5, 1e-7, 1e-6);
     const double d = 1e-5;

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include <Eigen/QR>
 
@@ -43,8 +44,17 @@ Eigen::MatrixXd LowRankJacobian::u_times(const Eigen::MatrixXd& z) const {
   return times_u ? times_u(z) : Eigen::MatrixXd(u * z);
 }
 
+bool LowRankJacobian::all_finite() const {
+  const auto finite = [](const Eigen::SparseMatrix<double>& m) {
+    return Eigen::Map<const Eigen::VectorXd>(m.valuePtr(), m.nonZeros()).allFinite();
+  };
+  return capacitance.allFinite() && u.allFinite() && finite(sparse_capacitance) && finite(sparse_u) &&
+         finite(sparse_v);
+}
+
 Eigen::VectorXd LowRankJacobian::apply(const Eigen::VectorXd& y) const {
   if (dense_form()) return capacitance * y / scale;
+  if (sparse_form()) return (y + times_update(y).col(0)) / scale;
   if (rank() == 0) return y / scale;
   return (y + u_times(times_v(y)).col(0)) / scale;
 }
@@ -52,9 +62,90 @@ Eigen::VectorXd LowRankJacobian::apply(const Eigen::VectorXd& y) const {
 Eigen::MatrixXd LowRankJacobian::dense() const {
   if (dense_form()) return capacitance / scale;
   Eigen::MatrixXd j = Eigen::MatrixXd::Identity(size(), size());
-  if (rank() > 0) j += u_times(times_v(Eigen::MatrixXd::Identity(size(), size())));
+  if (sparse_form()) {
+    j += times_update(Eigen::MatrixXd::Identity(size(), size()));
+  } else if (rank() > 0) {
+    j += u_times(times_v(Eigen::MatrixXd::Identity(size(), size())));
+  }
   return j / scale;
 }
+
+namespace {
+
+// bordered_low_rank for the sparse form (newton.hpp): K̂, V̂′ and Û assembled by triplets, and
+// the update Û L̂⁻¹ V̂′ from J's (L̂⁻¹ = diag(L⁻¹, 1, 1) leaves the border rows as they are).
+LowRankJacobian bordered_sparse_form(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
+                                     const Eigen::VectorXd& c, double d) {
+  using Triplets = std::vector<Eigen::Triplet<double>>;
+  const Eigen::Index n = j.size();
+  const Eigen::Index q = j.rank();
+  const double a = alpha / j.scale;
+  // The rows of V′ and the columns of U that hold an entry: where V′ b and cᵀ U are stored.
+  std::vector<char> v_rows(static_cast<size_t>(q), 0), u_cols(static_cast<size_t>(q), 0);
+  for (Eigen::Index k = 0; k < j.sparse_v.outerSize(); ++k) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_v, k); it; ++it) v_rows[static_cast<size_t>(it.row())] = 1;
+  }
+  for (Eigen::Index k = 0; k < j.sparse_u.outerSize(); ++k) {
+    if (j.sparse_u.outerIndexPtr()[k + 1] > j.sparse_u.outerIndexPtr()[k]) u_cols[static_cast<size_t>(k)] = 1;
+  }
+  const Eigen::VectorXd vb = j.sparse_v * b / a;
+  const Eigen::VectorXd cu = j.sparse_u.transpose() * c;
+  Triplets t;
+  t.reserve(static_cast<size_t>(j.sparse_capacitance.nonZeros() + 2 * q + 4));
+  for (Eigen::Index k = 0; k < j.sparse_capacitance.outerSize(); ++k) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_capacitance, k); it; ++it) {
+      t.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+    }
+  }
+  const auto qi = static_cast<int>(q);
+  for (int i = 0; i < qi; ++i) {
+    if (v_rows[static_cast<size_t>(i)] != 0) t.emplace_back(i, qi, vb(i));
+    if (u_cols[static_cast<size_t>(i)] != 0) t.emplace_back(qi + 1, i, cu(i));
+  }
+  t.emplace_back(qi, qi, 1.0);
+  t.emplace_back(qi, qi + 1, 1.0 / a);
+  t.emplace_back(qi + 1, qi, c.dot(b) / a);
+  t.emplace_back(qi + 1, qi + 1, d / a);
+  LowRankJacobian out;
+  out.scale = 1.0 / a;
+  out.rows = n + 1;
+  out.sparse_capacitance.resize(q + 2, q + 2);
+  out.sparse_capacitance.setFromTriplets(t.begin(), t.end());
+  t.clear();
+  for (Eigen::Index k = 0; k < j.sparse_v.outerSize(); ++k) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_v, k); it; ++it) {
+      t.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+    }
+  }
+  const auto ni = static_cast<int>(n);
+  for (int i = 0; i < ni; ++i) t.emplace_back(qi + 1, i, c(i));
+  t.emplace_back(qi, ni, 1.0);
+  t.emplace_back(qi + 1, ni, d - a);
+  out.sparse_v.resize(q + 2, n + 1);
+  out.sparse_v.setFromTriplets(t.begin(), t.end());
+  t.clear();
+  for (Eigen::Index k = 0; k < j.sparse_u.outerSize(); ++k) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_u, k); it; ++it) {
+      t.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+    }
+  }
+  for (int i = 0; i < ni; ++i) t.emplace_back(i, qi, b(i) / a);
+  t.emplace_back(ni, qi + 1, 1.0 / a);
+  out.sparse_u.resize(n + 1, q + 2);
+  out.sparse_u.setFromTriplets(t.begin(), t.end());
+  // Û L̂⁻¹ V̂′ Y = [U L⁻¹ V′ Y_x + (b/a) Y_λ; (cᵀ Y_x + (d − a) Y_λ)/a] (apply() and dense() only).
+  auto inner = std::make_shared<const LowRankJacobian>(j);
+  auto border = std::make_shared<const std::pair<Eigen::VectorXd, Eigen::VectorXd>>(b / a, c);
+  out.times_update = [inner, border, n, a, d](const Eigen::MatrixXd& y) {
+    Eigen::MatrixXd w(n + 1, y.cols());
+    w.topRows(n) = inner->times_update(y.topRows(n)) + border->first * y.row(n);
+    w.row(n) = (border->second.transpose() * y.topRows(n) + (d - a) * y.row(n)) / a;
+    return w;
+  };
+  return out;
+}
+
+}  // namespace
 
 LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
                                   const Eigen::VectorXd& c, double d) {
@@ -69,6 +160,7 @@ LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const 
                                 "; both must equal it");
   }
   LowRankJacobian out;
+  if (j.sparse_form()) return bordered_sparse_form(j, alpha, b, c, d);
   if (j.dense_form()) {
     out.capacitance.resize(n + 1, n + 1);
     out.capacitance.topLeftCorner(n, n) = (j.capacitance / j.scale) * alpha;
@@ -122,8 +214,13 @@ std::optional<double> DenseLu::rcond() const { return lu_.rcond(); }
 
 bool WoodburyLu::factorize(const LowRankJacobian& jacobian) {
   j_ = jacobian;
+  if (!j_.all_finite()) return false;  // times_u's and times_v's products are checked by newton()
+  if (j_.sparse_form()) {
+    if (!sparse_lu_ || sparse_lu_.use_count() > 1) sparse_lu_ = std::make_shared<SparseLu>();
+    return sparse_lu_->factorize(j_.sparse_capacitance);
+  }
   if (j_.capacitance.rows() > 0) lu_.compute(j_.capacitance);
-  return j_.capacitance.allFinite() && j_.u.allFinite();  // times_u's products are checked by newton()
+  return true;
 }
 
 Eigen::VectorXd WoodburyLu::solve(const Eigen::VectorXd& rhs) const {
@@ -133,11 +230,13 @@ Eigen::VectorXd WoodburyLu::solve(const Eigen::VectorXd& rhs) const {
 }
 
 std::optional<double> WoodburyLu::rcond() const {
+  if (j_.sparse_form()) return std::nullopt;
   return j_.capacitance.rows() > 0 ? lu_.rcond() : 1.0;  // rank 0: J = I / s
 }
 
 Eigen::VectorXd WoodburyLu::woodbury(const Eigen::VectorXd& y) const {
   if (j_.dense_form()) return j_.scale * lu_.solve(y);
+  if (j_.sparse_form()) return j_.scale * (y - j_.sparse_u * sparse_lu_->solve(j_.sparse_v * y));
   if (j_.capacitance.rows() == 0) return j_.scale * y;
   return j_.scale * (y - j_.u_times(lu_.solve(j_.times_v(y))).col(0));
 }

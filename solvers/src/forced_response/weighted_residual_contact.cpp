@@ -4,8 +4,11 @@
 #include "weighted_residual_impl.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+
+#include <unsupported/Eigen/KroneckerProduct>
 
 namespace wbm::solvers {
 
@@ -254,8 +257,9 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
 }
 
 
-Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector<ContactTangent>& tangents) const {
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+std::vector<WeightedResidual::Impl::ForceBlock> WeightedResidual::Impl::contact_force_blocks(
+    const std::vector<ContactTangent>& tangents) const {
+  std::vector<ForceBlock> blocks;
   for (int c = 0; c < nc; ++c) {
     const ContactTangent& t = tangents[static_cast<size_t>(c)];
     Eigen::MatrixXd block = t.active.empty() ? Eigen::MatrixXd::Zero(m, m) : contact_block(t.kc, t.active);
@@ -278,22 +282,37 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector
       }
       block -= anchored_product(t.anchored, kq, slips);
     }
-    for (int k = 0; k < m; ++k) {
-      for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + c) = block(j, k);
-    }
+    blocks.push_back({c, c, std::move(block)});
     if (!t.coupled.empty()) {
       // A varying normal load: + Σ_q p_j(τ_q) (∂f_q/∂u_n,r)/Q q_k(τ_r) into the columns of the
       // normal contact n (r the sample whose slip force f_q hangs on).
       const auto nq = static_cast<Eigen::Index>(t.coupled.size());
       Eigen::VectorXd kq(nq);
       for (Eigen::Index i = 0; i < nq; ++i) kq(i) = t.coupled_weight[static_cast<size_t>(i)] / q;
-      const Eigen::MatrixXd cross = anchored_product(t.coupled, kq, t.coupled_at);
-      for (int k = 0; k < m; ++k) {
-        for (int j = 0; j < m; ++j) jac(j * nc + c, k * nc + t.normal) += cross(j, k);
-      }
+      blocks.push_back({c, t.normal, anchored_product(t.coupled, kq, t.coupled_at)});
+    }
+  }
+  return blocks;
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::contact_force_jacobian(const std::vector<ContactTangent>& tangents) const {
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(nc * m, nc * m);
+  for (const ForceBlock& fb : contact_force_blocks(tangents)) {
+    for (int k = 0; k < m; ++k) {
+      for (int j = 0; j < m; ++j) jac(j * nc + fb.row, k * nc + fb.column) += fb.block(j, k);
     }
   }
   return jac;
+}
+
+
+void WeightedResidual::Impl::scale_tangents(std::vector<ContactTangent>& tangents, double sigma) {
+  for (ContactTangent& t : tangents) {
+    t.kc *= sigma;
+    t.kd *= sigma;
+    for (double& w : t.coupled_weight) w *= sigma;
+  }
 }
 
 
@@ -324,8 +343,29 @@ Eigen::MatrixXd WeightedResidual::Impl::weighting_rows_at(const std::vector<int>
 }
 
 
+Eigen::SparseMatrix<double> WeightedResidual::Impl::sparse_contact_force_jacobian(
+    const std::vector<ContactTangent>& tangents) const {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (const ForceBlock& fb : contact_force_blocks(tangents)) {
+    for (int k = 0; k < m; ++k) {
+      for (int j = 0; j < m; ++j) entries.emplace_back(j * nc + fb.row, k * nc + fb.column, fb.block(j, k));
+    }
+  }
+  Eigen::SparseMatrix<double> nx(nc * m, nc * m);
+  nx.setFromTriplets(entries.begin(), entries.end());
+  return nx;
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::hn_product(const std::vector<ContactTangent>& tangents) const {
+  // With H sparse, H N as a product of two sparse matrices: O(nnz(H) M) instead of O(nnz(H) n_c M).
+  if (h_is_sparse) return Eigen::MatrixXd(*h_sparse * sparse_contact_force_jacobian(tangents));
+  return compliance_times(contact_force_jacobian(tangents));
+}
+
+
 Eigen::MatrixXd WeightedResidual::Impl::identity_plus_hn(const std::vector<ContactTangent>& tangents) const {
-  Eigen::MatrixXd j = compliance_times(contact_force_jacobian(tangents));
+  Eigen::MatrixXd j = hn_product(tangents);
   j.diagonal().array() += 1.0;
   return j;
 }
@@ -344,6 +384,11 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> WeightedResidual::Impl::sloped_sampl
 LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::VectorXd& x) const {
   std::vector<ContactTangent> tangents;
   (void)contact_forces(x, &tangents);
+  return contact_jacobian_from(tangents);
+}
+
+
+LowRankJacobian WeightedResidual::Impl::contact_jacobian_from(const std::vector<ContactTangent>& tangents) const {
   LowRankJacobian jac;
   jac.scale = scale;
   Eigen::Index rank = 0;
@@ -355,6 +400,7 @@ LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::V
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   jac.rows = size;
   if (4 * rank > 3 * size || anchored) {
+    if (auto sparse = sparse_contact_jacobian(tangents)) return std::move(*sparse);
     jac.capacitance = identity_plus_hn(tangents);
     return jac;
   }
@@ -471,4 +517,66 @@ Eigen::VectorXd WeightedResidual::Impl::contact_residual(const Eigen::VectorXd& 
   require_factorized();
   return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
 }
+
+
+const WeightedResidual::Impl::AssembledOperator& WeightedResidual::Impl::assembled_operator() const {
+  std::call_once(assembled_once, [this] {
+    if (!operator_products->sparse) return;
+    // G = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K: kron(A, X)'s entry (j·n + i, k·n + l) = A(j, k) X(i, l),
+    // the stacked layout (layout.hpp).
+    const double fr = forcing.frequency_hz;
+    const std::array<const Eigen::SparseMatrix<double>*, 3> space{&system.mass, &system.damping, &system.stiffness};
+    const std::array<double, 3> factor{fr * fr, fr, 1.0};
+    auto g_full = std::make_shared<Eigen::SparseMatrix<double>>(n * m, n * m);
+    for (int t = 0; t < 3; ++t) {
+      const Eigen::SparseMatrix<double> a = factor[static_cast<size_t>(t)] *
+                                            Eigen::SparseMatrix<double>(operator_products->transposed[static_cast<size_t>(t)].transpose());
+      *g_full += Eigen::SparseMatrix<double>(Eigen::kroneckerProduct(a, *space[static_cast<size_t>(t)]));
+    }
+    g_full->makeCompressed();
+    assembled.g = std::move(g_full);
+    std::vector<Eigen::Triplet<double>> terms;
+    for (size_t j = 0; j < contact_terms.size(); ++j) {
+      for (const auto& [row, w] : contact_terms[j]) terms.emplace_back(static_cast<int>(j), static_cast<int>(row), w);
+    }
+    auto p = std::make_shared<Eigen::SparseMatrix<double>>(nc * m, n * m);
+    p->setFromTriplets(terms.begin(), terms.end());
+    assembled.p = std::move(p);
+    if (!h_is_sparse) assembled.h = std::make_shared<const Eigen::MatrixXd>(h);
+  });
+  return assembled;
+}
+
+
+std::optional<LowRankJacobian> WeightedResidual::Impl::sparse_contact_jacobian(
+    const std::vector<ContactTangent>& tangents) const {
+  if (!operator_products->sparse || nc == 0) return std::nullopt;
+  // K's entries, bounded before anything is formed, against the dense form's (n_c·M)².
+  const std::array<const Eigen::SparseMatrix<double>*, 3> space{&system.mass, &system.damping, &system.stiffness};
+  double bound = 0.0;
+  for (size_t t = 0; t < 3; ++t) {
+    bound += static_cast<double>(operator_products->transposed[t].nonZeros()) * static_cast<double>(space[t]->nonZeros());
+  }
+  for (const auto& c : contacts) bound += std::pow(static_cast<double>(m) * static_cast<double>(c.terms().size()), 2);
+  const double dense = static_cast<double>(nc) * m * static_cast<double>(nc) * m;
+  if (bound > dense) return std::nullopt;
+  const AssembledOperator& op = assembled_operator();
+  // N with every entry of its blocks stored: K's pattern changes only when a coupled block comes or
+  // goes (SparseLu then keeps its symbolic analysis).
+  auto nx = std::make_shared<const Eigen::SparseMatrix<double>>(sparse_contact_force_jacobian(tangents));
+  LowRankJacobian jac;
+  jac.scale = scale;
+  jac.rows = static_cast<Eigen::Index>(nc) * m;
+  jac.sparse_u = *op.p;  // U = P (n_c·M × n·M)
+  jac.sparse_v = Eigen::SparseMatrix<double>(op.p->transpose()) * (*nx);
+  jac.sparse_capacitance = *op.g + Eigen::SparseMatrix<double>(jac.sparse_v * (*op.p));
+  const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
+  const std::shared_ptr<const Eigen::MatrixXd> hd = op.h;
+  jac.times_update = [hs, hd, nx](const Eigen::MatrixXd& y) {
+    const Eigen::MatrixXd ny = *nx * y;
+    return Eigen::MatrixXd(hs ? Eigen::MatrixXd(*hs * ny) : Eigen::MatrixXd(*hd * ny));
+  };
+  return jac;
+}
+
 }  // namespace wbm::solvers

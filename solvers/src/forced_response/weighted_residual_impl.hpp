@@ -251,6 +251,17 @@ struct WeightedResidual::Impl {
   };
   mutable std::optional<ShiftKernel> kernel;
   mutable std::once_flag kernel_once;
+  // The sparse form of the contact Jacobian (sparse_contact_jacobian), formed on first use at this
+  // frequency, once even if several threads ask: the assembled G(f) (null when the time
+  // operators are not sparse), and H for the form's update (h_sparse, or a shared copy of h).
+  struct AssembledOperator {
+    std::shared_ptr<const Eigen::SparseMatrix<double>> g;   // G(f), n·M square, stacked layout
+    std::shared_ptr<const Eigen::SparseMatrix<double>> p;   // P, n_c·M × n·M
+    std::shared_ptr<const Eigen::MatrixXd> h;               // H when not h_is_sparse
+  };
+  mutable AssembledOperator assembled;
+  mutable std::once_flag assembled_once;
+  [[nodiscard]] const AssembledOperator& assembled_operator() const;
   [[nodiscard]] const std::optional<ShiftKernel>& shift_kernel_once() const {
     std::call_once(kernel_once, [this] { kernel = shift_kernel(); });
     return kernel;
@@ -530,7 +541,22 @@ struct WeightedResidual::Impl {
 
   // N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
   [[nodiscard]] Eigen::MatrixXd contact_force_jacobian(const std::vector<ContactTangent>& tangents) const;
+  // The same by M × M blocks (weighting index j by trial index k): N's entries
+  // (j·n_c + row, k·n_c + column) = block(j, k); one block per contact (row = column = c, every
+  // contact, zero when none of its samples is in contact), and one (c, normal) per friction
+  // contact whose slip force hangs on a normal contact's gap.
+  struct ForceBlock {
+    int row, column;
+    Eigen::MatrixXd block;
+  };
+  [[nodiscard]] std::vector<ForceBlock> contact_force_blocks(const std::vector<ContactTangent>& tangents) const;
+  // Multiplies the law's derivatives by σ: the tangents of σ n_c(x) (the contact homotopy).
+  static void scale_tangents(std::vector<ContactTangent>& tangents, double sigma);
 
+  // N as a sparse matrix, every entry of contact_force_blocks stored (explicit zeros included).
+  [[nodiscard]] Eigen::SparseMatrix<double> sparse_contact_force_jacobian(const std::vector<ContactTangent>& tangents) const;
+  // H N (n_c·M square, dense).
+  [[nodiscard]] Eigen::MatrixXd hn_product(const std::vector<ContactTangent>& tangents) const;
   // I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
   [[nodiscard]] Eigen::MatrixXd identity_plus_hn(const std::vector<ContactTangent>& tangents) const;
 
@@ -565,6 +591,17 @@ struct WeightedResidual::Impl {
   // wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
   // r × r LU then saves less than the two products with V cost (bench_weighted_residual).
   [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x) const;
+  // The same from the tangents (whatever law or factor gave them).
+  [[nodiscard]] LowRankJacobian contact_jacobian_from(const std::vector<ContactTangent>& tangents) const;
+
+  // The sparse form of (I + H N)/s_r (newton.hpp, LowRankJacobian): with L = G(f) assembled,
+  // U = P and V′ = Pᵀ N, the capacitance K = G + Pᵀ N P is the uncondensed Jacobian ∂R/∂a, and
+  // J⁻¹ y = s_r (y − P K⁻¹ Pᵀ N y): a sparse LU of n·M unknowns instead of the dense LU of the
+  // n_c·M contact unknowns. Taken where the dense form would be (r > ¾ n_c·M, or a hysteretic
+  // or coupled law), the time operators are sparse (OperatorProducts::sparse), and K's entries
+  // (bounded by Σ_t nnz(A_t) nnz(X_t) + Σ_c (M |e_c|)²) are at most the (n_c·M)² of the dense
+  // form; std::nullopt otherwise.
+  [[nodiscard]] std::optional<LowRankJacobian> sparse_contact_jacobian(const std::vector<ContactTangent>& tangents) const;
 
   // The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
   // and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW

@@ -75,17 +75,16 @@ Eigen::VectorXd WeightedResidual::ContactHomotopy::residual(const Eigen::VectorX
   return (x - p.x_lin + std::pow(10.0, lambda) * p.compliance_times(p.contact_forces(x, nullptr))) / p.scale;
 }
 
-Linearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd& x, double lambda) const {
+LowRankLinearization WeightedResidual::ContactHomotopy::linearize(const Eigen::VectorXd& x, double lambda) const {
   const auto& p = *problem->impl_;
   p.require_factorized();
   const double sigma = std::pow(10.0, lambda);
   std::vector<Impl::ContactTangent> tangents;
   const Eigen::VectorXd hn = p.compliance_times(p.contact_forces(x, &tangents));
-  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
-  Linearization l;
+  LowRankLinearization l;
   l.residual = (x - p.x_lin + sigma * hn) / p.scale;
-  l.jacobian = (sigma / p.scale) * p.compliance_times(nj);
-  l.jacobian.diagonal().array() += 1.0 / p.scale;
+  Impl::scale_tangents(tangents, sigma);  // the tangents of σ n_c(x): J = (I + H (σ N))/s_r in any form
+  l.jacobian = p.contact_jacobian_from(tangents);
   l.parameter_derivative = (std::log(10.0) * sigma / p.scale) * hn;  // dσ/dλ = σ ln 10
   return l;
 }
@@ -95,8 +94,7 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
   // λ₀: σ₀ ‖H N(x_lin)‖∞ = 0.1, so that x_lin is within Newton's reach of the σ₀ solution.
   std::vector<Impl::ContactTangent> tangents;
   (void)p.contact_forces(p.x_lin, &tangents);
-  const Eigen::MatrixXd nj = p.contact_force_jacobian(tangents);
-  const double coupling = p.compliance_times(nj).lpNorm<Eigen::Infinity>();
+  const double coupling = p.hn_product(tangents).lpNorm<Eigen::Infinity>();
   const double lambda0 = std::clamp(coupling > 0.0 ? std::log10(0.1 / coupling) : -1.0, -12.0, -1.0);
   report.lambda_start = lambda0;
   // From λ₀ to σ = 1 (a path turning back below λ₀ has ended), the state in metres as the residual.

@@ -37,6 +37,17 @@ namespace wbm::solvers {
 /// J⁻¹ y = s (y − U C⁻¹ V y), so a step costs an r × r LU instead of an n × n one;
 /// det J = det C / sⁿ. An empty `times_v` is the dense case: V = I_n, r = n, and J = C / s
 /// (U unused).
+///
+/// The sparse form (sparse_form(): `sparse_capacitance` not empty) is for an update whose rank
+/// is not small but whose factors are sparse through a sparse regular L (q × q):
+///   J = (I_n + U L⁻¹ V′) / s,   U: n × q (`sparse_u`),   V′: q × n (`sparse_v`),
+/// with the capacitance K = L + V′ U (q × q, sparse, `sparse_capacitance`): the generalized
+/// Woodbury identity (I + U L⁻¹ V′)⁻¹ = I − U K⁻¹ V′ [Hager 1989, Eq. (3)] makes a step one
+/// sparse LU of K. `times_update` gives Y ↦ U L⁻¹ V′ Y (n × k), for apply() and dense() only;
+/// `u`, `capacitance`, `times_v` and `times_u` are empty. The condensed contact Jacobian takes it with L the
+/// assembled operator G(f), U = P and V′ = Pᵀ N: K = G + Pᵀ N P is the uncondensed Jacobian,
+/// sparse where the structure is (weighted_residual.hpp, contact_jacobian_low_rank).
+/// det J = det K / (det L · sⁿ).
 struct LowRankJacobian {
   double scale = 1.0;            // s > 0
   Eigen::Index rows = 0;         // n
@@ -44,11 +55,19 @@ struct LowRankJacobian {
   Eigen::MatrixXd capacitance;   // C = I_r + V U, r × r (dense case: C = s J, n × n)
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_v;  // Y (n × k) ↦ V Y (r × k)
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_u;  // Z (r × k) ↦ U Z (n × k), optional
+  Eigen::SparseMatrix<double> sparse_capacitance;  // sparse form: K = L + V′ U (q × q)
+  Eigen::SparseMatrix<double> sparse_u;            // sparse form: U (n × q)
+  Eigen::SparseMatrix<double> sparse_v;            // sparse form: V′ (q × n)
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> times_update;  // sparse form: Y ↦ U L⁻¹ V′ Y
 
-  [[nodiscard]] bool dense_form() const { return !times_v; }
+  [[nodiscard]] bool dense_form() const { return !times_v && !sparse_form(); }
+  [[nodiscard]] bool sparse_form() const { return sparse_capacitance.rows() > 0; }
   [[nodiscard]] Eigen::Index size() const { return dense_form() ? capacitance.rows() : rows; }
-  [[nodiscard]] Eigen::Index rank() const { return capacitance.rows(); }
-  /// U Z (n × k) for Z (r × k).
+  /// r (q in the sparse form).
+  [[nodiscard]] Eigen::Index rank() const { return sparse_form() ? sparse_capacitance.rows() : capacitance.rows(); }
+  /// Every stored entry finite (capacitance, U, and the sparse form's three factors).
+  [[nodiscard]] bool all_finite() const;
+  /// U Z (n × k) for Z (r × k); not in the sparse form.
   [[nodiscard]] Eigen::MatrixXd u_times(const Eigen::MatrixXd& z) const;
   /// J y (length n).
   [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const;
@@ -69,6 +88,11 @@ struct LowRankJacobian {
 /// not, it is regular. Returned with scale 1/a. When J is in the dense form (C = s J, n × n), B
 /// is returned dense (capacitance = B, scale 1), its block α J formed as (C/s) α, as the dense
 /// corrector forms it. cᵀ U needs U: J.u, else U = times_u(I_r) is formed (r products).
+/// In the sparse form the same bordering multiplied through by L̂ = diag(L, 1, 1) stays sparse:
+///   K̂ = [[K, V′ b/a, 0], [0, 1, 1/a], [cᵀ U, cᵀ b/a, d/a]],   V̂′ = [[V′, 0], [0, 1], [cᵀ, d − a]],
+/// Û as above (sparse, its column b/a dense); the entries of V′ b and cᵀ U are stored on the rows
+/// of V′ and the columns of U that hold any entry, so that the pattern of K̂ depends on the
+/// patterns only (a sparse LU keeps its symbolic analysis).
 /// Throws std::invalid_argument if α is not finite and > 0, or if b or c does not have J's size.
 [[nodiscard]] LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
                                                 const Eigen::VectorXd& c, double d);
@@ -232,7 +256,10 @@ class SupernodalLu {
 /// y − J d (which makes the Woodbury formula as accurate as a backward-stable solve when C is
 /// well conditioned [Yip 1986, SIAM J. Sci. Stat. Comput. 7(2) 507–513]). rcond() is C's
 /// reciprocal condition estimate (s J has the eigenvalues of C and the eigenvalue 1 with
-/// multiplicity n − r); in the dense form it is that of s J itself.
+/// multiplicity n − r); in the dense form it is that of s J itself. In the sparse form K is
+/// factorized by SparseLu (KLU, its symbolic analysis kept while K's pattern is unchanged),
+/// d = s (y − U K⁻¹ V′ y), refined alike; rcond() is then not estimated (std::nullopt), and a
+/// singular K fails factorize().
 class WoodburyLu {
  public:
   bool factorize(const LowRankJacobian& jacobian);
@@ -243,6 +270,8 @@ class WoodburyLu {
   [[nodiscard]] Eigen::VectorXd woodbury(const Eigen::VectorXd& y) const;
   LowRankJacobian j_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
+  // The sparse form's LU; shared by copies until one of them factorizes (then it takes its own).
+  std::shared_ptr<SparseLu> sparse_lu_;
 };
 
 /// What a linear-solver policy provides for Jacobians (or operators) of type J: factorize(j) →

@@ -360,8 +360,13 @@ class WeightedResidual {
   /// the capacitance C = I_r + V U; V is applied by FFTW (Fourier trial basis) or by the
   /// wavelets' sparse rows. Fourier:Fourier (midpoint rule, H commuting with time shifts):
   /// C gathered from the shift kernel of H in O(r²) and U given by its product (times_u).
-  /// Dense form (C = I + H N) when r > ¾ n_c·M. dense() equals contact_jacobian(x) to
-  /// rounding. The products hold their own data (shared), not a reference to this object.
+  /// When r > ¾ n_c·M (or a hysteretic or coupled friction law makes N not diagonal in the
+  /// samples): the sparse form (newton.hpp) with the assembled G(f) as L, U = P and V′ = Pᵀ N,
+  /// its capacitance G + Pᵀ N P the uncondensed Jacobian, when the time operators are sparse and
+  /// that capacitance holds at most (n_c·M)² entries (many contacts on a sparse FE model: a
+  /// chain of n_c = 64 at M = 16 factorizes 1 024 sparse unknowns instead of a dense 1 024²);
+  /// else the dense form (C = I + H N). dense() equals contact_jacobian(x) to rounding. The
+  /// products hold their own data (shared), not a reference to this object.
   /// Throws std::runtime_error if G is singular.
   [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
@@ -450,11 +455,13 @@ class WeightedResidual {
   /// (linearization.hpp) in λ = log₁₀ σ, on the contact unknowns x (length n_c·M):
   ///   r(x, λ) = (x − x_lin + σ H n_c(x)) / s_r,   ∂r/∂x = (I + σ H N(x)) / s_r,
   ///   ∂r/∂λ = ln 10 · σ H n_c(x) / s_r,   σ = 10^λ.
-  /// r(x, 0) = contact_residual(x). Refers to this object, which must outlive it.
+  /// r(x, 0) = contact_residual(x). The Jacobian in the form contact_jacobian_low_rank gives
+  /// (with σ N for N), so that the corrector's bordered solves use its structure. Refers to this
+  /// object, which must outlive it.
   struct ContactHomotopy {
     const WeightedResidual* problem;
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const;
-    [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double lambda) const;
+    [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const;
   };
   [[nodiscard]] ContactHomotopy contact_homotopy() const { return {this}; }
 

@@ -92,7 +92,7 @@ auto branch_linear_solver(const S& system) {
 
 inline bool finite(const Linearization& l) { return l.jacobian.allFinite() && l.parameter_derivative.allFinite(); }
 inline bool finite(const LowRankLinearization& l) {
-  return l.jacobian.capacitance.allFinite() && l.jacobian.u.allFinite() && l.parameter_derivative.allFinite();
+  return l.jacobian.all_finite() && l.parameter_derivative.allFinite();
 }
 inline bool finite(const SparseLinearization& l) {
   return Eigen::Map<const Eigen::VectorXd>(l.jacobian.valuePtr(), l.jacobian.nonZeros()).allFinite() &&
