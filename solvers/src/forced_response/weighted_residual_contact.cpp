@@ -399,8 +399,15 @@ LowRankJacobian WeightedResidual::Impl::contact_jacobian_from(const std::vector<
   }
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   jac.rows = size;
-  if (4 * rank > 3 * size || anchored) {
-    if (auto sparse = sparse_contact_jacobian(tangents)) return std::move(*sparse);
+  // The form whose factorized matrix holds the fewest entries: the r × r capacitance, the dense
+  // n_c·M square, or (bounded before it is formed) the sparse G + Pᵀ N P.
+  const bool low_rank = !anchored && 4 * rank <= 3 * size;
+  const double entries = low_rank ? static_cast<double>(rank) * static_cast<double>(rank)
+                                  : static_cast<double>(size) * static_cast<double>(size);
+  if (rank > 0 || anchored) {
+    if (auto sparse = sparse_contact_jacobian(tangents, entries)) return std::move(*sparse);
+  }
+  if (!low_rank) {
     jac.capacitance = identity_plus_hn(tangents);
     return jac;
   }
@@ -494,18 +501,30 @@ LowRankJacobian WeightedResidual::Impl::shift_kernel_jacobian(const std::vector<
   const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
   const int contacts_n = nc, dimension = m;
   jac.times_u = [samples, rows, smp, hs, contacts_n, dimension](const Eigen::MatrixXd& z) {
-    // W Z: per contact, the rows of Z times κ_q placed at their samples, projected.
-    Eigen::MatrixXd wz(static_cast<Eigen::Index>(contacts_n) * dimension, z.cols());
+    // W Z: per contact, the rows of Z times κ_q placed at their samples, projected; only the
+    // columns of Z with an entry on the contact's rows (Z = I_r, the bordered corrector's U: r
+    // projections in all instead of r per contact), the others left 0.
+    Eigen::MatrixXd wz = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(contacts_n) * dimension, z.cols());
+    std::vector<Eigen::Index> columns;
     for (int c = 0; c < contacts_n; ++c) {
       const ContactRows& rc = (*rows)[static_cast<size_t>(c)];
       const auto na = static_cast<Eigen::Index>(rc.active.size());
-      Eigen::MatrixXd x(z.cols(), na);  // k × active
-      for (Eigen::Index i = 0; i < na; ++i) {
-        x.col(i) = (*samples)[static_cast<size_t>(rc.first + i)].stiffness * z.row(rc.first + i).transpose();
+      if (na == 0) continue;
+      columns.clear();
+      for (Eigen::Index j = 0; j < z.cols(); ++j) {
+        if ((z.col(j).segment(rc.first, na).array() != 0.0).any()) columns.push_back(j);
       }
-      const Eigen::MatrixXd projected = smp->weighting->project_at(rc.active, x);  // k × M
-      for (int l = 0; l < dimension; ++l) wz.row(static_cast<Eigen::Index>(l) * contacts_n + c) = projected.col(l).transpose();
+      Eigen::MatrixXd x(static_cast<Eigen::Index>(columns.size()), na);  // columns × active
+      for (Eigen::Index i = 0; i < na; ++i) {
+        x.col(i) = (*samples)[static_cast<size_t>(rc.first + i)].stiffness * z(rc.first + i, columns).transpose();
+      }
+      const Eigen::MatrixXd projected = smp->weighting->project_at(rc.active, x);  // columns × M
+      for (int l = 0; l < dimension; ++l) {
+        wz(static_cast<Eigen::Index>(l) * contacts_n + c, columns) = projected.col(l).transpose();
+      }
     }
+    // H W Z: with many columns W Z is sparse (each column on one contact's rows), and so is H.
+    if (z.cols() > 1) return Eigen::MatrixXd(*hs * Eigen::SparseMatrix<double>(wz.sparseView()));
     return Eigen::MatrixXd(*hs * wz);
   };
   return jac;
@@ -549,17 +568,16 @@ const WeightedResidual::Impl::AssembledOperator& WeightedResidual::Impl::assembl
 
 
 std::optional<LowRankJacobian> WeightedResidual::Impl::sparse_contact_jacobian(
-    const std::vector<ContactTangent>& tangents) const {
+    const std::vector<ContactTangent>& tangents, double limit) const {
   if (!operator_products->sparse || nc == 0) return std::nullopt;
-  // K's entries, bounded before anything is formed, against the dense form's (n_c·M)².
+  // K's entries, bounded before anything is formed.
   const std::array<const Eigen::SparseMatrix<double>*, 3> space{&system.mass, &system.damping, &system.stiffness};
   double bound = 0.0;
   for (size_t t = 0; t < 3; ++t) {
     bound += static_cast<double>(operator_products->transposed[t].nonZeros()) * static_cast<double>(space[t]->nonZeros());
   }
   for (const auto& c : contacts) bound += std::pow(static_cast<double>(m) * static_cast<double>(c.terms().size()), 2);
-  const double dense = static_cast<double>(nc) * m * static_cast<double>(nc) * m;
-  if (bound > dense) return std::nullopt;
+  if (bound > limit) return std::nullopt;
   const AssembledOperator& op = assembled_operator();
   // N with every entry of its blocks stored: K's pattern changes only when a coupled block comes or
   // goes (SparseLu then keeps its symbolic analysis).

@@ -590,18 +590,21 @@ struct WeightedResidual::Impl {
   // Fourier trial basis (all Q samples, the active ones kept) and by the sparse rows of the
   // wavelets otherwise. When r > ¾ n_c·M the dense form (I + H N) is factorized instead: an
   // r × r LU then saves less than the two products with V cost (bench_weighted_residual).
+  // Either gives way to the sparse form (sparse_contact_jacobian) when its capacitance holds
+  // fewer entries than theirs (r², or (n_c·M)²).
   [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x) const;
   // The same from the tangents (whatever law or factor gave them).
   [[nodiscard]] LowRankJacobian contact_jacobian_from(const std::vector<ContactTangent>& tangents) const;
 
   // The sparse form of (I + H N)/s_r (newton.hpp, LowRankJacobian): with L = G(f) assembled,
   // U = P and V′ = Pᵀ N, the capacitance K = G + Pᵀ N P is the uncondensed Jacobian ∂R/∂a, and
-  // J⁻¹ y = s_r (y − P K⁻¹ Pᵀ N y): a sparse LU of n·M unknowns instead of the dense LU of the
-  // n_c·M contact unknowns. Taken where the dense form would be (r > ¾ n_c·M, or a hysteretic
-  // or coupled law), the time operators are sparse (OperatorProducts::sparse), and K's entries
-  // (bounded by Σ_t nnz(A_t) nnz(X_t) + Σ_c (M |e_c|)²) are at most the (n_c·M)² of the dense
-  // form; std::nullopt otherwise.
-  [[nodiscard]] std::optional<LowRankJacobian> sparse_contact_jacobian(const std::vector<ContactTangent>& tangents) const;
+  // J⁻¹ y = s_r (y − P K⁻¹ Pᵀ N y): a sparse LU of n·M unknowns instead of a dense LU of the
+  // r samples in contact or of the n_c·M contact unknowns. Requires sparse time operators
+  // (OperatorProducts::sparse) and K's entries, bounded by Σ_t nnz(A_t) nnz(X_t) + Σ_c (M |e_c|)²
+  // before anything is formed, at most `limit` (the entries of the form it would replace: r²
+  // or (n_c·M)²); std::nullopt otherwise.
+  [[nodiscard]] std::optional<LowRankJacobian> sparse_contact_jacobian(const std::vector<ContactTangent>& tangents,
+                                                                       double limit) const;
 
   // The low-rank Jacobian of Fourier:Fourier through its ShiftKernel: C is gathered from κ_cd
   // and t_cd in O(r²) (no product with V), U is never formed: U Z = H W Z with W Z one FFTW

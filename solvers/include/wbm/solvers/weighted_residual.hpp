@@ -360,13 +360,14 @@ class WeightedResidual {
   /// the capacitance C = I_r + V U; V is applied by FFTW (Fourier trial basis) or by the
   /// wavelets' sparse rows. Fourier:Fourier (midpoint rule, H commuting with time shifts):
   /// C gathered from the shift kernel of H in O(r²) and U given by its product (times_u).
-  /// When r > ¾ n_c·M (or a hysteretic or coupled friction law makes N not diagonal in the
-  /// samples): the sparse form (newton.hpp) with the assembled G(f) as L, U = P and V′ = Pᵀ N,
-  /// its capacitance G + Pᵀ N P the uncondensed Jacobian, when the time operators are sparse and
-  /// that capacitance holds at most (n_c·M)² entries (many contacts on a sparse FE model: a
-  /// chain of n_c = 64 at M = 16 factorizes 1 024 sparse unknowns instead of a dense 1 024²);
-  /// else the dense form (C = I + H N). dense() equals contact_jacobian(x) to rounding. The
-  /// products hold their own data (shared), not a reference to this object.
+  /// Dense form (C = I + H N) when r > ¾ n_c·M or a hysteretic or coupled friction law makes N
+  /// not diagonal in the samples. Either gives way to the sparse form (newton.hpp) with the
+  /// assembled G(f) as L, U = P and V′ = Pᵀ N, its capacitance G + Pᵀ N P the uncondensed
+  /// Jacobian, when the time operators are sparse and a bound on that capacitance's entries is
+  /// at most those of the form it replaces (r², or (n_c·M)²): many contacts on a sparse FE model
+  /// (a chain of n_c = 64 at M = 16 factorizes 1 024 sparse unknowns instead of a dense r × r
+  /// with r up to 768). dense() equals contact_jacobian(x) to rounding. The products hold their
+  /// own data (shared), not a reference to this object.
   /// Throws std::runtime_error if G is singular.
   [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
