@@ -94,7 +94,8 @@ solvers::WeightedResidual chain_problem(int masses, int contacts, int m) {
   const Eigen::VectorXcd lin = solvers::frequency_response(system, forcing);
   std::vector<solvers::ContactPoint> points;
   for (int c = masses - contacts; c < masses; ++c) {
-    points.push_back({c, std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e3, 0.95 * std::abs(lin(c))})});
+    const contact::LinearPenaltyParameters stop{1e3, 0.95 * std::abs(lin(c))};
+    points.push_back({c, std::make_shared<contact::LinearPenalty>(stop)});
   }
   return {system, forcing, points, TimeBasis::from_name("fourier", m), TimeBasis::from_name("fourier", m)};
 }
@@ -122,7 +123,8 @@ TEST(SparseWoodbury, SolvesAsDenseLusOfTheMatricesItRepresents) {
   const Eigen::VectorXd expected = dense.lu().solve(y);
   EXPECT_LE((w.solve(y) - expected).norm(), 1e-13 * expected.norm());
 
-  const Eigen::VectorXd b = Eigen::VectorXd::Random(n), c = Eigen::VectorXd::Random(n), rhs = Eigen::VectorXd::Random(n + 1);
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(n), c = Eigen::VectorXd::Random(n);
+  const Eigen::VectorXd rhs = Eigen::VectorXd::Random(n + 1);
   const double alpha = 1.7, d = -0.3;
   const LowRankJacobian bj = solvers::bordered_low_rank(j, alpha, b, c, d);
   const Eigen::MatrixXd reference = bordered_matrix(dense, alpha, b, c, d);
@@ -154,7 +156,8 @@ TEST(SparseWoodbury, FailsOnASingularJacobianAndSolvesItsBorderedMatrix) {
   EXPECT_LE((j.dense() - singular).norm(), 1e-14);
   solvers::WoodburyLu w;
   EXPECT_FALSE(w.factorize(j));
-  const Eigen::VectorXd b = Eigen::VectorXd::Ones(n), c = Eigen::VectorXd::Ones(n), rhs = Eigen::VectorXd::Random(n + 1);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(n), c = Eigen::VectorXd::Ones(n);
+  const Eigen::VectorXd rhs = Eigen::VectorXd::Random(n + 1);
   const Eigen::MatrixXd reference = bordered_matrix(singular, 1.0, b, c, 0.0);
   ASSERT_GT(std::abs(reference.determinant()), 1e-3);
   solvers::WoodburyLu wb;

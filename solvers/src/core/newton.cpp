@@ -83,7 +83,9 @@ LowRankJacobian bordered_sparse_form(const LowRankJacobian& j, double alpha, con
   // The rows of V′ and the columns of U that hold an entry: where V′ b and cᵀ U are stored.
   std::vector<char> v_rows(static_cast<size_t>(q), 0), u_cols(static_cast<size_t>(q), 0);
   for (Eigen::Index k = 0; k < j.sparse_v.outerSize(); ++k) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_v, k); it; ++it) v_rows[static_cast<size_t>(it.row())] = 1;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j.sparse_v, k); it; ++it) {
+      v_rows[static_cast<size_t>(it.row())] = 1;
+    }
   }
   for (Eigen::Index k = 0; k < j.sparse_u.outerSize(); ++k) {
     if (j.sparse_u.outerIndexPtr()[k + 1] > j.sparse_u.outerIndexPtr()[k]) u_cols[static_cast<size_t>(k)] = 1;

@@ -547,10 +547,10 @@ const WeightedResidual::Impl::AssembledOperator& WeightedResidual::Impl::assembl
     const std::array<const Eigen::SparseMatrix<double>*, 3> space{&system.mass, &system.damping, &system.stiffness};
     const std::array<double, 3> factor{fr * fr, fr, 1.0};
     auto g_full = std::make_shared<Eigen::SparseMatrix<double>>(n * m, n * m);
-    for (int t = 0; t < 3; ++t) {
-      const Eigen::SparseMatrix<double> a = factor[static_cast<size_t>(t)] *
-                                            Eigen::SparseMatrix<double>(operator_products->transposed[static_cast<size_t>(t)].transpose());
-      *g_full += Eigen::SparseMatrix<double>(Eigen::kroneckerProduct(a, *space[static_cast<size_t>(t)]));
+    for (size_t t = 0; t < 3; ++t) {
+      const Eigen::SparseMatrix<double> a =
+          factor[t] * Eigen::SparseMatrix<double>(operator_products->transposed[t].transpose());
+      *g_full += Eigen::SparseMatrix<double>(Eigen::kroneckerProduct(a, *space[t]));
     }
     g_full->makeCompressed();
     assembled.g = std::move(g_full);
@@ -574,7 +574,8 @@ std::optional<LowRankJacobian> WeightedResidual::Impl::sparse_contact_jacobian(
   const std::array<const Eigen::SparseMatrix<double>*, 3> space{&system.mass, &system.damping, &system.stiffness};
   double bound = 0.0;
   for (size_t t = 0; t < 3; ++t) {
-    bound += static_cast<double>(operator_products->transposed[t].nonZeros()) * static_cast<double>(space[t]->nonZeros());
+    bound += static_cast<double>(operator_products->transposed[t].nonZeros()) *
+             static_cast<double>(space[t]->nonZeros());
   }
   for (const auto& c : contacts) bound += std::pow(static_cast<double>(m) * static_cast<double>(c.terms().size()), 2);
   if (bound > limit) return std::nullopt;
@@ -590,9 +591,10 @@ std::optional<LowRankJacobian> WeightedResidual::Impl::sparse_contact_jacobian(
   jac.sparse_capacitance = *op.g + Eigen::SparseMatrix<double>(jac.sparse_v * (*op.p));
   const std::shared_ptr<const Eigen::SparseMatrix<double>> hs = h_sparse;
   const std::shared_ptr<const Eigen::MatrixXd> hd = op.h;
-  jac.times_update = [hs, hd, nx](const Eigen::MatrixXd& y) {
+  jac.times_update = [hs, hd, nx](const Eigen::MatrixXd& y) {  // H N Y
     const Eigen::MatrixXd ny = *nx * y;
-    return Eigen::MatrixXd(hs ? Eigen::MatrixXd(*hs * ny) : Eigen::MatrixXd(*hd * ny));
+    if (hs) return Eigen::MatrixXd(*hs * ny);
+    return Eigen::MatrixXd(*hd * ny);
   };
   return jac;
 }

@@ -554,7 +554,8 @@ struct WeightedResidual::Impl {
   static void scale_tangents(std::vector<ContactTangent>& tangents, double sigma);
 
   // N as a sparse matrix, every entry of contact_force_blocks stored (explicit zeros included).
-  [[nodiscard]] Eigen::SparseMatrix<double> sparse_contact_force_jacobian(const std::vector<ContactTangent>& tangents) const;
+  [[nodiscard]] Eigen::SparseMatrix<double> sparse_contact_force_jacobian(
+      const std::vector<ContactTangent>& tangents) const;
   // H N (n_c·M square, dense).
   [[nodiscard]] Eigen::MatrixXd hn_product(const std::vector<ContactTangent>& tangents) const;
   // I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
