@@ -3,8 +3,8 @@
 // exponent p of t ≈ c·x^p (least squares on log t against log x over the last four points).
 //  - Time vs M: every combination of [JL14 Table 2] on Case 1 (reproduce/scenes/jl14_case1.toml,
 //    the FE rod, one contact), distributional form, M = 16 … 1024 (the default Q = max(256, 2M)).
-//  - Time vs n_c: Fourier:Fourier, M = 16, on an explicit fixed-free chain of 64 unit masses
-//    (k = 1e4 N/m, C = 1e-4 K, forcing 1 N at 0.8 of the first natural frequency on the free
+//  - Time vs n_c: Fourier:Fourier, M = 16, on a fixed-free chain of 64 unit masses (models/spring_chain.hpp,
+//    k = 1e4 N/m, C = 1e-4 K; forcing 1 N at 0.8 of the first natural frequency on the free
 //    end), linear penalty stops (k_pen = 1e3 N/m) on the last n_c = 1, 4, 16, 64 masses, each at
 //    0.95 of its linear amplitude, so every stop is hit.
 // Each time is the median of 5 runs on one core (set-up included). Writes, through
@@ -26,6 +26,7 @@
 #include <wbm/solvers/weighted_residual.hpp>
 
 #include "combinations.hpp"
+#include "spring_chain.hpp"
 #include "run.hpp"
 #include "scene.hpp"
 
@@ -85,26 +86,6 @@ double fitted_exponent(const std::vector<Row>& rows, size_t tail) {
   std::vector<double> x, t;
   for (size_t i = first; i < rows.size(); ++i) x.push_back(rows[i].x), t.push_back(rows[i].total_s);
   return wbm::reproduce::loglog_slope(x, t);
-}
-
-// Fixed-free chain: mass i tied to i − 1 (mass 0 to the ground) by k.
-wbm::solvers::MechanicalSystem chain(int n, double k) {
-  std::vector<Eigen::Triplet<double>> mt, kt;
-  for (int i = 0; i < n; ++i) {
-    mt.emplace_back(i, i, 1.0);
-    kt.emplace_back(i, i, (i + 1 < n ? 2.0 : 1.0) * k);
-    if (i + 1 < n) {
-      kt.emplace_back(i, i + 1, -k);
-      kt.emplace_back(i + 1, i, -k);
-    }
-  }
-  wbm::solvers::MechanicalSystem s;
-  s.mass.resize(n, n);
-  s.stiffness.resize(n, n);
-  s.mass.setFromTriplets(mt.begin(), mt.end());
-  s.stiffness.setFromTriplets(kt.begin(), kt.end());
-  s.damping = 1e-4 * s.stiffness;
-  return s;
 }
 
 // The rows of one series as a table: x, n_c·M, set-up and total time, Newton iterations; the
@@ -168,7 +149,7 @@ int main(int argc, char** argv) {
     std::vector<Row> chain_rows;
     const int n = 64, m_chain = 16;
     const double k = 1e4;
-    const auto system = chain(n, k);
+    const auto system = wbm::models::spring_chain(n, k, 1e-4);
     const double f1 = std::sqrt(k) * 2.0 * std::sin(std::numbers::pi / (2.0 * (2 * n + 1))) / (2.0 * std::numbers::pi);
     const wbm::solvers::HarmonicForcing forcing{n - 1, 1.0, 0.8 * f1};
     const Eigen::VectorXcd lin = wbm::solvers::frequency_response(system, forcing);

@@ -18,6 +18,7 @@
 #include <wbm/solvers/weighted_residual.hpp>
 #include <wbm/spectral/layout.hpp>
 
+#include "spring_chain.hpp"
 #include "testing.hpp"
 
 using namespace wbm;
@@ -63,32 +64,12 @@ Eigen::MatrixXd bordered_matrix(const Eigen::MatrixXd& j, double alpha, const Ei
   return m;
 }
 
-// A fixed-free chain of n unit masses tied by springs k (mass 0 to the ground), C = 1e-4 K.
-solvers::MechanicalSystem chain(int n, double k) {
-  std::vector<Eigen::Triplet<double>> mt, kt;
-  for (int i = 0; i < n; ++i) {
-    mt.emplace_back(i, i, 1.0);
-    kt.emplace_back(i, i, (i + 1 < n ? 2.0 : 1.0) * k);
-    if (i + 1 < n) {
-      kt.emplace_back(i, i + 1, -k);
-      kt.emplace_back(i + 1, i, -k);
-    }
-  }
-  solvers::MechanicalSystem s;
-  s.mass.resize(n, n);
-  s.stiffness.resize(n, n);
-  s.mass.setFromTriplets(mt.begin(), mt.end());
-  s.stiffness.setFromTriplets(kt.begin(), kt.end());
-  s.damping = 1e-4 * s.stiffness;
-  return s;
-}
-
 // The chain of `masses` forced at its free end at 0.8 f₁ (1 N), with linear penalty stops
 // (1e3 N/m) on its last `contacts` masses at 0.95 of their linear amplitude: every contact is
 // in contact over part of the period.
 solvers::WeightedResidual chain_problem(int masses, int contacts, int m) {
   const double k = 1e4;
-  const auto system = chain(masses, k);
+  const auto system = models::spring_chain(masses, k, 1e-4);
   const double f1 = std::sqrt(k) * 2.0 * std::sin(M_PI / (2.0 * (2 * masses + 1))) / (2.0 * M_PI);
   const solvers::HarmonicForcing forcing{masses - 1, 1.0, 0.8 * f1};
   const Eigen::VectorXcd lin = solvers::frequency_response(system, forcing);
