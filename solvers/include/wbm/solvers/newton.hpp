@@ -42,11 +42,11 @@ namespace wbm::solvers {
 /// is not small but whose factors are sparse through a sparse regular L (q × q):
 ///   J = (I_n + U L⁻¹ V′) / s,   U: n × q (`sparse_u`),   V′: q × n (`sparse_v`),
 /// with the capacitance K = L + V′ U (q × q, sparse, `sparse_capacitance`): the generalized
-/// Woodbury identity (I + U L⁻¹ V′)⁻¹ = I − U K⁻¹ V′ [Hager 1989, Eq. (3)] makes a step one
-/// sparse LU of K. `times_update` gives Y ↦ U L⁻¹ V′ Y (n × k), for apply() and dense() only;
-/// `u`, `capacitance`, `times_v` and `times_u` are empty. The condensed contact Jacobian takes it with L the
-/// assembled operator G(f), U = P and V′ = Pᵀ N: K = G + Pᵀ N P is the uncondensed Jacobian,
-/// sparse where the structure is (weighted_residual.hpp, contact_jacobian_low_rank).
+/// Woodbury identity (I + U L⁻¹ V′)⁻¹ = I − U K⁻¹ V′ [Hager 1989] makes a step one sparse LU
+/// of K. `times_update` gives Y ↦ U L⁻¹ V′ Y (n × k), for apply() and dense() only; `u`,
+/// `capacitance`, `times_v` and `times_u` are empty. The condensed contact Jacobian takes it
+/// with L the assembled operator G(f), U = P and V′ = Pᵀ N: K = G + Pᵀ N P is the uncondensed
+/// Jacobian, sparse where the structure is (weighted_residual.hpp, contact_jacobian_low_rank).
 /// det J = det K / (det L · sⁿ).
 struct LowRankJacobian {
   double scale = 1.0;            // s > 0
