@@ -70,7 +70,7 @@ Eigen::MatrixXd bordered_matrix(const Eigen::MatrixXd& j, double alpha, const Ei
 solvers::WeightedResidual chain_problem(int masses, int contacts, int m) {
   const double k = 1e4;
   const auto system = models::spring_chain(masses, k, 1e-4);
-  const double f1 = std::sqrt(k) * 2.0 * std::sin(M_PI / (2.0 * (2 * masses + 1))) / (2.0 * M_PI);
+  const double f1 = std::sqrt(k) * std::sin(wbm::testing::kPi / (2.0 * (2 * masses + 1))) / wbm::testing::kPi;
   const solvers::HarmonicForcing forcing{masses - 1, 1.0, 0.8 * f1};
   const Eigen::VectorXcd lin = solvers::frequency_response(system, forcing);
   std::vector<solvers::ContactPoint> points;
