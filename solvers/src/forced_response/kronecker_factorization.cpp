@@ -305,6 +305,7 @@ struct KroneckerFactorization::Setup {
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
   bool circulant = false;                             // all three time operators circulant
   bool supernodal = false;  // assembled path: the time operators' joint pattern is over ¼ full
+  bool by_components = false;  // not modal: G factorized per component (kronecker_components.cpp)
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
 };
 
@@ -333,7 +334,17 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
                                 "(Rayleigh C = c_M M + c_K K, or modal damping); this C is not (C M⁻¹ K ≠ K M⁻¹ C): "
                                 "use LinearSolverPath::SparseLU or Automatic");
   }
+  // Block-diagonal time operators (Fourier:Fourier) off the modal path: G's blocks G_c are sparse
+  // and |c|·n square, so G is factorized block by block (kronecker_components.cpp) instead of
+  // assembled whole.
+  auto components = block_components(ops, transposed);
+  const bool by_components = !components.empty() && (path == LinearSolverPath::SparseLU ||
+                                                     (path == LinearSolverPath::Automatic && !(rayleigh || classical)));
   setup->modal = path != LinearSolverPath::SparseLU && (rayleigh || classical);
+  if (by_components) {
+    setup->by_components = true;
+    setup->components = std::move(components);
+  }
   if (setup->modal) {
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
                                                                         Eigen::MatrixXd(system.mass));
@@ -357,7 +368,7 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     }
   }
   if (setup->modal) {
-    setup->components = block_components(ops, transposed);
+    setup->components = std::move(components);
     if (fourier_weighting) setup->fourier_weighting = FourierWeighting::detect(ops);
     setup->circulant = setup->components.empty() && !setup->fourier_weighting &&
                        spectral::Circulant::is_circulant(ops.mass) && spectral::Circulant::is_circulant(ops.damping) &&
@@ -428,6 +439,11 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
     }
     return factorized_;
   }
+  component_lus_.reset();
+  if (su.by_components) {
+    factorized_ = factorize_components(su.components);
+    return factorized_;
+  }
   g_ = Eigen::kroneckerProduct(Eigen::SparseMatrix<double>((fr * fr * ops.mass).sparseView()), system.mass).eval();
   g_ += Eigen::kroneckerProduct(Eigen::SparseMatrix<double>((fr * ops.damping).sparseView()), system.damping).eval();
   g_ += Eigen::kroneckerProduct(Eigen::SparseMatrix<double>(ops.stiffness.sparseView()), system.stiffness).eval();
@@ -460,6 +476,7 @@ std::optional<double> KroneckerFactorization::rcond() const { return 1.0 / condi
 
 Eigen::VectorXd KroneckerFactorization::solve(const Eigen::VectorXd& v, bool transposed) const {
   if (!setup_->modal) {
+    if (setup_->by_components) return solve_components(v, transposed, setup_->components);
     if (supernodal_lu_) return transposed ? supernodal_lu_->solve_transposed(v) : supernodal_lu_->solve(v);
     return transposed ? lu_->solve_transposed(v) : lu_->solve(v);
   }
@@ -609,6 +626,7 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     }
     return h;
   }
+  if (su.by_components) return compliance_components(rows, nc, su.components);
   Eigen::MatrixXd selection = Eigen::MatrixXd::Zero(g_.rows(), nc * m);  // Pᵀ
   for (Eigen::Index j = 0; j < nc * m; ++j) {
     for (const auto& [row, w] : rows[static_cast<size_t>(j)]) selection(row, j) = w;
@@ -650,7 +668,7 @@ Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd
 
 double KroneckerFactorization::norm1() const {
   if (norm1_ >= 0.0) return norm1_;
-  if (setup_->modal) {
+  if (setup_->modal || setup_->by_components) {
     const MechanicalSystem& system = *operator_.system;
     const TimeOperators& ops = *operator_.ops;
     const double fr = operator_.frequency_hz;

@@ -5,6 +5,8 @@
 // the modal path — n independent M × M blocks A + λ_i B — with the block structures it exploits
 // (components of the time operators' sparsity graph; the factored Fourier-weighting form).
 // Solves with G and Gᵀ, the condensed compliance H = P G⁻¹ Pᵀ on contact rows, and ‖G‖₁.
+// Off the modal path, block-diagonal time operators (Fourier:Fourier) are factorized block by
+// block (kronecker_components.cpp: band LU or KLU per component) instead of assembled.
 // A linear-solver policy (newton.hpp, LinearSolverPolicy) for the operator G(f): factorize(G),
 // solve(rhs), rcond(). The assembled path factorizes with the SparseLu policy (KLU) when the time
 // operators' joint pattern holds at most a quarter of its entries (Fourier:Fourier, Galerkin DB6),
@@ -106,7 +108,15 @@ class KroneckerFactorization {
 
  private:
   [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& v, bool transposed) const;
+  // The component path (kronecker_components.cpp): one SparseLu of each block G_c of the time
+  // operators' components, for operator_.
+  bool factorize_components(const std::vector<std::vector<Eigen::Index>>& components);
+  [[nodiscard]] Eigen::VectorXd solve_components(const Eigen::VectorXd& v, bool transposed,
+                                                 const std::vector<std::vector<Eigen::Index>>& components) const;
+  [[nodiscard]] Eigen::MatrixXd compliance_components(const std::vector<StackedTerms>& rows, int nc,
+                                                      const std::vector<std::vector<Eigen::Index>>& components) const;
   struct Setup;
+  struct ComponentLus;
   class ModeBlock;
   struct ComplianceStructure;
   explicit KroneckerFactorization(std::shared_ptr<const Setup> setup);
@@ -117,6 +127,7 @@ class KroneckerFactorization {
   // Assembled path only, one of the two (shared by copies: the policies are move-only).
   std::shared_ptr<SparseLu> lu_;
   std::shared_ptr<SupernodalLu> supernodal_lu_;
+  std::shared_ptr<const ComponentLus> component_lus_;  // component path only
   std::vector<std::shared_ptr<const ModeBlock>> blocks_;
   mutable double norm1_ = -1.0;  // < 0: not computed yet
   std::shared_ptr<const ComplianceStructure> compliance_structure_;  // set by compliance(), reset by factorize()

@@ -46,8 +46,13 @@ enum class OperatorRule { Automatic, Discrete };
 ///  - Automatic: Modal when the undamped modes diagonalize C: Rayleigh C = c_M M + c_K K (the
 ///    rod's β-damping is c_K = β), or any classical C such as modal damping ratios (Caughey &
 ///    O'Kelly 1965: C M⁻¹ K = K M⁻¹ C; then Φᵀ C Φ = diag(c_i) checked to 1e-10); SparseLU otherwise.
-///  - SparseLU: Eigen::SparseLU of the assembled Kronecker sum (any damping; slow for wavelet
-///    and dense time operators, whose periodic wrap-around defeats the fill-reducing ordering).
+///  - SparseLU: any damping. Block-diagonal time operators (Fourier:Fourier: a harmonic's cosine
+///    and sine) are factorized block by block, G_c = Σ_t A_t[c, c] ⊗ X_t of size |c|·n, by
+///    LAPACK's band LU (dgbtrf) when the structure's half-bandwidth b gives |c|(b + 1) − 1 ≤ 32,
+///    else by KLU with one step of iterative refinement: O(M·n) per frequency for a banded FE
+///    model. Other time operators: the assembled Kronecker sum, by KLU (joint pattern at most ¼
+///    full) or Eigen's supernodal SparseLU (slow for wavelet and dense time operators, whose
+///    periodic wrap-around defeats the fill-reducing ordering).
 ///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (Eigen's generalized self-adjoint eigensolver),
 ///      G = (I ⊗ Φ⁻ᵀ) blockdiag_i(A + λ_i B) (I ⊗ Φ⁻¹),  A = f² A_M + f c_M A_C,  B = f c_K A_C + A_K,
 ///    (a classical C that is not Rayleigh: c_M = c_i = (Φᵀ C Φ)_ii per mode and c_K = 0),
