@@ -1,6 +1,7 @@
 // FloquetAnalysis (floquet.hpp): the monodromy stepping of floquet_stepping.hpp in the undamped
 // modes' coordinates when the damping matrix is classical, set up once per branch.
 #include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/undamped_modes.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -150,17 +151,20 @@ std::shared_ptr<const FloquetAnalysis::Modes> modes_of(const MechanicalSystem& s
   double c_m = 0.0, c_k = 0.0;
   const bool rayleigh = detail::rayleigh_fit(system, c_m, c_k);
   if (!rayleigh && !detail::classical_damping_probe(system)) return nullptr;
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
-                                                                      Eigen::MatrixXd(system.mass));
-  if (eig.info() != Eigen::Success) return nullptr;
+  UndampedModes modes;  // dense below 400 DOFs, O(n²) for a larger tridiagonal pencil
+  try {
+    modes = undamped_modes(system.stiffness, system.mass);
+  } catch (const std::invalid_argument&) {
+    return nullptr;
+  }
   auto m = std::make_shared<FloquetAnalysis::Modes>();
-  m->phi = eig.eigenvectors();
+  m->phi = std::move(modes.phi);
   const Eigen::Index n = m->phi.cols();
-  const double largest = n > 0 ? eig.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+  const double largest = n > 0 ? modes.lambda.cwiseAbs().maxCoeff() : 0.0;
   // Eigenvalues below 1e-12 of the largest are rigid-body modes to rounding.
-  m->omega2 = eig.eigenvalues().array().unaryExpr([&](double l) { return l > 1e-12 * largest ? l : 0.0; });
+  m->omega2 = modes.lambda.array().unaryExpr([&](double l) { return l > 1e-12 * largest ? l : 0.0; });
   if (rayleigh) {
-    m->damping = c_m + c_k * eig.eigenvalues().array();
+    m->damping = c_m + c_k * modes.lambda.array();
   } else {
     auto d = detail::modal_damping_of(system, m->phi);
     if (!d) return nullptr;

@@ -17,6 +17,7 @@
 #include <Eigen/LU>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include <wbm/solvers/undamped_modes.hpp>
 #include <wbm/spectral/circulant.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -346,14 +347,16 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     setup->components = std::move(components);
   }
   if (setup->modal) {
-    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(system.stiffness),
-                                                                        Eigen::MatrixXd(system.mass));
-    if (eig.info() != Eigen::Success) {
+    // Dense below 400 DOFs; O(n²) for a larger tridiagonal pencil (undamped_modes.hpp).
+    UndampedModes modes;
+    try {
+      modes = undamped_modes(system.stiffness, system.mass);
+    } catch (const std::invalid_argument&) {
       throw std::invalid_argument("modal solve: K Φ = M Φ Λ failed (is M symmetric positive definite?); use "
                                   "LinearSolverPath::SparseLU");
     }
-    setup->phi = eig.eigenvectors();
-    setup->lambda = eig.eigenvalues();
+    setup->phi = std::move(modes.phi);
+    setup->lambda = std::move(modes.lambda);
     if (classical) {
       auto d = modal_damping_of(system, setup->phi);
       if (d) {

@@ -53,7 +53,8 @@ enum class OperatorRule { Automatic, Discrete };
 ///    model. Other time operators: the assembled Kronecker sum, by KLU (joint pattern at most ¼
 ///    full) or Eigen's supernodal SparseLU (slow for wavelet and dense time operators, whose
 ///    periodic wrap-around defeats the fill-reducing ordering).
-///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (Eigen's generalized self-adjoint eigensolver),
+///  - Modal: with K Φ = M Φ Λ, Φᵀ M Φ = I (undamped_modes.hpp: Eigen's dense solver, or Sturm
+///    bisection and inverse iteration in O(n²) for a tridiagonal pencil of 400 DOFs or more),
 ///      G = (I ⊗ Φ⁻ᵀ) blockdiag_i(A + λ_i B) (I ⊗ Φ⁻¹),  A = f² A_M + f c_M A_C,  B = f c_K A_C + A_K,
 ///    (a classical C that is not Rayleigh: c_M = c_i = (Φᵀ C Φ)_ii per mode and c_K = 0),
 ///    i.e. n independent M × M blocks, each inverted in the form its time operators allow:
