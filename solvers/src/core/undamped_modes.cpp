@@ -215,7 +215,8 @@ UndampedModes undamped_modes(const Eigen::SparseMatrix<double>& stiffness, const
   if (stiffness.rows() >= kTridiagonalFrom) {
     if (auto modes = tridiagonal_undamped_modes(stiffness, mass)) return std::move(*modes);
   }
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(stiffness), Eigen::MatrixXd(mass)};
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(stiffness),
+                                                                      Eigen::MatrixXd(mass)};
   if (eig.info() != Eigen::Success) {
     throw std::invalid_argument("undamped modes: K Φ = M Φ Λ failed (is M symmetric positive definite?)");
   }
