@@ -27,8 +27,9 @@ list(APPEND CMAKE_MODULE_PATH ${CMAKE_CURRENT_LIST_DIR})
 find_package(spectra 1.0 QUIET CONFIG)  # Craig–Bampton's sparse eigenproblem (fem/)
 wbm_require(spectra_FOUND libspectra-dev "Spectra")
 find_package(KLU QUIET)  # cmake/FindKLU.cmake
-# LAPACK: band LU (dgbtrf) of the weighted-residual operator's harmonic blocks (solvers/,
-# kronecker_components.cpp). Debian's reference LAPACK unless the machine chose OpenBLAS before
+# LAPACK: band LU (dgbtrf) of the weighted-residual operator's harmonic blocks
+# (kronecker_components.cpp) and tridiagonal LU (dgttrf) of the undamped modes' inverse
+# iteration (undamped_modes.cpp), both in solvers/. Debian's reference LAPACK unless the machine chose OpenBLAS before
 # (scripts/install-deps).
 find_package(LAPACK QUIET)
 wbm_require(LAPACK_FOUND liblapack-dev "LAPACK")
