@@ -13,10 +13,12 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
-#include <testing.hpp>
 #include <wbm/fem/rod.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/undamped_modes.hpp>
+
+#include "spring_chain.hpp"
+#include "testing.hpp"
 
 namespace wbm::solvers {
 namespace {
@@ -35,12 +37,9 @@ void expect_identities(const Eigen::SparseMatrix<double>& k, const Eigen::Sparse
 
 TEST(UndampedModes, ChainMatchesTheClosedForm) {
   const int n = 600;
-  Eigen::SparseMatrix<double> k(n, n), m(n, n);
-  for (int i = 0; i < n; ++i) {
-    k.insert(i, i) = i + 1 < n ? 2.0 : 1.0;  // fixed at 0, free at the end
-    if (i + 1 < n) k.insert(i + 1, i) = k.insert(i, i + 1) = -1.0;
-    m.insert(i, i) = 1.0;
-  }
+  const MechanicalSystem chain = models::spring_chain(n, 1.0, 0.0);  // unit masses and springs, fixed-free
+  const Eigen::SparseMatrix<double>& k = chain.stiffness;
+  const Eigen::SparseMatrix<double>& m = chain.mass;
   const auto modes = tridiagonal_undamped_modes(k, m);
   ASSERT_TRUE(modes.has_value());
   EXPECT_EQ(modes->method, "tridiagonal");
