@@ -38,10 +38,11 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   std::vector<Eigen::MatrixXd> a;              // A_k
   std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> lu;
   std::vector<Eigen::MatrixXd> v, g;           // V_k = A_k⁻¹ N_k, G_k = N_kᵀ V_k
-  Eigen::MatrixXd beta, gamma;                 // nl × f: multiplier columns β_k N_c, active rows γ_k N_cᵀ
+  Eigen::MatrixXd beta_t;                      // f × nl: multiplier columns β_k N_c (column l: multiplier l's β)
+  Eigen::MatrixXd gamma;                       // nl × f: active rows γ_k N_cᵀ
   Eigen::VectorXd diag;                        // nl: J(f_s, f_s)
   std::vector<Eigen::Index> inactive, active;  // multiplier indices (0 … nl − 1)
-  Eigen::MatrixXd beta_a, gamma_a;             // active rows of beta, gamma
+  Eigen::MatrixXd beta_a, gamma_a;             // active rows of β (beta_t's columns) and γ
   Eigen::MatrixXd bd, cd, xd;                  // ny × nd: dense columns (ω², E), dense rows (normalization, border), A⁻¹ bd
   Eigen::PartialPivLU<Eigen::MatrixXd> schur;
   std::vector<Eigen::MatrixXd> chat;           // penalty: per stop, Ĉ_c (f × f, zero diagonal)
@@ -176,7 +177,7 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   bd.setZero(ny, nd);
   cd.setZero(ny, nd);
   if (!exact) return factorize_penalty(jac);
-  beta.setZero(nl, f);
+  beta_t.setZero(f, nl);
   gamma.setZero(nl, f);
   diag.setZero(nl);
   std::vector<char> has_hb(static_cast<size_t>(nl), 0), off_diagonal(static_cast<size_t>(nl), 0);
@@ -213,7 +214,7 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
         } else {
           const Eigen::Index l = c - ny - 1;
           const int k = block_of[static_cast<size_t>(i)];
-          beta(l, k) += dirs[static_cast<size_t>(k)](local_of[static_cast<size_t>(i)], stop_of(l)) * val;
+          beta_t(k, l) += dirs[static_cast<size_t>(k)](local_of[static_cast<size_t>(i)], stop_of(l)) * val;
         }
       } else {
         tail.emplace_back(i, c, val);
@@ -230,10 +231,15 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   norm_inf = row_sum.maxCoeff();
   // β_k, γ_k: the least-squares multiples of N_c (a column or row of another shape leaves a
   // residual that the verified solves catch).
-  for (int k = 0; k < f; ++k) {  // column by column: β and γ are stored by columns
+  for (Eigen::Index l = 0; l < nl; ++l) {  // in storage order: β by multiplier, γ by harmonic
+    for (int k = 0; k < f; ++k) {
+      const double d2 = dir_norm2(stop_of(l), k);
+      beta_t(k, l) = d2 > 0.0 ? beta_t(k, l) / d2 : 0.0;
+    }
+  }
+  for (int k = 0; k < f; ++k) {
     for (Eigen::Index l = 0; l < nl; ++l) {
       const double d2 = dir_norm2(stop_of(l), k);
-      beta(l, k) = d2 > 0.0 ? beta(l, k) / d2 : 0.0;
       gamma(l, k) = d2 > 0.0 ? gamma(l, k) / d2 : 0.0;
     }
   }
@@ -268,7 +274,7 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   beta_a.resize(na, f);
   gamma_a.resize(na, f);
   for (Eigen::Index q = 0; q < na; ++q) {
-    beta_a.row(q) = beta.row(active[static_cast<size_t>(q)]);
+    beta_a.row(q) = beta_t.col(active[static_cast<size_t>(q)]).transpose();
     gamma_a.row(q) = gamma.row(active[static_cast<size_t>(q)]);
   }
   for (int k = 0; k < f; ++k) {
