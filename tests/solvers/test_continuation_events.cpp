@@ -171,6 +171,20 @@ TEST(PiecewiseContinuation, SimultaneousCrossingsSwitchTogetherWhateverTheirLast
   }
 }
 
+// Checks every point of a branch of two unit springs against u_i = min(p_i, g), f_i = max(0, p_i − g)
+// (g = 1); returns the parameters of its events.
+std::vector<double> on_closed_form(const SpringsAgainstStops& s, const solvers::Branch& b) {
+  std::vector<double> corners;
+  for (const auto& p : b.points) {
+    for (Eigen::Index i = 0; i < 2; ++i) {
+      EXPECT_NEAR(p.x(i), std::min(s.load(i, p.parameter), 1.0), 1e-10) << "λ = " << p.parameter;
+      EXPECT_NEAR(p.x(2 + i), std::max(0.0, s.load(i, p.parameter) - 1.0), 1e-10) << "λ = " << p.parameter;
+    }
+    if (p.event) corners.push_back(p.parameter);
+  }
+  return corners;
+}
+
 // Two unit springs, g = 1, one step from λ = 0.9 to about 1.2: DOF 0 under p₀ = λ reaches the
 // stop at λ = 1, DOF 1 under p₁ = 1 + 0.0025 − (λ − 1)² touches it only over 0.95 < λ < 1.05.
 // DOF 1's gap crosses 0 and comes back within the step, so the step's end shows only DOF 0's
@@ -192,14 +206,7 @@ TEST(PiecewiseContinuation, AnEntryThatCrossesAndReturnsWithinAStepSwitchesAlone
   ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
   EXPECT_EQ(b.events, 3);
   EXPECT_EQ(b.switches, 3);
-  std::vector<double> corners;
-  for (const auto& p : b.points) {
-    for (Eigen::Index i = 0; i < 2; ++i) {
-      EXPECT_NEAR(p.x(i), std::min(s.load(i, p.parameter), 1.0), 1e-10) << "λ = " << p.parameter;
-      EXPECT_NEAR(p.x(2 + i), std::max(0.0, s.load(i, p.parameter) - 1.0), 1e-10) << "λ = " << p.parameter;
-    }
-    if (p.event) corners.push_back(p.parameter);
-  }
+  const std::vector<double> corners = on_closed_form(s, b);
   ASSERT_EQ(corners.size(), 3U);
   EXPECT_NEAR(corners[0], 0.95, 1e-9);
   EXPECT_NEAR(corners[1], 1.0, 1e-9);
@@ -224,14 +231,7 @@ TEST(PiecewiseContinuation, ACrossingBesideACreepingEntryIsLocatedWithoutCreepin
   o.initial_step = o.max_step = 0.34;
   const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd(x0), lambda0, o);
   ASSERT_EQ(b.stop, solvers::StopReason::RangeReached) << b.message;
-  std::vector<double> corners;
-  for (const auto& p : b.points) {
-    for (Eigen::Index i = 0; i < 2; ++i) {
-      EXPECT_NEAR(p.x(i), std::min(s.load(i, p.parameter), 1.0), 1e-10) << "λ = " << p.parameter;
-      EXPECT_NEAR(p.x(2 + i), std::max(0.0, s.load(i, p.parameter) - 1.0), 1e-10) << "λ = " << p.parameter;
-    }
-    if (p.event) corners.push_back(p.parameter);
-  }
+  const std::vector<double> corners = on_closed_form(s, b);
   ASSERT_EQ(corners.size(), 2U);
   EXPECT_NEAR(corners[0], 1.0, 1e-9);
   EXPECT_NEAR(corners[1], 1.1, 2.0 * o.corrector_tolerance / rate);
