@@ -1,7 +1,8 @@
 // Piecewise-smooth continuation (continuation.hpp, detail/continuation_events.hpp) against closed
 // forms: a spring against a stop (one event, the branch bends), a branch that turns back at the
 // corner (a fold located at the event), two symmetric samples that switch together, and the same
-// with the symmetry broken at the rounding level (the branch must not change).
+// with the symmetry broken at the rounding level (the branch must not change), an entry that
+// crosses and returns within a step, and a crossing beside an entry that creeps to its stop.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -217,8 +218,8 @@ TEST(PiecewiseContinuation, AnEntryThatCrossesAndReturnsWithinAStepSwitchesAlone
 // at unit rate; DOF 1 under p₁ = 1 + r (λ − 1.1), r = 5e-7, creeps to it, 1e-7 away at the
 // start, and reaches it at λ = 1.1. Both cross within the step, so the minimum of their event
 // functions has a kink just before DOF 0's crossing, where DOF 1's gap stops being the smaller.
-// The crossing of DOF 0 is still located to 1e-9 in λ, and DOF 1's to the zero band over its
-// rate (1e-12 / 5e-7 = 2e-6). Regula falsi on the minimum instead of on each entry crept
+// The crossing of DOF 0 is still located to 1e-9 in λ, and DOF 1's to twice the zero band over
+// its rate (2 · 1e-12 / 5e-7 = 4e-6). Regula falsi on the minimum instead of on each entry crept
 // towards the first crossing: 52 evaluations of the system for this branch, against 18 now.
 TEST(PiecewiseContinuation, ACrossingBesideACreepingEntryIsLocatedWithoutCreeping) {
   SpringsAgainstStops s;
