@@ -257,6 +257,28 @@ TEST(Newton, LevenbergMarquardtRescuesAStalledLineSearch) {
   EXPECT_GT(lm.report.levenberg_marquardt_steps, 0);
 }
 
+// The fallback is taken only where the Newton step fails. On arctan the full Newton step
+// decreases |x| exactly when |x| < 1.3917 (the root of 2x = (1 + x²) arctan x), and near the root
+// it is x ↦ x − (1 + x²) arctan x = −(2/3) x³ + O(x⁵): cubic. From x₀ = 10 the iterates 10 and
+// about 2 (‖R‖ = 1.47, 1.11) lie outside that basin, so exactly two damped steps are needed; after
+// them every step must be Newton's, ‖R‖ₖ₊₁ ≤ ‖R‖ₖ³ (arctan x ≈ x). Damped steps kept to the end
+// converge only linearly once μ stops shrinking: 9.8e-7 → 2.6e-12, not below 1e-18.
+TEST(Newton, LevenbergMarquardtFallbackHandsBackToNewtonSteps) {
+  const auto lm = newton(Arctan{}, Eigen::VectorXd::Constant(1, 10.0),
+                         {.max_backtracks = 0, .levenberg_marquardt = true, .max_lm_trials = 40});
+  ASSERT_TRUE(lm.report.converged()) << lm.report.message;
+  const std::vector<double>& r = lm.report.residual_norms;
+  const double basin = std::atan(1.3917);
+  EXPECT_EQ(lm.report.levenberg_marquardt_steps, std::count_if(r.begin(), r.end(), [&](double v) { return v > basin; }));
+  int newton_pairs = 0;
+  for (size_t k = 0; k + 1 < r.size(); ++k) {
+    if (r[k] >= basin) continue;
+    EXPECT_LE(r[k + 1], r[k] * r[k] * r[k]) << "step " << k << ": " << r[k] << " -> " << r[k + 1];
+    ++newton_pairs;
+  }
+  EXPECT_GE(newton_pairs, 3);
+}
+
 namespace {
 // x³ − 2x + 2 = 0: from x0 = 0 Newton's iterates cycle exactly, 0 → 1 → 0 → … (the classic
 // example of a Newton cycle; its one real root, −1.7693, is never reached), ‖R‖ = 2, 1, 2, 1, …
