@@ -6,6 +6,7 @@
 #pragma once
 
 #include <chrono>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,9 +34,13 @@ using solvers::format;
 // point limit ([analysis] max_points), the state bound ([analysis] max_state), a step below
 // minimum ([analysis] max_step; for nnm, or another N/m), a retraced backbone or a degenerate
 // switching point ([analysis] harmonics, samples), LL11 Alg. 1/2's wall-time budget ([analysis]
-// algorithm). Empty for an outcome (range or goal reached) and for stops whose solver message
-// names its way out already (the undamped top Fourier function, a start that did not converge).
-std::string way_out(const Scene& scene, solvers::StopReason stop);
+// algorithm). A step below minimum whose corrector stalled at its rounding floor (stalled_residual
+// finite: Branch::stalled_residual) names [solver] tolerance instead of a shorter step (for nnm,
+// whose KKT tolerance is not a scene key, another N/m). Empty for an outcome (range or goal
+// reached) and for stops whose solver message names its way out already (the undamped top
+// Fourier function, a start that did not converge).
+std::string way_out(const Scene& scene, solvers::StopReason stop,
+                    double stalled_residual = std::numeric_limits<double>::quiet_NaN());
 
 // The column name of the scene's contact c: its DOF, or "dof-other" for a contact between two DOFs.
 std::string contact_label(const Scene& scene, size_t c);

@@ -59,7 +59,7 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     }
     b = modes.backbone(o);
   }
-  if (!b.complete()) b.message += way_out(scene, b.stop);
+  if (!b.complete()) b.message += way_out(scene, b.stop, b.stalled_residual);
   const BackboneColumns c = backbone_columns(modes, b);
   const Eigen::Index n = c.energy.size();
   if (n > 0) {

@@ -22,7 +22,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string way_out(const Scene& scene, solvers::StopReason stop) {
+std::string way_out(const Scene& scene, solvers::StopReason stop, double stalled_residual) {
   using solvers::StopReason;
   const Analysis& a = scene.analysis;
   const bool nnm = a.kind == AnalysisKind::NonlinearModes;
@@ -37,6 +37,12 @@ std::string way_out(const Scene& scene, solvers::StopReason stop) {
     case StopReason::StateBound:
       return "; way out: raise [analysis] max_state (now " + format("%g", a.max_state) + "), or set it to 0 for no bound";
     case StopReason::StepBelowMinimum:
+      if (std::isfinite(stalled_residual)) {
+        if (nnm) return "; way out: " + another_discretization;
+        return "; way out: raise [solver] tolerance (now " + format("%g", scene.solver.newton.tolerance) +
+               ") above the corrector's rounding floor ‖R‖ = " + format("%.2g", stalled_residual) + ", e.g. to " +
+               format("%.0e", 10.0 * stalled_residual) + " (the floor grows with the response; a shorter step does not lower it)";
+      }
       return "; way out: lower [analysis] max_step (now " + format("%g", a.max_step) + "), e.g. to " +
              format("%g", a.max_step / 4.0) +
              (nnm ? ", or " + another_discretization

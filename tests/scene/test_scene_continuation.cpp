@@ -281,6 +281,24 @@ TEST(Scene, AStopThatIsNotAnOutcomeNamesTheKeyToChange) {
   EXPECT_NE(nnm_message.find("way out: raise [analysis] max_points (now 4), e.g. to 8"), std::string::npos) << nnm_message;
 }
 
+// A corrector that stalls at its rounding floor is not a singular point: the way out is the
+// tolerance, not a shorter step. examples/scenes/rod_continuation.toml with [solver] tolerance =
+// 3e-16, below what a double-precision residual of O(1) resolves: the branch starts, then the
+// step falls below its minimum with the corrector within 10× of the residual's rounding floor, and
+// the message names [solver] tolerance and the residual it met (and no contact-quadrature hint).
+TEST(Scene, ACorrectorAtItsRoundingFloorNamesTheTolerance) {
+  Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "rod_continuation.toml");
+  s.solver.newton.tolerance = 3e-16;
+  const auto r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.stop.has_value());
+  ASSERT_EQ(*r.stop, wbm::solvers::StopReason::StepBelowMinimum) << r.diagnostics.dump();
+  const std::string message = r.diagnostics["continuation"]["message"].get<std::string>();
+  EXPECT_NE(message.find("way out: raise [solver] tolerance (now 3e-16) above the corrector's rounding floor"),
+            std::string::npos) << message;
+  EXPECT_EQ(message.find("max_step"), std::string::npos) << message;
+  EXPECT_EQ(message.find("contact_quadrature"), std::string::npos) << message;
+}
+
 // Progress of an nnm backbone: one report per accepted point of the energy continuation, the
 // fraction of the energy range covered, and a label with the point, its energy and the step.
 TEST(Scene, BackboneReportsProgressPerPoint) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>

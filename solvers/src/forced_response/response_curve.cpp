@@ -315,7 +315,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   curve.folds = branch.folds;
   curve.stop = branch.stop;
   curve.message = branch.message;
-  if (branch.stop == StopReason::StepBelowMinimum && !rigid && base.contact_quadrature() == ContactQuadrature::Midpoint) {
+  curve.stalled_residual = branch.stalled_residual;
+  if (branch.stop == StopReason::StepBelowMinimum && !std::isfinite(branch.stalled_residual) && !rigid &&
+      base.contact_quadrature() == ContactQuadrature::Midpoint) {
     // Sampled at midpoints, a law with a corner (a linear penalty k (u − g)₊) makes the residual
     // nonsmooth wherever a sample crosses the gap: the cell average is C¹ there (issue #35).
     curve.message += "; a contact law with a corner sampled at midpoints (WeightedResidualOptions::contact_quadrature "

@@ -643,6 +643,7 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   b.switches = branch.switches;
   b.rejected_steps = branch.rejected_steps;
   b.stop = branch.stop;
+  b.stalled_residual = branch.stalled_residual;
   const bool complete = !retraced && branch.stop == StopReason::RangeReached && !b.levels.empty() &&
                         (b.levels.back().energy >= o.energy_max * (1.0 - 1e-12) ||
                          (o.start && b.levels.back().energy <= o.energy_min * (1.0 + 1e-12)));

@@ -146,6 +146,17 @@ struct Branch {
   int switches = 0;         // entries flipped at them (simultaneous crossings count each entry)
   long corrector_iterations = 0;
   double wall_time_s = 0.0;
+  /// StepBelowMinimum after a corrector that failed at a residual its system cannot resolve: the
+  /// corrector's last ‖R‖ when it lies within kFloorFactor of the rounding floor of R measured at
+  /// the last accepted point x (the largest ‖R(x ⊙ (1 ± ε p), λ) − R(x, λ)‖ over the two
+  /// alternating sign patterns p, ε = 2⁻⁵²: how far R moves when x moves by its own rounding).
+  /// The tolerance then lies at or under that floor (a residual evaluated through ill-conditioned
+  /// solves, a penalty too stiff for the arithmetic), and the way out is a larger tolerance, not a
+  /// shorter step. NaN otherwise, e.g. at a corner of a nonsmooth residual, where the corrector
+  /// fails far above the floor.
+  double stalled_residual = std::numeric_limits<double>::quiet_NaN();
+  double rounding_floor = std::numeric_limits<double>::quiet_NaN();  // the floor measured then
+  static constexpr double kFloorFactor = 10.0;
   /// branch_status(stop): Converged when the range (or the goal) was reached.
   [[nodiscard]] SolveStatus status() const { return branch_status(stop); }
   [[nodiscard]] bool converged() const { return status() == SolveStatus::Converged; }
@@ -202,6 +213,30 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     branch.message = text;
     branch.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return branch;
+  };
+  // A failed corrector at a step below min_step: is its ‖R‖ within kFloorFactor of the rounding
+  // floor of R at the last accepted point (Branch::stalled_residual)? Three evaluations of R.
+  auto stalled_at_floor = [&](const detail::Attempt& a, const BranchPoint& last) {
+    if (a.converged() || !std::isfinite(a.rnorm)) return false;
+    const Eigen::VectorXd r0 = system.residual(last.x, last.parameter);
+    const auto n = last.x.size();
+    double floor = 0.0;
+    for (const double sign : {1.0, -1.0}) {
+      Eigen::VectorXd pattern(n);
+      for (Eigen::Index i = 0; i < n; ++i) pattern(i) = (i % 2 == 0 ? sign : -sign) * std::numeric_limits<double>::epsilon();
+      floor = std::max(floor, (system.residual(last.x.cwiseProduct(Eigen::VectorXd::Ones(n) + pattern), last.parameter) - r0).norm());
+    }
+    if (!(a.rnorm <= Branch::kFloorFactor * floor)) return false;
+    branch.stalled_residual = a.rnorm;
+    branch.rounding_floor = floor;
+    return true;
+  };
+  auto floor_message = [&] {
+    return " (h below min_step = " + format_number(o.min_step) + "): the corrector stalls at ‖R‖ = " +
+           format_number(branch.stalled_residual) + ", within " + format_number(Branch::kFloorFactor) +
+           " × the rounding floor of R at the last point (" + format_number(branch.rounding_floor) +
+           ", R's change when x moves by its own rounding), above corrector_tolerance = " +
+           format_number(o.corrector_tolerance) + ": that tolerance is below what R resolves; raise it";
   };
   auto scaled = [&](const Eigen::VectorXd& x, double lambda) {
     Eigen::VectorXd z(n + 1);
@@ -317,6 +352,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         ++branch.rejected_steps;
         h *= 0.5;
         if (h < o.min_step) {
+          if (stalled_at_floor(a, last)) {
+            return finish(StopReason::StepBelowMinimum, "step below minimum on a smooth piece at λ = " +
+                                                            format_number(last.parameter) + floor_message());
+          }
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + " (h = " +
                             format_number(h) +
@@ -364,6 +403,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         if (a.cycled()) corner_ahead = std::min(corner_ahead, h);
         h *= 0.5;
         if (h < o.min_step) {
+          if (stalled_at_floor(a, last)) {
+            return finish(StopReason::StepBelowMinimum,
+                          "step below minimum at λ = " + format_number(last.parameter) + floor_message());
+          }
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
                             (a.converged() ? ", tangent turning too fast)"

@@ -46,6 +46,7 @@
 /// reproduce/ll11_robustness tabulates N × m). docs/design.md.
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -145,6 +146,9 @@ struct Backbone {
                                       // located and crossed (one or more samples switching at once)
   int switches = 0;                   // continuation: samples switched at those events
   int rejected_steps = 0;             // continuation steps retried with half the step
+  /// Continuation: Branch::stalled_residual (the corrector's last ‖R‖ when it stalled at its
+  /// rounding floor), NaN otherwise.
+  double stalled_residual = std::numeric_limits<double>::quiet_NaN();
   /// Converged: the branch reached the end of its energy range (energy_max; with a start, either
   /// end) and holds a level there; PathEnded: it stopped before (`stop` and `message` say why).
   SolveStatus status = SolveStatus::PathEnded;

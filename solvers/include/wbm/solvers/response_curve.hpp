@@ -129,6 +129,9 @@ struct ResponseCurve {
   std::vector<bool> fold_confirmed;
   StopReason stop = StopReason::InitialPointFailed;
   std::string message;
+  /// Branch::stalled_residual: the corrector's last ‖R‖ when it stalled at the rounding floor of
+  /// the residual (StepBelowMinimum within 10× of that floor), NaN otherwise.
+  double stalled_residual = std::numeric_limits<double>::quiet_NaN();
   int rejected_steps = 0;
   int kinks = 0;
   int events = 0;                      // switching points located (rigid stops without friction)
