@@ -232,7 +232,8 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
                 ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
                 std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +
-                std::string(solvers::to_string(curve.stop)) + way_out(scene, curve.stop, curve.stalled_residual) + " (" +
+                std::string(solvers::to_string(curve.stop)) + way_out(scene, curve.stop, curve.stalled_residual) +
+                " (" +
                 format("%.3f", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()) +
                 " s in all: continuation " + format("%.3f", curve.wall_time_s) + " s, stability " +
                 format("%.3f", curve.stability_time_s) + " s)";

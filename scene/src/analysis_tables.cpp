@@ -41,7 +41,8 @@ std::string way_out(const Scene& scene, solvers::StopReason stop, double stalled
         if (nnm) return "; way out: " + another_discretization;
         return "; way out: raise [solver] tolerance (now " + format("%g", scene.solver.newton.tolerance) +
                ") above the corrector's rounding floor ‖R‖ = " + format("%.2g", stalled_residual) + ", e.g. to " +
-               format("%.0e", 10.0 * stalled_residual) + " (the floor grows with the response; a shorter step does not lower it)";
+               format("%.0e", 10.0 * stalled_residual) +
+               " (the floor grows with the response; a shorter step does not lower it)";
       }
       return "; way out: lower [analysis] max_step (now " + format("%g", a.max_step) + "), e.g. to " +
              format("%g", a.max_step / 4.0) +

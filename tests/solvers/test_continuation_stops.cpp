@@ -17,8 +17,9 @@ using namespace wbm;
 // from one evaluation to the next: the model of a rounding floor that grows with the response.
 // The exact root is x = λ, but a Newton step, exact for the error of one evaluation, lands where
 // the next one's error is the opposite: |R| = 2δλ at every iterate after the first. On this line
-// the predictor is exact, so a corrector converges at once while δλ ≤ tolerance and never after. With `ends`, the branch ends at λ = 0.5 instead:
-// beyond it (x − λ)² + 1 has no root (the corrector meets a singular Jacobian, ‖R‖ = 1).
+// the predictor is exact, so a corrector converges at once while δλ ≤ tolerance and never after.
+// With `ends`, the branch ends at λ = 0.5 instead: beyond it (x − λ)² + 1 has no root (the
+// corrector meets a singular Jacobian, ‖R‖ = 1).
 struct FlooredLine {
   double delta = 0.0;
   bool ends = false;
@@ -52,7 +53,8 @@ solvers::PseudoArclengthOptions line_options() {
 // the message names the tolerance, not a shorter step.
 TEST(ContinuationStops, ACorrectorAtItsRoundingFloorIsReportedWithTheFloor) {
   const auto o = line_options();
-  const auto b = solvers::pseudo_arclength(FlooredLine{.delta = 2.0 * o.corrector_tolerance}, Eigen::VectorXd::Zero(1), 0.0, o);
+  const FlooredLine line{.delta = 2.0 * o.corrector_tolerance};
+  const auto b = solvers::pseudo_arclength(line, Eigen::VectorXd::Zero(1), 0.0, o);
   ASSERT_EQ(b.stop, solvers::StopReason::StepBelowMinimum) << b.message;
   const double lambda = b.points.back().parameter;
   EXPECT_NEAR(lambda, 0.5, 1e-3);

@@ -269,7 +269,8 @@ TEST(Newton, LevenbergMarquardtFallbackHandsBackToNewtonSteps) {
   ASSERT_TRUE(lm.report.converged()) << lm.report.message;
   const std::vector<double>& r = lm.report.residual_norms;
   const double basin = std::atan(1.3917);
-  EXPECT_EQ(lm.report.levenberg_marquardt_steps, std::count_if(r.begin(), r.end(), [&](double v) { return v > basin; }));
+  const auto outside = std::count_if(r.begin(), r.end(), [&](double v) { return v > basin; });
+  EXPECT_EQ(lm.report.levenberg_marquardt_steps, outside);
   int newton_pairs = 0;
   for (size_t k = 0; k + 1 < r.size(); ++k) {
     if (r[k] >= basin) continue;

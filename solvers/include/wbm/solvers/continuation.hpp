@@ -219,12 +219,12 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   auto stalled_at_floor = [&](const detail::Attempt& a, const BranchPoint& last) {
     if (a.converged() || !std::isfinite(a.rnorm)) return false;
     const Eigen::VectorXd r0 = system.residual(last.x, last.parameter);
-    const auto n = last.x.size();
+    constexpr double kEps = std::numeric_limits<double>::epsilon();
     double floor = 0.0;
     for (const double sign : {1.0, -1.0}) {
-      Eigen::VectorXd pattern(n);
-      for (Eigen::Index i = 0; i < n; ++i) pattern(i) = (i % 2 == 0 ? sign : -sign) * std::numeric_limits<double>::epsilon();
-      floor = std::max(floor, (system.residual(last.x.cwiseProduct(Eigen::VectorXd::Ones(n) + pattern), last.parameter) - r0).norm());
+      Eigen::VectorXd moved = last.x;
+      for (Eigen::Index i = 0; i < moved.size(); ++i) moved(i) *= 1.0 + (i % 2 == 0 ? sign : -sign) * kEps;
+      floor = std::max(floor, (system.residual(moved, last.parameter) - r0).norm());
     }
     if (!(a.rnorm <= Branch::kFloorFactor * floor)) return false;
     branch.stalled_residual = a.rnorm;
