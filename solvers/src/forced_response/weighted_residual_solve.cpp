@@ -3,6 +3,7 @@
 // (weighted_residual_impl.hpp).
 #include "weighted_residual_impl.hpp"
 
+#include <wbm/solvers/detail/rounding_floor.hpp>
 #include <wbm/solvers/natural_parameter.hpp>
 
 #include <algorithm>
@@ -131,27 +132,12 @@ NewtonResult WeightedResidual::solve_with_contact_homotopy(HomotopyReport& repor
 double WeightedResidual::rounding_floor(const Eigen::VectorXd& a, const Eigen::VectorXd& x) const {
   const auto& p = *impl_;
   const double bnorm = p.b.norm() > 0.0 ? p.b.norm() : 1.0;
-  // v ⊙ (1 ± ε), the sign alternating from entry to entry, starting with + (pattern 0) or −.
-  const auto rounded = [](Eigen::VectorXd v, int pattern) {
-    for (Eigen::Index i = 0; i < v.size(); ++i) {
-      const double sign = ((i + pattern) % 2 == 0) ? 1.0 : -1.0;
-      v(i) *= 1.0 + sign * std::numeric_limits<double>::epsilon();
-    }
-    return v;
-  };
   double floor = 0.0;
   if (x.size() > 0) {  // the contact unknowns: a stiff contact law
-    const Eigen::VectorXd r0 = residual(expand(x));
-    for (int pattern = 0; pattern < 2; ++pattern) {
-      floor = std::max(floor, (residual(expand(rounded(x, pattern))) - r0).norm() / bnorm);
-    }
+    floor = detail::rounding_floor([&](const Eigen::VectorXd& v) { return residual(expand(v)); }, x) / bnorm;
   }
   // Every coefficient: an ill-conditioned G (its rounding is ≈ ε ‖|G| |a|‖, up to ε κ(G) ‖b‖).
-  const Eigen::VectorXd r0 = residual(a);
-  for (int pattern = 0; pattern < 2; ++pattern) {
-    floor = std::max(floor, (residual(rounded(a, pattern)) - r0).norm() / bnorm);
-  }
-  return floor;
+  return std::max(floor, detail::rounding_floor([&](const Eigen::VectorXd& v) { return residual(v); }, a) / bnorm);
 }
 
 std::string_view to_string(SolutionPath path) noexcept {

@@ -55,6 +55,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <concepts>
 #include <stdexcept>
 #include <string>
@@ -71,6 +72,7 @@
 #include <wbm/solvers/detail/continuation_corrector.hpp>
 #include <wbm/solvers/detail/continuation_events.hpp>
 #include <wbm/solvers/detail/continuation_fold.hpp>
+#include <wbm/solvers/detail/rounding_floor.hpp>
 #include <wbm/solvers/linearization.hpp>
 #include <wbm/solvers/newton.hpp>
 
@@ -214,27 +216,19 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     branch.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return branch;
   };
-  // A failed corrector at a step below min_step: is its ‖R‖ within kFloorFactor of the rounding
-  // floor of R at the last accepted point (Branch::stalled_residual)? Three evaluations of R.
-  auto stalled_at_floor = [&](const detail::Attempt& a, const BranchPoint& last) {
-    if (a.converged() || !std::isfinite(a.rnorm)) return false;
-    const Eigen::VectorXd r0 = system.residual(last.x, last.parameter);
-    constexpr double kEps = std::numeric_limits<double>::epsilon();
-    double floor = 0.0;
-    for (const double sign : {1.0, -1.0}) {
-      Eigen::VectorXd moved = last.x;
-      for (Eigen::Index i = 0; i < moved.size(); ++i) moved(i) *= 1.0 + (i % 2 == 0 ? sign : -sign) * kEps;
-      floor = std::max(floor, (system.residual(moved, last.parameter) - r0).norm());
-    }
-    if (!(a.rnorm <= Branch::kFloorFactor * floor)) return false;
+  // A failed corrector at a step below min_step whose ‖R‖ lies within kFloorFactor of the rounding
+  // floor of R at the last accepted point (Branch::stalled_residual): the message's tail saying
+  // so, or nothing.
+  auto floor_stop = [&](const detail::Attempt& a, const BranchPoint& last) -> std::optional<std::string> {
+    if (a.converged() || !std::isfinite(a.rnorm)) return std::nullopt;
+    const double floor = detail::rounding_floor(
+        [&](const Eigen::VectorXd& x) { return Eigen::VectorXd(system.residual(x, last.parameter)); }, last.x);
+    if (!(a.rnorm <= Branch::kFloorFactor * floor)) return std::nullopt;
     branch.stalled_residual = a.rnorm;
     branch.rounding_floor = floor;
-    return true;
-  };
-  auto floor_message = [&] {
     return " (h below min_step = " + format_number(o.min_step) + "): the corrector stalls at ‖R‖ = " +
-           format_number(branch.stalled_residual) + ", within " + format_number(Branch::kFloorFactor) +
-           " × the rounding floor of R at the last point (" + format_number(branch.rounding_floor) +
+           format_number(a.rnorm) + ", within " + format_number(Branch::kFloorFactor) +
+           " × the rounding floor of R at the last point (" + format_number(floor) +
            ", R's change when x moves by its own rounding), above corrector_tolerance = " +
            format_number(o.corrector_tolerance) + ": that tolerance is below what R resolves; raise it";
   };
@@ -352,9 +346,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         ++branch.rejected_steps;
         h *= 0.5;
         if (h < o.min_step) {
-          if (stalled_at_floor(a, last)) {
-            return finish(StopReason::StepBelowMinimum, "step below minimum on a smooth piece at λ = " +
-                                                            format_number(last.parameter) + floor_message());
+          if (const auto why = floor_stop(a, last)) {
+            return finish(StopReason::StepBelowMinimum,
+                          "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + *why);
           }
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum on a smooth piece at λ = " + format_number(last.parameter) + " (h = " +
@@ -403,9 +397,9 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
         if (a.cycled()) corner_ahead = std::min(corner_ahead, h);
         h *= 0.5;
         if (h < o.min_step) {
-          if (stalled_at_floor(a, last)) {
+          if (const auto why = floor_stop(a, last)) {
             return finish(StopReason::StepBelowMinimum,
-                          "step below minimum at λ = " + format_number(last.parameter) + floor_message());
+                          "step below minimum at λ = " + format_number(last.parameter) + *why);
           }
           return finish(StopReason::StepBelowMinimum,
                         "step below minimum at λ = " + format_number(last.parameter) + " (h = " + format_number(h) +
