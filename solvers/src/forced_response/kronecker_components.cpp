@@ -17,11 +17,25 @@
 // linear elements, so a block costs O(n) [Anderson et al., LAPACK Users' Guide, 3rd ed., 1999,
 // Sec. 2.4.2]. Otherwise by KLU (SparseLu), whose threshold pivoting (KLU's default 0.001) left
 // solves of the 320-element rod inaccurate enough to stall the continuation corrector at
-// ‖R‖ = 2e-10: its solves take one step of iterative refinement on G_c.
+// ‖R‖ = 2e-10.
+//
+// Both take one step of iterative refinement on a residual that keeps G_c's three terms apart
+// and accumulates in twice the working precision (Dot2 below). Near a resonance the entries of
+// G_c = f² A_M ⊗ M + f A_C ⊗ C + A_K ⊗ K cancel: on 1 280 rod elements |K_ii| is 2.4e6 times
+// ω² |M_ii| at 1 173 Hz. Their rounded sum moves in steps of ε |K_ij| as f varies continuously, so
+// the solution of the stored G_c is a staircase in f with steps near κ ε (1e-9 relative there):
+// a continuation corrector, which moves f at every iteration, met a residual noisy at 5e-10 and
+// stalled above the 1e-10 tolerance at 1 173 Hz, although any one solve is backward stable. The
+// residual v − Σ_t B_t y, each term B_t = s_t A_t ⊗ X_t (s = f², f, 1) rounded on its own and
+// every product exact, is that of G_c itself up to ε per term, smooth in f; the LU of the rounded
+// sum is its preconditioner, and one correction leaves an error near κ ε times the first one's
+// [Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., 2002, Sec. 12.1]. The modal
+// path has no such cancellation: it forms λ_i − ω² per mode.
 #include "kronecker_factorization.hpp"
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <stdexcept>
@@ -38,13 +52,71 @@ void dgbtrs_(const char* trans, const int* n, const int* kl, const int* ku, cons
 
 namespace wbm::solvers::detail {
 
+namespace {
+
+// v − Σ_t a_t x_t accumulated as if in twice the working precision, then rounded: Dot2 of Ogita,
+// Rump & Oishi, SIAM J. Sci. Comput. 26(6), 2005, Alg. 5.3 (TwoProduct by fma, TwoSum).
+// p = fl(a x) must be rounded, so it is its own statement: GCC contracts a product into an fma
+// only across statements on a target with FMA (this build passes no -march), clang only within
+// one expression.
+class Dot2 {
+ public:
+  explicit Dot2(double v) : s_(v) {}
+  void subtract(double a, double x) {
+    const double p = a * x;
+    const double ep = std::fma(a, x, -p);  // a x = p + ep exactly
+    const double s = s_ - p;
+    const double z = s - s_;
+    const double es = (s_ - (s - z)) + (-p - z);  // s_ − p = s + es exactly
+    s_ = s;
+    c_ += es - ep;
+  }
+  [[nodiscard]] double value() const { return s_ + c_; }
+
+ private:
+  double s_ = 0.0, c_ = 0.0;
+};
+
+// v − Σ_t B_t y (or v − Σ_t B_tᵀ y), every column, by Dot2 per entry.
+Eigen::MatrixXd residual_dot2(const std::array<Eigen::SparseMatrix<double>, 3>& terms, const Eigen::MatrixXd& v,
+                              const Eigen::MatrixXd& y, bool transposed) {
+  Eigen::MatrixXd r(v.rows(), v.cols());
+  std::vector<Dot2> acc;
+  for (Eigen::Index c = 0; c < v.cols(); ++c) {
+    acc.assign(static_cast<size_t>(v.rows()), Dot2(0.0));
+    for (Eigen::Index i = 0; i < v.rows(); ++i) acc[static_cast<size_t>(i)] = Dot2(v(i, c));
+    for (const auto& b : terms) {
+      for (Eigen::Index j = 0; j < b.outerSize(); ++j) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(b, j); it; ++it) {
+          if (transposed) {  // (Bᵀ y)_j = Σ_i B(i, j) y_i
+            acc[static_cast<size_t>(j)].subtract(it.value(), y(it.row(), c));
+          } else {
+            acc[static_cast<size_t>(it.row())].subtract(it.value(), y(j, c));
+          }
+        }
+      }
+    }
+    for (Eigen::Index i = 0; i < v.rows(); ++i) r(i, c) = acc[static_cast<size_t>(i)].value();
+  }
+  return r;
+}
+
+}  // namespace
+
 // Not in an anonymous namespace: a field of ComponentLus (as KluWithTranspose in sparse_lu.cpp).
-// A band LU (dgbtrf) of an N × N matrix with kl = ku = w off-diagonals, in LAPACK's band storage
-// AB(kl + ku + i − j, j) = A(i, j) (0-based), ldab = 2 kl + ku + 1.
+// A band LU (dgbtrf) of an N × N matrix A = Σ_t B_t with kl = ku = w off-diagonals, in LAPACK's
+// band storage AB(kl + ku + i − j, j) = A(i, j) (0-based), ldab = 2 kl + ku + 1. The terms B_t are
+// kept apart, B_t(i, j) at terms_[t](w + i − j, j), for the refinement's residual.
 class BandLu {
  public:
-  BandLu(int size, int width) : n_(size), w_(width), ab_(Eigen::MatrixXd::Zero(3 * width + 1, size)), ipiv_(size) {}
-  void add(Eigen::Index i, Eigen::Index j, double v) { ab_(2 * w_ + i - j, j) += v; }
+  BandLu(int size, int width) : n_(size), w_(width), ab_(Eigen::MatrixXd::Zero(3 * width + 1, size)), ipiv_(size) {
+    for (auto& b : terms_) b = Eigen::MatrixXd::Zero(2 * width + 1, size);
+  }
+  // A(i, j) += v, v a contribution of term t.
+  void add(Eigen::Index i, Eigen::Index j, double v, size_t t) {
+    ab_(2 * w_ + i - j, j) += v;
+    terms_[t](w_ + i - j, j) += v;
+  }
   bool factorize() {
     if (!ab_.allFinite()) return false;
     const int ldab = 3 * w_ + 1;
@@ -52,17 +124,42 @@ class BandLu {
     dgbtrf_(&n_, &n_, &w_, &w_, ab_.data(), &ldab, ipiv_.data(), &info);
     return info == 0;
   }
-  // B ← A⁻¹ B (or A⁻ᵀ B), every column.
+  // B ← A⁻¹ B (or A⁻ᵀ B), every column, with one step of refinement on the Dot2 residual.
   void solve(Eigen::MatrixXd& b, bool transposed) const {
+    const Eigen::MatrixXd v = b;
+    lapack_solve(b, transposed);
+    Eigen::MatrixXd r = residual(v, b, transposed);
+    lapack_solve(r, transposed);
+    b += r;
+  }
+
+ private:
+  void lapack_solve(Eigen::MatrixXd& b, bool transposed) const {
     const int ldab = 3 * w_ + 1, nrhs = static_cast<int>(b.cols()), ldb = n_;
     const char trans = transposed ? 'T' : 'N';
     int info = 0;
     dgbtrs_(&trans, &n_, &w_, &w_, &nrhs, ab_.data(), &ldab, ipiv_.data(), b.data(), &ldb, &info, 1);
   }
-
- private:
+  // v − Σ_t B_t y (or v − Σ_t B_tᵀ y) by Dot2, row by row over the band.
+  [[nodiscard]] Eigen::MatrixXd residual(const Eigen::MatrixXd& v, const Eigen::MatrixXd& y, bool transposed) const {
+    Eigen::MatrixXd r(n_, v.cols());
+    for (Eigen::Index c = 0; c < v.cols(); ++c) {
+      for (int i = 0; i < n_; ++i) {
+        Dot2 d(v(i, c));
+        for (const auto& b : terms_) {
+          for (int j = std::max(0, i - w_); j <= std::min(n_ - 1, i + w_); ++j) {
+            // row i of B: B(i, j) = b(w + i − j, j); row i of Bᵀ: B(j, i) = b(w + j − i, i)
+            d.subtract(transposed ? b(w_ + j - i, i) : b(w_ + i - j, j), y(j, c));
+          }
+        }
+        r(i, c) = d.value();
+      }
+    }
+    return r;
+  }
   int n_, w_;
   Eigen::MatrixXd ab_;
+  std::array<Eigen::MatrixXd, 3> terms_;
   std::vector<int> ipiv_;
 };
 
@@ -73,7 +170,7 @@ struct KroneckerFactorization::ComponentLus {
   int band = 0;                        // b + 1 (b: the structure's half-bandwidth) for band LUs; 0: KLU
   std::vector<BandLu> bands;           // one per component, G_c with interleaved rows (band LU)
   std::vector<SparseLu> lus;           // one per component, G_c stacked by position (KLU)
-  std::vector<Eigen::SparseMatrix<double>> blocks;  // G_c, for KLU's step of iterative refinement
+  std::vector<std::array<Eigen::SparseMatrix<double>, 3>> terms;  // KLU: G_c's terms B_t, for the refinement
   // Row of G_c for (DOF i, position p): interleaved for a band LU, stacked for KLU.
   [[nodiscard]] Eigen::Index row(Eigen::Index i, Eigen::Index p, Eigen::Index s) const {
     return band > 0 ? i * s + p : p * n + i;
@@ -86,9 +183,7 @@ struct KroneckerFactorization::ComponentLus {
     }
     const Eigen::MatrixXd rhs = y;
     y = lus[c].solve_columns(rhs, transposed);
-    const Eigen::MatrixXd r = transposed ? Eigen::MatrixXd(rhs - blocks[c].transpose() * y)
-                                         : Eigen::MatrixXd(rhs - blocks[c] * y);
-    y += lus[c].solve_columns(r, transposed);
+    y += lus[c].solve_columns(residual_dot2(terms[c], rhs, y, transposed), transposed);
   }
 };
 
@@ -128,7 +223,7 @@ bool KroneckerFactorization::factorize_components(const std::vector<std::vector<
   const Eigen::Index b = half_bandwidth(x);
   if (static_cast<Eigen::Index>(widest) * (b + 1) - 1 <= kBandLimit) lus->band = static_cast<int>(b + 1);
   bool ok = true;
-  std::vector<Eigen::Triplet<double>> triplets;
+  std::array<std::vector<Eigen::Triplet<double>>, 3> triplets;  // per term
   for (size_t c = 0; c < components.size(); ++c) {
     const auto& idx = components[c];
     const auto s = static_cast<Eigen::Index>(idx.size());
@@ -138,7 +233,7 @@ bool KroneckerFactorization::factorize_components(const std::vector<std::vector<
     }
     std::optional<BandLu> band;
     if (lus->band > 0) band.emplace(static_cast<int>(s * n), static_cast<int>(s * (b + 1) - 1));
-    triplets.clear();
+    for (auto& tt : triplets) tt.clear();
     for (size_t t = 0; t < 3; ++t) {
       for (Eigen::Index q = 0; q < s; ++q) {
         for (Eigen::Index p = 0; p < s; ++p) {
@@ -147,9 +242,9 @@ bool KroneckerFactorization::factorize_components(const std::vector<std::vector<
           for (Eigen::Index j = 0; j < x[t]->outerSize(); ++j) {
             for (Eigen::SparseMatrix<double>::InnerIterator it(*x[t], j); it; ++it) {
               if (band) {
-                band->add(lus->row(it.row(), p, s), lus->row(j, q, s), v * it.value());
+                band->add(lus->row(it.row(), p, s), lus->row(j, q, s), v * it.value(), t);
               } else {
-                triplets.emplace_back(lus->row(it.row(), p, s), lus->row(j, q, s), v * it.value());
+                triplets[t].emplace_back(lus->row(it.row(), p, s), lus->row(j, q, s), v * it.value());
               }
             }
           }
@@ -161,12 +256,16 @@ bool KroneckerFactorization::factorize_components(const std::vector<std::vector<
       lus->bands.push_back(std::move(*band));
       continue;
     }
-    Eigen::SparseMatrix<double> gc(s * n, s * n);
-    gc.setFromTriplets(triplets.begin(), triplets.end());
+    std::array<Eigen::SparseMatrix<double>, 3> terms;
+    for (size_t t = 0; t < 3; ++t) {
+      terms[t].resize(s * n, s * n);
+      terms[t].setFromTriplets(triplets[t].begin(), triplets[t].end());
+    }
+    const Eigen::SparseMatrix<double> gc = terms[0] + terms[1] + terms[2];
     SparseLu lu;
     ok = lu.factorize(gc) && ok;
     lus->lus.push_back(std::move(lu));
-    lus->blocks.push_back(std::move(gc));
+    lus->terms.push_back(std::move(terms));
   }
   component_lus_ = std::move(lus);
   return ok;
