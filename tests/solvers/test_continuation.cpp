@@ -303,13 +303,21 @@ TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
   struct Flaky {
     const solvers::ForcedResponseFamily* family;
     mutable int failures_left = 6;
-    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const { return family->residual(x, f); }
+    // An evaluation in the window fails (residual or linearization alike: the corrector reads R
+    // from residual() and forms J by linearize()).
+    [[nodiscard]] bool fails(double f) const {
+      if (!(f > 10.5 && f < 11.0 && failures_left > 0)) return false;
+      --failures_left;
+      return true;
+    }
+    [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const {
+      Eigen::VectorXd r = family->residual(x, f);
+      if (fails(f)) r.setConstant(std::nan(""));
+      return r;
+    }
     [[nodiscard]] solvers::LowRankLinearization linearize(const Eigen::VectorXd& x, double f) const {
       solvers::LowRankLinearization l = family->linearize(x, f);
-      if (f > 10.5 && f < 11.0 && failures_left > 0) {
-        --failures_left;
-        l.residual.setConstant(std::nan(""));
-      }
+      if (fails(f)) l.residual.setConstant(std::nan(""));
       return l;
     }
   };

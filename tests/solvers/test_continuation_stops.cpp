@@ -13,20 +13,20 @@ namespace {
 
 using namespace wbm;
 
-// x − λ = 0, evaluated (by residual() or linearize()) with an error of ±δλ whose sign alternates
-// from one evaluation to the next: the model of a rounding floor that grows with the response.
-// The exact root is x = λ, but a Newton step, exact for the error of one evaluation, lands where
-// the next one's error is the opposite: |R| = 2δλ at every iterate after the first. On this line
-// the predictor is exact, so a corrector converges at once while δλ ≤ tolerance and never after.
+// x − λ = 0, evaluated (by residual() or linearize()) with an error of δλ sgn(x − λ) (sgn 0 = +1):
+// the model of a rounding floor that grows with the response, a function of the point however
+// often it is evaluated. The exact root is x = λ, but a Newton step from d = x − λ ≠ 0, exact for
+// that point's error, lands at d = −δλ sgn d, whose error is the opposite: |R| = 2δλ at every
+// iterate after the first. On this line the predictor is exact (d = 0, |R| = δλ), so a corrector
+// converges at once while δλ ≤ tolerance and never after.
 // With `ends`, the branch ends at λ = 0.5 instead: beyond it (x − λ)² + 1 has no root (the
 // corrector meets a singular Jacobian, ‖R‖ = 1).
 struct FlooredLine {
   double delta = 0.0;
   bool ends = false;
-  mutable long evaluations = 0;
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
     const double d = x(0) - lambda;
-    const double error = ((++evaluations % 2 == 0) ? delta : -delta) * lambda;
+    const double error = (d >= 0.0 ? delta : -delta) * lambda;
     return Eigen::VectorXd::Constant(1, (ends && lambda >= 0.5 ? d * d + 1.0 : d) + error);
   }
   [[nodiscard]] solvers::Linearization linearize(const Eigen::VectorXd& x, double lambda) const {

@@ -119,8 +119,13 @@ inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 // The corrector of one step as a NonlinearSystem in the scaled ẑ (length n + 1), for newton():
 //   [R(x, λ); ⟨t, ẑ − ẑ_k⟩ − h] = 0, Jacobian the bordered matrix.
-// The last linearization is cached, so residual() and jacobian() at one ẑ linearize once, and
-// the tangent at the converged point reuses it.
+// residual() evaluates R alone (S::residual, the same arithmetic as the linearization's
+// residual); jacobian() and at() linearize, once per ẑ (cached), and the tangent at the converged
+// point reuses it. So a Jacobian is formed only where a Newton step or a tangent uses it: where
+// the corrector converges at an iterate, or at its start (an exact predictor, or a trial of the
+// event location started next to the branch), none is formed there unless a tangent is taken,
+// and the event location's trials take none. A non-finite Jacobian is refused by the linear
+// solver's factorize() (newton(): SingularJacobian), and the tangent with one is NaN.
 template <class S, class Lin>
 struct Corrector {
   const S* system;
@@ -129,21 +134,26 @@ struct Corrector {
   double step;
   mutable Eigen::VectorXd cached_z;
   mutable Lin cached;
+  mutable bool linearized = false;  // cached holds the Jacobian at cached_z, not only R
   [[nodiscard]] const Lin& at(const Eigen::VectorXd& z) const {
-    if (cached_z.size() != z.size() || cached_z != z) {
+    if (!linearized || cached_z.size() != z.size() || cached_z != z) {
       const auto n = z.size() - 1;
       take(cached, system->linearize(z.head(n) * xs, z(n) * ls));
       cached_z = z;
+      linearized = true;
     }
     return cached;
   }
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& z) const {
     const auto n = z.size() - 1;
-    const Lin& l = at(z);
+    if (cached_z.size() != z.size() || cached_z != z) {
+      cached.residual = system->residual(z.head(n) * xs, z(n) * ls);
+      cached_z = z;
+      linearized = false;
+    }
     Eigen::VectorXd r(n + 1);
-    r.head(n) = l.residual;
+    r.head(n) = cached.residual;
     r(n) = inner(direction, z - z_last) - step;
-    if (!finite(l)) r(n) = std::nan("");  // a non-finite Jacobian stops the corrector
     return r;
   }
   [[nodiscard]] auto jacobian(const Eigen::VectorXd& z) const { return bordered(at(z), direction, xs, ls); }
@@ -177,16 +187,18 @@ struct Attempt {
   [[nodiscard]] bool cycled() const { return status == SolveStatus::Stagnated; }
 };
 
-// Predictor ẑ⁰ = ẑ_last + step·direction, corrector newton() without line search on the
-// bordered system, then (unless with_tangent is false) the tangent at the converged point (from
-// the cached linearization).
+// Predictor ẑ⁰ = ẑ_last + step·direction (or `start`, a point of the same hyperplane
+// ⟨direction, ẑ − ẑ_last⟩ = step nearer the branch), corrector newton() without line search on
+// the bordered system, then (unless with_tangent is false) the tangent at the converged point
+// (from the cached linearization).
 template <class S, class Lin, class Solver>
 Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector_options,
                       const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step,
-                      bool with_tangent = true) {
+                      bool with_tangent = true, const Eigen::VectorXd* start = nullptr) {
   Attempt a;
   const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
-  NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
+  Eigen::VectorXd z0 = start != nullptr ? Eigen::VectorXd(*start) : Eigen::VectorXd(z_last + step * direction);
+  NewtonResult r = newton(corrector, std::move(z0), corrector_options, solver);
   a.status = r.report.status;
   a.iterations = r.report.iterations;
   a.rnorm = r.report.residual_norms.back();
