@@ -122,10 +122,11 @@ inline double inner(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 // residual() evaluates R alone (S::residual, the same arithmetic as the linearization's
 // residual); jacobian() and at() linearize, once per ẑ (cached), and the tangent at the converged
 // point reuses it. So a Jacobian is formed only where a Newton step or a tangent uses it: where
-// the corrector converges at an iterate, or at its start (an exact predictor, or a trial of the
-// event location started next to the branch), none is formed there unless a tangent is taken,
-// and the event location's trials take none. A non-finite Jacobian is refused by the linear
-// solver's factorize() (newton(): SingularJacobian), and the tangent with one is NaN.
+// the corrector converges (at an iterate, or at once from an exact predictor) none is formed
+// unless a tangent is taken, and the event location's trials take none. Where the residuals of
+// S::residual and S::linearize agree bit for bit the iterates are those of a corrector that
+// linearizes everywhere. A non-finite Jacobian is refused by the linear solver's factorize()
+// (newton(): SingularJacobian), and the tangent with one is NaN.
 template <class S, class Lin>
 struct Corrector {
   const S* system;
@@ -187,18 +188,16 @@ struct Attempt {
   [[nodiscard]] bool cycled() const { return status == SolveStatus::Stagnated; }
 };
 
-// Predictor ẑ⁰ = ẑ_last + step·direction (or `start`, a point of the same hyperplane
-// ⟨direction, ẑ − ẑ_last⟩ = step nearer the branch), corrector newton() without line search on
-// the bordered system, then (unless with_tangent is false) the tangent at the converged point
-// (from the cached linearization).
+// Predictor ẑ⁰ = ẑ_last + step·direction, corrector newton() without line search on the
+// bordered system, then (unless with_tangent is false) the tangent at the converged point (from
+// the cached linearization).
 template <class S, class Lin, class Solver>
 Attempt attempt_along(const S& system, Solver& solver, double xs, double ls, const NewtonOptions& corrector_options,
                       const Eigen::VectorXd& direction, const Eigen::VectorXd& z_last, double step,
-                      bool with_tangent = true, const Eigen::VectorXd* start = nullptr) {
+                      bool with_tangent = true) {
   Attempt a;
   const Corrector<S, Lin> corrector{&system, xs, ls, direction, z_last, step, {}, {}};
-  Eigen::VectorXd z0 = start != nullptr ? Eigen::VectorXd(*start) : Eigen::VectorXd(z_last + step * direction);
-  NewtonResult r = newton(corrector, std::move(z0), corrector_options, solver);
+  NewtonResult r = newton(corrector, Eigen::VectorXd(z_last + step * direction), corrector_options, solver);
   a.status = r.report.status;
   a.iterations = r.report.iterations;
   a.rnorm = r.report.residual_norms.back();

@@ -182,9 +182,8 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   const auto n = z_last.size() - 1;
   PieceStep out;
   const OnPiece<S> on{&system, &piece};
-  auto at = [&](double step, bool with_tangent = true, const Eigen::VectorXd* start = nullptr) {
-    Attempt a =
-        attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, t_last, z_last, step, with_tangent, start);
+  auto at = [&](double step, bool with_tangent = true) {
+    Attempt a = attempt_along<OnPiece<S>, Lin>(on, solver, xs, ls, corrector, t_last, z_last, step, with_tangent);
     out.iterations += a.iterations;
     return a;
   };
@@ -214,7 +213,6 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
   };
   add_crossing(e_hi);
   const Eigen::VectorXd e_end = e_hi;  // at the end of the whole step
-  Eigen::VectorXd z_hi = out.a.z;      // the point at the high end
   double lo = 0.0, hi = h;
   Eigen::VectorXd e_at_lo = e_last;  // the events at the low end
   double phi_lo = phi(e_last);       // φ at the low end (≥ 0)
@@ -249,13 +247,8 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
     }
     width_2 = width_1;
     width_1 = width;
-    // The corrector starts from the nearer end of the bracket moved along t_last onto the
-    // trial's hyperplane, not from ẑ_last + s t_last: within the shrinking bracket it is already
-    // close to the branch (the tangent only at the point kept, below).
-    const Eigen::VectorXd start = s - lo <= hi - s ? Eigen::VectorXd(a_lo.z + (s - lo) * t_last)
-                                                   : Eigen::VectorXd(z_hi + (s - hi) * t_last);
-    Attempt a = at(s, false, &start);
-    if (!a.converged()) {  // the piece's corrector at this step: bisect instead
+    Attempt a = at(s, false);  // the tangent only at the point kept (below)
+    if (!a.converged()) {        // the piece's corrector at this step: bisect instead
       s = 0.5 * (lo + hi);
       a = at(s, false);
       if (!a.converged()) break;
@@ -273,7 +266,6 @@ PieceStep piece_step(const S& system, Solver& solver, double xs, double ls, cons
       kept = +1;
     } else {
       hi = s;
-      z_hi = a.z;
       e_hi = std::move(e);
       weight_hi = 1.0;
       if (kept == -1) weight_lo *= 0.5;
