@@ -302,18 +302,10 @@ TEST(Continuation, StepAdaptationRecoversFromAForcedCorrectorFailure) {
   const solvers::ForcedResponseFamily family(base, ContinuationParameter::Frequency);
   struct Flaky {
     const solvers::ForcedResponseFamily* family;
-    mutable int failures_left = 6;
-    // An evaluation in the window fails (residual or linearization alike: the corrector reads R
-    // from residual() and forms J by linearize()).
-    [[nodiscard]] bool fails(double f) const {
-      if (!(f > 10.5 && f < 11.0 && failures_left > 0)) return false;
-      --failures_left;
-      return true;
-    }
+    mutable int failures_left = 6;  // evaluations in the window fail, residual() and linearize() alike
+    [[nodiscard]] bool fails(double f) const { return f > 10.5 && f < 11.0 && failures_left > 0 && failures_left--; }
     [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double f) const {
-      Eigen::VectorXd r = family->residual(x, f);
-      if (fails(f)) r.setConstant(std::nan(""));
-      return r;
+      return fails(f) ? Eigen::VectorXd(Eigen::VectorXd::Constant(x.size(), NAN)) : family->residual(x, f);
     }
     [[nodiscard]] solvers::LowRankLinearization linearize(const Eigen::VectorXd& x, double f) const {
       solvers::LowRankLinearization l = family->linearize(x, f);
