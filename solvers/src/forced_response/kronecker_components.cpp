@@ -83,8 +83,8 @@ Eigen::MatrixXd residual_dot2(const std::array<Eigen::SparseMatrix<double>, 3>& 
   Eigen::MatrixXd r(v.rows(), v.cols());
   std::vector<Dot2> acc;
   for (Eigen::Index c = 0; c < v.cols(); ++c) {
-    acc.assign(static_cast<size_t>(v.rows()), Dot2(0.0));
-    for (Eigen::Index i = 0; i < v.rows(); ++i) acc[static_cast<size_t>(i)] = Dot2(v(i, c));
+    acc.clear();
+    for (Eigen::Index i = 0; i < v.rows(); ++i) acc.emplace_back(v(i, c));
     for (const auto& b : terms) {
       for (Eigen::Index j = 0; j < b.outerSize(); ++j) {
         for (Eigen::SparseMatrix<double>::InnerIterator it(b, j); it; ++it) {
@@ -106,18 +106,17 @@ Eigen::MatrixXd residual_dot2(const std::array<Eigen::SparseMatrix<double>, 3>& 
 // Not in an anonymous namespace: a field of ComponentLus (as KluWithTranspose in sparse_lu.cpp).
 // A band LU (dgbtrf) of an N × N matrix A = Σ_t B_t with kl = ku = w off-diagonals, in LAPACK's
 // band storage AB(kl + ku + i − j, j) = A(i, j) (0-based), ldab = 2 kl + ku + 1. The terms B_t are
-// kept apart, B_t(i, j) at terms_[t](w + i − j, j), for the refinement's residual.
+// kept apart, B_t(i, j) at terms_[t](w + i − j, j), for the refinement's residual; factorize()
+// sums them into AB's rows w … 3w.
 class BandLu {
  public:
   BandLu(int size, int width) : n_(size), w_(width), ab_(Eigen::MatrixXd::Zero(3 * width + 1, size)), ipiv_(size) {
     for (auto& b : terms_) b = Eigen::MatrixXd::Zero(2 * width + 1, size);
   }
-  // A(i, j) += v, v a contribution of term t.
-  void add(Eigen::Index i, Eigen::Index j, double v, size_t t) {
-    ab_(2 * w_ + i - j, j) += v;
-    terms_[t](w_ + i - j, j) += v;
-  }
+  // B_t(i, j) += v.
+  void add(Eigen::Index i, Eigen::Index j, double v, size_t t) { terms_[t](w_ + i - j, j) += v; }
   bool factorize() {
+    ab_.middleRows(w_, 2 * w_ + 1) = terms_[0] + terms_[1] + terms_[2];
     if (!ab_.allFinite()) return false;
     const int ldab = 3 * w_ + 1;
     int info = 0;
