@@ -11,8 +11,6 @@
 #include <string>
 #include <vector>
 
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_roots.h>
 #include <gtest/gtest.h>
 
 #include <wbm/contact/friction.hpp>
@@ -26,6 +24,7 @@
 
 #include "shipped_scenes.hpp"
 #include "testing.hpp"
+#include "impact_oscillators.hpp"
 #include "weighted_residual_fixtures.hpp"
 
 using namespace wbm;
@@ -461,74 +460,6 @@ TEST(RigidContact, ContinuationPassesThroughTheFixedFrequencySolves) {
   }
 }
 
-namespace {
-
-// The 1-DOF impact oscillator m ü + c u̇ + k u = F cos ωt against a rigid stop at u = g0 with a
-// plastic impact (e = 0), in closed form. Once the mass is on the stop it stays there while the
-// load pushes it on (contact force F cos ωt − k g0 ≥ 0) and leaves it at the instant t₁ with
-// F cos ωt₁ = k g0, ωt₁ = arccos(k g0/F) ∈ (0, π/2): the state (g0, 0) at t₁ is the same every
-// period, whatever came before. From it the free flight is the linear response
-//   u(t) = u_p(t) + e^{−ζω_n s}(A cos ω_d s + B sin ω_d s),  s = t − t₁,
-// u_p = Re(F e^{iωt}/(k − mω² + iωc)), A = g0 − u_p(t₁), B = (ζω_n A − u̇_p(t₁))/ω_d, until its
-// first return to g0 at t_i (a bracketed root, GSL's Brent). The orbit with one impact per
-// period is: flight on [t₁, t_i], rest on the stop on [t_i, t₁ + T]; it exists when t_i − T lies
-// in the sticking window ω(t_i − T) ≥ −arccos(k g0/F), which the test checks.
-struct PlasticImpactOscillator {
-  double m = 1.0, k = std::pow(2.0 * std::numbers::pi * 10.0, 2), zeta = 0.05, f = 8.0, amplitude = 10.0;
-  double c = 2.0 * zeta * std::sqrt(k * m), gap = 0.5 * amplitude / k;  // k g0 / F = ½
-  double omega = 2.0 * std::numbers::pi * f, wn = std::sqrt(k / m), wd = wn * std::sqrt(1.0 - zeta * zeta);
-  std::complex<double> u_amp = amplitude / std::complex<double>(k - m * omega * omega, omega * c);
-  double t1 = std::acos(k * gap / amplitude) / omega, t_impact = 0.0, a = 0.0, b = 0.0;
-
-  [[nodiscard]] double particular(double t) const { return std::real(u_amp * std::exp(std::complex<double>(0.0, omega * t))); }
-  [[nodiscard]] double flight(double t) const {
-    const double s = t - t1;
-    return particular(t) + std::exp(-zeta * wn * s) * (a * std::cos(wd * s) + b * std::sin(wd * s));
-  }
-  PlasticImpactOscillator() {
-    const double v_p = std::real(std::complex<double>(0.0, omega) * u_amp * std::exp(std::complex<double>(0.0, omega * t1)));
-    a = gap - particular(t1);
-    b = (zeta * wn * a - v_p) / wd;
-    // First return: the first sign change of u − g0 after the mass has left (a fine scan), then Brent.
-    const double period = 1.0 / f;
-    double lo = t1 + 1e-6 * period, hi = lo;
-    for (int i = 1; i <= 100000; ++i) {
-      hi = t1 + period * 1.25 * i / 100000.0;
-      if (flight(hi) > gap) break;
-      lo = hi;
-    }
-    gsl_function fn{[](double t, void* p) {
-                      const auto* o = static_cast<const PlasticImpactOscillator*>(p);
-                      return o->flight(t) - o->gap;
-                    },
-                    this};
-    gsl_root_fsolver* solver = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
-    gsl_root_fsolver_set(solver, &fn, lo, hi);
-    for (int i = 0; i < 200; ++i) {
-      gsl_root_fsolver_iterate(solver);
-      if (gsl_root_test_interval(gsl_root_fsolver_x_lower(solver), gsl_root_fsolver_x_upper(solver), 0.0, 1e-15) == GSL_SUCCESS) break;
-    }
-    t_impact = gsl_root_fsolver_root(solver);
-    gsl_root_fsolver_free(solver);
-  }
-  [[nodiscard]] solvers::MechanicalSystem system() const {
-    solvers::MechanicalSystem s;
-    s.mass = Eigen::MatrixXd::Constant(1, 1, m).sparseView();
-    s.damping = Eigen::MatrixXd::Constant(1, 1, c).sparseView();
-    s.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
-    return s;
-  }
-  // u at τ = t f ∈ [0, 1).
-  [[nodiscard]] double displacement(double tau) const {
-    const double period = 1.0 / f;
-    double t = tau * period;
-    while (t < t1) t += period;
-    return t <= t_impact ? flight(t) : gap;
-  }
-};
-
-}  // namespace
-
 // The closed-form orbit exists for these parameters (the mass leaves, stays below the stop in
 // flight, and lands within the sticking window), and Moreau–Jean with e = 0 converges to it at
 // first order in the step (the velocity jump at the impact). The discrete orbit is not exactly
@@ -536,7 +467,7 @@ struct PlasticImpactOscillator {
 // impact to the next, so δ stalls near the discretization error instead of reaching 1e-7; the
 // test takes period 100 and checks that δ is no larger than the error against the closed form.
 TEST(MoreauJean, PlasticImpactOscillatorConvergesToTheClosedFormOrbit) {
-  const PlasticImpactOscillator o;
+  const wbm::testing::PlasticImpactOscillator o;
   const double period = 1.0 / o.f;
   ASSERT_GT(o.t_impact, o.t1 + 0.25 * period);
   ASSERT_LT(o.t_impact, o.t1 + period);

@@ -90,8 +90,8 @@ struct FloquetResult {
 /// displacements: contact_displacement is n_c × P, row c = u*_c(τ_p) [m] at τ_p = p/P of one
 /// period (P ≥ 8 steps; the row order of `contacts`). Without contacts pass a 0 × P matrix.
 /// Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples,
-/// f ≤ 0, a rigid stop (contact::RigidStop: an impacting orbit would need saltation
-/// matrices, not implemented; stability is not computed for rigid stops), friction, or a contact
+/// f ≤ 0, a rigid stop (contact::RigidStop: an impacting orbit needs saltation matrices, which
+/// impact_shooting.hpp computes on the exact orbit it shoots), friction, or a contact
 /// too stiff to resolve in 32 768 steps (above). P is raised for a stiff contact (above).
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,

@@ -1,0 +1,130 @@
+#pragma once
+/// Exact periodic orbits with impacts, and their stability through saltation matrices.
+/// Units: SI; times in s, frequencies in Hz, states (u [m], u̇ [m/s]).
+///
+/// The system is linear between events: M ü + C u̇ + K u = f_ext(t) − Σ_{c ∈ A} e_c λ_c, with rigid
+/// stops e_cᵀ u ≤ g_c (contact::RigidStop: the gap function h_c = g_c − e_cᵀ u ≥ 0) and A the stops
+/// in a contact phase (persistent contact, e_cᵀ u = g_c, e_cᵀ u̇ = 0, λ_c ≥ 0). Event-driven:
+///   - flight with an active set A: u = Z q + u_A with Z an orthonormal basis of the null space of
+///     E_Aᵀ and E_Aᵀ u_A = g_A; Zᵀ M Z q̈ + Zᵀ C Z q̇ + Zᵀ K Z q = Zᵀ (f_ext − K u_A), solved in
+///     closed form: its periodic particular solution (one complex solve per load harmonic) plus
+///     the homogeneous part V e^{Λ t} V⁻¹ y₀ from the eigendecomposition of the first-order
+///     matrix (formed once per active set). The contact forces
+///     λ_A = W⁻¹ E_Aᵀ M⁻¹ (f_ext − C u̇ − K u), W = E_Aᵀ M⁻¹ E_A;
+///   - an impact (h_c reaches 0 from above, c ∉ A): Newton's law e_cᵀ u̇⁺ = −e e_cᵀ u̇⁻ by the impulse
+///     that also keeps the stops of A closed, u̇⁺ = u̇⁻ − M⁻¹ E′ W′⁻¹ D E′ᵀ u̇⁻ (E′ = [E_A, e_c], D =
+///     diag(1, …, 1, 1 + e)). For e = 0 the stop then stays closed when its force λ_c > 0 (a contact
+///     phase), else it leaves at once;
+///   - a release (λ_c reaches 0 from above, c ∈ A): c leaves A, the state is continuous.
+/// Events are located on the closed-form flight: brackets of min(T/P, π/(2 max|Λ|)) (at most a
+/// quarter of the active set's shortest natural period), GSL's Brent solver inside a bracket (to
+/// 1e-14 T), and a gap that dips below zero and back inside one bracket is found where its rate
+/// −e_cᵀu̇ changes sign. After an event its stop's gap leaves zero slowly (like τ² after a plastic
+/// impact that does not close, τ³ after a release), below the rounding of e_cᵀu at first: in the
+/// first bracket a return counts when the gap is below −1e-11 (|g_c| + |e_cᵀu|) at its end, and
+/// the stop must have opened beyond that in between, else the impacts accumulate (chatter, a Zeno
+/// sequence), which is refused (std::domain_error).
+///
+/// The monodromy matrix Φ = ∂x(t₀ + T)/∂x(t₀) is the product of the flights' transition matrices
+/// and of a saltation matrix at each event [Aizerman & Gantmacher 1958; Müller 1995, Chaos,
+/// Solitons & Fractals 5(9) 1671–1681; Leine & Nijmeijer 2004, Dynamics and Bifurcations of
+/// Non-Smooth Mechanical Systems, Springer, Sec. 7.1]:
+///   S = R + (f⁺ − R f⁻) ∇hᵀ / (∇hᵀ f⁻),
+/// R the impact map's Jacobian (blockdiag(I, I − M⁻¹ E′ W′⁻¹ D E′ᵀ)), f∓ the vector fields before
+/// and after, ∇h = (−e_c, 0). At a release f⁺ = f⁻ (λ_c = 0), so S = I. For one impact per period
+/// and no contact phase, det S = e² and det Φ = e^{2k} exp(−tr(M⁻¹ C) T) for k impacts (Liouville).
+/// A plastic impact (e = 0) into a contact phase maps every perturbation onto the constraint, so
+/// Φ then has two zero multipliers per stop that closes.
+
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/newton.hpp>
+
+namespace wbm::solvers {
+
+struct ImpactFlowOptions {
+  double restitution = 0.0;       // Newton's coefficient e ∈ [0, 1]
+  int steps_per_period = 512;     // P: brackets per period for the event search, at least (≥ 8)
+  int max_events = 1000;          // per flow; more (an accumulation of impacts, chatter) is refused
+  void validate() const;          // throws std::invalid_argument naming the field, value and range
+};
+
+enum class ImpactEventKind { Impact, Release };
+
+struct ImpactEvent {
+  double time_s = 0.0;                     // [s]
+  int contact = -1;                        // index in the contact list
+  ImpactEventKind kind = ImpactEventKind::Impact;
+  double normal_velocity = 0.0;            // e_cᵀ u̇⁻ [m/s] before the event (> 0 at an impact)
+  bool closes = false;                     // an impact after which the stop stays closed (e = 0)
+};
+
+/// One flow of the event-driven system from (t₀, x₀).
+struct ImpactFlowResult {
+  Eigen::VectorXd state;               // x(t₀ + duration) = (u, u̇), 2n
+  Eigen::MatrixXd monodromy;           // ∂x(t₀ + duration)/∂x(t₀) with the saltation matrices, 2n × 2n
+  std::vector<ImpactEvent> events;     // in time order
+  std::vector<char> active;            // per stop at the end: 1 if in a contact phase
+  Eigen::MatrixXd contact_displacement;  // n_c × S: e_cᵀ u at t₀ + s duration/S (S = samples asked)
+};
+
+/// The event-driven flow of one structure, load and set of rigid stops (set-up once: the
+/// eigendecompositions per active set are formed on first use and kept; not thread-safe).
+/// Throws std::invalid_argument for invalid matrices or forcing, an empty or non-rigid contact list
+/// (penalty laws: FloquetAnalysis; friction is not covered), and at a flow whose linear part is
+/// singular at a load harmonic (an undamped resonance, or a static load on a free structure).
+class ImpactFlow {
+ public:
+  ImpactFlow(const MechanicalSystem& system, const HarmonicForcing& forcing, std::vector<ContactPoint> contacts,
+             ImpactFlowOptions options = {});
+  ~ImpactFlow();
+  ImpactFlow(ImpactFlow&&) noexcept;
+  ImpactFlow& operator=(ImpactFlow&&) noexcept;
+
+  /// Flows x₀ = (u₀, u̇₀) (2n) from t₀ [s] over `duration` [s] (> 0), starting with the stops of
+  /// `active` (n_c entries, or empty: none) in a contact phase (x₀ must then satisfy their
+  /// constraints). samples > 0 fills contact_displacement. Throws std::invalid_argument for a
+  /// wrong size, non-finite values or duration ≤ 0, and std::domain_error when x₀ penetrates a stop
+  /// not in `active` (h_c < −1e-12 (1 + |g_c|)), at a grazing impact (e_cᵀ u̇⁻ ≤ 0), at an impact
+  /// whose impulse would pull on a closed stop, at chatter (above), and beyond max_events.
+  [[nodiscard]] ImpactFlowResult flow(const Eigen::VectorXd& x0, double t0, double duration,
+                                      const std::vector<char>& active = {}, int samples = 0) const;
+  [[nodiscard]] int dofs() const noexcept;
+  [[nodiscard]] double period_s() const noexcept;  // T = 1/f of the forcing
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// A periodic orbit found by shooting, with its saltation monodromy and Floquet multipliers.
+struct ImpactOrbit {
+  Eigen::VectorXd state;         // x(t₀) on the orbit, 2n
+  double start_s = 0.0;          // t₀ [s], a time of free flight
+  ImpactFlowResult period;       // the flow over one period from `state`
+  Eigen::VectorXcd multipliers;  // eigenvalues of period.monodromy, by decreasing modulus
+  double max_modulus = 0.0;
+  NewtonReport report;           // the shooting's Newton solve (converged: verified residual)
+};
+
+/// Shooting on the period map in scaled unknowns z = D x: R(z) = D (x(t₀ + T) − x), D =
+/// diag(1/s, 1/(ω s)) with s the largest of |u| and |u̇|/ω in x_guess and ω = 2π f, solved by the
+/// project's Newton core (dense LU) with the Jacobian D Φ D⁻¹ − I, Φ the saltation monodromy. The orbit starts at t₀ in free flight with
+/// every stop open (choose t₀ where the guessed orbit is away from the stops). The tolerance is
+/// options.tolerance on ‖R‖ (relative to s_u). A flow that fails (std::domain_error) inside the
+/// Newton solve gives a non-finite residual, which the line search backs away from.
+/// Throws std::invalid_argument for a guess of the wrong size or with a stop closed at t₀.
+[[nodiscard]] ImpactOrbit shoot_periodic_orbit(const ImpactFlow& flow, const Eigen::VectorXd& x_guess, double t0,
+                                               const NewtonOptions& options = {});
+
+/// The slow reference: Φ by central differences of the flow over one period from (t₀, x₀),
+/// column j with the step δ_j = step · max(|x₀_j|, s) for a displacement and step · max(|x₀_j|, ω s)
+/// for a velocity (s the largest of |u| and |u̇|/ω in x₀). Same throws as ImpactFlow::flow.
+[[nodiscard]] Eigen::MatrixXd finite_difference_monodromy(const ImpactFlow& flow, const Eigen::VectorXd& x0,
+                                                          double t0, double step = 1e-6);
+
+}  // namespace wbm::solvers
