@@ -170,7 +170,9 @@ TEST(ImpactShooting, RodOrbitFromTheWeightedResidualSolution) {
   const auto sampled = flow.flow(orbit.state, t0, flow.period_s(), {}, 256);
   Eigen::VectorXd shifted(256);
   for (int s = 0; s < 256; ++s) shifted(s) = tip((far + s) % 256);
-  EXPECT_LT(solvers::rms_relative_error(shifted, sampled.contact_displacement.row(0).transpose()), 1e-3);
+  // Measured 1.3e-4: the weighted residual's truncation at M = 256 (its error against Moreau–Jean
+  // is below 5e-4, test_rigid_contact).
+  EXPECT_LT(solvers::rms_relative_error(shifted, sampled.contact_displacement.row(0).transpose()), 5e-4);
   // C = 1e-4 K damps the first mode at ζ₁ ≈ 0.4: every perturbation decays by ~e⁻²¹ over a period.
   EXPECT_LT(orbit.max_modulus, 1e-6);
   // The same rod with C = 1e-6 K (ζ₁ ≈ 0.004): its orbit from the same seed, and the saltation
@@ -183,11 +185,11 @@ TEST(ImpactShooting, RodOrbitFromTheWeightedResidualSolution) {
   ASSERT_TRUE(lit.report.converged()) << lit.report.message;
   ASSERT_EQ(lit.period.events.size(), 2U);  // measured: an impact that closes the stop, a release
   EXPECT_TRUE(lit.period.events[0].closes);
-  // Measured: 2.3e-6 relative, the same for FD steps 1e-4 … 1e-7 (6e-7 in the balanced state
-  // (u, u̇/σ); 4e-6 with a lumped mass; 1.0e-6 with C = 1e-5 K), against 5e-10 on the chain
-  // above: a floor on this stiff rod that is not the difference quotient's, not yet explained.
+  // Measured: 2.9e-9. With the eigenvalues of the unbalanced first-order matrix (ε ‖M⁻¹K‖ off:
+  // 4e-5 rad/s here) it was 2.3e-6 for every difference step from 1e-4 to 1e-7: the vector fields
+  // in the saltation matrices disagreed with the flow they were meant to describe.
   const Eigen::MatrixXd fd = solvers::finite_difference_monodromy(lightly, lit.state, t0, 1e-6);
-  EXPECT_LT((lit.period.monodromy - fd).norm(), 1e-5 * lit.period.monodromy.norm());
+  EXPECT_LT((lit.period.monodromy - fd).norm(), 1e-7 * lit.period.monodromy.norm());
   EXPECT_GT(lit.max_modulus, 0.1);  // measured 0.31: the light damping leaves the multipliers off zero
   EXPECT_LT(lit.max_modulus, 1.0);
 }
