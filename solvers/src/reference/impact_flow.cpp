@@ -133,6 +133,7 @@ struct ImpactFlow::Impl {
   // The flight's transition matrix over τ in the full state: blockdiag(Z, Z) Re(V e^{Λτ} V⁻¹) blockdiag(Zᵀ, Zᵀ).
   [[nodiscard]] Eigen::MatrixXd transition(const Phase& p, double tau) const {
     const Eigen::Index r = p.r();
+    if (r == 0) return Eigen::MatrixXd::Zero(2 * n, 2 * n);  // every DOF held: perturbations vanish
     const Eigen::VectorXcd decay = (p.lambda * tau).array().exp().matrix();
     const Eigen::MatrixXd tr = (p.v * decay.asDiagonal() * p.v_inv).real();
     Eigen::MatrixXd zz = Eigen::MatrixXd::Zero(2 * n, 2 * r);
