@@ -17,6 +17,15 @@
 
 namespace wbm::testing {
 
+// m ü + c u̇ + k u: 1 × 1 matrices [kg, N·s/m, N/m].
+inline wbm::solvers::MechanicalSystem one_dof_system(double m, double c, double k) {
+  wbm::solvers::MechanicalSystem s;
+  s.mass = Eigen::MatrixXd::Constant(1, 1, m).sparseView();
+  s.damping = Eigen::MatrixXd::Constant(1, 1, c).sparseView();
+  s.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
+  return s;
+}
+
 // The 1-DOF impact oscillator m ü + c u̇ + k u = F cos ωt against a rigid stop at u = g0 with a
 // plastic impact (e = 0), in closed form. Once the mass is on the stop it stays there while the
 // load pushes it on (contact force F cos ωt − k g0 ≥ 0) and leaves it at the instant t₁ with
@@ -70,13 +79,7 @@ struct PlasticImpactOscillator {
     t_impact = gsl_root_fsolver_root(solver);
     gsl_root_fsolver_free(solver);
   }
-  [[nodiscard]] wbm::solvers::MechanicalSystem system() const {
-    wbm::solvers::MechanicalSystem s;
-    s.mass = Eigen::MatrixXd::Constant(1, 1, m).sparseView();
-    s.damping = Eigen::MatrixXd::Constant(1, 1, c).sparseView();
-    s.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
-    return s;
-  }
+  [[nodiscard]] wbm::solvers::MechanicalSystem system() const { return one_dof_system(m, c, k); }
   // u at τ = t f ∈ [0, 1).
   [[nodiscard]] double displacement(double tau) const {
     const double period = 1.0 / f;
@@ -152,13 +155,7 @@ struct ElasticImpactOscillator {
     salt << -restitution, 0.0, (a_plus + restitution * a_minus) / velocity, -restitution;
     return salt * phi;
   }
-  [[nodiscard]] wbm::solvers::MechanicalSystem system() const {
-    wbm::solvers::MechanicalSystem s;
-    s.mass = Eigen::MatrixXd::Constant(1, 1, m).sparseView();
-    s.damping = Eigen::MatrixXd::Constant(1, 1, c).sparseView();
-    s.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
-    return s;
-  }
+  [[nodiscard]] wbm::solvers::MechanicalSystem system() const { return one_dof_system(m, c, k); }
 };
 
 }  // namespace wbm::testing
