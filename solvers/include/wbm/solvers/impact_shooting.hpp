@@ -113,11 +113,13 @@ struct ImpactOrbit {
 
 /// Shooting on the period map in scaled unknowns z = D x: R(z) = D (x(t₀ + T) − x), D =
 /// diag(1/s, 1/(ω s)) with s the largest of |u| and |u̇|/ω in x_guess and ω = 2π f, solved by the
-/// project's Newton core (dense LU) with the Jacobian D Φ D⁻¹ − I, Φ the saltation monodromy. The orbit starts at t₀ in free flight with
-/// every stop open (choose t₀ where the guessed orbit is away from the stops). The tolerance is
-/// options.tolerance on ‖R‖ (relative to s_u). A flow that fails (std::domain_error) inside the
-/// Newton solve gives a non-finite residual, which the line search backs away from.
-/// Throws std::invalid_argument for a guess of the wrong size or with a stop closed at t₀.
+/// project's Newton core (dense LU) with the Jacobian D Φ D⁻¹ − I, Φ the saltation monodromy.
+/// The orbit starts at t₀ in free flight with every stop open (choose t₀ where the guessed orbit
+/// is away from the stops). The tolerance is options.tolerance on ‖R‖ (relative to s). A flow that
+/// fails (std::domain_error: a graze, chatter, a penetration) gives a non-finite residual: the line
+/// search backs away from it, and at the guess itself the report says NonFinite. Throws
+/// std::invalid_argument for a guess of the wrong size, non-finite or zero, and as ImpactFlow does
+/// for an active set whose linear part is singular at a load harmonic.
 [[nodiscard]] ImpactOrbit shoot_periodic_orbit(const ImpactFlow& flow, const Eigen::VectorXd& x_guess, double t0,
                                                const NewtonOptions& options = {});
 
