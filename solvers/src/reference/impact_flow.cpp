@@ -345,9 +345,14 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     const double h_step = std::min(h_period, p.bracket);
     const double t_left0 = t;
     double t_left = t;
-    const Eigen::VectorXd& x_left = x;
-    Eigen::VectorXd left = s.indicators(p, t_left, x_left);
-    Eigen::VectorXd rate_left = -s.e.transpose() * x_left.tail(n);
+    Eigen::VectorXd left = s.indicators(p, t_left, x);
+    Eigen::VectorXd rate_left = -s.e.transpose() * x.tail(n);
+    // The samples of e_cᵀu at times before `limit`, on this flight.
+    auto fill_samples = [&](double limit) {
+      for (; next_sample < samples && sample_time(next_sample) < limit; ++next_sample) {
+        out.contact_displacement.col(next_sample) = s.e.transpose() * at(sample_time(next_sample)).head(n);
+      }
+    };
     for (int i = 0; i < nc; ++i) {
       if (fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)])
         left(i) = std::numeric_limits<double>::infinity();
@@ -394,9 +399,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
         }
       }
       const double t_stop = hit >= 0 ? t_hit : t_right;
-      for (; next_sample < samples && sample_time(next_sample) < t_stop; ++next_sample) {
-        out.contact_displacement.col(next_sample) = s.e.transpose() * at(sample_time(next_sample)).head(n);
-      }
+      fill_samples(t_stop);
       left = right;
       rate_left = rate_right;
       t_left = t_right;
@@ -408,9 +411,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     if (hit < 0) {
       out.state = x_minus;
       out.active = active;
-      for (; next_sample < samples; ++next_sample) {
-        out.contact_displacement.col(next_sample) = s.e.transpose() * at(sample_time(next_sample)).head(n);
-      }
+      fill_samples(std::numeric_limits<double>::infinity());
       return out;
     }
     if (static_cast<int>(out.events.size()) >= s.options.max_events) {

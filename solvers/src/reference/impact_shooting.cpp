@@ -34,7 +34,7 @@ class PeriodMap {
     return scale_.asDiagonal() * r->monodromy * scale_.cwiseInverse().asDiagonal() - Eigen::MatrixXd::Identity(m, m);
   }
 
- private:
+  // The flow from D⁻¹ z (kept from the last residual or Jacobian at z), or null if it failed.
   const ImpactFlowResult* run(const Eigen::VectorXd& z) const {
     if (last_z_.size() == z.size() && last_z_ == z) return last_ ? &*last_ : nullptr;
     last_z_ = z;
@@ -46,6 +46,8 @@ class PeriodMap {
     }
     return &*last_;
   }
+
+ private:
   const ImpactFlow& flow_;
   double t0_;
   Eigen::VectorXd scale_;
@@ -81,7 +83,9 @@ ImpactOrbit shoot_periodic_orbit(const ImpactFlow& flow, const Eigen::VectorXd& 
   orbit.report = solved.report;
   orbit.state = solved.x.cwiseQuotient(scale);
   if (!orbit.report.converged()) return orbit;
-  orbit.period = flow.flow(orbit.state, t0, flow.period_s());
+  const ImpactFlowResult* last = map.run(solved.x);  // Newton's last residual was evaluated there
+  if (last == nullptr) throw std::logic_error("shoot_periodic_orbit: the converged iterate's flow failed");
+  orbit.period = *last;
   const Eigen::EigenSolver<Eigen::MatrixXd> eig(orbit.period.monodromy, false);
   orbit.multipliers = eig.eigenvalues();
   std::sort(orbit.multipliers.data(), orbit.multipliers.data() + orbit.multipliers.size(),
