@@ -191,14 +191,20 @@ def response_curve(folder, title, written):
     if stable is None:
         ax.plot(f, amplitude, "-", color="C0", label=name)
     else:  # one line per run of equal stability, joined at the change
+        # An empty cell (NaN) is a point without a verdict (rigid stops: no exact orbit found near it).
+        kind = ["unavailable" if math.isnan(v) else ("stable" if v == 1.0 else "unstable") for v in stable]
+        style = {"stable": ("-", "C0"), "unstable": ("--", "C0"), "unavailable": (":", "0.5")}
         start = 0
         for i in range(1, len(f) + 1):
-            if i == len(f) or stable[i] != stable[start]:
+            if i == len(f) or kind[i] != kind[start]:
                 end = min(i + 1, len(f))
-                ax.plot(f[start:end], amplitude[start:end], "-" if stable[start] == 1.0 else "--", color="C0")
+                line, color = style[kind[start]]
+                ax.plot(f[start:end], amplitude[start:end], line, color=color)
                 start = i
-        ax.plot([], [], "-", color="C0", label="stable")
-        ax.plot([], [], "--", color="C0", label="unstable")
+        for name in ("stable", "unstable", "unavailable"):
+            if name in kind or name != "unavailable":
+                ax.plot([], [], style[name][0], color=style[name][1],
+                        label=name if name != "unavailable" else "no stability verdict")
     for k, (other, values) in enumerate(amplitudes[1:]):
         ax.plot(f, values, "-", color=f"C{k + 1}", linewidth=0.8, label=other)
     if listed(folder, "folds.csv"):

@@ -402,8 +402,8 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
         o.samples = samples;
         const auto curve = solvers::trace_response(base, o);
         const auto n = static_cast<Eigen::Index>(curve.points.size());
-        Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n), dropped(n);
-        Eigen::Matrix<bool, Eigen::Dynamic, 1> stable(n);
+        Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n), dropped(n), distance(n);
+        Eigen::Matrix<bool, Eigen::Dynamic, 1> stable(n), available(n);
         for (Eigen::Index i = 0; i < n; ++i) {
           const auto& p = curve.points[static_cast<size_t>(i)];
           f(i) = p.frequency_hz;
@@ -411,9 +411,12 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
           umin(i) = p.min_displacement;
           amp(i) = p.amplitude;
           force(i) = p.max_contact_force;
-          mu(i) = stability ? p.max_multiplier : NAN;
-          mu_error(i) = stability ? p.max_multiplier_error : NAN;
+          // A point without a verdict (rigid stops: no exact orbit near it): NaN multipliers, not stable.
+          mu(i) = stability && p.stability_available ? p.max_multiplier : NAN;
+          mu_error(i) = stability && p.stability_available ? p.max_multiplier_error : NAN;
           stable(i) = p.stable;
+          available(i) = p.stability_available;
+          distance(i) = p.shooting_distance;
           dropped(i) = p.dropped_harmonics_residual;
         }
         std::vector<double> folds, fold_amplitudes;
@@ -433,6 +436,8 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
           out["stable"] = py::cast(stable);
           out["max_floquet_multiplier"] = py::cast(mu);
           out["max_floquet_multiplier_error"] = py::cast(mu_error);
+          out["stability_available"] = py::cast(available);
+          if (base.rigid()) out["shooting_distance"] = py::cast(distance);  // the exact orbit's, relative
         }
         out["folds_hz"] = folds;
         out["fold_amplitudes"] = fold_amplitudes;
@@ -448,11 +453,14 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
       py::arg("contact_quadrature") = "midpoint",
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
 [Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
-matrix on `samples` steps; refused for rigid stops: pass stability=False). Arguments as solve();
+matrix on `samples` steps; with rigid stops, the saltation monodromy of the exact orbit with plastic
+impacts near each point, by shooting; refused for friction: pass stability=False). Arguments as solve();
 max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|.
 Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
-(bool), max_floquet_multiplier, max_floquet_multiplier_error; and folds_hz (turning points),
+(bool), max_floquet_multiplier, max_floquet_multiplier_error (NaN where stability_available (bool)
+is false: no exact orbit found near a point with rigid stops), with rigid stops shooting_distance
+(the exact orbit's rms distance from the point's, relative); and folds_hz (turning points),
 fold_amplitudes [m] (the forced DOF's amplitude at each fold's own state, Hermite-interpolated on
 its step: on a multivalued curve not the nearest point's), fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
 message, wall_time_s, stability_time_s; with harmonics (a selection, as in solve()):

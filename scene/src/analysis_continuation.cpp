@@ -27,10 +27,12 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
   nlohmann::json list = nlohmann::json::array();
   std::vector<double> hz, before, after, amplitude, modulus, argument, lost;
   std::vector<std::string> kind;
+  size_t last = 0;  // the last point with a verdict before i (rigid stops: some have none)
   for (size_t i = 1; i < curve.points.size(); ++i) {
     const solvers::ResponsePoint& b = curve.points[i];
+    if (curve.points[i - 1].stability_available) last = i - 1;
     if (b.crossing == solvers::Bifurcation::None) continue;
-    const solvers::ResponsePoint& a = curve.points[i - 1];
+    const solvers::ResponsePoint& a = curve.points[last];
     const double span = b.max_multiplier - a.max_multiplier;
     const double t = std::abs(span) > 0.0 ? std::clamp((1.0 - a.max_multiplier) / span, 0.0, 1.0) : 0.5;
     const solvers::ResponsePoint& unstable = b.stable ? a : b;
@@ -103,16 +105,20 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   const auto curve = solvers::trace_response(base, o);
   const std::string dof = scene.structure->dof_name(scene.forcing->dof);
   const auto n = static_cast<Eigen::Index>(curve.points.size());
+  const bool rigid = base.rigid();
   Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), mu_error(n), steps(n), its(n);
+  Eigen::VectorXd distance(n), impacts(n);
   std::vector<std::string> verdict(static_cast<size_t>(n));
+  std::string first_unavailable;
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& p = curve.points[static_cast<size_t>(i)];
     // The error estimate is missing (empty cell) where it could not be formed (floquet.hpp).
     mu_error(i) = std::isfinite(p.max_multiplier_error) ? p.max_multiplier_error : NAN;
     steps(i) = p.monodromy_steps;
-    verdict[static_cast<size_t>(i)] = !std::isfinite(p.max_multiplier_error) ? "no error estimate"
-                                      : p.stability_settled                 ? "settled"
-                                                                            : "within its error estimate";
+    verdict[static_cast<size_t>(i)] = !p.stability_available                  ? "unavailable"
+                                      : !std::isfinite(p.max_multiplier_error) ? "no error estimate"
+                                      : p.stability_settled                    ? "settled"
+                                                                               : "within its error estimate";
     f(i) = p.frequency_hz;
     umax(i) = p.max_displacement;
     umin(i) = p.min_displacement;
@@ -121,15 +127,29 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     stable(i) = p.stable ? 1.0 : 0.0;
     mu(i) = p.max_multiplier;
     its(i) = p.corrector_iterations;
+    // Rigid stops: the exact orbit's distance and impacts (empty where no orbit was found).
+    distance(i) = std::isfinite(p.shooting_distance) ? p.shooting_distance : NAN;
+    impacts(i) = std::isfinite(p.shooting_distance) ? p.impacts : NAN;
+    if (!p.stability_available) {  // no verdict: empty cells
+      stable(i) = mu(i) = mu_error(i) = NAN;
+      if (first_unavailable.empty()) first_unavailable = format("%.6g", p.frequency_hz) + " Hz: " + p.stability_message;
+    }
   }
   if (n > 0) {
     std::vector<std::string> header = {"frequency [Hz]", "u_max_" + dof + " [m]", "u_min_" + dof + " [m]",
                                        "amplitude_" + dof + " [m]", "max_contact_force [N]"};
     std::vector<Eigen::VectorXd> columns = {f, umax, umin, amp, force};
     if (o.stability) {
-      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]",
-                                   "monodromy_steps [-]"});
-      columns.insert(columns.end(), {stable, mu, mu_error, steps});
+      header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]"});
+      columns.insert(columns.end(), {stable, mu, mu_error});
+      // Rigid stops: the exact orbit by shooting (its saltation monodromy), not P steps.
+      if (rigid) {
+        header.insert(header.end(), {"shooting_distance [-]", "impacts_per_period [-]"});
+        columns.insert(columns.end(), {distance, impacts});
+      } else {
+        header.push_back("monodromy_steps [-]");
+        columns.push_back(steps);
+      }
     }
     if (!scene.basis.selected_harmonics.empty()) {
       Eigen::VectorXd dropped(n);
@@ -221,13 +241,20 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                      {"corrector_iterations", curve.corrector_iterations},
                                      {"continuation_time_s", curve.wall_time_s},
                                      {"stability_time_s", curve.stability_time_s},
-                                     {"unsettled_stability_points", curve.unsettled_points}};
+                                     {"unsettled_stability_points", curve.unsettled_points},
+                                     {"unavailable_stability_points", curve.unavailable_points}};
   if (o.stability) out.diagnostics["continuation"]["bifurcations"] = bifurcations;
   if (curve.unsettled_points > 0) {
     out.warnings.push_back("continuation: at " + std::to_string(curve.unsettled_points) +
                            " point(s) a Floquet multiplier lies within twice its error estimate of the unit circle "
                            "even with 16x the monodromy steps; their stability verdict may be wrong (branch.csv, "
                            "status column); raise [output] samples");
+  }
+  if (curve.unavailable_points > 0) {
+    out.warnings.push_back("continuation: " + std::to_string(curve.unavailable_points) + " of " +
+                           std::to_string(curve.points.size()) +
+                           " point(s) have no stability verdict (branch.csv: empty cells, status \"unavailable\"): "
+                           "no exact orbit with impacts was found near them; the first at " + first_unavailable);
   }
   out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
                 ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +

@@ -63,11 +63,6 @@ void Parser::contacts(const toml::table& root) {
                "\"" + law + "\" with analysis.stability = true: the monodromy matrix of a stick/slip orbit is not computed; "
                "set stability = false");
     }
-    if (c.law == ContactLawKind::Rigid && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
-      r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"rigid\" (exact contact) with analysis.stability = true: the stability of impacting orbits "
-               "(saltation matrices) is not computed; set stability = false, or use a stiff \"linear\" penalty");
-    }
     if (!modes && !s_.contacts.empty() && exact(c.law) != exact(s_.contacts.front().law)) {
       r_.error(t->source(), section, "mixes exact contacts (\"rigid\", \"coulomb\") with penalty or \"jenkins\" laws; a "
                                      "forced response takes all exact or none (give the rigid ones a stiff \"linear\" "

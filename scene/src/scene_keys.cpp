@@ -110,8 +110,10 @@ const std::vector<DeclaredKey<Analysis>>& analysis_keys() {
                     "runaway branch (e.g. an undamped resonance) long before the point limit")
           .only_in({"continuation"}),
       boolean_key<A>("stability", [](auto& a) -> auto& { return a.stability; },
-                     "Floquet multipliers of every point (monodromy matrix)")
-          .documented_default("`true` (`false` with rigid stops, which refuse `true`)")
+                     "Floquet multipliers of every point (monodromy matrix; with rigid stops that of the exact "
+                     "orbit with plastic impacts near the point, by shooting, through saltation matrices; friction "
+                     "laws refuse `true`)")
+          .documented_default("`true`")
           .read_by_section()
           .only_in({"continuation"}),
       compound_key<A>("energy", "`[from, to]`", "— (required)", "0 < from < to",

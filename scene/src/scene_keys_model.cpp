@@ -145,7 +145,7 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
       choice_key<C>("law", names(law_table()), [](const C& c) { return to_string(c.law); },
                     [](C& c, const std::string& v) { c.law = value_of(law_table(), v); },
                     "exponential penalty [JL14 Eq. (5)], linear penalty f = k max(u − g0, 0), a rigid stop with "
-                    "exact contact (Signorini conditions; solve, sweep, continuation without stability, timestep and "
+                    "exact contact (Signorini conditions; solve, sweep, continuation, timestep and "
                     "nnm; all contacts of a forced response rigid or none), or a Jenkins element: dry friction along "
                     "the contact's direction, a spring k_t in series with a Coulomb slider of slip force μN (solve, "
                     "sweep, continuation without stability; Midpoint quadrature), or exact Coulomb friction along it "

@@ -98,18 +98,7 @@ bool Parser::analysis(const toml::table& root) {
   if (s_.analysis.kind == AnalysisKind::Continuation) {
     Analysis& a = s_.analysis;
     read_values(r_, *t, "analysis", analysis_keys(), a, kind);  // max_step, max_frequency_step_hz, max_points, max_state
-    // Rigid stops have no stability (no saltation matrices): false unless asked for (then refused).
-    bool rigid = false;
-    auto rigid_law = [](const toml::table* c) {
-      return c != nullptr && c->get_as<std::string>("law") != nullptr && c->get_as<std::string>("law")->get() == "rigid";
-    };
-    if (const toml::node* c = root.get("contact")) {
-      if (c->is_table()) rigid = rigid_law(c->as_table());
-      if (c->is_array_of_tables()) {
-        for (const auto& e : *c->as_array()) rigid = rigid || rigid_law(e.as_table());
-      }
-    }
-    a.stability = r_.boolean(*t, "analysis", "stability", rigid ? false : a.stability);
+    a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
   }
   return true;
 }

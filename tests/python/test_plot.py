@@ -117,3 +117,27 @@ def test_each_kind_of_stability_change_is_marked_once_in_the_legend(tmp_path):
     assert entries.count("stability change: Neimark-Sacker") == 1
     assert entries.count("stability change: period-doubling") == 1
     assert (tmp_path / "response_curve.png").exists()
+
+
+def test_points_without_a_stability_verdict_are_drawn_apart(tmp_path):
+    # Rigid stops: a point with no exact orbit near it has empty stability cells (branch.csv);
+    # it is drawn dotted with its own legend entry, neither stable nor unstable.
+    write_csv(tmp_path / "branch.csv", ["frequency [Hz]", "amplitude_x1 [m]", "stable [-]"],
+              [(30.0, 1e-3, 1.0), (35.0, 2e-3, ""), (40.0, 1.5e-3, 0.0), (45.0, 1e-3, 1.0)])
+    result = {"converged": True, "files": ["branch.csv"], "scene": {"title": "rigid stop"}, "diagnostics": {}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    drawn = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        ax = fig.axes[0]
+        drawn[path.name] = ([t.get_text() for t in ax.get_legend().get_texts()],
+                            [(line.get_linestyle(), len(line.get_xdata())) for line in ax.get_lines()])
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    legend, lines = drawn["response_curve.png"]
+    assert legend.count("no stability verdict") == 1 and "stable" in legend and "unstable" in legend
+    assert (":", 2) in lines  # the unavailable point, joined to the next

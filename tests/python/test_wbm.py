@@ -138,8 +138,13 @@ def test_trace_response_follows_the_closed_form_below_the_stop():
     np.testing.assert_allclose(curve["amplitude"][inside], exact, rtol=1e-5)
     assert curve["stable"].all() and (curve["max_floquet_multiplier"] < 1.0).all()
     assert curve["folds_hz"] == []
-    with pytest.raises(ValueError, match="stability"):
-        wbm.trace_response(s, 0, 10.0, (5.0, 55.0), [(0, wbm.RigidStop(1.0))], fourier, fourier)
+    # The same stop rigid: each point's exact orbit (no impact) is the linear one, and its largest
+    # multiplier is |e^{λT}| = e^{−(c/2m)/f} in closed form.
+    rigid = wbm.trace_response(s, 0, 10.0, (5.0, 55.0), [(0, wbm.RigidStop(1.0))], fourier, fourier,
+                               max_frequency_step_hz=5.0)
+    assert rigid["converged"], rigid["message"]
+    assert rigid["stability_available"].all() and (rigid["shooting_distance"] < 1e-9).all()
+    np.testing.assert_allclose(rigid["max_floquet_multiplier"], np.exp(-1.5 / rigid["frequency_hz"]), rtol=1e-9)
 
 
 def test_trace_response_gives_each_fold_its_own_amplitude():

@@ -173,17 +173,12 @@ TEST(Scene, RefusesImpossibleChoicesNamingTheWayOut) {
   expect_throw_with<std::invalid_argument>(
       [&] { (void)parse(rod + "[contact]\nlaw = \"exponential\"\ncoefficient = 1.0\nexponent = 1.0\ngap = 1e-3\n" + nnm); },
       {"contact.law: analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)"});
-  // Rigid stops in forced responses: not continued, not mixed with penalty laws, no cell average,
-  // and Moreau–Jean's keys (not the BDF's) in [timestep].
+  // Rigid stops in forced responses: continued with stability on by default, as penalty laws (from the
+  // exact orbit near each point, issue #38), not mixed with penalty laws, no cell average, and
+  // Moreau–Jean's keys (not the BDF's) in [timestep].
   const std::string stop = "[contact]\nlaw = \"rigid\"\ngap = 1e-3\n";
-  expect_throw_with<std::invalid_argument>(
-      [&] {
-        (void)parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
-                    "[analysis]\ntype = \"continuation\"\nstability = true\n");
-      },
-      {"contact.law: \"rigid\" (exact contact) with analysis.stability = true", "set stability = false"});
-  EXPECT_FALSE(parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
-                     "[analysis]\ntype = \"continuation\"\n").analysis.stability);
+  EXPECT_TRUE(parse(rod + "[forcing]\namplitude = 1.0\nfrequency_hz = [100.0, 200.0]\n" + stop +
+                    "[analysis]\ntype = \"continuation\"\n").analysis.stability);
   expect_throw_with<std::invalid_argument>(
       [&] {
         (void)parse(rod + force + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\n[[contact]]\nlaw = \"linear\"\n"

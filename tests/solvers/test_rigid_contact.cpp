@@ -338,8 +338,13 @@ TEST(RigidContact, RefusesWhatItCannotDo) {
   wbm::testing::expect_throw_with<std::logic_error>([&] { (void)wr.residual(wr.linear_response()); }, {"rigid stops"});
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)wr.signorini_residual(Eigen::VectorXd::Zero(3)); },
                                                     {"length 3", "n_c*M = 16"});
+  // Stability with exact friction (rigid stops alone have it: test_impact_stability).
+  const solvers::WeightedResidual friction(
+      c.system, c.forcing,
+      {c.stop[0], {c.tip - 5, std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.3, 2.0})}},
+      fourier, fourier);
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::trace_response(wr, {}); }, {"rigid stops", "saltation", "stability = false"});
+      [&] { (void)solvers::trace_response(friction, {}); }, {"friction", "stick–slip", "stability = false"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::integrate_to_periodic(c.system, c.forcing, c.stop); }, {"integrate_moreau_jean_to_periodic"});
   wbm::testing::expect_throw_with<std::invalid_argument>(

@@ -244,10 +244,9 @@ void ResponseCurveOptions::validate() const {
 
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
   const bool rigid = base.rigid();
-  if (rigid && o.stability) {
-    throw std::invalid_argument("trace_response: stability = true with rigid stops: the monodromy matrix of an "
-                                "impacting orbit needs saltation matrices, which are not implemented; set "
-                                "ResponseCurveOptions::stability = false (or use a stiff LinearPenalty)");
+  if (rigid && o.stability && !rigid_stops_only(base)) {
+    throw std::invalid_argument("trace_response: stability = true with friction: the monodromy matrix of a "
+                                "stick–slip orbit is not computed; set ResponseCurveOptions::stability = false");
   }
   if (base.contact_unknowns(base.linear_response()).size() == 0) {
     throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
@@ -344,7 +343,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   }
   const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
   // The response at one state x of the branch (a point, or a fold's interpolated state).
-  auto response_at = [&](double parameter, const Eigen::VectorXd& x, int corrector_iterations) {
+  // Rigid stops with stability: each point's trial coefficients (n × M), for its exact orbit.
+  std::vector<Eigen::MatrixXd> rigid_coefficients;
+  auto response_at = [&](double parameter, const Eigen::VectorXd& x, int corrector_iterations,
+                         Eigen::MatrixXd* coefficients = nullptr) {
     ResponsePoint r;
     r.parameter = parameter;
     r.frequency_hz = frequency ? parameter : base.frequency_hz();
@@ -361,6 +363,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       const WeightedResidual& wr = family.at(parameter);
       const Eigen::VectorXd a = wr.expand_forces(x, family.load(parameter));
       keep(wr, a);
+      if (coefficients != nullptr) *coefficients = spectral::as_coefficients(a, wr.dofs());
       r.max_contact_force = x.maxCoeff();
       u = evaluate_trial(wr.trial(), spectral::as_coefficients(a, wr.dofs()), dof, tau, r.frequency_hz);
       r.max_displacement = u.maxCoeff();
@@ -401,7 +404,12 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     r.corrector_iterations = corrector_iterations;
     return r;
   };
-  for (const auto& p : branch.points) curve.points.push_back(response_at(p.parameter, p.x, p.corrector_iterations));
+  if (rigid && o.stability) rigid_coefficients.resize(branch.points.size());
+  for (size_t i = 0; i < branch.points.size(); ++i) {
+    const BranchPoint& p = branch.points[i];
+    curve.points.push_back(response_at(p.parameter, p.x, p.corrector_iterations,
+                                       rigid_coefficients.empty() ? nullptr : &rigid_coefficients[i]));
+  }
   for (const auto& fold : branch.folds) curve.fold_points.push_back(response_at(fold.parameter, fold.x, 0));
   if (o.stability) {
     // The monodromy matrix of each point, on oneTBB's workers (at most `threads`, in a task
@@ -413,20 +421,39 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     // The modes of a classical C are set up once for the branch (FloquetAnalysis); the points
     // read the multipliers only.
     const auto t0 = std::chrono::steady_clock::now();
-    const FloquetAnalysis floquet(base.system(), contacts, {.monodromy = false});
+    // Rigid stops: the exact orbit near each point, by shooting, and its saltation monodromy
+    // (impact_stability). The flow is set up per point (its frequency and load).
+    std::optional<FloquetAnalysis> floquet;
+    if (!rigid) floquet.emplace(base.system(), contacts, FloquetOptions{.monodromy = false});
     std::vector<FloquetResult> results(curve.points.size());
+    std::vector<ImpactStability> exact(rigid ? curve.points.size() : 0);
+    auto impact_stability_of = [&](size_t i) {
+      const ResponsePoint& r = curve.points[i];
+      HarmonicForcing forcing = base.forcing();
+      const double load = family.load(r.parameter);
+      forcing.frequency_hz = r.frequency_hz;
+      forcing.amplitude *= load;
+      for (auto& more : forcing.more) more.amplitude *= load;
+      exact[i] = impact_stability(base.system(), forcing, contacts, base.trial(), rigid_coefficients[i], o.samples,
+                                  o.impact_stability);
+      results[i] = std::move(exact[i].floquet);
+    };
     auto stability_of = [&](size_t i) {
+      if (rigid) {
+        impact_stability_of(i);
+        return;
+      }
       const ResponsePoint& r = curve.points[i];
       Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
       // A contact stiff against its mass needs more steps (floquet.hpp): the orbit is evaluated
       // there from the trial functions, rather than interpolated between the P samples.
-      const Eigen::Index resolved = floquet.resolved_steps(uc.transpose(), r.frequency_hz);
+      const Eigen::Index resolved = floquet->resolved_steps(uc.transpose(), r.frequency_hz);
       if (resolved > uc.rows()) {
         const double last = 1.0 - 1.0 / static_cast<double>(resolved);
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
         uc = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
       }
-      FloquetResult fl = floquet(uc.transpose(), r.frequency_hz);
+      FloquetResult fl = (*floquet)(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
       // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
       for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
@@ -434,7 +461,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
         const Eigen::MatrixXd ucf =
             base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
-        fl = floquet(ucf.transpose(), r.frequency_hz);
+        fl = (*floquet)(ucf.transpose(), r.frequency_hz);
       }
       results[i] = std::move(fl);
     };
@@ -445,9 +472,22 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         for (size_t i = range.begin(); i != range.end(); ++i) stability_of(i);
       });
     });
+    const FloquetResult* previous = nullptr;  // the last point with a verdict
     for (size_t i = 0; i < results.size(); ++i) {
       ResponsePoint& r = curve.points[i];
       const FloquetResult& fl = results[i];
+      if (rigid) {
+        r.shooting_distance = exact[i].distance;
+        r.impacts = exact[i].impacts;
+        if (!exact[i].available) {
+          r.stability_available = false;
+          r.stability_message = exact[i].message;
+          r.stability_settled = false;
+          r.stable = false;
+          ++curve.unavailable_points;
+          continue;
+        }
+      }
       r.stability_settled = fl.settled();
       if (!r.stability_settled) ++curve.unsettled_points;
       r.monodromy_steps = fl.steps;
@@ -455,7 +495,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       r.max_multiplier = fl.max_modulus;
       r.stable = fl.stable();
       if (fl.multipliers.size() > 0) r.leading_multiplier = fl.multipliers(0);
-      if (i > 0) r.crossing = classify_crossing(results[i - 1], fl);
+      if (previous != nullptr) r.crossing = classify_crossing(*previous, fl);
+      previous = &fl;
     }
     curve.stability_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

@@ -60,7 +60,8 @@ struct Phase {
   std::vector<int> harmonics;         // the load harmonics (0: static, with −K u_A)
   std::vector<Eigen::VectorXcd> q_h;  // per harmonic: the reduced particular amplitude Q_h (r)
   Eigen::MatrixXd force_rows;         // a × n: L = W⁻¹ E_Aᵀ M⁻¹ (λ_A = L (f − C u̇ − K u))
-  double bracket = std::numeric_limits<double>::infinity();  // π / (2 max |Λ|) [s]
+  double bracket = std::numeric_limits<double>::infinity();  // π / (2 max |Im Λ|) [s]: oscillations
+  double fastest = std::numeric_limits<double>::infinity();  // π / (2 max |Λ|) [s]: also decays
   [[nodiscard]] Eigen::Index r() const { return z.cols(); }
 };
 
@@ -203,7 +204,8 @@ const Phase& ImpactFlow::Impl::phase(const std::vector<char>& active) const {
   p->v.bottomRows(r) *= sigma;
   p->v_inv = v_lu.inverse();
   p->v_inv.rightCols(r) /= sigma;
-  p->bracket = std::numbers::pi / (2.0 * p->lambda.cwiseAbs().maxCoeff());
+  p->bracket = std::numbers::pi / (2.0 * p->lambda.imag().cwiseAbs().maxCoeff());
+  p->fastest = std::numbers::pi / (2.0 * p->lambda.cwiseAbs().maxCoeff());
   // Particular solution: (K_r − (hω)² M_r + i hω C_r) Q_h = Zᵀ F_h, the static harmonic with −Zᵀ K u_A.
   std::vector<int> hs = harmonics;
   std::vector<Eigen::VectorXcd> fs = f_h;
@@ -342,7 +344,12 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     auto at = [&](double time) { return s.state(p, coef, ta, time); };
     // Brackets of at most a quarter of the phase's shortest natural period (and T/P): between two
     // samples each gap then has at most one minimum, found where its rate −e_cᵀu̇ changes sign.
-    const double h_step = std::min(h_period, p.bracket);
+    // An overdamped mode (real Λ, |Λ| up to β ω_max² with Rayleigh damping: 6e6 1/s on the
+    // 25-element JL14 rod against 1e4 rad/s for its fastest oscillation) does not oscillate, but
+    // its transient, excited at an event, may add an extremum while it lasts: the flight's
+    // brackets start at π/(2 max|Λ|) and double up to that cap, past e^{−π 2^(k−1)} of it after k.
+    const double h_cap = std::min(h_period, p.bracket);
+    double h_step = std::min(h_cap, p.fastest);
     const double t_left0 = t;
     double t_left = t;
     Eigen::VectorXd left = s.indicators(p, t_left, x);
@@ -367,12 +374,17 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
       for (int i = 0; i < nc; ++i) {
         if (!(left(i) > 0.0)) continue;
         double lo = t_left, hi = t_right;
-        if (t_left == t_left0 && fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)]) {
+        if (fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)]) {
           // The stop of the last event, whose gap leaves 0 slowly (like τ² after a plastic impact that
-          // does not close, τ³ after a release), below the rounding of e_cᵀu at first: a return
-          // counts when the gap is clearly negative at the bracket's end, and the stop must have
-          // clearly opened in between (16 samples), else the impacts accumulate.
+          // does not close, τ³ after a release), below the rounding of e_cᵀu at first: until it is
+          // clearly open at a bracket's end (or h_cap after the event), a return counts when the gap
+          // is clearly negative at the bracket's end, and the stop must have clearly opened in
+          // between (16 samples), else the impacts accumulate.
           const double noise = 1e-11 * (std::abs(s.g(i)) + std::abs(s.e.col(i).dot(x.head(n))));
+          if (right(i) > noise || (right(i) > -noise && t_right - t_left0 >= h_cap)) {
+            fresh[static_cast<size_t>(i)] = 0;  // open, or as open as it gets: the plain search from here
+            continue;
+          }
           if (right(i) > -noise) continue;
           lo = -1.0;
           for (int q = 1; q < 16 && lo < 0.0; ++q) {
@@ -403,6 +415,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
       left = right;
       rate_left = rate_right;
       t_left = t_right;
+      h_step = std::min(2.0 * h_step, h_cap);
     }
     const double t_stop = hit >= 0 ? t_hit : t_end;
     const Eigen::VectorXd x_minus = at(t_stop);

@@ -16,8 +16,10 @@
 ///     diag(1, …, 1, 1 + e)). For e = 0 the stop then stays closed when its force λ_c > 0 (a contact
 ///     phase), else it leaves at once;
 ///   - a release (λ_c reaches 0 from above, c ∈ A): c leaves A, the state is continuous.
-/// Events are located on the closed-form flight: brackets of min(T/P, π/(2 max|Λ|)) (at most a
-/// quarter of the active set's shortest natural period), GSL's Brent solver inside a bracket (to
+/// Events are located on the closed-form flight: brackets of min(T/P, π/(2 max|Im Λ|)) (at most a
+/// quarter of the active set's shortest natural period; after each event they start at
+/// π/(2 max|Λ|) and double up to it, for the transients of overdamped modes), GSL's Brent solver
+/// inside a bracket (to
 /// 1e-14 T), and a gap that dips below zero and back inside one bracket is found where its rate
 /// −e_cᵀu̇ changes sign. After an event its stop's gap leaves zero slowly (like τ² after a plastic
 /// impact that does not close, τ³ after a release), below the rounding of e_cᵀu at first: in the
@@ -36,13 +38,17 @@
 /// A plastic impact (e = 0) into a contact phase maps every perturbation onto the constraint, so
 /// Φ then has two zero multipliers per stop that closes.
 
+#include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/newton.hpp>
+#include <wbm/solvers/time_basis.hpp>
 
 namespace wbm::solvers {
 
@@ -128,5 +134,55 @@ struct ImpactOrbit {
 /// for a velocity (s the largest of |u| and |u̇|/ω in x₀). Same throws as ImpactFlow::flow.
 [[nodiscard]] Eigen::MatrixXd finite_difference_monodromy(const ImpactFlow& flow, const Eigen::VectorXd& x0,
                                                           double t0, double step = 1e-6);
+
+struct ImpactStabilityOptions {
+  NewtonOptions newton = {};      // the shooting (tolerance on the scaled residual, iterations)
+  /// The exact orbit must lie within this rms distance of the given one (relative, over the
+  /// samples of every contact displacement): farther, it is another orbit, and the point's
+  /// stability is unavailable. 0.1 admits the truncation of a coarse basis (Haar at M = 32 on the
+  /// JL14 rod: a few %) and refuses a jump to another branch.
+  double max_distance = 0.1;
+  void validate() const;          // throws std::invalid_argument naming the field, value and range
+};
+
+/// The stability of one periodic solution with rigid stops, given by its trial coefficients.
+struct ImpactStability {
+  bool available = false;         // false: no verdict; `message` says why (floquet then empty)
+  std::string message;
+  /// monodromy (the saltation monodromy Φ, 2n × 2n), multipliers by decreasing modulus,
+  /// max_modulus, multiplier_errors (below); steps 0 (the flow is exact between events).
+  FloquetResult floquet;
+  ImpactOrbit orbit;              // the exact orbit found by shooting
+  /// rms over the samples of the contact displacements of the exact orbit minus the given one,
+  /// relative to the given one's rms (rms_relative_error); NaN when no orbit was found.
+  double distance = std::numeric_limits<double>::quiet_NaN();
+  int impacts = 0;                // impacts per period on the exact orbit
+};
+
+/// Stability of a periodic solution of M ü + C u̇ + K u = f_ext(t) with rigid stops, given by the
+/// trial coefficients of an approximate method (a weighted-residual solution, n × M, row = DOF),
+/// through the exact orbit near it (issue #38 item 4):
+///  1. the samples τ_p = p/P of u and u̇ (evaluate_fields; a basis without a pointwise velocity
+///     (DB4) by central differences of u over the samples), and t₀ = τ_p/f at the sample where
+///     the smallest gap min_c (g_c − e_cᵀu) is largest: a time of free flight;
+///  2. shoot_periodic_orbit from (u, u̇)(τ_p) with plastic impacts (e = 0): the weighted residual's
+///     Signorini conditions on displacements keep a stop closed once reached, the contact phase of
+///     a plastic impact at a massive contact node (its error against Moreau–Jean's e = 0 is the
+///     truncation's, test_rigid_contact);
+///  3. the verdict from the orbit's saltation monodromy Φ, with the error estimate of each
+///     multiplier κ_i δ ‖Φ̂‖_F on the similar Φ̂ = D Φ D⁻¹, D = diag(I, I/ω) (the shooting's
+///     scaling), κ_i = ‖v_i‖ ‖w_i‖ its condition (v_i the eigenvector, w_i the row of V⁻¹) and δ
+///     the larger of the shooting's final scaled residual and 1e-9 (the saltation
+///     monodromy's agreement with central differences on the JL14 rod, 2.9e-9 with the
+///     differences' own error, test_impact_shooting); inf when V is singular to rounding.
+/// Unavailable (no throw): no sample with every stop open, a flow that fails at the seed (a graze,
+/// chatter: std::domain_error's message), a shooting that does not converge, an exact orbit farther
+/// than options.max_distance from the given one. Throws std::invalid_argument for coefficients
+/// of the wrong shape or non-finite, samples < 8, a contact that is not a rigid stop, and as
+/// ImpactFlow does.
+[[nodiscard]] ImpactStability impact_stability(const MechanicalSystem& system, const HarmonicForcing& forcing,
+                                               const std::vector<ContactPoint>& contacts, const TimeBasis& trial,
+                                               const Eigen::MatrixXd& coefficients, int samples,
+                                               const ImpactStabilityOptions& options = {});
 
 }  // namespace wbm::solvers

@@ -9,12 +9,14 @@
 #include <complex>
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/floquet.hpp>
+#include <wbm/solvers/impact_shooting.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 namespace wbm::solvers {
@@ -100,12 +102,21 @@ struct ResponsePoint {
   /// (one more factorization of G per point); NaN without one.
   double dropped_harmonics_residual = std::numeric_limits<double>::quiet_NaN();
   int corrector_iterations = 0;
-  // Stability (ResponseCurveOptions::stability): floquet.hpp.
+  // Stability (ResponseCurveOptions::stability): floquet.hpp; with rigid stops impact_stability
+  // (impact_shooting.hpp), the saltation monodromy of the exact orbit near the point's.
+  /// False when the point has no verdict (rigid stops: no exact orbit found near it, see
+  /// stability_message); the fields below are then meaningless (stable false, multipliers 0).
+  bool stability_available = true;
+  std::string stability_message;       // why stability is unavailable; empty otherwise
   double max_multiplier = 0.0;         // spectral radius of the monodromy matrix
   double max_multiplier_error = 0.0;   // largest FloquetResult::multiplier_errors entry
-  int monodromy_steps = 0;             // P used: `samples`, ×4 up to twice while not settled
+  int monodromy_steps = 0;             // P used: `samples`, ×4 up to twice while not settled; 0 with rigid stops
   bool stability_settled = true;       // FloquetResult::settled() at monodromy_steps
   bool stable = true;                  // every |μ| < 1 + 1e-6
+  /// Rigid stops: ImpactStability::distance, the exact orbit's rms distance from this point's
+  /// (its contact displacements, relative), and its impacts per period; NaN and 0 otherwise.
+  double shooting_distance = std::numeric_limits<double>::quiet_NaN();
+  int impacts = 0;
   Bifurcation crossing = Bifurcation::None;  // between the previous point and this one
   /// The Floquet multiplier of largest modulus (FloquetResult::multipliers(0)); its argument
   /// tells a crossing's kind (classify_crossing: near 0 fold, near π period doubling).
@@ -140,6 +151,7 @@ struct ResponseCurve {
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
   double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
   int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
+  int unavailable_points = 0;          // points without a verdict (ResponsePoint::stability_available)
   /// branch_status(stop): Converged when the range was reached (its last point on the range end).
   [[nodiscard]] SolveStatus status() const { return branch_status(stop); }
   [[nodiscard]] bool converged() const { return status() == SolveStatus::Converged; }
@@ -171,6 +183,9 @@ struct ResponseCurveOptions {
   /// Throws std::invalid_argument (trace_response) if P < 8.
   int samples = 512;
   bool stability = true;               // Floquet multipliers of every point (floquet.hpp)
+  /// Rigid stops: the shooting of each point's exact orbit and the distance it may lie from the
+  /// point's (impact_stability, impact_shooting.hpp).
+  ImpactStabilityOptions impact_stability = {};
   /// Threads for the stability of the points: a oneTBB task arena of this many (each point's
   /// monodromy matrix is independent, so the multipliers are bit-identical for any count);
   /// 0: oneTBB's default concurrency (the cores this process may use).
@@ -198,7 +213,11 @@ struct ResponseCurveOptions {
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
 /// without contact (a linear curve needs no continuation: frequency_response()), and for
-/// stability = true with rigid stops (no saltation matrices). Rigid stops (WeightedResidual::
+/// stability = true with friction (no saltation matrices for stick–slip). With rigid stops the
+/// stability of each point is that of the exact orbit near it (impact_stability: plastic impacts,
+/// its saltation monodromy; ResponsePoint::shooting_distance says how near), or unavailable with
+/// the reason (ResponsePoint::stability_available, ResponseCurve::unavailable_points); a
+/// crossing is classified against the last point with a verdict. Rigid stops (WeightedResidual::
 /// rigid()): the unknowns are the impulses λ (contact_unknowns of the points), the residual the
 /// Signorini conditions. Without friction the branch is continued piece by piece
 /// (SignoriniResponseFamily): every change of the active instants is an event, located and
