@@ -11,8 +11,10 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 #include <memory>
 
@@ -357,19 +359,23 @@ int main(int argc, char** argv) {
     }
     // Fig. 12 with the rigid stop: the frequency response of Case 2 over 1000 … 1700 Hz by
     // pseudo-arclength continuation of the Signorini conditions, piece by piece (each impulse that
-    // starts or ends is an event; no stability: saltation matrices are not implemented), every
-    // combination at the figure's M.
+    // starts or ends is an event), every combination at the figure's M, with the stability of each
+    // point: the exact orbit with plastic impacts near it (shooting) and its saltation monodromy
+    // (impact_stability, issue #38); a point without such an orbit within 0.1 has no verdict.
     {
       const auto scene = load_scene("jl14_case2");
       const auto penalty_contacts = scene.contact_points();
       std::vector<solvers::ContactPoint> stops;
       for (const auto& c : penalty_contacts) stops.push_back({c.dof, std::make_shared<contact::RigidStop>(c.law->gap())});
       const double from = 1000.0, to = quick ? 1100.0 : 1700.0;  // Hz, the range of Fig. 12
-      Eigen::VectorXd comb(0), freq(0), amp(0), force(0);
+      Eigen::VectorXd comb(0), freq(0), amp(0), force(0), stable(0), mu(0), distance(0);
+      std::vector<std::string> verdict;  // per row: the stability's status (why a cell is empty)
       md << "\n### Fig. 12 with the rigid stop: " << scene.title << ", " << format("%g", from) << " … "
          << format("%g", to) << " Hz, M = " << figure_m << "\n\n"
-         << "| combination | stop | points | folds | events | peak amplitude [mm] | at [Hz] | time [s] |\n"
-         << "|---|---|---|---|---|---|---|---|\n";
+         << "| combination | stop | points | folds | events | peak amplitude [mm] | at [Hz] | time [s] | "
+         << "stable / unstable / no verdict | largest \\|μ\\| | exact orbit's distance, median / largest | "
+         << "stability [s] |\n"
+         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
       nlohmann::json branches = nlohmann::json::array();
       const auto& combos = table2_combinations();
       for (size_t i = 0; i < combos.size(); ++i) {
@@ -382,29 +388,63 @@ int main(int argc, char** argv) {
         solvers::ResponseCurveOptions o;
         o.parameter_min = from;
         o.parameter_max = to;
-        o.stability = false;
+        o.stability = true;
         o.max_parameter_step = 5.0;
         o.observed_dof = scene.forcing->dof;
         const auto curve = solvers::trace_response(base, o);
-        double peak = 0.0, peak_hz = NAN;
+        double peak = 0.0, peak_hz = NAN, largest_mu = NAN;
+        int unstable = 0;
+        std::vector<double> distances;
+        std::string first_unavailable;  // why the first point without a verdict has none
         for (const auto& pt : curve.points) {
           push(comb, static_cast<double>(i));
           push(freq, pt.frequency_hz);
           push(amp, pt.amplitude);
           push(force, pt.max_contact_force);
+          // No verdict: empty cells (the exact orbit's distance is written when one was found).
+          push(stable, pt.stability_available ? (pt.stable ? 1.0 : 0.0) : NAN);
+          push(mu, pt.stability_available ? pt.max_multiplier : NAN);
+          push(distance, pt.shooting_distance);
+          verdict.push_back(pt.stability_available ? "verdict" : "no verdict");
+          if (!pt.stability_available && first_unavailable.empty()) {
+            first_unavailable = format("%.6g", pt.frequency_hz) + " Hz: " + pt.stability_message;
+          }
           if (pt.amplitude > peak) peak = pt.amplitude, peak_hz = pt.frequency_hz;
+          if (!pt.stability_available) continue;
+          unstable += pt.stable ? 0 : 1;
+          distances.push_back(pt.shooting_distance);
+          if (!(pt.max_multiplier <= largest_mu)) largest_mu = pt.max_multiplier;
         }
+        std::sort(distances.begin(), distances.end());
+        const int verdicts = static_cast<int>(distances.size());
+        const double median = distances.empty() ? NAN : distances[distances.size() / 2];
+        const double largest = distances.empty() ? NAN : distances.back();
         md << "| " << k.label() << " | " << solvers::to_string(curve.stop) << " | " << curve.points.size() << " | "
            << curve.folds.size() << " | " << curve.events << " | " << format("%.3f", 1e3 * peak) << " | "
-           << format("%.1f", peak_hz) << " | " << format("%.2f", curve.wall_time_s) << " |\n";
+           << format("%.1f", peak_hz) << " | " << format("%.2f", curve.wall_time_s) << " | "
+           << verdicts - unstable << " / " << unstable << " / " << curve.unavailable_points << " | "
+           << (std::isfinite(largest_mu) ? format("%.3g", largest_mu) : "") << " | "
+           << (std::isfinite(median) ? format("%.2g", median) + " / " + format("%.2g", largest) : "") << " | "
+           << format("%.2f", curve.stability_time_s) << " |\n";
         branches.push_back({{"combination", k.label()}, {"stop", std::string(solvers::to_string(curve.stop))},
                             {"message", curve.message}, {"points", curve.points.size()}, {"folds", curve.folds.size()},
-                            {"events", curve.events}, {"switches", curve.switches}});
+                            {"events", curve.events}, {"switches", curve.switches},
+                            {"unstable_points", unstable}, {"unavailable_stability_points", curve.unavailable_points},
+                            {"stability_time_s", curve.stability_time_s},
+                            {"first_without_stability_verdict", first_unavailable}});
       }
       md << "\nA branch that ends before " << format("%g", to) << " Hz is drawn as far as it goes (its stop and "
-         << "message in meta.json). The penalty branches of Fig. 12 are in `out/jl14_fig12/`.\n";
-      r.table("frequency_response.csv", {"combination [-]", "frequency [Hz]", "amplitude [m]", "max_contact_force [N]"},
-              {comb, freq, amp, force});
+         << "message in meta.json). The penalty branches of Fig. 12 are in `out/jl14_fig12/`. Stability: each "
+         << "point's exact orbit with plastic impacts (e = 0: the Signorini conditions on displacements keep the "
+         << "stop closed once reached) is shot from the point's state where every stop is open, and its Floquet "
+         << "multipliers are those of its saltation monodromy matrix; \"distance\" is that orbit's rms distance "
+         << "from the point's contact displacements, relative (the weighted residual's truncation at this M), and "
+         << "a point whose exact orbit lies farther than 0.1, or that the shooting does not reach, has no verdict "
+         << "(empty cells in frequency_response.csv).\n";
+      r.table("frequency_response.csv",
+              {"combination [-]", "frequency [Hz]", "amplitude [m]", "max_contact_force [N]", "stable [-]",
+               "max_floquet_multiplier [-]", "shooting_distance [-]"},
+              {comb, freq, amp, force, stable, mu, distance}, verdict);
       meta["frequency_response"] = branches;
       meta["frequency_response_gap_m"] = scene.contacts.front().gap;
     }

@@ -396,10 +396,19 @@ def rigid_stop(folder):
         present = sorted({int(c) for c in cols[0]})
         for stem, wanted in (("frequency_response", [0, 3]), ("frequency_response_all", present)):
             fig, ax = plt.subplots(figsize=(7.0, 4.4))
+            marked = set()
             for i in wanted:
                 pts = [(f, 1e3 * a) for c, f, a in zip(cols[0], cols[1], cols[2]) if int(c) == i]
                 if pts:
                     line, = ax.plot(*zip(*pts), lw=1.2, label=f"{METHODS[i]}, rigid stop")
+                    # Stability (stable [-]: 1, 0, or empty = no verdict): unstable and undecided points marked.
+                    for value, marker, name in ((0.0, "x", "unstable"), (math.nan, ".", "no stability verdict")):
+                        sel = [(f, 1e3 * a) for c, f, a, st in zip(cols[0], cols[1], cols[2], cols[4])
+                               if int(c) == i and (st == value or (math.isnan(value) and math.isnan(st)))]
+                        if sel:
+                            ax.plot(*zip(*sel), marker, ms=4, color=line.get_color() if value == 0.0 else "0.5",
+                                    label=name if name not in marked else None)
+                            marked.add(name)
                     if pen is not None:
                         pp = [(f, 1e3 * a) for c, f, a in zip(pen[0], pen[1], pen[4]) if int(c) == i]
                         if pp:
@@ -408,7 +417,8 @@ def rigid_stop(folder):
             ax.axhline(1e3 * meta["frequency_response_gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
             ax.set_xlabel("forcing frequency [Hz]")
             ax.set_ylabel("tip amplitude (max - min)/2 [mm]")
-            ax.set_title("Fig. 12 with a rigid stop (continuation; stability not computed)", fontsize=9)
+            ax.set_title("Fig. 12 with a rigid stop (continuation; stability of the exact orbit near each point)",
+                         fontsize=9)
             ax.legend(fontsize=7)
             save(fig, folder, stem)
 

@@ -436,3 +436,56 @@ TEST(Scene, OddHarmonicSelectionOfASymmetricOscillatorIsTheFullBranch) {
       [&] { (void)parse(oscillator + odd + "[[contact]]\nlaw = \"rigid\"\ngap = 1e-3\ndof = 0\n"); },
       {"basis.harmonic_selection", "rigid stops", "law = \"linear\""});
 }
+
+// A rigid stop continued with stability (issue #38): branch.csv gives each point the verdict of
+// the exact orbit with plastic impacts near it. The 1-DOF impact oscillator (k g0/F = ½) from 8 to
+// 20 Hz: a point whose orbit never reaches the stop has the linear oscillator's |μ| = e^{−ζω_n/f},
+// one whose orbit has a contact phase Φ = 0 (the state leaves the stop at the same (g0, 0) every
+// period: below 13.5 Hz); a point without a verdict has empty cells, the status "unavailable" and a warning.
+TEST(Scene, RigidStopContinuationGivesTheExactOrbitsStability) {
+  const double k = std::pow(2.0 * std::numbers::pi * 10.0, 2), c = 2.0 * 0.05 * std::sqrt(k);
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "structure = { mass = 1.0, stiffness = %.17g }\ndamping = { alpha = 0.0, beta = %.17g }\n"
+                "forcing = { amplitude = 10.0, frequency_hz = [8.0, 20.0] }\n"
+                "contact = { law = \"rigid\", gap = %.17g }\nbasis = { dimension = 64 }\n"
+                "analysis = { type = \"continuation\", max_step = 0.05 }\n",
+                k, c / k, 5.0 / k);
+  const auto r = wbm::scene::run_analysis(parse(text), nullptr);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump(2);
+  const wbm::scene::Table* branch = nullptr;
+  for (const auto& t : r.tables) branch = t.file == "branch.csv" ? &t : branch;
+  ASSERT_NE(branch, nullptr);
+  const auto at = [&](const std::string& name) {
+    const auto i = std::find(branch->header.begin(), branch->header.end(), name) - branch->header.begin();
+    EXPECT_LT(static_cast<size_t>(i), branch->header.size()) << name;
+    return branch->columns.at(static_cast<size_t>(i));
+  };
+  EXPECT_EQ(std::count(branch->header.begin(), branch->header.end(), "monodromy_steps [-]"), 0);
+  const Eigen::VectorXd hz = at("frequency [Hz]"), stable = at("stable [-]"), mu = at("max_floquet_multiplier [-]");
+  const Eigen::VectorXd impacts = at("impacts_per_period [-]"), distance = at("shooting_distance [-]");
+  const double zeta_wn = c / 2.0;
+  int free = 0, phase = 0, none = 0;
+  for (Eigen::Index i = 0; i < hz.size(); ++i) {
+    if (branch->status[static_cast<size_t>(i)] == "unavailable") {
+      ++none;
+      EXPECT_TRUE(std::isnan(stable(i)) && std::isnan(mu(i)));
+      continue;
+    }
+    EXPECT_LE(distance(i), 0.1);
+    if (impacts(i) == 0.0) {
+      ++free;
+      EXPECT_NEAR(mu(i), std::exp(-zeta_wn / hz(i)), 1e-9) << hz(i);
+    } else if (hz(i) < 13.5) {  // measured: from 14 Hz on the impact no longer closes the stop (0 < |μ| < 1)
+      ++phase;
+      EXPECT_LT(mu(i), 1e-10) << hz(i);
+    }
+  }
+  EXPECT_GT(free, 5);
+  EXPECT_GT(phase, 100);
+  EXPECT_GT(none, 0) << "the grazing stretch (14–17.6 Hz) has points without an exact orbit near them";
+  EXPECT_EQ(none, r.diagnostics["continuation"]["unavailable_stability_points"].get<int>());
+  const bool warned = std::any_of(r.warnings.begin(), r.warnings.end(),
+                                  [](const std::string& w) { return w.find("no stability verdict") != std::string::npos; });
+  EXPECT_EQ(warned, none > 0);
+}
