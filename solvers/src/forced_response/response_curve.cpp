@@ -426,7 +426,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     std::optional<FloquetAnalysis> floquet;
     if (!rigid) floquet.emplace(base.system(), contacts, FloquetOptions{.monodromy = false});
     std::vector<FloquetResult> results(curve.points.size());
-    std::vector<ImpactStability> exact(rigid ? curve.points.size() : 0);
+    // Per point what the curve keeps of it (not its orbit and monodromy: 2n × 2n each).
+    struct Exact {
+      bool available = false;
+      std::string message;
+      double distance = std::numeric_limits<double>::quiet_NaN();
+      int impacts = 0;
+    };
+    std::vector<Exact> exact(rigid ? curve.points.size() : 0);
     auto impact_stability_of = [&](size_t i) {
       const ResponsePoint& r = curve.points[i];
       HarmonicForcing forcing = base.forcing();
@@ -434,9 +441,12 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       forcing.frequency_hz = r.frequency_hz;
       forcing.amplitude *= load;
       for (auto& more : forcing.more) more.amplitude *= load;
-      exact[i] = impact_stability(base.system(), forcing, contacts, base.trial(), rigid_coefficients[i], o.samples,
-                                  o.impact_stability);
-      results[i] = std::move(exact[i].floquet);
+      ImpactStability s = impact_stability(base.system(), forcing, contacts, base.trial(), rigid_coefficients[i],
+                                           o.samples, o.impact_stability);
+      exact[i] = {s.available, std::move(s.message), s.distance, s.impacts};
+      results[i] = std::move(s.floquet);
+      results[i].monodromy.resize(0, 0);  // the multipliers suffice
+      rigid_coefficients[i].resize(0, 0);
     };
     auto stability_of = [&](size_t i) {
       if (rigid) {
