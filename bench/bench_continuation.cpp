@@ -4,13 +4,17 @@
 // points on the branch and points per second. Goals: the whole branch, at least 300 points,
 // under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17). And a rod
 // branch against the number of elements (issue #39: its cost should grow like n), and NLvib's
-// unit rod as `wbm run` traces examples/scenes/nlvib_rod.toml (issue #39, item 7).
+// unit rod as `wbm run` traces examples/scenes/nlvib_rod.toml (issue #39, item 7), and Fig. 12
+// with its stop rigid, with the stability of the exact orbits (issue #38).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <string>
+#include <vector>
 
+#include <wbm/contact/signorini.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
@@ -141,6 +145,36 @@ void BM_Continuation_NLvibRod(benchmark::State& state) {
   state.counters["ms_per_point"] = 1e3 * seconds / static_cast<double>(std::max<size_t>(points, 1));
 }
 
+// Fig. 12 with its stop rigid (reproduce/jl14_rigid_stop: Fourier:Fourier, M = 64, steps ≤ 5 Hz),
+// without and with stability (range(0)): with rigid stops each point's verdict is that of the
+// exact orbit with plastic impacts near it, shot from the point, and its saltation monodromy
+// (issue #38). Counters: points, and the stability's wall time per point [ms].
+void BM_Continuation_Fig12RigidStop(benchmark::State& state) {
+  const auto& s = case2();
+  std::vector<wbm::solvers::ContactPoint> stops;
+  for (const auto& c : s.contact_points()) {
+    stops.push_back({c.dof, std::make_shared<wbm::contact::RigidStop>(c.law->gap())});
+  }
+  const auto fourier = wbm::solvers::TimeBasis::fourier(64);
+  const wbm::solvers::WeightedResidual base(s.system(), s.harmonic_forcing(1000.0), stops, fourier, fourier);
+  wbm::solvers::ResponseCurveOptions o;
+  o.parameter_min = 1000.0;
+  o.parameter_max = 1700.0;
+  o.max_parameter_step = 5.0;
+  o.stability = state.range(0) != 0;
+  state.SetLabel(o.stability ? "with the exact orbits' stability" : "without stability");
+  size_t points = 0;
+  double stability = 0.0;
+  for (auto _ : state) {
+    const auto curve = wbm::solvers::trace_response(base, o);
+    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+    points = curve.points.size();
+    stability = curve.stability_time_s;
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["stability_ms_per_point"] = 1e3 * stability / static_cast<double>(std::max<size_t>(points, 1));
+}
+
 }  // namespace
 
 // Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
@@ -155,4 +189,5 @@ BENCHMARK(BM_Continuation_RodElements)
     ->ArgsProduct({{20, 80, 320}, {1}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_NLvibRod)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Continuation_Fig12RigidStop)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

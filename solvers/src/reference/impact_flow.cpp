@@ -372,17 +372,18 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
       const Eigen::VectorXd right = s.indicators(p, t_right, xr);
       const Eigen::VectorXd rate_right = -s.e.transpose() * xr.tail(n);
       for (int i = 0; i < nc; ++i) {
-        if (!(left(i) > 0.0)) continue;
+        const bool just_left = fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)];
+        if (!just_left && !(left(i) > 0.0)) continue;
         double lo = t_left, hi = t_right;
-        if (fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)]) {
+        if (just_left) {
           // The stop of the last event, whose gap leaves 0 slowly (like τ² after a plastic impact that
           // does not close, τ³ after a release), below the rounding of e_cᵀu at first: until it is
-          // clearly open at a bracket's end (or h_cap after the event), a return counts when the gap
-          // is clearly negative at the bracket's end, and the stop must have clearly opened in
-          // between (16 samples), else the impacts accumulate.
+          // clearly open at a bracket's end, a return counts when the gap is clearly negative at the
+          // bracket's end, and the stop must have clearly opened in between (16 samples), else the
+          // impacts accumulate.
           const double noise = 1e-11 * (std::abs(s.g(i)) + std::abs(s.e.col(i).dot(x.head(n))));
-          if (right(i) > noise || (right(i) > -noise && t_right - t_left0 >= h_cap)) {
-            fresh[static_cast<size_t>(i)] = 0;  // open, or as open as it gets: the plain search from here
+          if (right(i) > noise) {
+            fresh[static_cast<size_t>(i)] = 0;  // open: the plain search from the next bracket
             continue;
           }
           if (right(i) > -noise) continue;
@@ -393,7 +394,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
           }
           if (lo < 0.0) {
             throw std::domain_error("ImpactFlow::flow: stop " + std::to_string(i) + " returned within " +
-                                    num(t_right - t_left) + " s of its last event at t = " + num(t) +
+                                    num(t_right - t_left0) + " s of its last event at t = " + num(t) +
                                     " s without opening (chatter or grazing): the orbit accumulates impacts, "
                                     "which the event-driven flow does not resolve");
           }

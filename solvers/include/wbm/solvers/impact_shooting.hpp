@@ -19,13 +19,13 @@
 /// Events are located on the closed-form flight: brackets of min(T/P, π/(2 max|Im Λ|)) (at most a
 /// quarter of the active set's shortest natural period; after each event they start at
 /// π/(2 max|Λ|) and double up to it, for the transients of overdamped modes), GSL's Brent solver
-/// inside a bracket (to
-/// 1e-14 T), and a gap that dips below zero and back inside one bracket is found where its rate
-/// −e_cᵀu̇ changes sign. After an event its stop's gap leaves zero slowly (like τ² after a plastic
-/// impact that does not close, τ³ after a release), below the rounding of e_cᵀu at first: in the
-/// first bracket a return counts when the gap is below −1e-11 (|g_c| + |e_cᵀu|) at its end, and
-/// the stop must have opened beyond that in between, else the impacts accumulate (chatter, a Zeno
-/// sequence), which is refused (std::domain_error).
+/// inside a bracket (to 1e-14 T), and a gap that dips below zero and back inside one bracket is
+/// found where its rate −e_cᵀu̇ changes sign. After an event its stop's gap leaves zero slowly
+/// (like τ² after a plastic impact that does not close, τ³ after a release), below the rounding of
+/// e_cᵀu at first: until the gap exceeds 1e-11 (|g_c| + |e_cᵀu|) at a bracket's end, a return
+/// counts when it is below minus that at a bracket's end, and the stop must have opened beyond it
+/// inside that bracket, else the impacts accumulate (chatter, a Zeno sequence), which is refused
+/// (std::domain_error).
 ///
 /// The monodromy matrix Φ = ∂x(t₀ + T)/∂x(t₀) is the product of the flights' transition matrices
 /// and of a saltation matrix at each event [Aizerman & Gantmacher 1958; Müller 1995, Chaos,
