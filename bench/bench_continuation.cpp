@@ -30,6 +30,14 @@ const wbm::scene::Scene& case2() {
 
 const char* const kTrial[] = {"fourier", "haar"};
 
+// One trace_response of `base` with `o`; an error unless it reaches the range's end.
+wbm::solvers::ResponseCurve trace(benchmark::State& state, const wbm::solvers::WeightedResidual& base,
+                                  const wbm::solvers::ResponseCurveOptions& o) {
+  auto curve = wbm::solvers::trace_response(base, o);
+  if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
+  return curve;
+}
+
 void BM_Continuation_Fig12Branch(benchmark::State& state) {
   const auto& s = case2();
   const int m = static_cast<int>(state.range(0));
@@ -43,16 +51,11 @@ void BM_Continuation_Fig12Branch(benchmark::State& state) {
   o.parameter_max = 1700.0;
   o.max_parameter_step = 2.0;
   o.stability = state.range(2) != 0;
-  size_t points = 0;
-  double continuation = 0.0;
-  for (auto _ : state) {
-    const auto curve = wbm::solvers::trace_response(base, o);
-    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
-    points = curve.points.size();
-    continuation = curve.wall_time_s;
-  }
-  state.counters["points"] = static_cast<double>(points);
-  state.counters["continuation_points_per_s"] = static_cast<double>(points) / continuation;
+  wbm::solvers::ResponseCurve curve;
+  for (auto _ : state) curve = trace(state, base, o);
+  const auto points = static_cast<double>(curve.points.size());
+  state.counters["points"] = points;
+  state.counters["continuation_points_per_s"] = points / curve.wall_time_s;
 }
 
 void BM_Floquet_OnePoint(benchmark::State& state) {
@@ -85,9 +88,7 @@ size_t trace_scene(benchmark::State& state, const wbm::scene::Scene& scene,
   const wbm::solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(scene.forcing->range->from_hz),
                                             scene.contact_points(), scene.trial(), scene.weighting(),
                                             scene.weighted_residual_options());
-  const auto curve = wbm::solvers::trace_response(base, o);
-  if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
-  return curve.points.size();
+  return trace(state, base, o).points.size();
 }
 
 // The branch's cost against the structure's size (issue #39, item 5): the rod of
@@ -163,16 +164,11 @@ void BM_Continuation_Fig12RigidStop(benchmark::State& state) {
   o.max_parameter_step = 5.0;
   o.stability = state.range(0) != 0;
   state.SetLabel(o.stability ? "with the exact orbits' stability" : "without stability");
-  size_t points = 0;
-  double stability = 0.0;
-  for (auto _ : state) {
-    const auto curve = wbm::solvers::trace_response(base, o);
-    if (curve.stop != wbm::solvers::StopReason::RangeReached) state.SkipWithError(curve.message.c_str());
-    points = curve.points.size();
-    stability = curve.stability_time_s;
-  }
-  state.counters["points"] = static_cast<double>(points);
-  state.counters["stability_ms_per_point"] = 1e3 * stability / static_cast<double>(std::max<size_t>(points, 1));
+  wbm::solvers::ResponseCurve curve;
+  for (auto _ : state) curve = trace(state, base, o);
+  const auto points = static_cast<double>(std::max<size_t>(curve.points.size(), 1));
+  state.counters["points"] = static_cast<double>(curve.points.size());
+  state.counters["stability_ms_per_point"] = 1e3 * curve.stability_time_s / points;
 }
 
 }  // namespace
