@@ -112,7 +112,12 @@ ImpactStability impact_stability(const MechanicalSystem& system, const HarmonicF
     guess << u.col(start), 0.5 * f * samples * (u.col((start + 1) % samples) - u.col((start + samples - 1) % samples));
   }
   const double t0 = tau(start) / f;
-  result.orbit = shoot_periodic_orbit(flow, guess, t0, options.newton);
+  try {
+    result.orbit = shoot_periodic_orbit(flow, guess, t0, options.newton);
+  } catch (const std::invalid_argument& e) {  // a phase met on the way whose flight ImpactFlow cannot form
+    result.message = std::string("the event-driven flow refused the orbit: ") + e.what();
+    return result;
+  }
   if (!result.orbit.report.converged()) {
     result.message = "the shooting of the exact orbit did not converge: " + result.orbit.report.message;
     return result;

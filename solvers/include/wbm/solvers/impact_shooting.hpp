@@ -176,10 +176,12 @@ struct ImpactStability {
 ///     monodromy's agreement with central differences on the JL14 rod, 2.9e-9 with the
 ///     differences' own error, test_impact_shooting); inf when V is singular to rounding.
 /// Unavailable (no throw): no sample with every stop open, a flow that fails at the seed (a graze,
-/// chatter: std::domain_error's message), a shooting that does not converge, an exact orbit farther
-/// than options.max_distance from the given one. Throws std::invalid_argument for coefficients
-/// of the wrong shape or non-finite, samples < 8, a contact that is not a rigid stop, and as
-/// ImpactFlow does.
+/// chatter: std::domain_error's message), a shooting that does not converge or meets an active set
+/// whose flight ImpactFlow cannot form (its std::invalid_argument: a linear part singular at a load
+/// harmonic, a defective first-order matrix), an exact orbit farther than options.max_distance
+/// from the given one. Throws std::invalid_argument for coefficients of the wrong shape or
+/// non-finite, samples < 8, invalid options, and as ImpactFlow's constructor does (invalid
+/// matrices or forcing, a contact that is not a rigid stop).
 [[nodiscard]] ImpactStability impact_stability(const MechanicalSystem& system, const HarmonicForcing& forcing,
                                                const std::vector<ContactPoint>& contacts, const TimeBasis& trial,
                                                const Eigen::MatrixXd& coefficients, int samples,
