@@ -74,9 +74,14 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
         for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k));
         f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
         f.columns.push_back(w);
-        friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w,
-                                               Eigen::VectorXd::Constant(m, coulomb->slip_force()),
-                                               forcing.frequency_hz, "collocation_instants"));
+        // The slip force μ N, or μ times the normal stop's multiplier at the same instants.
+        const int normal = contacts[c].normal;
+        const double mu = coulomb->parameters().friction_coefficient;
+        const Eigen::VectorXd slip =
+            normal >= 0 ? Eigen::VectorXd(mu * solution.contact_force_samples.row(normal).transpose().cwiseMax(0.0))
+                        : Eigen::VectorXd::Constant(m, coulomb->slip_force());
+        friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, slip, forcing.frequency_hz,
+                                               "collocation_instants"));
       }
     }
     if (!friction.empty()) out.diagnostics["friction"] = friction;

@@ -78,15 +78,10 @@ void Parser::contacts(const toml::table& root) {
     // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
     read_keys(r_, *t, section, contact_keys(), c, "", law);
     if (friction) {  // a constant normal load, or one that follows a normal contact (jenkins)
-      // Jenkins: a penalty normal contact (any forced response); coulomb: a rigid one, in
-      // analysis "timestep" only (Moreau–Jean's 2D contact; the weighted residual has none).
-      const bool varying = (c.law == ContactLawKind::Jenkins || (c.law == ContactLawKind::Coulomb && timestep)) &&
+      // Jenkins: a penalty normal contact; coulomb: a rigid one (a 2D contact: the weighted residual
+      // and Moreau–Jean solve the stop and the friction together).
+      const bool varying = (c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb) &&
                            t->contains("normal_contact");
-      if (c.law == ContactLawKind::Coulomb && !timestep && t->contains("normal_contact")) {
-        r_.error(Reader::source_of(*t, "normal_contact"), section + ".normal_contact",
-                 "\"coulomb\" under a varying normal load is solved by time stepping only: set analysis.type = "
-                 "\"timestep\", or use a \"jenkins\" law on a \"linear\" or \"exponential\" normal contact");
-      }
       c.normal_load = r_.number(*t, section, "normal_load", non_negative("N"),
                                 varying ? std::optional<double>(0.0) : std::nullopt);
       if (varying && c.law == ContactLawKind::Coulomb && c.normal_load != 0.0) {
@@ -168,7 +163,7 @@ void Parser::normal_contacts(const std::vector<std::pair<const toml::table*, std
       if (law != ContactLawKind::Rigid) {
         r_.error(where, full, "= " + std::to_string(c.normal_contact) + " names " + tables[target].second + " of law \"" +
                               std::string(to_string(law)) + "\"; a \"coulomb\" contact takes its normal load from a "
-                              "\"rigid\" contact on the normal DOF (Moreau–Jean's 2D contact)");
+                              "\"rigid\" contact on the normal DOF (a 2D contact)");
         continue;
       }
       for (const Contact& other : s_.contacts) {

@@ -184,13 +184,13 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
           .read_by_section(),
       compound_key<C>("normal_contact", "integer", "none (a constant normal load)",
                       "the index (0-based, in file order) of another `[[contact]]` located by `node` or `dof`: "
-                      "`\"linear\"` or `\"exponential\"` for jenkins; `\"rigid\"` for coulomb (analysis "
-                      "`\"timestep\"` only, at most one coulomb per rigid contact)",
+                      "`\"linear\"` or `\"exponential\"` for jenkins; `\"rigid\"` for coulomb (at most one coulomb "
+                      "per rigid contact)",
                       "a normal load that varies with the normal gap: the slip force at each instant is μ (N + n), n "
                       "the force of that normal contact (its `gap` < 0 is a preload; n = 0 where it opens, and the "
                       "element then slides freely). For coulomb the normal contact's reaction is the normal load "
-                      "(a 2D contact, Moreau–Jean with Siconos' fc2d): N must be 0, and a static load presses the "
-                      "normal DOF",
+                      "(a 2D contact: the stop's multiplier of each instant in the weighted residual, its impulse "
+                      "with Siconos' fc2d in time stepping): N must be 0, and a static load presses the normal DOF",
                       [](const C& c) { return c.normal_contact >= 0 ? nlohmann::json(c.normal_contact) : nlohmann::json(); })
           .only_in({"jenkins", "coulomb"}),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),

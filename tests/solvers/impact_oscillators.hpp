@@ -1,18 +1,21 @@
 // Impact oscillators in closed form, shared by the rigid-stop tests (test_rigid_contact.cpp,
-// test_impact_shooting.cpp): the 1-DOF oscillator against a rigid stop with a plastic impact
+// test_impact_shooting.cpp, test_impact_stability.cpp): the 1-DOF oscillator against a rigid stop with a plastic impact
 // (a contact phase every period) and with Newton's restitution e > 0 (one impact per period).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <memory>
 #include <numbers>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_roots.h>
 
+#include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 
 namespace wbm::testing {
@@ -24,6 +27,11 @@ inline wbm::solvers::MechanicalSystem one_dof_system(double m, double c, double 
   s.damping = Eigen::MatrixXd::Constant(1, 1, c).sparseView();
   s.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
   return s;
+}
+
+// One rigid stop at `dof` with initial gap g0 [m] (the contact list of the impact tests).
+inline std::vector<wbm::solvers::ContactPoint> stop_at(int dof, double gap) {
+  return {{dof, std::make_shared<wbm::contact::RigidStop>(gap)}};
 }
 
 // The 1-DOF impact oscillator m ü + c u̇ + k u = F cos ωt against a rigid stop at u = g0 with a

@@ -26,16 +26,13 @@
 #include "testing.hpp"
 
 using namespace wbm;
+using wbm::testing::stop_at;
 
 namespace {
 
 Eigen::VectorXcd by_modulus(Eigen::VectorXcd mu) {
   std::sort(mu.data(), mu.data() + mu.size(), [](const auto& a, const auto& b) { return std::abs(a) > std::abs(b); });
   return mu;
-}
-
-std::vector<solvers::ContactPoint> stop_at(int dof, double gap) {
-  return {{dof, std::make_shared<contact::RigidStop>(gap)}};
 }
 
 }  // namespace

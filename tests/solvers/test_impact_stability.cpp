@@ -20,12 +20,9 @@
 #include "impact_oscillators.hpp"
 
 using namespace wbm;
+using wbm::testing::stop_at;
 
 namespace {
-
-std::vector<solvers::ContactPoint> stop_at(int dof, double gap) {
-  return {{dof, std::make_shared<contact::RigidStop>(gap)}};
-}
 
 // The plastic oscillator's structure and stop (k g0/F = ½), forced at f [Hz].
 struct Oscillator {

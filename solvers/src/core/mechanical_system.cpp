@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseLU>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/solvers/model_checks.hpp>
 #include <wbm/solvers/status.hpp>
 
@@ -198,14 +199,37 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
       throw std::invalid_argument(where + ": must be -1 (a constant normal load) or the index of another contact in [0, " +
                                   std::to_string(count) + ")");
     }
+    const auto& n = *contacts[static_cast<size_t>(c.normal)].law;
+    if (const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(c.law.get())) {
+      // Exact Coulomb friction: a 2D contact, the normal load the stop's reaction (a multiplier).
+      if (!n.rigid() || n.hysteretic()) {
+        throw std::invalid_argument(where + ": the normal contact is a " + n.describe() + "; exact Coulomb friction "
+                                    "takes its normal load from a rigid stop (contact::RigidStop); for a penalty normal "
+                                    "law use a Jenkins element (contact::JenkinsLaw)");
+      }
+      if (coulomb->parameters().normal_load != 0.0) {
+        throw std::invalid_argument(where + ": normal_load = " + format_number(coulomb->parameters().normal_load) +
+                                    " N beside a rigid normal stop, whose reaction is the normal load: set it to 0 and "
+                                    "press the normal DOF with a static load (HarmonicLoad with harmonic 0)");
+      }
+      for (int j = 0; j < i; ++j) {
+        const ContactPoint& o = contacts[static_cast<size_t>(j)];
+        if (o.normal == c.normal && dynamic_cast<const contact::CoulombFriction*>(o.law.get()) != nullptr) {
+          throw std::invalid_argument(where + ": contact " + std::to_string(j) + " already takes its normal load from "
+                                      "that stop; one tangent per stop (a 2D contact)");
+        }
+      }
+      continue;
+    }
     if (!c.law->takes_normal_load()) {
       throw std::invalid_argument(where + ": the " + c.law->describe() + " takes no varying normal load; only a "
-                                  "Jenkins element does (exact Coulomb friction under a varying load is not implemented)");
+                                  "Jenkins element (on a penalty normal law) and exact Coulomb friction (on a rigid "
+                                  "stop) do");
     }
-    const auto& n = *contacts[static_cast<size_t>(c.normal)].law;
     if (n.rigid() || n.hysteretic()) {
-      throw std::invalid_argument(where + ": the normal contact is a " + n.describe() + "; the normal load comes from "
-                                  "a penalty law (linear or exponential) whose force is a function of the normal gap");
+      throw std::invalid_argument(where + ": the normal contact is a " + n.describe() + "; the normal load of a "
+                                  "Jenkins element comes from a penalty law (linear or exponential) whose force is a "
+                                  "function of the normal gap (for a rigid stop, use exact Coulomb friction)");
     }
   }
 }

@@ -13,6 +13,7 @@
 
 #include <wbm/solvers/weighted_residual.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -291,8 +292,13 @@ struct WeightedResidual::Impl {
     Eigen::MatrixXd increments;  // V(τ_{k+1}) − V(τ_k) (M × M), friction rows
     Eigen::VectorXd gaps;        // g0 of contact c at row k·n_c + c
     std::vector<char> coulomb;   // per contact: exact Coulomb friction (1) or a rigid stop (0)
-    Eigen::VectorXd slip_forces; // μ N of contact c (0 for a stop)
+    Eigen::VectorXd slip_forces; // μ N of contact c (0 for a stop, and under a rigid normal stop)
+    // Per contact: the rigid stop whose multiplier is a friction contact's normal load
+    // (ContactPoint::normal, a 2D contact), or −1; and that contact's μ.
+    std::vector<int> normal_of;
+    Eigen::VectorXd friction_coefficients;
     bool any_coulomb = false;
+    bool any_normal = false;  // some friction contact takes its normal load from a stop
   };
   std::shared_ptr<const Collocation> collocation;
   Eigen::MatrixXd delassus;
@@ -309,6 +315,21 @@ struct WeightedResidual::Impl {
   // roots. Without stops c = c_f and ρ = 1.
   double friction_compliance = 1.0;
   [[nodiscard]] double friction_weight() const { return force_compliance / friction_compliance; }
+  // The slip force of friction row i = k·n_c + c [N]: μ N, or μ λ⁺ of its normal stop's impulse k
+  // (Signorini's multiplier of the same cell: the normal load; a negative iterate carries none).
+  [[nodiscard]] double slip_force(const Eigen::VectorXd& lambda, Eigen::Index i) const {
+    const Collocation& col = *collocation;
+    const auto c = static_cast<size_t>(i % nc);
+    const int normal = col.any_normal ? col.normal_of[c] : -1;
+    if (normal < 0) return col.slip_forces(static_cast<Eigen::Index>(c));
+    return col.friction_coefficients(static_cast<Eigen::Index>(c)) * std::max(lambda(i - static_cast<Eigen::Index>(c) + normal), 0.0);
+  }
+  // A slip row whose slip force is μ λ_j⁺ of a stop's impulse j with λ_j > 0: ∂φ_i/∂λ_j = −σ μ c.
+  struct CoupledSlip {
+    int row;
+    int normal_row;
+    double sigma_mu;  // σ μ
+  };
   [[nodiscard]] contact::CoulombProjection friction_row(double lambda, double slip, double slip_force) const {
     auto cp = contact::coulomb_projection(friction_compliance * lambda, slip, friction_compliance * slip_force);
     cp.value *= friction_weight();
@@ -364,13 +385,15 @@ struct WeightedResidual::Impl {
 
   // φ(λ) [m] at load s, row by row: min(c λ, g0 − u(λ)) for a stop, with u(λ) = s u_lin − D λ;
   // c λ − proj_[−c μN, c μN](c λ + Δ(λ)) for friction (contact::coulomb_projection), with
-  // Δ(λ) = s u_lin − D λ; a friction contact that sticks at every instant has its row c replaced
+  // Δ(λ) = s u_lin − D λ and μN the row's slip_force; a friction contact that sticks at every instant has its row c replaced
   // by −u(τ_1) (`pinned` lists the stuck_* entries used).
   // gap_rows: the rows on the branch that depends on D (the gap of a stop, the stick of friction,
   // pinned rows included). With a piece (stops only, no friction; require_piece), each stop row
   // takes the branch the piece names, 1 the gap g0 − u, 0 the force c λ, instead of the min's.
+  // coupled: the slip rows of friction contacts on a rigid normal stop whose stop pushes (CoupledSlip).
   [[nodiscard]] Eigen::VectorXd signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
-                                          std::vector<int>* pinned = nullptr, const ActiveSet* piece = nullptr) const;
+                                          std::vector<int>* pinned = nullptr, const ActiveSet* piece = nullptr,
+                                          std::vector<CoupledSlip>* coupled = nullptr) const;
   // Throws std::logic_error with friction contacts (their rows have three branches) and
   // std::invalid_argument unless the piece has length n_c·M; nothing for a null piece.
   void require_piece(const char* what, const ActiveSet* piece) const;

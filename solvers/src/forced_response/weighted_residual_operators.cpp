@@ -253,11 +253,16 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
     }
     col->coulomb.assign(static_cast<size_t>(nc), 0);
     col->slip_forces = Eigen::VectorXd::Zero(nc);
+    col->normal_of.assign(static_cast<size_t>(nc), -1);
+    col->friction_coefficients = Eigen::VectorXd::Zero(nc);
     for (int c = 0; c < nc; ++c) {
       if (const auto* f = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get())) {
         col->coulomb[static_cast<size_t>(c)] = 1;
         col->slip_forces(c) = f->slip_force();
+        col->friction_coefficients(c) = f->parameters().friction_coefficient;
+        col->normal_of[static_cast<size_t>(c)] = contacts[c].normal;  // a rigid stop (ContactPoint::validate)
         col->any_coulomb = true;
+        col->any_normal = col->any_normal || contacts[c].normal >= 0;
       }
     }
     if (col->any_coulomb) {

@@ -145,7 +145,8 @@ void WeightedResidual::Impl::require_piece(const char* what, const ActiveSet* pi
 }
 
 Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda, double load, std::vector<int>* gap_rows,
-                                                  std::vector<int>* pinned, const ActiveSet* piece) const {
+                                                  std::vector<int>* pinned, const ActiveSet* piece,
+                                                  std::vector<CoupledSlip>* coupled) const {
   require_factorized();
   const Collocation& col = *collocation;
   // The slips Δ (friction rows), and the stops' gaps in one expression, as before friction existed
@@ -159,15 +160,20 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
   Eigen::VectorXd phi(lambda.size());
   if (gap_rows != nullptr) gap_rows->clear();
   if (pinned != nullptr) pinned->clear();
+  if (coupled != nullptr) coupled->clear();
   std::vector<char> slips(static_cast<size_t>(nc), 0);
   for (Eigen::Index i = 0; i < phi.size(); ++i) {
     const auto c = static_cast<size_t>(i % nc);
     bool d_branch = false;
     if (col.coulomb[c] != 0) {
-      const auto cp = friction_row(lambda(i), u(i), col.slip_forces(static_cast<Eigen::Index>(c)));
+      const auto cp = friction_row(lambda(i), u(i), slip_force(lambda, i));
       phi(i) = cp.value;
       d_branch = cp.stick;
       if (!cp.stick) slips[c] = 1;
+      if (!cp.stick && coupled != nullptr && col.any_normal && col.normal_of[c] >= 0) {
+        const auto j = static_cast<int>(i) - static_cast<int>(c) + col.normal_of[c];
+        if (lambda(j) > 0.0) coupled->push_back({static_cast<int>(i), j, cp.sigma * col.friction_coefficients(static_cast<Eigen::Index>(c))});
+      }
     } else if (piece != nullptr) {  // the piece's branch
       d_branch = (*piece)[static_cast<size_t>(i)] != 0;
       phi(i) = d_branch ? gap(i) : force_compliance * lambda(i);
@@ -265,14 +271,26 @@ LowRankJacobian WeightedResidual::signorini_jacobian(const Eigen::VectorXd& lamb
   p.require_rigid("signorini_jacobian");
   p.require_piece("signorini_jacobian", piece);
   std::vector<int> active, pinned;
-  (void)p.signorini(lambda, load, &active, &pinned, piece);
+  std::vector<Impl::CoupledSlip> coupled;
+  (void)p.signorini(lambda, load, &active, &pinned, piece, &coupled);
   const Eigen::Index size = lambda.size();
-  const auto rank = static_cast<Eigen::Index>(active.size());
   const double c = p.force_compliance;
   LowRankJacobian jac;
   jac.scale = p.scale / c;  // J = (c/s_r)(I + P_A (D/c − I)_A)
   jac.rows = size;
-  const Eigen::MatrixXd d_rows = p.constraint_rows(active, pinned) / c;  // (D/c)_A, r × n
+  Eigen::MatrixXd d_rows = p.constraint_rows(active, pinned) / c;  // (D/c)_A, r × n
+  if (!coupled.empty()) {  // slip rows on a pushing stop: c λ_i − σ μ c λ_j, the row e_i − σ μ e_j
+    const auto gap_rank = static_cast<Eigen::Index>(active.size());
+    d_rows.conservativeResize(gap_rank + static_cast<Eigen::Index>(coupled.size()), Eigen::NoChange);
+    for (size_t e = 0; e < coupled.size(); ++e) {
+      auto row = d_rows.row(gap_rank + static_cast<Eigen::Index>(e));
+      row.setZero();
+      row(coupled[e].row) = 1.0;
+      row(coupled[e].normal_row) = -coupled[e].sigma_mu;
+      active.push_back(coupled[e].row);
+    }
+  }
+  const auto rank = static_cast<Eigen::Index>(active.size());
   if (4 * rank > 3 * size) {  // dense form: s J = I with the gap rows replaced by D/c
     jac.capacitance = Eigen::MatrixXd::Identity(size, size);
     for (Eigen::Index i = 0; i < rank; ++i) jac.capacitance.row(active[static_cast<size_t>(i)]) = d_rows.row(i);
@@ -441,6 +459,20 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
     history += "; load stepping (" + std::to_string(steps) + " steps): " + stepped.report.message;
     if (stepped.report.converged()) s.path = SolutionPath::LoadStepping;
     result = std::move(stepped);
+    if (!result.report.converged()) {
+      // The active-set iteration with full steps (weighted_residual.hpp: the backtracking on ‖φ‖
+      // stalls where an instant changes branch); a cycle of the residual norms ends it.
+      NewtonOptions full = p.options.newton;
+      full.line_search = false;
+      full.levenberg_marquardt = false;
+      full.stop_on_cycle = true;
+      full.max_iterations = std::max(full.max_iterations, 4 * p.m);
+      NewtonResult pdas = newton(Signorini{this, 1.0}, Eigen::VectorXd::Zero(size), full);
+      pdas.report.iterations += result.report.iterations;
+      history += "; full-step active set from zero impulses: " + pdas.report.message;
+      if (pdas.report.converged()) s.path = SolutionPath::FullStepActiveSet;
+      result = std::move(pdas);
+    }
   } else if (!result.report.converged() && lambda0 == nullptr && p.options.contact_homotopy) {
     NewtonResult h = solve_rigid_with_penalty_homotopy(s.homotopy);
     h.report.iterations += result.report.iterations;
@@ -469,7 +501,7 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   for (Eigen::Index i = 0; i < size; ++i) {
     const auto c = static_cast<size_t>(i % p.nc);
     if (col.coulomb[c] != 0) {
-      phi(i) = p.friction_row(lambda(i), kin(i), col.slip_forces(static_cast<Eigen::Index>(c))).value;
+      phi(i) = p.friction_row(lambda(i), kin(i), p.slip_force(lambda, i)).value;
     } else {
       phi(i) = contact::signorini_min(p.force_compliance * lambda(i), col.gaps(i) - kin(i)).value;
       s.collocation_penetration = std::max(s.collocation_penetration, kin(i) - col.gaps(i));
@@ -480,7 +512,7 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
     bool slips = false;
     for (int k = 0; k < p.m; ++k) {
       const Eigen::Index i = static_cast<Eigen::Index>(k) * p.nc + c;
-      slips = slips || !p.friction_row(lambda(i), kin(i), col.slip_forces(c)).stick;
+      slips = slips || !p.friction_row(lambda(i), kin(i), p.slip_force(lambda, i)).stick;
     }
     if (slips) continue;
     const Eigen::VectorXd x_c = xa(Eigen::seq(c, Eigen::last, p.nc));

@@ -146,6 +146,7 @@ std::string_view to_string(SolutionPath path) noexcept {
     case SolutionPath::ContactHomotopy: return "contact homotopy";
     case SolutionPath::LoadStepping: return "load stepping";
     case SolutionPath::Linear: return "linear";
+    case SolutionPath::FullStepActiveSet: return "full-step active set";
   }
   return "unknown";
 }

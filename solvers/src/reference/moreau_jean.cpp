@@ -39,7 +39,7 @@ const contact::CoulombFriction* coulomb(const ContactPoint& c) {
 }
 
 // The contacts of the fc2d problem, or none when no contact has friction (the stops then go to
-// projected Gauss–Seidel, as before friction existed). Checks the laws and the pairing.
+// projected Gauss–Seidel, as before friction existed). Checks the laws (the pairing: ContactPoint::validate).
 std::vector<FrictionalContact> frictional_contacts(const std::vector<ContactPoint>& contacts) {
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   std::vector<FrictionalContact> out;
@@ -52,28 +52,7 @@ std::vector<FrictionalContact> frictional_contacts(const std::vector<ContactPoin
       out.push_back({-1, i, law->parameters().friction_coefficient, law->parameters().normal_load});
       continue;
     }
-    const std::string where = "integrate_moreau_jean_to_periodic: ContactPoint.normal = " + std::to_string(c.normal) +
-                              " (contact " + std::to_string(i) + " at DOF " + std::to_string(c.dof) + ")";
-    if (c.normal < -1 || c.normal >= nc || c.normal == i) {
-      throw std::invalid_argument(where + ": must be -1 (a constant normal load) or the index of another contact in [0, " +
-                                  std::to_string(nc) + ")");
-    }
-    const auto& n = contacts[static_cast<size_t>(c.normal)];
-    if (!n.law->rigid() || n.law->hysteretic()) {
-      throw std::invalid_argument(where + ": the normal contact is a " + n.law->describe() + "; exact Coulomb friction "
-                                  "takes its normal load from a rigid stop (contact::RigidStop) here");
-    }
-    if (law->parameters().normal_load != 0.0) {
-      throw std::invalid_argument(where + ": normal_load = " + format_number(law->parameters().normal_load) +
-                                  " N beside a rigid normal stop, whose reaction is the normal load: set it to 0 and "
-                                  "press the normal DOF with a static load (HarmonicLoad with harmonic 0)");
-    }
-    auto& slot = friction_of[static_cast<size_t>(c.normal)];
-    if (slot >= 0) {
-      throw std::invalid_argument(where + ": contact " + std::to_string(slot) + " already takes its normal load from "
-                                  "that stop; one tangent per stop (a 2D contact)");
-    }
-    slot = i;
+    friction_of[static_cast<size_t>(c.normal)] = i;  // ContactPoint::validate: a rigid stop, one tangent each
   }
   bool friction = false;
   for (Eigen::Index i = 0; i < nc; ++i) {
@@ -169,13 +148,7 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
                                                    const MoreauJeanOptions& options) {
   system.validate();
   forcing.validate(system.dofs());
-  // ContactPoint::validate admits a `normal` only for Jenkins elements on penalty laws; an exact
-  // Coulomb contact naming a rigid stop is checked by frictional_contacts.
-  std::vector<ContactPoint> plain = contacts;
-  for (auto& c : plain) {
-    if (coulomb(c) != nullptr) c.normal = -1;
-  }
-  ContactPoint::validate(plain, system.dofs());
+  ContactPoint::validate(contacts, system.dofs());  // also the pairing of exact Coulomb contacts with stops
   options.validate();
   forcing.require_resolved(options.samples_per_period,
                            "the P = " + std::to_string(options.samples_per_period) + " output samples per period",

@@ -97,10 +97,15 @@ struct ContactPoint {
   int other = -1;  // the second DOF of a relative contact (two bodies), or −1 (a fixed obstacle)
   std::vector<std::pair<int, double>> along = {};  // (DOF, weight) of a general direction, or empty
   /// A friction contact whose normal load varies: the index, in the same contact list, of the
-  /// normal contact whose force n_c(u_n) [N] is the normal load (a penalty law: linear or
-  /// exponential, with its gap; a negative gap is a preload). The friction law's slip force is
-  /// then μ (N + n_c) at every sample (contact::ContactLaw::takes_normal_load; N its own preload),
-  /// and the tangential force depends on both displacements. −1: a constant normal load.
+  /// normal contact whose force [N] is the normal load.
+  ///   - A Jenkins element (contact::ContactLaw::takes_normal_load): a penalty law n_c(u_n), linear
+  ///     or exponential, with its gap (a negative gap is a preload); the slip force is then
+  ///     μ (N + n_c) at every sample (N its own preload), and the tangential force depends on both
+  ///     displacements.
+  ///   - Exact Coulomb friction (contact::CoulombFriction, with N = 0): a rigid stop, whose
+  ///     multiplier is the normal load (a 2D contact; one friction contact per stop). The weighted
+  ///     residual and Moreau–Jean solve the two together.
+  /// −1: a constant normal load.
   int normal = -1;
   /// The nonzeros of e_c as (DOF, weight), in the order given.
   [[nodiscard]] std::vector<std::pair<int, double>> terms() const {
@@ -123,8 +128,10 @@ struct ContactPoint {
   /// Throws std::invalid_argument for a DOF (or other DOF) out of range, other == dof, a null law,
   /// a direction (along) with a DOF out of range or repeated, a non-finite weight, all weights
   /// zero, dof not among its DOFs or other ≥ 0 beside it, the same direction twice, or a `normal`
-  /// that is out of range, names the contact itself, is given to a law without
-  /// takes_normal_load(), or names a contact whose law is rigid or hysteretic.
+  /// that is out of range, names the contact itself, is given to a law that is neither exact
+  /// Coulomb friction nor takes_normal_load(), names for a Jenkins element a law that is rigid or
+  /// hysteretic, names for exact Coulomb friction a law that is not a rigid stop or a stop that
+  /// another friction contact names, or beside a Coulomb normal_load ≠ 0.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
 

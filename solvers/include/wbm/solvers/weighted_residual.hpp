@@ -104,8 +104,8 @@ enum class ContactQuadrature { Midpoint, CellAverage };
 ///    folds in the forcing amplitude that stall load stepping. Folds in σ are passed too.
 ///  - LoadStepping: forcing s·F, s: 0 → 1, adaptive steps, Newton at each.
 ///  - Linear: no contact, one solve.
-enum class SolutionPath { DirectNewton, ContactHomotopy, LoadStepping, Linear };
-/// "direct Newton", "contact homotopy", "load stepping", "linear".
+enum class SolutionPath { DirectNewton, ContactHomotopy, LoadStepping, Linear, FullStepActiveSet };
+/// "direct Newton", "contact homotopy", "load stepping", "linear", "full-step active set".
 [[nodiscard]] std::string_view to_string(SolutionPath p) noexcept;
 
 /// The σ path of the contact homotopy (SolutionPath::ContactHomotopy), for reports.
@@ -292,6 +292,13 @@ struct WeightedResidualSolution {
 /// inverse penalty; here it is solved in time, on the impulses, by Newton. Contrary to the
 /// frequency-domain DLFT it holds for any admissible pair. The friction force switches at an
 /// instant: the response converges at first order in 1/M (tests/solvers/test_friction.cpp).
+/// A friction contact whose ContactPoint::normal names a rigid stop is a 2D contact (Signorini and
+/// Coulomb on one point): its slip force at impulse k is μ λ⁺_{n,k}, the stop's multiplier of the
+/// same cell (the normal load the stop transmits; zero where it is open, so that the tangential
+/// impulse vanishes there), μN replaced by it in φ; a slip row then also has ∂φ/∂λ_{n,k} = −σμc
+/// (σ the slip direction), one more row in the Jacobian's low-rank part. This is the pairing of
+/// the Moreau–Jean step with fc2d (integrate_moreau_jean_to_periodic), the reference it converges
+/// to (tests/solvers/test_friction_rigid_normal.cpp).
 /// In full stick the slips leave the position free: a contact that sticks at every instant is
 /// pinned at u(τ_1) = 0 (the Jenkins convention, f = k_t w, as k_t → ∞). The instants are the
 /// midpoints unless W is singular there (Fourier of even M, whose top function vanishes at
@@ -300,7 +307,13 @@ struct WeightedResidualSolution {
 /// regularization, the Jenkins element, has a state): when the active-set Newton from zero
 /// impulses fails, the load is stepped, s: 0 → 1 (SolutionPath::LoadStepping; natural-parameter
 /// continuation from λ = 0, where every contact sticks or stays open, adaptive steps from 1/8,
-/// the active-set Newton at each from the secant prediction).
+/// the active-set Newton at each from the secant prediction). When that fails too, the
+/// active-set iteration runs from zero impulses with full steps, without the line search on ‖φ‖
+/// (SolutionPath::FullStepActiveSet; the primal–dual active-set method of [HIK02], whose steps
+/// are not descent directions of ‖φ‖ where an instant changes branch: the backtracking then stalls
+/// where the full steps settle the branches; a cycle of the residual norms stops it). Measured on
+/// a point pressed on a plane and rubbing on it (a 2D contact, test_friction_rigid_normal.cpp):
+/// with the line search it failed for DB6 at M = 64 and 256, without it every pair converged.
 ///
 /// Throws std::invalid_argument for invalid inputs, for a load at a harmonic h with 2h ≥ M
 /// (HarmonicForcing::require_resolved: M functions would alias it), for M differing between trial and weighting,
@@ -406,7 +419,8 @@ class WeightedResidual {
   /// Rigid stops: φ(λ) = min(c λ, g0 − u(λ)) / s_r (length n_c·M) at load s (x_lin → s x_lin),
   /// and its generalized Jacobian (gap rows: D_i/s_r; force rows: c e_i/s_r) as identity plus
   /// the gap rows, (c/s_r)(I + P_A (D/c − I)_A), with capacitance D_AA/c (dense when
-  /// r > ¾ n_c·M). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
+  /// r > ¾ n_c·M); A also holds the slip rows of 2D contacts whose stop pushes (their row
+  /// e_i − σμ e_j, j the stop's impulse). λ in N, ordering k·n_c + c. Throw std::logic_error unless rigid().
   /// With a piece (rigid stops without friction; an ActiveSet of length n_c·M, ordering
   /// k·n_c + c, 1 = the gap row g0 − u(λ), 0 = the force row c λ): the smooth residual of that
   /// piece, each row on the branch the piece names instead of the min's, and its Jacobian and
