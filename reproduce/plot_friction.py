@@ -1,6 +1,6 @@
 """The friction figures of reproductions.txt (issue #36), drawn by plot.py: the 1-DOF damper
-against Den Hartog with the Jenkins element and with exact Coulomb friction, and the chain under a
-varying normal load."""
+against Den Hartog with the Jenkins element and with exact Coulomb friction, the chain under a
+varying normal load, and the point rubbing on a rigid plane (a 2D contact)."""
 import json
 import math
 
@@ -135,3 +135,39 @@ def friction_normal_load(folder):
     ax.legend(fontsize=7)
     fig.tight_layout()
     save(fig, folder, "friction_normal_load")
+
+
+def friction_rigid_normal(folder):
+    """Issue #36, a 2D contact (exact Coulomb friction on a rigid stop): (a) the rms error of x
+    against Moreau-Jean with Siconos' fc2d versus M, per pair, with the reference's own error;
+    (b) one period of x, the reference and each pair."""
+    meta = json.loads((folder / "meta.json").read_text())
+    labels = meta["combinations"]
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    ax = axes[0]
+    dims = meta["dimensions"]
+    for c, label in enumerate(labels):
+        pts = [(m, e) for m, e in zip(dims, meta["errors_x"][c]) if e is not None and math.isfinite(e) and e > 0]
+        if pts:
+            order = meta["orders"][c]
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
+                      label=f"{label} (order {order:.2f})" if order is not None else label)
+    ax.axhline(meta["reference_self_error"], color="k", ls=":", lw=0.8, label="reference's own error")
+    ax.set_xlabel("M [-]")
+    ax.set_ylabel("rms error of x / rms x [-]")
+    ax.set_title(f"(a) {meta['frequency_hz']:g} Hz, normal load {meta['static_normal_load_N']:g} ± "
+                 f"{meta['normal_swing_N']:g} N", fontsize=9)
+    ax.legend(fontsize=7)
+    hist = wbm_plot.read_csv(folder / "history.csv")
+    tau = hist["tau [-]"]
+    ax = axes[1]
+    ax.plot(tau, hist["moreau_jean [m]"], "k-", lw=1.6, label="Moreau-Jean (Siconos fc2d)")
+    for name in hist:
+        if name not in ("tau [-]", "moreau_jean [m]"):
+            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("x [m]")
+    ax.set_title(f"(b) M = {meta['history_dimension']}", fontsize=9)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    save(fig, folder, "friction_rigid_normal")

@@ -344,6 +344,33 @@ def test_a_normal_contact_at_rest_gives_the_constant_load_it_balances():
                                                            normal_load=0.0), 0)], basis, basis)
 
 
+def test_exact_coulomb_friction_on_a_prestressed_rigid_plane_rubs_under_its_reaction():
+    # A 2D contact, (dof, CoulombFriction, normal) with the normal a RigidStop: a point mass on
+    # springs k in x and y whose plane sits at y = g < 0, so it holds y at g with the reaction
+    # N = −k g (statics, at every instant). The x response is then that of a constant load N, to
+    # rounding (Fourier: the instants' quadrature is exact), and the plane's impulses are N.
+    m, k, g, mu = 1.0, (2.0 * math.pi * 10.0) ** 2, -1e-4, 0.3
+    c = 2.0 * 0.02 * math.sqrt(k * m)
+    n_closed = -g * k
+    both = wbm.MechanicalSystem(np.diag([m, m]), np.diag([c, c]), np.diag([k, k]))
+    basis = wbm.TimeBasis("fourier", 33)
+    paired = wbm.solve(both, 0, 1.0, 12.0, [(1, wbm.RigidStop(g)),
+                                            (0, wbm.CoulombFriction(friction_coefficient=mu, normal_load=0.0), 0)],
+                       basis, basis)
+    assert paired["converged"], paired["message"]
+    one = wbm.MechanicalSystem([[m]], [[c]], [[k]])
+    constant = wbm.solve(one, 0, 1.0, 12.0, [(0, wbm.CoulombFriction(friction_coefficient=mu, normal_load=n_closed))],
+                         basis, basis)
+    assert constant["converged"], constant["message"]
+    x = paired["coefficients"][0]
+    assert np.max(np.abs(x - constant["coefficients"][0])) < 1e-9 * np.max(np.abs(x))
+    assert np.max(np.abs(paired["contact_force_samples"][0] - n_closed)) < 1e-9 * n_closed
+    with pytest.raises(ValueError, match="normal_load = 0.5 N beside a rigid normal stop"):
+        wbm.solve(both, 0, 1.0, 12.0, [(1, wbm.RigidStop(g)),
+                                       (0, wbm.CoulombFriction(friction_coefficient=mu, normal_load=0.5), 0)],
+                  basis, basis)
+
+
 def test_exact_coulomb_friction_gives_den_hartogs_amplitude_and_its_impulses():
     # The same oscillator with wbm.CoulombFriction (no spring): first order in 1/M, within 5e-3 of
     # Den Hartog at M = 256 and r = 1.5 (measured 4.2e-3; out/friction_coulomb_exact); every

@@ -99,7 +99,7 @@ TEST(FrictionRigidNormal, AStaticallyPressedPointRubsAsUnderAConstantNormalLoad)
 }
 
 // The normal load n0 + py cos ωt (0.2 … 1.8 N) keeps the point on the plane and swings the slip
-// force with it: stick and slip under μ λ_n. The weighted residual tends to the Moreau–Jean
+// force with it: x slips throughout, under μ λ_n. The weighted residual tends to the Moreau–Jean
 // reference (Siconos fc2d, T/16384; its own error against T/32768 is 1.4e-5): with the instants
 // at k/M (Fourier of even M, B-splines) from 2.6e-2 at M = 64 to 4.6e-3 at M = 256 (1.1e-3 at
 // 512); with the midpoints (DB6) 4.7e-3 and 4.6e-3, the irregular first-order convergence of exact
