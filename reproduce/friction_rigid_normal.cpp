@@ -125,9 +125,11 @@ int main(int argc, char** argv) {
     }
     // The path taken goes in the status column (one string per row: converged by which route).
     std::vector<std::string> status(e_status.size());
-    for (size_t i = 0; i < status.size(); ++i) status[i] = e_path[i].empty() ? e_status[i] : e_status[i] + " (" + e_path[i] + ")";
-    run.table("errors.csv", {"combination [-]", "M [-]", "error_x [-]", "max_abs_y [m]", "cone_excess [N]", "stick_fraction [-]",
-                             "newton_iterations [-]"},
+    for (size_t i = 0; i < status.size(); ++i)
+      status[i] = e_path[i].empty() ? e_status[i] : e_status[i] + " (" + e_path[i] + ")";
+    run.table("errors.csv",
+              {"combination [-]", "M [-]", "error_x [-]", "max_abs_y [m]", "cone_excess [N]", "stick_fraction [-]",
+               "newton_iterations [-]"},
               {as_column(e_c), as_column(e_m), as_column(e_err), as_column(e_y), as_column(e_cone), as_column(e_stick),
                as_column(e_it)},
               status);
@@ -146,34 +148,43 @@ int main(int argc, char** argv) {
     std::vector<Claim> claims = {
         {"the Moreau–Jean reference (Siconos' fc2d) at T/" + std::to_string(steps) + " is within " +
              format("%g", kReferenceTolerance) + " of its run at T/" + std::to_string(steps / 2) + " (rms of x)",
-         std::isfinite(reference_error) && reference_error <= kReferenceTolerance, "difference " + format("%.2e", reference_error)},
+         std::isfinite(reference_error) && reference_error <= kReferenceTolerance,
+         "difference " + format("%.2e", reference_error)},
         {"every pair converges at every M = " + std::to_string(dims.front()) + " … " + std::to_string(m_top) +
              " (the active-set iteration with its fallbacks: load stepping, then full steps)",
-         converged == total, std::to_string(converged) + " of " + std::to_string(total) + " solves; " +
-                                 std::to_string(full_steps) + " by the full-step active set"},
-        {"every converged solve keeps the friction force inside the cone of the plane's reaction, |λ_t| ≤ μ λ_n⁺ at every "
-         "instant (to " + format("%g", kConeSlack) + " N)",
+         converged == total,
+         std::to_string(converged) + " of " + std::to_string(total) + " solves; " + std::to_string(full_steps) +
+             " by the full-step active set"},
+        {"every converged solve keeps the friction force inside the cone of the plane's reaction, |λ_t| ≤ μ λ_n⁺ at "
+         "every "
+         "instant (to " +
+             format("%g", kConeSlack) + " N)",
          converged > 0 ? std::optional<bool>(worst_cone <= kConeSlack) : std::nullopt,
          "largest |λ_t| − μ λ_n⁺ " + format("%.1e", worst_cone) + " N"},
-        {"Fourier:Fourier and B-spline:B-spline (instants k/M) reach the reference within " + format("%g", kTopTolerance) +
-             " at M = " + std::to_string(m_top) + ", at first order or better (fitted order ≥ " + format("%g", kLeastOrder) + ")",
+        {"Fourier:Fourier and B-spline:B-spline (instants k/M) reach the reference within " +
+             format("%g", kTopTolerance) + " at M = " + std::to_string(m_top) +
+             ", at first order or better (fitted order ≥ " + format("%g", kLeastOrder) + ")",
          std::isfinite(ff_top) && std::isfinite(bb_top) && std::isfinite(orders[0]) && std::isfinite(orders[1])
-             ? std::optional<bool>(std::max(ff_top, bb_top) <= kTopTolerance && std::min(orders[0], orders[1]) >= kLeastOrder)
+             ? std::optional<bool>(std::max(ff_top, bb_top) <= kTopTolerance &&
+                                   std::min(orders[0], orders[1]) >= kLeastOrder)
              : std::nullopt,
-         "errors " + format("%.2e", ff_top) + " and " + format("%.2e", bb_top) + ", orders " + format("%.2f", orders[0]) +
-             " and " + format("%.2f", orders[1])}};
+         "errors " + format("%.2e", ff_top) + " and " + format("%.2e", bb_top) + ", orders " +
+             format("%.2f", orders[0]) + " and " + format("%.2f", orders[1])}};
 
     std::ostringstream md;
     md << "## Exact Coulomb friction on a rigid stop beyond the papers: a 2D contact by every pair (issue #36)\n\n"
-       << "Files: `out/friction_rigid_normal/friction_rigid_normal.{png,pdf}`, `errors.csv`, `history.csv`, `meta.json`. "
-          "A point mass (" << format("%g", p.m) << " kg) on two springs of " << format("%g", std::sqrt(p.k / p.m) / (2.0 * kPi))
+       << "Files: `out/friction_rigid_normal/friction_rigid_normal.{png,pdf}`, `errors.csv`, `history.csv`, "
+          "`meta.json`. "
+          "A point mass ("
+       << format("%g", p.m) << " kg) on two springs of " << format("%g", std::sqrt(p.k / p.m) / (2.0 * kPi))
        << " Hz (ζ = " << format("%g", p.zeta) << "), pressed on a rigid plane by " << format("%g", p.n0) << " N + "
-       << format("%g", p.py) << " N cos ωt and rubbing on it with μ = " << format("%g", p.mu) << ", driven along the plane by "
-       << format("%g", p.px) << " N at " << format("%g", p.hz) << " Hz (examples/scenes/friction_rigid_normal.toml). "
+       << format("%g", p.py) << " N cos ωt and rubbing on it with μ = " << format("%g", p.mu)
+       << ", driven along the plane by " << format("%g", p.px) << " N at " << format("%g", p.hz)
+       << " Hz (examples/scenes/friction_rigid_normal.toml). "
           "The slip force of each friction impulse is μ times the plane's multiplier of the same cell; both are solved "
-          "in one active-set iteration. Every pair of Table 2 in the " << solvers::to_string(kFigureFormulation)
-       << " form, against Moreau–Jean with Siconos' fc2d at T/" << steps << " (its difference from T/" << steps / 2
-       << ": " << format("%.1e", reference_error) << ").\n\n"
+          "in one active-set iteration. Every pair of Table 2 in the "
+       << solvers::to_string(kFigureFormulation) << " form, against Moreau–Jean with Siconos' fc2d at T/" << steps
+       << " (its difference from T/" << steps / 2 << ": " << format("%.1e", reference_error) << ").\n\n"
        << "Relative rms error of x per M (— with the status where the solve failed), and the fitted order in 1/M:\n\n"
        << dimension_table_header(dims, "order");
     for (size_t ci = 0; ci < combos.size(); ++ci) {
@@ -186,17 +197,27 @@ int main(int argc, char** argv) {
     }
     md << "\nThe pairs whose instants are the midpoints (DB6, and the Haar and DB6 trials against Fourier or B-spline "
           "weighting) converge irregularly: exact friction switches at an instant, within a cell of the reversal, and "
-          "the error depends on where the instants fall (docs/design.md, \"A 2D contact\"). Where the swing exceeds the "
+          "the error depends on where the instants fall (docs/design.md, \"A 2D contact\"). Where the swing exceeds "
+          "the "
           "static load the point mass lifts off its plane: that normal problem is the position-level impact of a point "
           "mass (issue #38), for which Moreau–Jean is the path.\n\n"
        << claims_markdown(claims);
     run.report(md.str());
     nlohmann::json meta = {{"formulation", std::string(solvers::to_string(kFigureFormulation))},
-                           {"mass_kg", p.m}, {"stiffness_N_per_m", p.k}, {"zeta", p.zeta}, {"friction_coefficient", p.mu},
-                           {"static_normal_load_N", p.n0}, {"normal_swing_N", p.py}, {"tangential_load_N", p.px},
-                           {"frequency_hz", p.hz}, {"dimensions", dims}, {"history_dimension", history_m},
-                           {"reference_steps_per_period", steps}, {"reference_self_error", reference_error},
-                           {"orders", orders}, {"errors_x", errors}};
+                           {"mass_kg", p.m},
+                           {"stiffness_N_per_m", p.k},
+                           {"zeta", p.zeta},
+                           {"friction_coefficient", p.mu},
+                           {"static_normal_load_N", p.n0},
+                           {"normal_swing_N", p.py},
+                           {"tangential_load_N", p.px},
+                           {"frequency_hz", p.hz},
+                           {"dimensions", dims},
+                           {"history_dimension", history_m},
+                           {"reference_steps_per_period", steps},
+                           {"reference_self_error", reference_error},
+                           {"orders", orders},
+                           {"errors_x", errors}};
     meta["combinations"] = nlohmann::json::array();
     for (const auto& c : combos) meta["combinations"].push_back(c.label());
     run.meta(meta);

@@ -319,9 +319,11 @@ TEST(SceneFriction, ASolveOfA2DContactBalancesItsEnergyAndMatchesTimeStepping) {
   EXPECT_LE((tangent.cwiseAbs() - 0.3 * normal.cwiseMax(0.0)).maxCoeff(), 1e-9);
   // The same point by time stepping.
   std::string stepped = text;
-  const std::string from = "[basis]\nharmonics = 64                 # M = 129 impulses per contact\n\n[analysis]\ntype = \"solve\"";
+  const std::string from =
+      "[basis]\nharmonics = 64                 # M = 129 impulses per contact\n\n[analysis]\ntype = \"solve\"";
   ASSERT_NE(stepped.find(from), std::string::npos);
-  stepped.replace(stepped.find(from), from.size(), "[analysis]\ntype = \"timestep\"\n[timestep]\nsteps_per_period = 16384");
+  stepped.replace(stepped.find(from), from.size(),
+                  "[analysis]\ntype = \"timestep\"\n[timestep]\nsteps_per_period = 16384");
   const wbm::scene::AnalysisResult t = wbm::scene::run_analysis(parse(stepped));
   ASSERT_TRUE(t.converged()) << t.diagnostics.dump();
   const Eigen::VectorXd& x_wr = column(r, "displacement.csv", 2);

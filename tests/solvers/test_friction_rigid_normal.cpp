@@ -114,7 +114,8 @@ TEST(FrictionRigidNormal, ConvergesToMoreauJeanUnderAVaryingNormalLoad) {
   o.steps_per_period = 16384;
   o.samples_per_period = 1024;
   o.periodicity_tolerance = 1e-10;
-  const auto reference = solvers::integrate_moreau_jean_to_periodic(PointOnPlane::system(), p.forcing(), p.contacts(), o);
+  const auto reference =
+      solvers::integrate_moreau_jean_to_periodic(PointOnPlane::system(), p.forcing(), p.contacts(), o);
   ASSERT_TRUE(reference.report.converged()) << reference.report.message;
   ASSERT_EQ(reference.report.unsettled_lcp_steps, 0);
   const Eigen::VectorXd x_ref = reference.displacement.row(0).transpose();
@@ -130,7 +131,8 @@ TEST(FrictionRigidNormal, ConvergesToMoreauJeanUnderAVaryingNormalLoad) {
       const double ex = solvers::rms_relative_error(at_samples(basis, s.coefficients, 0), x_ref);
       const double ey = at_samples(basis, s.coefficients, 1).cwiseAbs().maxCoeff();  // y stays on the plane
       errors.push_back(ex);
-      std::printf("%s M = %d: x %.3e, max|y| %.1e m (%s)\n", pair.c_str(), m, ex, ey, solvers::to_string(s.path).data());
+      std::printf("%s M = %d: x %.3e, max|y| %.1e m (%s)\n", pair.c_str(), m, ex, ey,
+                  solvers::to_string(s.path).data());
       EXPECT_LT(ey, 1e-9) << pair << " M = " << m;
       // The friction force within the cone of the plane's reaction: |λ_t| ≤ μ λ_n⁺ at every instant.
       for (int k = 0; k < m; ++k) {
@@ -190,9 +192,8 @@ TEST(FrictionRigidNormal, PairingsThatAreNotA2DContactAreRefusedByName) {
   };
   auto contacts = p.contacts();
   contacts[0].law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e6, 0.0});
-  wbm::testing::expect_throw_with<std::invalid_argument>([&] { build(contacts); },
-                                                         {"ContactPoint.normal = 0 (contact 1", "from a rigid stop",
-                                                          "Jenkins element"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { build(contacts); }, {"ContactPoint.normal = 0 (contact 1", "from a rigid stop", "Jenkins element"});
   contacts = p.contacts();
   contacts[1].law = std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.3, 0.5});
   wbm::testing::expect_throw_with<std::invalid_argument>([&] { build(contacts); }, {"normal_load = 0.5"});

@@ -203,9 +203,10 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
     if (const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(c.law.get())) {
       // Exact Coulomb friction: a 2D contact, the normal load the stop's reaction (a multiplier).
       if (!n.rigid() || n.hysteretic()) {
-        throw std::invalid_argument(where + ": the normal contact is a " + n.describe() + "; exact Coulomb friction "
-                                    "takes its normal load from a rigid stop (contact::RigidStop); for a penalty normal "
-                                    "law use a Jenkins element (contact::JenkinsLaw)");
+        throw std::invalid_argument(where + ": the normal contact is a " + n.describe() +
+                                    "; exact Coulomb friction takes its normal load from a rigid stop "
+                                    "(contact::RigidStop); for a penalty normal law use a Jenkins element "
+                                    "(contact::JenkinsLaw)");
       }
       if (coulomb->parameters().normal_load != 0.0) {
         throw std::invalid_argument(where + ": normal_load = " + format_number(coulomb->parameters().normal_load) +

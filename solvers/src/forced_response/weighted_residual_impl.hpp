@@ -322,7 +322,8 @@ struct WeightedResidual::Impl {
     const auto c = static_cast<size_t>(i % nc);
     const int normal = col.any_normal ? col.normal_of[c] : -1;
     if (normal < 0) return col.slip_forces(static_cast<Eigen::Index>(c));
-    return col.friction_coefficients(static_cast<Eigen::Index>(c)) * std::max(lambda(i - static_cast<Eigen::Index>(c) + normal), 0.0);
+    const Eigen::Index j = i - static_cast<Eigen::Index>(c) + normal;  // the stop's row k·n_c + normal
+    return col.friction_coefficients(static_cast<Eigen::Index>(c)) * std::max(lambda(j), 0.0);
   }
   // A slip row whose slip force is μ λ_j⁺ of a stop's impulse j with λ_j > 0: ∂φ_i/∂λ_j = −σ μ c.
   struct CoupledSlip {
@@ -385,8 +386,8 @@ struct WeightedResidual::Impl {
 
   // φ(λ) [m] at load s, row by row: min(c λ, g0 − u(λ)) for a stop, with u(λ) = s u_lin − D λ;
   // c λ − proj_[−c μN, c μN](c λ + Δ(λ)) for friction (contact::coulomb_projection), with
-  // Δ(λ) = s u_lin − D λ and μN the row's slip_force; a friction contact that sticks at every instant has its row c replaced
-  // by −u(τ_1) (`pinned` lists the stuck_* entries used).
+  // Δ(λ) = s u_lin − D λ and μN the row's slip_force; a friction contact that sticks at every
+  // instant has its row c replaced by −u(τ_1) (`pinned` lists the stuck_* entries used).
   // gap_rows: the rows on the branch that depends on D (the gap of a stop, the stick of friction,
   // pinned rows included). With a piece (stops only, no friction; require_piece), each stop row
   // takes the branch the piece names, 1 the gap g0 − u, 0 the force c λ, instead of the min's.

@@ -172,7 +172,8 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
       if (!cp.stick) slips[c] = 1;
       if (!cp.stick && coupled != nullptr && col.any_normal && col.normal_of[c] >= 0) {
         const auto j = static_cast<int>(i) - static_cast<int>(c) + col.normal_of[c];
-        if (lambda(j) > 0.0) coupled->push_back({static_cast<int>(i), j, cp.sigma * col.friction_coefficients(static_cast<Eigen::Index>(c))});
+        const double mu = col.friction_coefficients(static_cast<Eigen::Index>(c));
+        if (lambda(j) > 0.0) coupled->push_back({static_cast<int>(i), j, cp.sigma * mu});
       }
     } else if (piece != nullptr) {  // the piece's branch
       d_branch = (*piece)[static_cast<size_t>(i)] != 0;
