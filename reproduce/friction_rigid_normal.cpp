@@ -195,12 +195,12 @@ int main(int argc, char** argv) {
       }
       md << " " << format("%.2f", orders[ci]) << " |\n";
     }
-    md << "\nThe pairs whose instants are the midpoints (DB6, and the Haar and DB6 trials against Fourier or B-spline "
-          "weighting) converge irregularly: exact friction switches at an instant, within a cell of the reversal, and "
-          "the error depends on where the instants fall (docs/design.md, \"A 2D contact\"). Where the swing exceeds "
-          "the "
-          "static load the point mass lifts off its plane: that normal problem is the position-level impact of a point "
-          "mass (issue #38), for which Moreau–Jean is the path.\n\n"
+    md << "\nThe instants are the cell ends k/M for a Fourier (even M) or B-spline weighting and the midpoints for "
+          "DB6:DB6 (solvers/weighted_residual.hpp). Exact friction switches at an instant, within a cell of the "
+          "reversal, so the error depends on where the instants fall: DB6:DB6 and the Haar trials converge "
+          "irregularly (docs/design.md, \"A 2D contact\"). Where the swing exceeds the static load the point mass "
+          "lifts off its plane: that normal problem is the position-level impact of a point mass (issue #38), for "
+          "which Moreau–Jean is the path.\n\n"
        << claims_markdown(claims);
     run.report(md.str());
     nlohmann::json meta = {{"formulation", std::string(solvers::to_string(kFigureFormulation))},

@@ -91,37 +91,45 @@ def friction_coulomb_exact(folder):
     save(fig, folder, "friction_exact")
 
 
-def friction_normal_load(folder):
-    """Issue #36, a varying normal load: (a) the rms error of x3 against the central-difference
-    reference versus M, per pair, with the reference's own error; (b) one period of x3, the
-    reference and each pair; (c) the reference's normal and friction forces and the bound ±μ n."""
-    meta = json.loads((folder / "meta.json").read_text())
-    labels = meta["combinations"]
-    fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.2))
-    ax = axes[0]
-    dims = meta["dimensions"]
-    for c, label in enumerate(labels):
-        pts = [(m, e) for m, e in zip(dims, meta["errors_x3"][c]) if e is not None and math.isfinite(e) and e > 0]
+def _errors_versus_m(ax, meta, key, ylabel, title):
+    """Panel: the rms error `meta[key]` (one list per pair, over meta["dimensions"]) versus M on log
+    axes, each pair with its fitted order, and the reference's own error as a dotted line."""
+    for c, label in enumerate(meta["combinations"]):
+        pts = [(m, e) for m, e in zip(meta["dimensions"], meta[key][c]) if e is not None and math.isfinite(e) and e > 0]
         if pts:
             order = meta["orders"][c]
             ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
                       label=f"{label} (order {order:.2f})" if order is not None else label)
     ax.axhline(meta["reference_self_error"], color="k", ls=":", lw=0.8, label="reference's own error")
     ax.set_xlabel("M [-]")
-    ax.set_ylabel("rms error of x3 / rms x3 [-]")
-    ax.set_title(f"(a) {meta['frequency_hz']:g} Hz, Q = {meta['time_samples']}", fontsize=9)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
+
+
+def _history(ax, folder, meta, reference, reference_label, ylabel):
+    """Panel: one period of history.csv, the reference column `reference` and each pair's."""
     hist = wbm_plot.read_csv(folder / "history.csv")
     tau = hist["tau [-]"]
-    ax = axes[1]
-    ax.plot(tau, hist["reference [m]"], "k-", lw=1.6, label="central differences")
+    ax.plot(tau, hist[reference], "k-", lw=1.6, label=reference_label)
     for name in hist:
-        if name not in ("tau [-]", "reference [m]"):
+        if name not in ("tau [-]", reference):
             ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
     ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("x3 [m]")
+    ax.set_ylabel(ylabel)
     ax.set_title(f"(b) M = {meta['history_dimension']}", fontsize=9)
     ax.legend(fontsize=6)
+
+
+def friction_normal_load(folder):
+    """Issue #36, a varying normal load: (a) the rms error of x3 against the central-difference
+    reference versus M, per pair, with the reference's own error; (b) one period of x3, the
+    reference and each pair; (c) the reference's normal and friction forces and the bound ±μ n."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.2))
+    _errors_versus_m(axes[0], meta, "errors_x3", "rms error of x3 / rms x3 [-]",
+                     f"(a) {meta['frequency_hz']:g} Hz, Q = {meta['time_samples']}")
+    _history(axes[1], folder, meta, "reference [m]", "central differences", "x3 [m]")
     ref = wbm_plot.read_csv(folder / "reference.csv")
     ax = axes[2]
     mu = meta["friction_coefficient"]
@@ -142,32 +150,10 @@ def friction_rigid_normal(folder):
     against Moreau-Jean with Siconos' fc2d versus M, per pair, with the reference's own error;
     (b) one period of x, the reference and each pair."""
     meta = json.loads((folder / "meta.json").read_text())
-    labels = meta["combinations"]
     fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
-    ax = axes[0]
-    dims = meta["dimensions"]
-    for c, label in enumerate(labels):
-        pts = [(m, e) for m, e in zip(dims, meta["errors_x"][c]) if e is not None and math.isfinite(e) and e > 0]
-        if pts:
-            order = meta["orders"][c]
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], MARKERS[c] + "-", ms=5, mfc="none", lw=0.8,
-                      label=f"{label} (order {order:.2f})" if order is not None else label)
-    ax.axhline(meta["reference_self_error"], color="k", ls=":", lw=0.8, label="reference's own error")
-    ax.set_xlabel("M [-]")
-    ax.set_ylabel("rms error of x / rms x [-]")
-    ax.set_title(f"(a) {meta['frequency_hz']:g} Hz, normal load {meta['static_normal_load_N']:g} ± "
-                 f"{meta['normal_swing_N']:g} N", fontsize=9)
-    ax.legend(fontsize=7)
-    hist = wbm_plot.read_csv(folder / "history.csv")
-    tau = hist["tau [-]"]
-    ax = axes[1]
-    ax.plot(tau, hist["moreau_jean [m]"], "k-", lw=1.6, label="Moreau-Jean (Siconos fc2d)")
-    for name in hist:
-        if name not in ("tau [-]", "moreau_jean [m]"):
-            ax.plot(tau, hist[name], lw=0.8, label=name.replace(" [m]", ""))
-    ax.set_xlabel("τ = t/T [-]")
-    ax.set_ylabel("x [m]")
-    ax.set_title(f"(b) M = {meta['history_dimension']}", fontsize=9)
-    ax.legend(fontsize=6)
+    _errors_versus_m(axes[0], meta, "errors_x", "rms error of x / rms x [-]",
+                     f"(a) {meta['frequency_hz']:g} Hz, normal load {meta['static_normal_load_N']:g} ± "
+                     f"{meta['normal_swing_N']:g} N")
+    _history(axes[1], folder, meta, "moreau_jean [m]", "Moreau-Jean (Siconos fc2d)", "x [m]")
     fig.tight_layout()
     save(fig, folder, "friction_rigid_normal")
