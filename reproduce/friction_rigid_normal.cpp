@@ -156,9 +156,7 @@ int main(int argc, char** argv) {
          std::to_string(converged) + " of " + std::to_string(total) + " solves; " + std::to_string(full_steps) +
              " by the full-step active set"},
         {"every converged solve keeps the friction force inside the cone of the plane's reaction, |λ_t| ≤ μ λ_n⁺ at "
-         "every "
-         "instant (to " +
-             format("%g", kConeSlack) + " N)",
+         "every instant (to " + format("%g", kConeSlack) + " N)",
          converged > 0 ? std::optional<bool>(worst_cone <= kConeSlack) : std::nullopt,
          "largest |λ_t| − μ λ_n⁺ " + format("%.1e", worst_cone) + " N"},
         {"Fourier:Fourier and B-spline:B-spline (instants k/M) reach the reference within " +
