@@ -102,5 +102,5 @@ TEST(SceneFrictionNormalLoad, KeysAreReadEchoedAndRefused) {
           {"contact[2].normal_contact", "of law \"jenkins\"", "\"linear\" or \"exponential\""});
   refused(base + jenkins, {"contact[1].normal_load", "missing"});
   refused(base + "[[contact]]\nlaw = \"coulomb\"\ndof = \"x\"\nfriction_coefficient = 0.3\nnormal_contact = 0\n",
-          {"contact[1].normal_contact", "solved by time stepping only"});
+          {"contact[1].normal_contact", "of law \"linear\"", "from a \"rigid\" contact"});
 }
