@@ -303,7 +303,9 @@ order the family does not have.)");
       "Exact Coulomb friction along the contact's direction, slip force mu N [N] (contact/friction.hpp): the k_t -> inf "
       "limit of JenkinsLaw. Its force is a multiplier at the collocation instants, as a RigidStop's (rigid is True; "
       "force() and stiffness() raise); wbm.solve returns it in contact_force_samples with collocation_times. All "
-      "contacts of one solve exact (RigidStop, CoulombFriction) or none.")
+      "contacts of one solve exact (RigidStop, CoulombFriction) or none. As (dof, law, normal) with `normal` the "
+      "index of a RigidStop in the same list and normal_load = 0, a 2D contact: the slip force is mu times that "
+      "stop's multiplier at each instant (one CoulombFriction per stop).")
       .def(py::init([](double friction_coefficient, double normal_load) {
              return std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{friction_coefficient, normal_load});
            }),
