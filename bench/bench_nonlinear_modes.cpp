@@ -2,7 +2,13 @@
 // Fig. 3 backbone by continuation (E from 0.5 to 10, per N), one energy level by LL11 Alg. 1
 // (augmented Lagrangian with Powell's updates, warm-started from the neighbouring level), and one
 // KKT linearization (sparse residual and Jacobian) at the sizes of the extremes (N up to 64,
-// m up to 1024). Counters: levels, corners (events located), time per level.
+// m up to 1024). Alg. 1 also over the first part of the backbone, and its Hessian's solve and
+// Levenberg–Marquardt step by the bordered sparse LU against the dense path they replaced.
+// Counters: levels, corners (events located), time per level.
+#include <cmath>
+#include <numbers>
+#include <vector>
+
 #include <benchmark/benchmark.h>
 
 #include <wbm/scene/analysis.hpp>
@@ -60,6 +66,75 @@ void BM_NonlinearModes_Algorithm1Level(benchmark::State& state) {
   }
 }
 
+// LL11 Alg. 1 on the scene itself (N = 12, m = 256) from E = 0.5 to `range(0)`/100: the energy
+// stepping of `make reproduce`'s ll11_fig03 claim, one level per step.
+void BM_NonlinearModes_Algorithm1Backbone(benchmark::State& state) {
+  const auto& p = ll11();
+  const wbm::solvers::NonlinearModes nm(p.system, p.stops, p.options);
+  wbm::solvers::BackboneOptions o;
+  o.energy_min = 0.5;
+  o.energy_max = static_cast<double>(state.range(0)) / 100.0;
+  o.max_step = 0.05;
+  size_t levels = 0;
+  int newton = 0;
+  for (auto _ : state) {
+    const auto b = nm.backbone(o);
+    if (!b.complete()) state.SkipWithError(b.message.c_str());
+    levels = b.levels.size();
+    newton = 0;
+    for (const auto& l : b.levels) newton += l.newton_iterations;
+  }
+  state.counters["levels"] = static_cast<double>(levels);
+  state.counters["newton_iterations"] = newton;
+}
+
+// The Hessian of Alg. 1's augmented Lagrangian at the rod's size (n = 20 DOFs, F = 2N + 1 = 25
+// coefficients: 499 unknowns, the phase one removed) in its structure H = S + U C Uᵀ: S block
+// tridiagonal per harmonic plus one dense F × F contact block, U the two rank-one directions.
+// range(0): 0 the bordered sparse LU (BorderedSparseLu), 1 the dense LU of H formed (DenseLu,
+// the path before), both with one solve; range(1): 1 adds a Levenberg–Marquardt step (the
+// shifted bordered system, or the dense QR of [H; μI]).
+void BM_NonlinearModes_Algorithm1Hessian(benchmark::State& state) {
+  constexpr int n = 20, f = 25, size = n * f;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int k = 0; k < f; ++k) {
+    const double shift = k == 1 ? 2.0 - 2.0 * std::cos(std::numbers::pi / (2.0 * n + 1.0)) : -0.3 * k * k;
+    for (int i = 0; i < n; ++i) {
+      t.emplace_back(k * n + i, k * n + i, 2.0 - shift);
+      if (i + 1 < n) {
+        t.emplace_back(k * n + i, k * n + i + 1, -1.0);
+        t.emplace_back(k * n + i + 1, k * n + i, -1.0);
+      }
+    }
+  }
+  for (int k = 0; k < f; ++k) {
+    for (int l = 0; l < f; ++l) t.emplace_back(k * n + n - 1, l * n + n - 1, 1e3 / (1.0 + std::abs(k - l)));
+  }
+  wbm::solvers::SparseLowRankHessian h;
+  h.sparse.resize(size, size);
+  h.sparse.setFromTriplets(t.begin(), t.end());
+  h.u = Eigen::MatrixXd::Random(size, 2);
+  h.core.resize(2, 2);
+  h.core << 1e2, -1e-2, -1e-2, 0.0;
+  const Eigen::VectorXd r = Eigen::VectorXd::Ones(size);
+  const bool bordered = state.range(0) == 0, lm = state.range(1) == 1;
+  for (auto _ : state) {
+    if (bordered) {
+      wbm::solvers::BorderedSparseLu solver;
+      solver.factorize(h);
+      benchmark::DoNotOptimize(solver.solve(r));
+      if (lm) benchmark::DoNotOptimize(solver.levenberg_marquardt_step(h, r, 1e-3));
+    } else {
+      const Eigen::MatrixXd dense = h.dense();
+      wbm::solvers::DenseLu solver;
+      solver.factorize(dense);
+      benchmark::DoNotOptimize(solver.solve(r));
+      if (lm) benchmark::DoNotOptimize(wbm::solvers::detail::levenberg_marquardt_step(dense, r, 1e-3));
+    }
+  }
+  state.counters["unknowns"] = size;
+}
+
 void BM_NonlinearModes_KktLinearization(benchmark::State& state) {
   const auto nm = modes(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const wbm::solvers::NonlinearModes::BackboneSystem system(nm, 0.0);
@@ -77,6 +152,13 @@ BENCHMARK(BM_NonlinearModes_Fig3Backbone)
     ->Args({24, 512})  // the costliest pair of ll11_robustness's grid but one
     ->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_NonlinearModes_Algorithm1Level)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_NonlinearModes_Algorithm1Backbone)->Arg(150)->Arg(190)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_NonlinearModes_Algorithm1Hessian)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NonlinearModes_KktLinearization)->Args({8, 256})->Args({16, 256})->Args({64, 1024})->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

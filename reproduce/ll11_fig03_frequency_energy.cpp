@@ -169,8 +169,11 @@ int main(int argc, char** argv) {
               std::to_string(powell_its) + " Powell and " + std::to_string(newton) +
               " Newton iterations in the converged levels (" + ba.message + "); the continuation covers the whole range in " +
               format("%.1f", continuation_s) + " s. Each Powell update re-solves the augmented Lagrangian by "
-              "semismooth Newton on a dense Hessian of the " + std::to_string(pa.system.stiffness.rows() * (2 * s.analysis.harmonics + 1) - 1) +
-              " unknowns (n (2N + 1) coefficients, the phase one fixed)" + (ba.failed_energies.empty() ? std::string() : ", and energy steps failed and were halved")};
+              "semismooth Newton on its " + std::to_string(pa.system.stiffness.rows() * (2 * s.analysis.harmonics + 1) - 1) +
+              " unknowns (n (2N + 1) coefficients, the phase one fixed; the Hessian by a bordered sparse LU)" +
+              (ba.failed_energies.empty() ? std::string() : ", and energy steps failed and were halved") +
+              "; energy stepping cannot pass a turn in energy, and the continuation's first is at E = " +
+              (nnm["folds"].empty() ? std::string("— (none)") : format("%.3f", nnm["folds"][0].get<double>()))};
     }
 
     // The linear modes: f_k against (2k − 1) f_1 (odd multiples for the continuous rod).

@@ -382,6 +382,27 @@ TEST(NonlinearModes, AugmentedLagrangianAndKktContinuationAgree) {
   EXPECT_GT(kkt->frequency_hz - kkt->rayleigh_frequency_hz, 0.5);  // Hz: not a rounding effect
 }
 
+// A stationarity tolerance below what ∇L_κ can be evaluated to: LL11 Alg. 1 converges within 10
+// times the measured rounding floor of ∇L_κ, reports that tolerance and says so, and lands on
+// the KKT continuation's mode (an independent formulation) as with the default tolerance.
+TEST(NonlinearModes, AugmentedLagrangianBelowItsRoundingFloorConvergesAtTheFloorAndSaysSo) {
+  const solvers::NonlinearModes strict(ll11_system(), {{tip_dof(), 1e-3}},
+                                       {.harmonics = 8, .samples = 256, .stationarity_tolerance = 1e-17});
+  const auto level = strict.solve(1.2);
+  ASSERT_TRUE(level.converged()) << level.message;
+  EXPECT_GT(level.tolerance, 1e-17);
+  EXPECT_LT(level.tolerance, 1e-9);  // a rounding floor, not a loose tolerance
+  EXPECT_LE(level.residual_norm, level.tolerance);
+  EXPECT_NE(level.message.find("converged at the rounding floor"), std::string::npos) << level.message;
+  const auto nm = modes(1e-3);
+  const auto b = nm.continue_backbone({.energy_min = 0.9, .energy_max = 1.3, .include = {1.2}});
+  ASSERT_TRUE(b.complete()) << b.message;
+  const auto* kkt = included(b, 1.2);
+  ASSERT_NE(kkt, nullptr);
+  EXPECT_NEAR(level.frequency_hz, kkt->frequency_hz, 1e-7 * kkt->frequency_hz);
+  EXPECT_LT((level.coefficients - kkt->coefficients).norm(), 1e-5 * kkt->coefficients.norm());
+}
+
 // Extremes: from below contact to 10 times the onset energy the branch is complete, and at every
 // level the Signorini conditions hold at every sample (no penetration, non-negative forces,
 // complementarity), the normalization holds, and the frequency never drops below the linear one.

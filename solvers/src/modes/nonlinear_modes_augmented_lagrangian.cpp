@@ -9,9 +9,13 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCore>
 
+#include <wbm/solvers/detail/rounding_floor.hpp>
 #include <wbm/solvers/natural_parameter.hpp>
 #include <wbm/spectral/fourier_basis.hpp>
 #include <wbm/spectral/layout.hpp>
@@ -20,7 +24,7 @@ namespace wbm::solvers {
 
 struct NonlinearModes::Evaluation {
   Eigen::VectorXd gradient;   // reduced (phase coefficient removed)
-  Eigen::MatrixXd hessian;    // reduced, if asked
+  SparseLowRankHessian hessian;  // reduced (phase row and column removed), if asked
   Eigen::VectorXd g;          // constraint values, stop-major: g(c·m + k)
   double h = 0.0;             // ½m̂/γ_c − E
   double r = 0.0;             // Rayleigh quotient [(rad/s)²]
@@ -57,27 +61,53 @@ NonlinearModes::Evaluation NonlinearModes::evaluate(const Eigen::VectorXd& y, do
   e.gradient << full.head(phase_index_), full.tail(full.size() - phase_index_ - 1);
   if (!hessian) return e;
 
+  // The Hessian as H = S + U C Uᵀ (SparseLowRankHessian): S block diagonal in the harmonics plus
+  // the contact curvature on the stops' DOFs, U C Uᵀ the rank-one terms of the Rayleigh quotient
+  // and the normalization; the phase coefficient's row and column removed.
+  const auto p = static_cast<Eigen::Index>(phase_index_);
+  auto reduced = [p](Eigen::Index i) { return i < p ? i : i - 1; };
+  std::vector<Eigen::Triplet<double>> t = contact_curvature(al.inequality_curvature(e.g));
+  for (int k = 0; k < f_; ++k) {  // (2K̃ − 2ω² M̃)/denominator + (2μ/m_c) M̃, block k
+    const double ck = 2.0 * weight_(k) / denominator, cm = (2.0 * mu / m_c_ - 2.0 * omega2 / denominator) * wnu2(k);
+    for (const auto& [matrix, c] : {std::pair{&system_.stiffness, ck}, std::pair{&system_.mass, cm}}) {
+      if (c == 0.0) continue;
+      for (Eigen::Index j = 0; j < matrix->outerSize(); ++j) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(*matrix, j); it; ++it) {
+          t.emplace_back(k * n_ + it.row(), k * n_ + it.col(), c * it.value());
+        }
+      }
+    }
+  }
   const Eigen::Index size = static_cast<Eigen::Index>(n_) * f_;
-  Eigen::MatrixXd hs = Eigen::MatrixXd::Zero(size, size);
-  for (int k = 0; k < f_; ++k) {  // (2K̃ − 2ω² M̃)/denominator, block diagonal
-    hs.block(k * n_, k * n_, n_, n_) = (2.0 * weight_(k) * k_ - 2.0 * omega2 * wnu2(k) * m_) / denominator;
+  std::vector<Eigen::Triplet<double>> kept;
+  kept.reserve(t.size());
+  for (const auto& entry : t) {
+    if (entry.row() != p && entry.col() != p) {
+      kept.emplace_back(reduced(entry.row()), reduced(entry.col()), entry.value());
+    }
   }
+  e.hessian.sparse.resize(size - 1, size - 1);
+  e.hessian.sparse.setFromTriplets(kept.begin(), kept.end());
+  auto drop_phase = [p](const Eigen::VectorXd& v) {
+    Eigen::VectorXd out(v.size() - 1);
+    out << v.head(p), v.tail(v.size() - p - 1);
+    return out;
+  };
+  // Equality: κ_e ∇h ∇hᵀ, ∇h = ∇m̂/m_c; simultaneous also − (∇m̂ ∇rᵀ + ∇r ∇m̂ᵀ)/(ω₀² m̂),
+  // ∇r = (∇k̂ − r ∇m̂)/m̂.
   const Eigen::VectorXd dmv = spectral::stacked(dm);
-  if (simultaneous) {  // − (∇m̂ ∇rᵀ + ∇r ∇m̂ᵀ)/(ω₀² m̂), ∇r = (∇k̂ − r ∇m̂)/m̂
+  const double ce = al.equality_curvature() / (m_c_ * m_c_);
+  if (simultaneous) {
     const Eigen::VectorXd dr = spectral::stacked((dk - e.r * dm) / mh);
-    hs.noalias() -= (dmv * dr.transpose() + dr * dmv.transpose()) / (w02 * mh);
+    e.hessian.u.resize(size - 1, 2);
+    e.hessian.u << drop_phase(dmv), drop_phase(dr);
+    const double a = 1.0 / (w02 * mh);
+    e.hessian.core.resize(2, 2);
+    e.hessian.core << ce, -a, -a, 0.0;
+  } else {
+    e.hessian.u = drop_phase(dmv);
+    e.hessian.core = Eigen::MatrixXd::Constant(1, 1, ce);
   }
-  for (const auto& t : contact_curvature(al.inequality_curvature(e.g))) hs(t.row(), t.col()) += t.value();
-  // Equality: κ_e ∇h ∇hᵀ + μ ∇²h, ∇h = ∇m̂/m_c, ∇²h = 2M̃/m_c.
-  hs.noalias() += (al.equality_curvature() / (m_c_ * m_c_)) * dmv * dmv.transpose();
-  for (int k = 0; k < f_; ++k) hs.block(k * n_, k * n_, n_, n_) += (2.0 * mu * wnu2(k) / m_c_) * m_;
-  // Remove the phase coefficient's row and column.
-  const Eigen::Index p = phase_index_, rest = size - p - 1;
-  e.hessian.resize(size - 1, size - 1);
-  e.hessian.topLeftCorner(p, p) = hs.topLeftCorner(p, p);
-  e.hessian.topRightCorner(p, rest) = hs.topRightCorner(p, rest);
-  e.hessian.bottomLeftCorner(rest, p) = hs.bottomLeftCorner(rest, p);
-  e.hessian.bottomRightCorner(rest, rest) = hs.bottomRightCorner(rest, rest);
   return e;
 }
 
@@ -119,6 +149,7 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
                                      .norm = ResidualNorm::Max};
   NewtonReport last_primal;
   std::string why = "Powell iteration limit reached";
+  double tolerance = options_.stationarity_tolerance;  // the one the level is verified against
   for (int j = 0; j < options_.max_powell_iterations; ++j) {
     if (spent()) {
       why = "wall-time budget spent (" + format_number(max_wall_time_s) + " s)";
@@ -135,7 +166,7 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
       [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x) const {
         return nm->evaluate(nm->with_phase(x), energy, omega2, *al, false).gradient;
       }
-      [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& x) const {
+      [[nodiscard]] SparseLowRankHessian jacobian(const Eigen::VectorXd& x) const {
         return nm->evaluate(nm->with_phase(x), energy, omega2, *al, true).hessian;
       }
     };
@@ -153,17 +184,42 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
     level.inequality_measure = al.inequality_measure(e.g);
     level.equality_measure = contact::AugmentedLagrangian::equality_measure(e.h);
     // A level converges only on a verified stationarity residual (‖∇L_κ‖∞ ≤ tolerance).
-    const bool stationary = e.gradient.lpNorm<Eigen::Infinity>() <= options_.stationarity_tolerance;
-    if (al.update(e.g, e.h).measures_met && omega_settled && stationary) {
+    const double stationarity = e.gradient.lpNorm<Eigen::Infinity>();
+    const bool stationary = stationarity <= options_.stationarity_tolerance;
+    const bool measures_met = al.update(e.g, e.h).measures_met;
+    if (measures_met && omega_settled && stationary) {
       level.status = SolveStatus::Converged;
       why = "converged";
+      break;
+    }
+    // With the measures met the update changed no multiplier or penalty (and ω² is settled): only
+    // the primal solve can make progress, and if it made none (‖∇L_κ‖∞ down by less than 0.1 %)
+    // the next iteration would repeat this one. At the rounding floor of ∇L_κ at x (‖∇L_κ(x ⊙ (1 ±
+    // ε))‖ − ∇L_κ(x)‖∞, detail::rounded) the level is converged to 10 times that floor, the
+    // tolerance then reported; otherwise Newton stalls at a nonsmooth point and the level fails.
+    const auto& norms = primal.report.residual_norms;
+    if (measures_met && omega_settled && norms.back() >= (1.0 - 1e-3) * norms.front()) {
+      auto gradient = [&](const Eigen::VectorXd& v) { return evaluate(expand(v), energy, omega2, al, false).gradient; };
+      double floor = 0.0;
+      for (int pattern = 0; pattern < 2; ++pattern) {
+        floor = std::max(floor, (gradient(detail::rounded(x, pattern)) - e.gradient).lpNorm<Eigen::Infinity>());
+      }
+      if (stationarity <= 10.0 * floor) {
+        level.status = SolveStatus::Converged;
+        tolerance = 10.0 * floor;
+        why = "converged at the rounding floor of ∇L_κ (10 × " + format_number(floor) +
+              ", above stationarity_tolerance " + format_number(options_.stationarity_tolerance) + ")";
+      } else {
+        why = "the primal Newton stalled (‖∇L_κ‖∞ = " + format_number(stationarity) + ", 10 times its rounding floor " +
+              format_number(10.0 * floor) + " or more) with Powell's measures met: a nonsmooth point it cannot cross";
+      }
       break;
     }
   }
   // Report on the final iterate.
   const Evaluation e = evaluate(expand(x), energy, omega2, al, false);
   level.residual_norm = e.gradient.lpNorm<Eigen::Infinity>();
-  level.tolerance = options_.stationarity_tolerance;
+  level.tolerance = tolerance;
   if (!level.converged()) {
     level.status = last_primal.converged() ? SolveStatus::MaxIterations : last_primal.status;
     why += "; last primal solve " + last_primal.brief();
@@ -193,7 +249,7 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
      << " Newton iterations: G_i = " << format_number(level.inequality_measure)
      << ", G_e = " << format_number(level.equality_measure) << ", ‖∇L‖∞ = " << format_number(level.residual_norm)
      << " (tolerances " << format_number(options_.powell.tolerance) << ", "
-     << format_number(options_.stationarity_tolerance) << ")";
+     << format_number(tolerance) << ")";
   level.message = os.str();
   level.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return level;

@@ -97,16 +97,36 @@ struct LowRankJacobian {
 [[nodiscard]] LowRankJacobian bordered_low_rank(const LowRankJacobian& j, double alpha, const Eigen::VectorXd& b,
                                                 const Eigen::VectorXd& c, double d);
 
+/// A symmetric Jacobian that is sparse plus a dense update of low rank, the Hessian of a
+/// function whose terms are local but for a few global scalars (the augmented Lagrangian of
+/// nonlinear modes [LL11 Eq. (18)]: the Rayleigh quotient and the energy normalization couple
+/// every unknown through rank-one terms, the rest is block diagonal in the harmonics plus the
+/// contact samples):
+///   H = S + U C Uᵀ,   S: n × n sparse symmetric,   U: n × p dense,   C: p × p symmetric,
+/// with p small. S alone may be singular (a harmonic block K − ν²ω²M at a resonance of the
+/// linear mode) and so may C; BorderedSparseLu never inverts either.
+struct SparseLowRankHessian {
+  Eigen::SparseMatrix<double> sparse;  // S (n × n)
+  Eigen::MatrixXd u;                   // U (n × p)
+  Eigen::MatrixXd core;                // C (p × p)
+  [[nodiscard]] Eigen::Index size() const { return sparse.rows(); }
+  /// H y (length n): O(nnz(S) + n p).
+  [[nodiscard]] Eigen::VectorXd apply(const Eigen::VectorXd& y) const;
+  /// H as an n × n matrix: O(n² p) (the slow reference path and the fallback).
+  [[nodiscard]] Eigen::MatrixXd dense() const;
+};
+
 /// A square nonlinear system: residual(x) (length n) and its Jacobian dR/dx (n × n), either
-/// dense (Eigen::MatrixXd), sparse (Eigen::SparseMatrix<double>) or identity plus low rank
-/// (LowRankJacobian); the Jacobian's type picks the default linear solver (DenseLu, SparseLu
-/// or WoodburyLu).
+/// dense (Eigen::MatrixXd), sparse (Eigen::SparseMatrix<double>), identity plus low rank
+/// (LowRankJacobian) or sparse plus symmetric low rank (SparseLowRankHessian); the Jacobian's
+/// type picks the default linear solver (DenseLu, SparseLu, WoodburyLu or BorderedSparseLu).
 template <class S>
 concept NonlinearSystem = requires(const S& s, const Eigen::VectorXd& x) {
   { s.residual(x) } -> std::convertible_to<Eigen::VectorXd>;
   requires std::convertible_to<decltype(s.jacobian(x)), Eigen::MatrixXd> ||
                std::convertible_to<decltype(s.jacobian(x)), Eigen::SparseMatrix<double>> ||
-               std::same_as<std::decay_t<decltype(s.jacobian(x))>, LowRankJacobian>;
+               std::same_as<std::decay_t<decltype(s.jacobian(x))>, LowRankJacobian> ||
+               std::same_as<std::decay_t<decltype(s.jacobian(x))>, SparseLowRankHessian>;
 };
 
 /// The norm in which the convergence test ‖R(x)‖ ≤ tolerance is made (and residual_norms are
@@ -125,8 +145,9 @@ struct NewtonOptions {
   /// the fallback is taken only at the iterations whose line search fails, and μ is kept between
   /// them. (Kept for the rest of the solve instead, LM's damped steps converge linearly where
   /// Newton converges quadratically: LL11 Alg. 1 on the Fig. 3 rod at N = 12, m = 256 then
-  /// spent over 120 s on the level E = 1.3, against 2 s.) Each step is a dense Householder QR of [J; μI]
-  /// (detail::levenberg_marquardt_step): for small systems (nonlinear modes).
+  /// spent over 120 s on the level E = 1.3, against 2 s.) Each step is the policy's own when it
+  /// has one (LevenbergMarquardtPolicy: BorderedSparseLu's shifted sparse LU), else a dense
+  /// Householder QR of [J; μI] (detail::levenberg_marquardt_step), for small systems only.
   bool levenberg_marquardt = false;
   int max_lm_trials = 20;
   ResidualNorm norm = ResidualNorm::Euclidean;
@@ -277,6 +298,55 @@ class WoodburyLu {
   std::shared_ptr<SparseLu> sparse_lu_;
 };
 
+/// Linear-solver policy for SparseLowRankHessian, H = S + U C Uᵀ: the bordered system
+///   [[S, U C D], [D⁻¹ Uᵀ, −I]] [x; z] = [b; 0]
+/// ((n + p) × (n + p), sparse but for the p dense border rows and columns; D = diag(‖U(:, q)‖∞)),
+/// whose Schur complement on x is H, is factorized by SparseLu (KLU, partial pivoting; the
+/// symbolic analysis kept while the pattern is unchanged) [Govaerts 2000, Numerical Methods for
+/// Bifurcations of Dynamical Equilibria, Sec. 3.6, on bordered systems]. Its determinant is
+/// ± det H, so it is singular exactly where H is, whether or not S or C is; the cost is that of
+/// the sparse LU of S (block diagonal in the harmonics for nonlinear modes) instead of a dense LU
+/// of n. Every solve is refined once on H's residual and verified: a normwise backward error
+/// ‖b − H x‖∞ / (‖H‖∞ ‖x‖∞ + ‖b‖∞) above 1e-11 sends it to a dense LU of H (fallback_solves()).
+/// rcond() is 1/(‖H‖₁ est ‖H⁻¹‖₁) with Hager–Higham's estimate from solves (H is symmetric).
+/// factorize() returns false for a singular (KLU's zero pivot) or non-finite H, or mismatched
+/// sizes. The Levenberg–Marquardt step of newton() uses the symmetry: (H² + μ²I) d = −H r is
+/// d = −Re[(H − iμI)⁻¹ r], one real sparse LU of the bordered 2(n + p) system with the blocks
+/// [[S, μI], [−μI, S]] and the same borders on both copies, instead of a dense QR of [H; μI]
+/// (levenberg_marquardt_step). Implemented in solvers/src/core/bordered_sparse_lu.cpp.
+class BorderedSparseLu {
+ public:
+  BorderedSparseLu();
+  ~BorderedSparseLu();
+  BorderedSparseLu(BorderedSparseLu&&) noexcept;
+  BorderedSparseLu& operator=(BorderedSparseLu&&) noexcept;
+  bool factorize(const SparseLowRankHessian& hessian);
+  /// H⁻¹ rhs; NaN everywhere if the last factorize() failed.
+  [[nodiscard]] Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  [[nodiscard]] std::optional<double> rcond() const;
+  /// ‖H‖∞ (= ‖H‖₁), for the initial Levenberg–Marquardt damping.
+  [[nodiscard]] double jacobian_infinity_norm(const SparseLowRankHessian& hessian) const;
+  /// argmin ‖H d + r‖₂² + μ²‖d‖₂² (μ > 0) through the shifted bordered system above; the same d
+  /// as detail::levenberg_marquardt_step(H.dense(), r, μ) up to rounding. Non-finite entries for
+  /// μ ≤ 0, mismatched sizes, or a shifted system KLU cannot factorize (it is regular for μ > 0).
+  [[nodiscard]] Eigen::VectorXd levenberg_marquardt_step(const SparseLowRankHessian& hessian, const Eigen::VectorXd& r,
+                                                         double mu);
+  /// Solves that missed the backward error and were redone by the dense LU.
+  [[nodiscard]] int fallback_solves() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// A linear-solver policy P that computes newton()'s Levenberg–Marquardt step for its Jacobian
+/// type J itself (BorderedSparseLu); other policies get the dense QR of [J; μI].
+template <class P, class J>
+concept LevenbergMarquardtPolicy = requires(P& p, const P& cp, const J& j, const Eigen::VectorXd& r, double mu) {
+  { cp.jacobian_infinity_norm(j) } -> std::convertible_to<double>;
+  { p.levenberg_marquardt_step(j, r, mu) } -> std::convertible_to<Eigen::VectorXd>;
+};
+
 /// What a linear-solver policy provides for Jacobians (or operators) of type J: factorize(j) →
 /// false if it cannot be factorized, solve(rhs) → J⁻¹ rhs, rcond() → a reciprocal condition
 /// estimate when the policy has one. DenseLu, SparseLu, SupernodalLu and WoodburyLu are policies for their
@@ -292,6 +362,7 @@ static_assert(LinearSolverPolicy<DenseLu, Eigen::MatrixXd>);
 static_assert(LinearSolverPolicy<SparseLu, Eigen::SparseMatrix<double>>);
 static_assert(LinearSolverPolicy<SupernodalLu, Eigen::SparseMatrix<double>>);
 static_assert(LinearSolverPolicy<WoodburyLu, LowRankJacobian>);
+static_assert(LinearSolverPolicy<BorderedSparseLu, SparseLowRankHessian>);
 
 namespace detail {
 template <class S>
@@ -329,11 +400,14 @@ Eigen::VectorXd levenberg_marquardt_step(const Eigen::MatrixXd& jacobian, const 
 }  // namespace detail
 
 /// The linear solver newton() uses by default for a system: SparseLu for a sparse Jacobian,
-/// WoodburyLu for a LowRankJacobian, DenseLu otherwise.
+/// WoodburyLu for a LowRankJacobian, BorderedSparseLu for a SparseLowRankHessian, DenseLu
+/// otherwise.
 template <class S>
-using DefaultLinearSolver =
-    std::conditional_t<detail::sparse_jacobian_v<S>, SparseLu,
-                       std::conditional_t<std::is_same_v<detail::SystemJacobian<S>, LowRankJacobian>, WoodburyLu, DenseLu>>;
+using DefaultLinearSolver = std::conditional_t<
+    detail::sparse_jacobian_v<S>, SparseLu,
+    std::conditional_t<std::is_same_v<detail::SystemJacobian<S>, LowRankJacobian>, WoodburyLu,
+                       std::conditional_t<std::is_same_v<detail::SystemJacobian<S>, SparseLowRankHessian>,
+                                          BorderedSparseLu, DenseLu>>>;
 
 /// Newton–Raphson from x: J(x_k) Δ = −R(x_k), x_{k+1} = x_k + t Δ with t = 1, ½, ¼, … the
 /// first step length that reduces ‖R‖₂ by the factor (1 − 10⁻⁴ t) (Armijo), or t = 1 without
@@ -405,11 +479,24 @@ NewtonResult newton(const S& system, Eigen::VectorXd x, const NewtonOptions& opt
         }
       }
     }
-    if (!accepted && options.levenberg_marquardt) {  // Levenberg–Marquardt on ½‖R‖₂², by QR
-      const Eigen::MatrixXd dense = detail::as_dense(jac);
-      if (mu == 0.0) mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
+    if (!accepted && options.levenberg_marquardt) {  // Levenberg–Marquardt on ½‖R‖₂²: the policy's, or by QR
+      constexpr bool own_step = LevenbergMarquardtPolicy<Solver, std::decay_t<decltype(jac)>>;
+      Eigen::MatrixXd dense;
+      if constexpr (!own_step) dense = detail::as_dense(jac);
+      if (mu == 0.0) {
+        if constexpr (own_step) {
+          mu = 1e-6 * solver.jacobian_infinity_norm(jac);
+        } else {
+          mu = 1e-6 * dense.cwiseAbs().rowwise().sum().maxCoeff();
+        }
+      }
       for (int b = 0; b < options.max_lm_trials; ++b) {
-        const Eigen::VectorXd d = detail::levenberg_marquardt_step(dense, r, mu);
+        Eigen::VectorXd d;
+        if constexpr (own_step) {
+          d = solver.levenberg_marquardt_step(jac, r, mu);
+        } else {
+          d = detail::levenberg_marquardt_step(dense, r, mu);
+        }
         if (d.allFinite()) {
           x_new = x + d;
           r_new = system.residual(x_new);
