@@ -194,9 +194,10 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
     }
     // With the measures met the update changed no multiplier or penalty (and ω² is settled): only
     // the primal solve can make progress, and if it made none (‖∇L_κ‖∞ down by less than 0.1 %)
-    // the next iteration would repeat this one. At the rounding floor of ∇L_κ at x (‖∇L_κ(x ⊙ (1 ±
-    // ε))‖ − ∇L_κ(x)‖∞, detail::rounded) the level is converged to 10 times that floor, the
-    // tolerance then reported; otherwise Newton stalls at a nonsmooth point and the level fails.
+    // the next iteration would repeat this one. Within 10 times the rounding floor of ∇L_κ at x
+    // (the larger over two sign patterns of ‖∇L_κ(x ⊙ (1 ± ε)) − ∇L_κ(x)‖∞, detail::rounded) the
+    // level is converged, with that tolerance reported; above it Newton stalls at a nonsmooth point
+    // and the level fails.
     const auto& norms = primal.report.residual_norms;
     if (measures_met && omega_settled && norms.back() >= (1.0 - 1e-3) * norms.front()) {
       auto gradient = [&](const Eigen::VectorXd& v) { return evaluate(expand(v), energy, omega2, al, false).gradient; };
@@ -210,8 +211,8 @@ ModeLevel NonlinearModes::solve(double energy, const ModeLevel* start, double ma
         why = "converged at the rounding floor of ∇L_κ (10 × " + format_number(floor) +
               ", above stationarity_tolerance " + format_number(options_.stationarity_tolerance) + ")";
       } else {
-        why = "the primal Newton stalled (‖∇L_κ‖∞ = " + format_number(stationarity) + ", 10 times its rounding floor " +
-              format_number(10.0 * floor) + " or more) with Powell's measures met: a nonsmooth point it cannot cross";
+        why = "the primal Newton stalled with Powell's measures met, ‖∇L_κ‖∞ = " + format_number(stationarity) +
+              " above 10 times its rounding floor (" + format_number(floor) + "): a nonsmooth point it cannot cross";
       }
       break;
     }

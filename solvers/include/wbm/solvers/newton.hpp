@@ -349,8 +349,9 @@ concept LevenbergMarquardtPolicy = requires(P& p, const P& cp, const J& j, const
 
 /// What a linear-solver policy provides for Jacobians (or operators) of type J: factorize(j) →
 /// false if it cannot be factorized, solve(rhs) → J⁻¹ rhs, rcond() → a reciprocal condition
-/// estimate when the policy has one. DenseLu, SparseLu, SupernodalLu and WoodburyLu are policies for their
-/// Jacobian types; the weighted-residual operator's factorization is one for G(f)
+/// estimate when the policy has one. DenseLu, SparseLu, SupernodalLu, WoodburyLu and
+/// BorderedSparseLu are policies for their Jacobian types; the weighted-residual operator's
+/// factorization is one for G(f)
 /// (solvers/src/forced_response/kronecker_factorization.hpp).
 template <class P, class J>
 concept LinearSolverPolicy = requires(P& p, const P& cp, const J& j, const Eigen::VectorXd& v) {
@@ -388,6 +389,7 @@ Eigen::MatrixXd as_dense(const J& j) {
   return Eigen::MatrixXd(j);
 }
 inline Eigen::MatrixXd as_dense(const LowRankJacobian& j) { return j.dense(); }
+inline Eigen::MatrixXd as_dense(const SparseLowRankHessian& j) { return j.dense(); }
 
 /// The Levenberg–Marquardt step d = argmin ‖J d + r‖₂² + μ²‖d‖₂², i.e. (JᵀJ + μ²I) d = −Jᵀr,
 /// computed as the least-squares solution of the stacked system [J; μI] d = [−r; 0] by
