@@ -10,7 +10,7 @@
 namespace wbm::contact {
 
 JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
-                         const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods) {
+                         const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods, double period_shift) {
   const double kt = tangential_stiffness;
   if (!(kt > 0.0) || !std::isfinite(kt)) {
     std::ostringstream m;
@@ -23,6 +23,9 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
                                 std::to_string(w.size()) + "; give one slip force per sample (a constant load repeated)");
   }
   if (max_periods < 2) throw std::invalid_argument("jenkins_loop: max_periods = " + std::to_string(max_periods) + " must be >= 2");
+  if (!std::isfinite(period_shift)) {
+    throw std::invalid_argument("jenkins_loop: period_shift is not finite; give the change of w over one period [m] (0: periodic)");
+  }
   for (Eigen::Index q = 0; q < w.size(); ++q) {
     if (!std::isfinite(w(q))) throw std::invalid_argument("jenkins_loop: w[" + std::to_string(q) + "] is not finite");
     if (!(slip_force(q) >= 0.0) || !std::isfinite(slip_force(q))) {
@@ -52,7 +55,7 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   // oscillator with DB6: 1.9102933194927472e-06 and 1.9102933194927468e-06 N). Either period is
   // the steady state to rounding; the last one is returned.
   constexpr double kUlps = 16.0;
-  const double scale = std::max(slip_force.maxCoeff(), kt * w.cwiseAbs().maxCoeff());
+  const double scale = std::max(slip_force.maxCoeff(), kt * (w.cwiseAbs().maxCoeff() + std::abs(period_shift)));
   for (int period = 1; period <= max_periods; ++period) {
     int first_slip = -1;
     out.slipping_samples = 0;
@@ -101,6 +104,10 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
     }
     before = previous_end;
     previous_end = f_prev;
+    // The next period's samples are w + δ: the state carried into it (the anchor and the last
+    // sample, in the coordinates of the samples as given) moves by −δ.
+    w_anchor -= period_shift;
+    w_prev -= period_shift;
   }
   std::ostringstream m;
   m.precision(17);
@@ -146,11 +153,12 @@ std::string JenkinsLaw::describe() const {
   return d.str();
 }
 
-JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u) const {
-  return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()));
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift) const {
+  return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()), 8, period_shift);
 }
 
-JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal) const {
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
+                             double period_shift) const {
   if (normal.size() != u.size()) {
     throw std::invalid_argument("JenkinsLaw::loop: normal has " + std::to_string(normal.size()) + " samples, u " +
                                 std::to_string(u.size()) + "; give the normal load at every sample of u");
@@ -164,19 +172,19 @@ JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, const E
     }
   }
   const Eigen::VectorXd fs = p_.friction_coefficient * (normal.array() + p_.normal_load).matrix();
-  return jenkins_loop(p_.tangential_stiffness, u, fs);
+  return jenkins_loop(p_.tangential_stiffness, u, fs, 8, period_shift);
 }
 
 void JenkinsLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u,
                                         const Eigen::Ref<const Eigen::VectorXd>& normal, Eigen::Ref<Eigen::VectorXd> force,
                                         Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
-                                        Eigen::Ref<Eigen::VectorXd> load_sensitivity) const {
+                                        Eigen::Ref<Eigen::VectorXd> load_sensitivity, double period_shift) const {
   if (force.size() != u.size() || stiffness.size() != u.size() || anchor.size() != u.size() ||
       load_sensitivity.size() != u.size()) {
     throw std::invalid_argument("JenkinsLaw::evaluate_period_loaded: force, stiffness, anchor and load_sensitivity "
                                 "must have the " + std::to_string(u.size()) + " samples of u");
   }
-  const JenkinsLoop l = loop(u, normal);
+  const JenkinsLoop l = loop(u, normal, period_shift);
   force = l.force;
   stiffness = l.stiffness;
   anchor = l.anchor;
@@ -184,12 +192,13 @@ void JenkinsLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>&
 }
 
 void JenkinsLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
-                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const {
+                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                                 double period_shift) const {
   if (force.size() != u.size() || stiffness.size() != u.size() || anchor.size() != u.size()) {
     throw std::invalid_argument("JenkinsLaw::evaluate_period: force, stiffness and anchor must have the " +
                                 std::to_string(u.size()) + " samples of u");
   }
-  const JenkinsLoop l = loop(u);
+  const JenkinsLoop l = loop(u, period_shift);
   force = l.force;
   stiffness = l.stiffness;
   anchor = l.anchor;

@@ -33,7 +33,8 @@ void ContactLaw::evaluate(const Eigen::Ref<const Eigen::VectorXd>& u,
 }
 
 void ContactLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
-                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const {
+                                 Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                                 double /*period_shift: a memoryless law has no state to carry*/) const {
   evaluate(u, force, stiffness);
   anchor.setConstant(-1);
 }
@@ -42,7 +43,7 @@ void ContactLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>&
                                         const Eigen::Ref<const Eigen::VectorXd>& /*normal*/,
                                         Eigen::Ref<Eigen::VectorXd> /*force*/, Eigen::Ref<Eigen::VectorXd> /*stiffness*/,
                                         Eigen::Ref<Eigen::VectorXi> /*anchor*/,
-                                        Eigen::Ref<Eigen::VectorXd> /*load_sensitivity*/) const {
+                                        Eigen::Ref<Eigen::VectorXd> /*load_sensitivity*/, double /*period_shift*/) const {
   throw std::logic_error("ContactLaw::evaluate_period_loaded: the " + describe() + " takes no normal load; only a "
                          "friction law with takes_normal_load() (a Jenkins element) does");
 }

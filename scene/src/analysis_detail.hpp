@@ -52,9 +52,13 @@ std::string contact_label(const Scene& scene, size_t c);
 // the rigid-plastic slider moves with the point), dissipated_energy_per_cycle_J
 // (Σ_k λ_k (w_{k+1} − w_k) ≥ 0, the work of the slips paired with the impulses) and
 // dissipated_power_W (that times f), and the number of instants under `count_key`
-// ("collocation_instants", "output_samples"). All vectors have one entry per instant.
+// ("collocation_instants", "output_samples"). All vectors have one entry per instant. w is
+// relative to a moving counter-surface, which slides by `drift` d per period
+// (solvers::ObstacleMotion): the last slip is w_0 − d − w_{m−1}, and the slip amplitude is that of
+// w_k + d k/m, the drift's ramp removed.
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key);
+                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key,
+                                   double drift = 0.0);
 
 // A_h and φ_h of u = Σ_h A_h cos(2πhτ + φ_h), h = 0 … h_max, for each row of `samples` (k × P,
 // equispaced over one period), by FFT (spectral::Aft). amplitude, phase: k × (h_max + 1).

@@ -70,8 +70,8 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
       f.header.push_back("f_c_" + contact_label(scene, c) + " [N]");
       f.columns.push_back(force);
       if (const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get())) {
-        Eigen::VectorXd w(m);
-        for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k));
+        Eigen::VectorXd w(m);  // relative to a moving counter-surface (ContactPoint::obstacle)
+        for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k)) - contacts[c].obstacle.at(tk(k));
         f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
         f.columns.push_back(w);
         // The slip force μ N, or μ times the normal stop's multiplier at the same instants.
@@ -81,7 +81,7 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
             normal >= 0 ? Eigen::VectorXd(mu * solution.contact_force_samples.row(normal).transpose().cwiseMax(0.0))
                         : Eigen::VectorXd::Constant(m, coulomb->slip_force());
         friction.push_back(coulomb_diagnostics(contact_label(scene, c), force, w, slip, forcing.frequency_hz,
-                                               "collocation_instants"));
+                                               "collocation_instants", contacts[c].obstacle.drift));
       }
     }
     if (!friction.empty()) out.diagnostics["friction"] = friction;

@@ -123,6 +123,11 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   }
   if (!contacts.empty() && !contacts.front().law->rigid()) {  // rigid: their impulses (solve_one)
     Table f{"contact_force.csv", {"tau [-]", "time [s]"}, {tau, time}};
+    // What a law sees: u_c relative to its counter-surface (ContactPoint::obstacle), at τ_p.
+    const Eigen::MatrixXd obstacle = solvers::obstacle_samples(contacts, tau);
+    const auto relative = [&](const solvers::ContactPoint& ct, size_t index, Eigen::Index p) {
+      return ct.displacement(solver_displacement.col(p)) - obstacle(static_cast<Eigen::Index>(index), p);
+    };
     nlohmann::json friction = nlohmann::json::array();
     std::vector<std::pair<size_t, Eigen::VectorXd>> slip_displacements;  // (contact, w) of friction contacts
     for (size_t k = 0; k < contacts.size(); ++k) {
@@ -131,16 +136,18 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
       if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
         // The element's periodic loop over the P output samples (tau uniform over one period).
         Eigen::VectorXd w(tau.size());
-        for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = c.displacement(solver_displacement.col(p));
+        for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = relative(c, k, p);
         Eigen::VectorXd normal = Eigen::VectorXd::Zero(tau.size());  // a varying normal load's n(τ_p)
         if (c.normal >= 0) {
           const auto& n = contacts[static_cast<size_t>(c.normal)];
-          for (Eigen::Index p = 0; p < tau.size(); ++p) normal(p) = n.law->force(n.displacement(solver_displacement.col(p)));
+          for (Eigen::Index p = 0; p < tau.size(); ++p) normal(p) = n.law->force(relative(n, static_cast<size_t>(c.normal), p));
         }
-        const contact::JenkinsLoop loop = c.normal >= 0 ? jenkins->loop(w, normal) : jenkins->loop(w);
+        const double shift = -c.obstacle.drift;  // w over the next period (a counter-surface sliding by)
+        const contact::JenkinsLoop loop = c.normal >= 0 ? jenkins->loop(w, normal, shift) : jenkins->loop(w, shift);
         force = loop.force;
         slip_displacements.emplace_back(k, w);
-        const Eigen::VectorXd slider = w - force / jenkins->parameters().tangential_stiffness;
+        // The slider's position, its drift's ramp removed (w + d τ is periodic).
+        const Eigen::VectorXd slider = w - force / jenkins->parameters().tangential_stiffness + c.obstacle.drift * tau;
         friction.push_back({{"contact", contact_label(scene, k)},
                             {"stick_fraction", 1.0 - static_cast<double>(loop.slipping_samples) / static_cast<double>(tau.size())},
                             {"slip_amplitude_m", 0.5 * (slider.maxCoeff() - slider.minCoeff())},
@@ -148,7 +155,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
                             {"dissipated_power_W", loop.dissipated_energy * frequency_hz},
                             {"output_samples", tau.size()}});
       } else {
-        for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(c.displacement(solver_displacement.col(p)));
+        for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(relative(c, k, p));
       }
       f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
       f.columns.push_back(force);
@@ -182,6 +189,9 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
   if (velocity != nullptr && scene.friction()) {
     out.diagnostics["energy"] = "not written: a friction law's energy depends on the history (diagnostics.friction "
                                 "gives the energy it dissipates per cycle)";
+  } else if (velocity != nullptr && solvers::any_moving_obstacle(contacts)) {
+    out.diagnostics["energy"] = "not written: a moving counter-surface works on the structure, so the energy of "
+                                "[JL14 Eq. (35)] is not an invariant of the motion";
   } else if (velocity != nullptr) {
     out.tables.push_back({"energy.csv",
                           {"tau [-]", "time [s]", "energy [J]"},
@@ -190,17 +200,21 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
 }
 
 nlohmann::json coulomb_diagnostics(const std::string& label, const Eigen::VectorXd& force, const Eigen::VectorXd& w,
-                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key) {
+                                   const Eigen::VectorXd& slip_force, double frequency_hz, const std::string& count_key,
+                                   double drift) {
   const Eigen::Index m = force.size();
   int stuck = 0;
   double energy = 0.0;
   for (Eigen::Index k = 0; k < m; ++k) {
     if (std::abs(force(k)) < slip_force(k) * (1.0 - 1e-9)) ++stuck;
-    energy += force(k) * (w((k + 1) % m) - w(k));
+    // w over the next period is w − d (a counter-surface sliding by d per period).
+    energy += force(k) * (w((k + 1) % m) - w(k) - (k + 1 == m ? drift : 0.0));
   }
+  // The slip amplitude of the periodic part, w + d k/m (the drift's ramp removed).
+  const Eigen::VectorXd periodic = w + drift * Eigen::VectorXd::LinSpaced(m, 0.0, static_cast<double>(m - 1)) / m;
   return {{"contact", label},
           {"stick_fraction", static_cast<double>(stuck) / static_cast<double>(m)},
-          {"slip_amplitude_m", 0.5 * (w.maxCoeff() - w.minCoeff())},
+          {"slip_amplitude_m", 0.5 * (periodic.maxCoeff() - periodic.minCoeff())},
           {"dissipated_energy_per_cycle_J", energy},
           {"dissipated_power_W", energy * frequency_hz},
           {count_key, m}};

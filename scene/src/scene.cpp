@@ -191,8 +191,20 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
     points.push_back({c.dof, law, c.against, c.along, c.normal_index});
+    if (c.counter_surface >= 0) {
+      const bool friction = c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb;
+      points.back().obstacle = counter_surfaces.at(static_cast<size_t>(c.counter_surface)).motion(friction);
+    }
   }
   return points;
+}
+
+solvers::ObstacleMotion CounterSurface::motion(bool friction) const {
+  if (type == "oval_casing") {
+    if (friction) return {.drift = -2.0 * std::numbers::pi * radius / lobes};
+    return {.cosine = {ovalization * std::cos(phase_rad)}, .sine = {-ovalization * std::sin(phase_rad)}};
+  }
+  return {.cosine = cosine, .sine = sine, .drift = drift};
 }
 
 solvers::TimeBasis Scene::trial() const { return solvers::TimeBasis::from_name(basis.trial, basis.dimension); }
@@ -355,9 +367,15 @@ nlohmann::json to_json(const Scene& s) {
         for (const auto& [j, w] : c.along) d[s.structure->dof_name(j)] = w;
         o["direction"] = d;
       }
+      if (c.counter_surface >= 0) o["counter_surface"] = s.counter_surfaces.at(static_cast<size_t>(c.counter_surface)).name;
       list.push_back(o);
     }
     j["contact"] = list;
+    if (!s.counter_surfaces.empty()) {
+      nlohmann::json surfaces = nlohmann::json::array();
+      for (const auto& cs : s.counter_surfaces) surfaces.push_back(echo_keys(counter_surface_keys(), cs, cs.type));
+      j["counter_surface"] = surfaces;
+    }
   }
   if (s.analysis.kind != AnalysisKind::Timestep && s.analysis.kind != AnalysisKind::NonlinearModes) {
     nlohmann::json b = {{"trial", s.basis.trial}};

@@ -77,6 +77,7 @@ void Parser::contacts(const toml::table& root) {
     }
     // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
     read_keys(r_, *t, section, contact_keys(), c, "", law);
+    c.counter_surface = counter_surface_of(*t, section, c);
     if (friction) {  // a constant normal load, or one that follows a normal contact (jenkins)
       // Jenkins: a penalty normal contact; coulomb: a rigid one (a 2D contact: the weighted residual
       // and Moreau–Jean solve the stop and the friction together).

@@ -49,8 +49,8 @@ std::string key_table(const std::vector<KeyRow>& rows) {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> s = {"analysis", "structure", "damping", "forcing", "contact",
-                                             "basis",    "solver",    "timestep", "output"};
+  static const std::vector<std::string> s = {"analysis", "structure", "damping",  "forcing", "contact",
+                                             "counter_surface", "basis", "solver", "timestep", "output"};
   return s;
 }
 
@@ -60,9 +60,11 @@ const std::vector<DeclaredKey<Scene>>& top_keys() {
         text_key<Scene>("title", [](auto& s) -> auto& { return s.title; }, "free text, copied to `result.json`")
             .read_by_section()};
     for (const auto& s : section_names()) {
-      const bool many = s == "contact";
+      const bool many = s == "contact" || s == "counter_surface";
       k.push_back(compound_key<Scene>(s.c_str(), many ? "table or array of tables" : "table", "", "",
-                                      many ? "`[contact]` or `[[contact]]`, below" : "below"));
+                                      s == "contact"           ? "`[contact]` or `[[contact]]`, below"
+                                      : s == "counter_surface" ? "`[[counter_surface]]`, below"
+                                                               : "below"));
     }
     return k;
   }();
@@ -272,6 +274,7 @@ std::string key_table_markdown(const std::string& section) {
   if (section == "forcing") return key_table(key_rows(forcing_keys()));
   if (section == "forcing.loads") return key_table(key_rows(load_keys()));
   if (section == "contact") return key_table(key_rows(contact_keys()));
+  if (section == "counter_surface") return key_table(key_rows(counter_surface_keys()));
   if (section == "basis") return key_table(key_rows(basis_keys()));
   if (section == "solver") return key_table(key_rows(solver_keys()));
   if (section == "timestep") return key_table(key_rows(bdf_keys()));
@@ -284,7 +287,7 @@ std::string key_table_markdown(const std::string& section) {
 
 std::vector<std::string> declared_sections() {
   return {"top",   "analysis", "structure", "damping",  "forcing",        "forcing.loads",
-          "contact", "basis",  "solver",    "timestep", "timestep.rigid", "output"};
+          "contact", "counter_surface", "basis",  "solver",    "timestep", "timestep.rigid", "output"};
 }
 
 }  // namespace wbm::scene

@@ -24,6 +24,7 @@ const std::vector<DeclaredKey<Damping>>& damping_keys();                        
 const std::vector<DeclaredKey<Forcing>>& forcing_keys();                          // [forcing]
 const std::vector<DeclaredKey<solvers::HarmonicLoad>>& load_keys();               // [[forcing.loads]]
 const std::vector<DeclaredKey<Contact>>& contact_keys();                          // [[contact]], by law
+const std::vector<DeclaredKey<CounterSurface>>& counter_surface_keys();           // [[counter_surface]], by type
 const std::vector<DeclaredKey<Basis>>& basis_keys();                              // [basis]
 const std::vector<DeclaredKey<Solver>>& solver_keys();                            // [solver]
 const std::vector<DeclaredKey<solvers::TimeIntegrationOptions>>& bdf_keys();      // [timestep], penalty laws

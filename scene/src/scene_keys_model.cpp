@@ -193,6 +193,8 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                       "with Siconos' fc2d in time stepping): N must be 0, and a static load presses the normal DOF",
                       [](const C& c) { return c.normal_contact >= 0 ? nlohmann::json(c.normal_contact) : nlohmann::json(); })
           .only_in({"jenkins", "coulomb"}),
+      compound_key<C>("counter_surface", "string", "none (a fixed obstacle)", "the `name` of a `[[counter_surface]]`",
+                      "the counter-surface this contact acts against moves: the law sees u_c − s(τ) (below)"),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),
       compound_key<C>("dof", kLocation, "1-DOF matrices: `0`", "see Locations", "matrices only: the contact DOF"),
       compound_key<C>("nodes", "node set name or list of node numbers", "none",
@@ -209,6 +211,49 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                       "or a direction n over several DOFs, g = g0 − n·u (e.g. a unit normal over a node's x, y, z; a "
                       "warning when \\|n\\| ≠ 1). For nnm, the energy is normalized by the stop that touches first in "
                       "the linear mode"),
+  };
+  return keys;
+}
+
+const std::vector<DeclaredKey<CounterSurface>>& counter_surface_keys() {
+  using S = CounterSurface;
+  const auto list = [](const std::vector<double>& v) { return v.empty() ? nlohmann::json() : nlohmann::json(v); };
+  static const std::vector<DeclaredKey<S>> keys = {
+      text_key<S>("name", [](auto& s) -> auto& { return s.name; },
+                  "what a `[[contact]]` gives as `counter_surface`; unique")
+          .is_required()
+          .read_by_section(),
+      choice_key<S>("type", {"fourier", "oval_casing"}, [](const S& s) { return s.type; },
+                    [](S& s, const std::string& v) { s.type = v; },
+                    "`fourier`: s(τ) = d τ + Σ_h (a_h cos 2πhτ + b_h sin 2πhτ) along each contact's direction, τ = f t; "
+                    "`oval_casing`: a casing of radius R + δ cos nθ around a blade tip turning at Ω = 2πf/n (below)")
+          .documented_default("`\"fourier\"`")
+          .read_by_section(),
+      compound_key<S>("cosine", "list of numbers", "none", "finite [m]; entry h − 1 is harmonic h; 2h < M",
+                      "a_h [m]", [list](const S& s) { return list(s.cosine); })
+          .only_in({"fourier"}),
+      compound_key<S>("sine", "list of numbers", "none", "finite [m]; as `cosine`", "b_h [m]",
+                      [list](const S& s) { return list(s.sine); })
+          .only_in({"fourier"}),
+      number_key<S>("drift", [](auto& s) -> auto& { return s.drift; }, finite("m"),
+                    "d [m per period]: the counter-surface sliding by; friction contacts only (a normal gap would "
+                    "grow every period)")
+          .only_in({"fourier"}),
+      number_key<S>("ovalization", [](auto& s) -> auto& { return s.ovalization; }, non_negative("m"),
+                    "δ [m]: the radius's variation; a normal contact's gap is g0 + δ cos(2πτ + φ)")
+          .is_required()
+          .only_in({"oval_casing"}),
+      integer_key<S>("lobes", [](auto& s) -> auto& { return s.lobes; }, 1, 1000,
+                     "n: lobes per turn; the response's period is one lobe passing, f = nΩ/(2π)")
+          .only_in({"oval_casing"}),
+      number_key<S>("radius", [](auto& s) -> auto& { return s.radius; }, positive("m"),
+                    "R [m]: a friction contact (its direction along the rotation) sees the casing slide back by "
+                    "2πR/n per period")
+          .is_required()
+          .only_in({"oval_casing"}),
+      compound_key<S>("phase_deg", "number", "`0`", "finite [deg]", "φ: where the first lobe meets the tip at τ = 0",
+                      [](const S& s) { return nlohmann::json(s.phase_rad * 180.0 / std::numbers::pi); })
+          .only_in({"oval_casing"}),
   };
   return keys;
 }

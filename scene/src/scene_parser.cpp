@@ -18,7 +18,7 @@ Scene Parser::parse(const toml::table& root) {
   if (!analysis(root)) return std::move(s_);
   const bool plot = s_.analysis.kind == AnalysisKind::BasisPlot;
   if (plot) {
-    for (const char* unused : {"structure", "damping", "forcing", "contact", "solver", "timestep"}) {
+    for (const char* unused : {"structure", "damping", "forcing", "contact", "counter_surface", "solver", "timestep"}) {
       if (const toml::node* n = root.get(unused)) {
         r_.warn(n->source(), std::string("[") + unused + "] is not used by analysis \"basis-plot\" (no structure is "
                              "built); ignored");
@@ -27,7 +27,7 @@ Scene Parser::parse(const toml::table& root) {
   } else if (s_.analysis.kind == AnalysisKind::NonlinearModes) {
     // Modes of the conservative system against its stops: no forcing, damping, basis, solver
     // or time stepping.
-    for (const char* unused : {"forcing", "damping", "basis", "solver", "timestep"}) {
+    for (const char* unused : {"forcing", "damping", "basis", "solver", "timestep", "counter_surface"}) {
       if (const toml::node* n = root.get(unused)) {
         r_.warn(n->source(), std::string("[") + unused + "] is not used by analysis \"nnm\" (modes of the "
                              "undamped, unforced structure); ignored");
@@ -56,6 +56,7 @@ Scene Parser::parse(const toml::table& root) {
     structure(root);
     damping(root);
     forcing(root);
+    counter_surfaces(root);
     contacts(root);
     solver(root);
     timestep(root);
@@ -330,6 +331,19 @@ void Parser::load_harmonics(const toml::table& root) {
                  " resolve (2h < " + std::to_string(functions) + "); the load would be aliased to a lower harmonic: " +
                  fix + std::to_string(timestep || s_.basis.harmonics == 0 ? 2 * l.harmonic : l.harmonic) +
                  ", or remove the load");
+  }
+  if (timestep) return;  // a contact there names no counter-surface (refused with the contact)
+  const toml::node* surfaces = root.get("counter_surface");
+  for (size_t i = 0; i < s_.counter_surfaces.size(); ++i) {
+    const int h = s_.counter_surfaces[i].motion(false).highest_harmonic();
+    if (h <= highest) continue;
+    const std::string section = surfaces != nullptr && surfaces->is_array_of_tables()
+                                    ? "counter_surface[" + std::to_string(i) + "]" : std::string("counter_surface");
+    r_.error(surfaces != nullptr ? surfaces->source() : root.source(), section,
+             "moves at harmonic " + std::to_string(h) + ", above the highest harmonic " + std::to_string(highest) +
+                 " that the basis' M = " + std::to_string(functions) + " functions resolve (2h < " +
+                 std::to_string(functions) + "): " + fix + std::to_string(s_.basis.harmonics == 0 ? 2 * h : h) +
+                 ", or drop that harmonic");
   }
 }
 

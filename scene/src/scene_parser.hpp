@@ -152,6 +152,12 @@ class Parser {
 
   void contacts(const toml::table& root);
 
+  // [[counter_surface]] (scene_counter_surface.cpp), read before the contacts that name them; and
+  // a [[contact]]'s counter_surface: the index in Scene::counter_surfaces, −1 for none (errors:
+  // an unknown name, an analysis without moving obstacles, a drift the law cannot take).
+  void counter_surfaces(const toml::table& root);
+  int counter_surface_of(const toml::table& t, const std::string& section, const Contact& c);
+
   // Static condensation of massless DOFs (solvers/condensation.hpp), checked here so that a
   // scene it cannot condense is refused with the reason.
   // K symmetric positive semidefinite (issue #40): a negative ω² of K φ = ω² M φ is refused;

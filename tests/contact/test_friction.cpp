@@ -260,3 +260,44 @@ TEST(CoulombFriction, IsAMultiplierLawAndRefusesBadParameters) {
   expect_throw_with<std::invalid_argument>([] { (void)CoulombFriction({0.1, std::nan("")}); },
                                            {"CoulombParameters.normal_load (N) = nan", "finite and >= 0 [N]"});
 }
+
+// A counter-surface that slides by (period_shift δ: the next period's samples are w + δ). The
+// slow reference is the return map itself, f ← proj_[−F_s, F_s](f + k_t Δw), stepped sample by
+// sample over the unrolled sequence w_q + p δ from the unstretched spring until a period repeats:
+// the loop agrees with its last period to rounding, stick samples included (a slide of 0.3 of the
+// loop's width: the element sticks after each reversal). Under a slide wider than the loop,
+// f = sign(δ) F_s at every sample and the period dissipates F_s |δ| (the slider travels δ).
+TEST(JenkinsLoop, ASlidingCounterSurfaceCarriesTheSliderAcrossPeriods) {
+  const double kt = 2e5, fs = 0.5, a = 1e-5;  // loop width 2 (a − F_s/k_t) = 1.5e-5 m
+  const int q = 64;
+  const Eigen::VectorXd slip = Eigen::VectorXd::Constant(q, fs);
+  // w = a cos θ + δ θ/2π over a period, then the next period's samples w + δ.
+  const auto samples = [&](double delta) {
+    return Eigen::VectorXd(a * angles(q).array().cos() + delta * angles(q).array() / (2.0 * kPi));
+  };
+  for (double delta : {4.5e-6, -4.5e-6}) {
+    const Eigen::VectorXd w = samples(delta);
+    const JenkinsLoop l = jenkins_loop(kt, w, slip, 16, delta);
+    EXPECT_GT(l.slipping_samples, 0);
+    EXPECT_LT(l.slipping_samples, q);  // it sticks at the reversals
+    double f = 0.0, w_prev = 0.0;
+    Eigen::VectorXd reference(q);
+    for (int period = 0; period < 64; ++period) {
+      for (int k = 0; k < q; ++k) {
+        const double wk = w(k) + period * delta;
+        f = std::clamp(f + kt * (wk - w_prev), -fs, fs);
+        w_prev = wk;
+        reference(k) = f;
+      }
+    }
+    EXPECT_LT((l.force - reference).cwiseAbs().maxCoeff(), 1e-12 * fs) << "delta = " << delta;
+  }
+  for (double delta : {-1e-3, 1e-3}) {
+    const JenkinsLoop l = jenkins_loop(kt, samples(delta), slip, 8, delta);
+    EXPECT_EQ(l.slipping_samples, q);
+    EXPECT_LT((l.force.array() - std::copysign(fs, delta)).abs().maxCoeff(), 1e-15) << "delta = " << delta;
+    EXPECT_NEAR(l.dissipated_energy, fs * std::abs(delta), 1e-12 * fs * std::abs(delta)) << "delta = " << delta;
+  }
+  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)jenkins_loop(kt, samples(0.0), slip, 8, std::nan("")); },
+                                                         {"period_shift", "finite"});
+}

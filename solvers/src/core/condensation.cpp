@@ -172,6 +172,7 @@ MasslessCondensation condense_massless(const MechanicalSystem& system, const std
     contact_rows.push_back(row);
     const double flex = out.flexibility(row, row);
     ContactPoint r;
+    r.obstacle = c.obstacle;  // along the same e_c: the series law sees the same relative displacement
     r.law = c.law->rigid() ? std::shared_ptr<const contact::ContactLaw>(std::make_shared<contact::LinearPenalty>(
                                  contact::LinearPenaltyParameters{1.0 / flex, c.law->gap()}))
                            : std::make_shared<contact::SeriesCompliance>(c.law, flex);

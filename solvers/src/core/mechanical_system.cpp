@@ -189,6 +189,25 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
                                   " appears twice: combine the laws into one per DOF");
     }
   }
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const ContactPoint& c = contacts[i];
+    const ObstacleMotion& o = c.obstacle;
+    const std::string where = "ContactPoint.obstacle (contact " + std::to_string(i) + " at DOF " + std::to_string(c.dof) + ")";
+    if (!std::isfinite(o.drift)) throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + ": must be finite [m]");
+    for (const auto* list : {&o.cosine, &o.sine}) {
+      for (size_t h = 0; h < list->size(); ++h) {
+        if (std::isfinite((*list)[h])) continue;
+        throw std::invalid_argument(where + (list == &o.cosine ? ".cosine[" : ".sine[") + std::to_string(h) + "] = " +
+                                    format_number((*list)[h]) + " (harmonic " + std::to_string(h + 1) +
+                                    "): must be finite [m]");
+      }
+    }
+    if (o.drift != 0.0 && !c.law->hysteretic()) {
+      throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + " m per period on a " + c.law->describe() +
+                                  ": a normal gap that grows by the drift every period has no periodic response; a "
+                                  "drift is a friction contact's sliding (set drift = 0 here)");
+    }
+  }
   const auto count = static_cast<int>(contacts.size());
   for (int i = 0; i < count; ++i) {
     const ContactPoint& c = contacts[static_cast<size_t>(i)];
@@ -263,18 +282,95 @@ Eigen::VectorXcd frequency_response(const MechanicalSystem& system, const Harmon
   return lu.solve(rhs);
 }
 
+bool ObstacleMotion::moving() const {
+  if (drift != 0.0) return true;
+  const auto nonzero = [](double v) { return v != 0.0; };
+  return std::any_of(cosine.begin(), cosine.end(), nonzero) || std::any_of(sine.begin(), sine.end(), nonzero);
+}
+
+int ObstacleMotion::highest_harmonic() const {
+  int h = 0;
+  for (size_t i = 0; i < cosine.size(); ++i) {
+    if (cosine[i] != 0.0) h = std::max(h, static_cast<int>(i) + 1);
+  }
+  for (size_t i = 0; i < sine.size(); ++i) {
+    if (sine[i] != 0.0) h = std::max(h, static_cast<int>(i) + 1);
+  }
+  return h;
+}
+
+double ObstacleMotion::at(double tau) const {
+  double s = drift * tau;
+  for (size_t i = 0; i < std::max(cosine.size(), sine.size()); ++i) {
+    const double arg = 2.0 * std::numbers::pi * static_cast<double>(i + 1) * tau;
+    if (i < cosine.size() && cosine[i] != 0.0) s += cosine[i] * std::cos(arg);
+    if (i < sine.size() && sine[i] != 0.0) s += sine[i] * std::sin(arg);
+  }
+  return s;
+}
+
+double ObstacleMotion::rate(double tau) const {
+  double s = drift;
+  for (size_t i = 0; i < std::max(cosine.size(), sine.size()); ++i) {
+    const double w = 2.0 * std::numbers::pi * static_cast<double>(i + 1);
+    if (i < cosine.size() && cosine[i] != 0.0) s -= w * cosine[i] * std::sin(w * tau);
+    if (i < sine.size() && sine[i] != 0.0) s += w * sine[i] * std::cos(w * tau);
+  }
+  return s;
+}
+
+double ObstacleMotion::amplitude_bound() const {
+  double bound = 0.0;
+  for (size_t i = 0; i < std::max(cosine.size(), sine.size()); ++i) {
+    const double a = i < cosine.size() ? cosine[i] : 0.0, b = i < sine.size() ? sine[i] : 0.0;
+    bound += std::hypot(a, b);
+  }
+  return bound;
+}
+
+bool any_moving_obstacle(const std::vector<ContactPoint>& contacts) {
+  return std::any_of(contacts.begin(), contacts.end(), [](const ContactPoint& c) { return c.obstacle.moving(); });
+}
+
+Eigen::MatrixXd obstacle_samples(const std::vector<ContactPoint>& contacts, const Eigen::Ref<const Eigen::VectorXd>& tau,
+                                 int derivative) {
+  if (derivative != 0 && derivative != 1) {
+    throw std::invalid_argument("obstacle_samples: derivative = " + std::to_string(derivative) + " must be 0 or 1");
+  }
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(contacts.size()), tau.size());
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    const ObstacleMotion& o = contacts[c].obstacle;
+    if (!o.moving()) continue;
+    for (Eigen::Index p = 0; p < tau.size(); ++p) {
+      out(static_cast<Eigen::Index>(c), p) = derivative == 0 ? o.at(tau(p)) : o.rate(tau(p));
+    }
+  }
+  return out;
+}
+
+void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what, const std::string& fix) {
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    if (!contacts[c].obstacle.moving()) continue;
+    throw std::invalid_argument(what + ": contact " + std::to_string(c) + " (DOF " + std::to_string(contacts[c].dof) +
+                                ") has a moving counter-surface (ContactPoint::obstacle), which " + what +
+                                " does not model; " + fix);
+  }
+}
+
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity) {
   const ContactPoint& point = contacts[static_cast<size_t>(c)];
+  // u is relative to the counter-surface: over the next period it moves by −d (its drift).
+  const double shift = -point.obstacle.drift;
   if (point.normal < 0) {
-    point.law->evaluate_period(u.row(c).transpose(), force, stiffness, anchor);
+    point.law->evaluate_period(u.row(c).transpose(), force, stiffness, anchor, shift);
     load_sensitivity.setZero();
     return;
   }
   Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
   contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal, normal_stiffness);
-  point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity);
+  point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity, shift);
 }
 
 Eigen::SparseMatrix<double> modal_damping(const MechanicalSystem& system, double ratio) {

@@ -63,6 +63,8 @@ PeriodicFields evaluate_fields(const TimeBasis& trial, const Eigen::MatrixXd& co
 Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts, const Eigen::MatrixXd& displacement) {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(displacement.cols());
   if (contacts.empty()) return f;
+  require_fixed_obstacles(contacts, "contact_force (a function of u alone)",
+                          "evaluate the law on u_c(τ) − s_c(τ) (obstacle_samples)");
   if (contacts.front().law->hysteretic()) {
     throw std::invalid_argument("contact_force: the contact at DOF " + std::to_string(contacts.front().dof) + " is a " +
                                 contacts.front().law->describe() + ", whose force depends on the history over the "
@@ -86,6 +88,8 @@ Eigen::VectorXd system_energy(const MechanicalSystem& system, const std::vector<
                                 std::to_string(velocity.rows()) + " x " + std::to_string(velocity.cols()) +
                                 " must both be n x P with n = " + std::to_string(system.dofs()));
   }
+  require_fixed_obstacles(contacts, "system_energy",
+                          "a moving counter-surface works on the structure: E is not an invariant of its motion");
   for (const auto& c : contacts) {
     if (c.law->hysteretic()) {
       throw std::invalid_argument("system_energy: the contact at DOF " + std::to_string(c.dof) + " is a " +

@@ -248,6 +248,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     throw std::invalid_argument("trace_response: stability = true with friction: the monodromy matrix of a "
                                 "stick–slip orbit is not computed; set ResponseCurveOptions::stability = false");
   }
+  if (rigid && o.stability) {
+    require_fixed_obstacles(base.contacts(), "trace_response with rigid stops and stability = true (the exact orbit "
+                            "with impacts is shot against fixed stops)", "set ResponseCurveOptions::stability = false");
+  }
   if (base.contact_unknowns(base.linear_response()).size() == 0) {
     throw std::invalid_argument("trace_response: the problem has no contact; its response is linear "
                                 "(use frequency_response)");
@@ -342,6 +346,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     if (contacts[c].terms() == std::vector<std::pair<int, double>>{{dof, 1.0}}) observed_contact = c;
   }
   const Eigen::MatrixXd q = base.trial().values(tau, 0);  // P × M
+  // The contact displacements relative to the counter-surfaces (ContactPoint::obstacle), P × n_c,
+  // at the instants `at`: what the laws and the monodromy matrix see.
+  const bool moving = any_moving_obstacle(contacts);
+  auto relative = [&](Eigen::MatrixXd uc, const Eigen::VectorXd& at) {
+    if (moving) uc -= obstacle_samples(contacts, at).transpose();
+    return uc;
+  };
   // The response at one state x of the branch (a point, or a fold's interpolated state).
   // Rigid stops with stability: each point's trial coefficients (n × M), for its exact orbit.
   std::vector<Eigen::MatrixXd> rigid_coefficients;
@@ -376,16 +387,17 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       r.dropped_harmonics_residual = family.at(parameter).dropped_harmonics_residual(x, family.load(parameter));
     }
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(x, nc).transpose();  // P × n_c
+    const Eigen::MatrixXd ur = relative(uc, tau);                                 // what the laws see
     for (int c = 0; c < nc; ++c) {
       if (contacts[c].law->hysteretic()) {  // the periodic loop over the P samples; |f| (friction)
-        Eigen::VectorXd f(uc.rows()), k(uc.rows()), sensitivity(uc.rows());
-        Eigen::VectorXi anchor(uc.rows());
-        evaluate_contact_period(contacts, c, uc.transpose(), f, k, anchor, sensitivity);
+        Eigen::VectorXd f(ur.rows()), k(ur.rows()), sensitivity(ur.rows());
+        Eigen::VectorXi anchor(ur.rows());
+        evaluate_contact_period(contacts, c, ur.transpose(), f, k, anchor, sensitivity);
         r.max_contact_force = std::max(r.max_contact_force, f.cwiseAbs().maxCoeff());
         continue;
       }
-      for (Eigen::Index k = 0; k < uc.rows(); ++k) {
-        r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(uc(k, c)));
+      for (Eigen::Index k = 0; k < ur.rows(); ++k) {
+        r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(ur(k, c)));
       }
     }
     if (observed_contact >= 0 && o.keep_dofs.empty()) {
@@ -454,14 +466,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         return;
       }
       const ResponsePoint& r = curve.points[i];
-      Eigen::MatrixXd uc = q * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+      Eigen::MatrixXd uc = relative(q * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), tau);
       // A contact stiff against its mass needs more steps (floquet.hpp): the orbit is evaluated
       // there from the trial functions, rather than interpolated between the P samples.
       const Eigen::Index resolved = floquet->resolved_steps(uc.transpose(), r.frequency_hz);
       if (resolved > uc.rows()) {
         const double last = 1.0 - 1.0 / static_cast<double>(resolved);
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
-        uc = base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+        uc = relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
       }
       FloquetResult fl = (*floquet)(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
@@ -470,7 +482,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         const int steps = 4 * fl.steps;
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
         const Eigen::MatrixXd ucf =
-            base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose();
+            relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
         fl = (*floquet)(ucf.transpose(), r.frequency_hz);
       }
       results[i] = std::move(fl);

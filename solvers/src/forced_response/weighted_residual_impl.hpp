@@ -205,6 +205,9 @@ struct WeightedResidual::Impl {
     Eigen::VectorXd tau;
     std::shared_ptr<const spectral::Aft> aft;  // when either basis is Fourier
     std::optional<detail::SampledBasis> trial, trial_slope, weighting;
+    // Moving counter-surfaces (ContactPoint::obstacle): s_c(τ_q) (n_c × Q) and, for CellAverage,
+    // its cell increments ṡ_c(τ_q)/Q; both empty when every obstacle is fixed.
+    Eigen::MatrixXd obstacle, obstacle_slope;
   };
   std::shared_ptr<const Sampling> sampling;
   bool cell_average_rule = false;
@@ -299,6 +302,11 @@ struct WeightedResidual::Impl {
     Eigen::VectorXd friction_coefficients;
     bool any_coulomb = false;
     bool any_normal = false;  // some friction contact takes its normal load from a stop
+    // Moving counter-surfaces (ContactPoint::obstacle; empty when every obstacle is fixed): a
+    // stop's s(τ_{k+1}) is in `gaps`; a friction row's slip is relative, Δ_k − (s(τ_{k+1}) − s(τ_k)),
+    // slip_offsets(k·n_c + c) the counter-surface's own (0 on a stop's row); pin_offsets(c) = s_c(τ_1),
+    // where a contact in full stick is pinned (u_c(τ_1) − s_c(τ_1) = 0).
+    Eigen::VectorXd slip_offsets, pin_offsets;
   };
   std::shared_ptr<const Collocation> collocation;
   Eigen::MatrixXd delassus;
@@ -528,9 +536,11 @@ struct WeightedResidual::Impl {
     return x;
   }
 
-  // Contact displacement samples U (n_c × Q) for stacked contact unknowns x.
+  // Contact displacement samples U (n_c × Q) for stacked contact unknowns x, relative to the
+  // counter-surfaces (u_c(τ_q) − s_c(τ_q): what the laws see; ContactPoint::obstacle).
   [[nodiscard]] Eigen::MatrixXd contact_samples(const Eigen::VectorXd& x) const {
-    return sampling->trial->to_time(spectral::as_coefficients(x, nc));
+    if (sampling->obstacle.size() == 0) return sampling->trial->to_time(spectral::as_coefficients(x, nc));
+    return sampling->trial->to_time(spectral::as_coefficients(x, nc)) - sampling->obstacle;
   }
 
   // block(j, k) = (1/Q) Σ_q p_j(τ_q) κ_q q_k(τ_q) over the samples with κ_q ≠ 0 (`active`): the

@@ -197,6 +197,19 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
   if (cell_average_rule) smp->trial_slope.emplace(trial, smp->tau, 1, smp->aft);
   smp->weighting.emplace(weighting, smp->tau, 0, smp->aft);
   smp->weighting->keep = keep;
+  if (any_moving_obstacle(contacts)) {
+    for (int c = 0; c < nc; ++c) {
+      const int h = contacts[c].obstacle.highest_harmonic();
+      if (h <= highest_resolved_harmonic(m)) continue;
+      throw std::invalid_argument("ContactPoint.obstacle (contact " + std::to_string(c) + " at DOF " +
+                                  std::to_string(contacts[c].dof) + ") moves at harmonic " + std::to_string(h) +
+                                  ", which the weighted residual's M = " + std::to_string(m) + " trial functions "
+                                  "cannot carry (2h < M, harmonic " + std::to_string(highest_resolved_harmonic(m)) +
+                                  " at most): raise the basis dimension, or drop that harmonic");
+    }
+    smp->obstacle = obstacle_samples(contacts, smp->tau);
+    if (cell_average_rule) smp->obstacle_slope = obstacle_samples(contacts, smp->tau, 1) / static_cast<double>(q);
+  }
   sampling = smp;
   assemble_time_operators();
   if (keep.size() > 0) require_block_diagonal_operators();
@@ -288,6 +301,25 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
       }
       col->increments = col->trial_values - trial_at_tau;
     }
+    if (any_moving_obstacle(contacts)) {
+      // Impulse k keeps the gap at τ_{k+1} and sets the slip over [τ_k, τ_{k+1}]; τ_M = τ_0 + 1 (a
+      // drift counts over the last cell).
+      Eigen::VectorXd next(m);
+      for (int k = 0; k < m; ++k) next(k) = k + 1 < m ? col->tau(k + 1) : col->tau(0) + 1.0;
+      const Eigen::MatrixXd s_next = obstacle_samples(contacts, next), s_at = obstacle_samples(contacts, col->tau);
+      col->slip_offsets = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(nc) * m);
+      col->pin_offsets = s_next.col(0);
+      for (int k = 0; k < m; ++k) {
+        for (int c = 0; c < nc; ++c) {
+          const Eigen::Index i = static_cast<Eigen::Index>(k) * nc + c;
+          if (col->coulomb[static_cast<size_t>(c)] != 0) {
+            col->slip_offsets(i) = s_next(c, k) - s_at(c, k);
+          } else {
+            col->gaps(i) += s_next(c, k);
+          }
+        }
+      }
+    }
     collocation = col;
   }
 
@@ -300,6 +332,8 @@ WeightedResidual::Impl::Impl(MechanicalSystem s, HarmonicForcing f, std::vector<
     if (rigid) set_delassus(true);
     double gmax = 0.0;
     for (const auto& ct : contacts) gmax = std::max(gmax, std::abs(ct.law->gap()));
+    // A moving counter-surface's excursion is a length of the problem too (0 when fixed).
+    for (const auto& ct : contacts) gmax = std::max(gmax, ct.obstacle.amplitude_bound());
     // The larger of the gap and the linear response: a 1 nm gap beside a millimetre motion
     // must not ask Newton for 1e-19 m.
     scale = std::max(gmax, x_lin.lpNorm<Eigen::Infinity>());

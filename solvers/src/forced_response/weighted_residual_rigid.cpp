@@ -156,6 +156,7 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
   const Eigen::VectorXd d_lambda = delassus * lambda;
   Eigen::VectorXd u, gap;
   if (col.any_coulomb) u = load * u_lin - d_lambda;
+  if (col.any_coulomb && col.slip_offsets.size() > 0) u -= col.slip_offsets;  // relative to the counter-surface
   if (std::find(col.coulomb.begin(), col.coulomb.end(), 0) != col.coulomb.end()) gap = col.gaps - (load * u_lin - d_lambda);
   Eigen::VectorXd phi(lambda.size());
   if (gap_rows != nullptr) gap_rows->clear();
@@ -191,6 +192,7 @@ Eigen::VectorXd WeightedResidual::Impl::signorini(const Eigen::VectorXd& lambda,
     // position free: pinned at u(τ_1) = 0, the Jenkins convention as k_t → ∞.
     const auto ee = static_cast<Eigen::Index>(e);
     phi(stuck_row_of[e]) = friction_weight() * (stuck_rows.row(ee).dot(lambda) - load * stuck_lin(ee));
+    if (col.pin_offsets.size() > 0) phi(stuck_row_of[e]) += friction_weight() * col.pin_offsets(stuck_contact[e]);
     if (pinned != nullptr) pinned->push_back(static_cast<int>(e));
   }
   return phi;
@@ -495,8 +497,9 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
   s.residual_tolerance = p.options.residual_tolerance;
   // The conditions recomputed from the coefficients, not from D λ.
   const Eigen::VectorXd xa = p.gather(a);
-  const Eigen::VectorXd kin = p.kinematic(xa);  // u_c(τ_{k+1}) at a stop, Δ_k for friction
   const auto& col = *p.collocation;
+  Eigen::VectorXd kin = p.kinematic(xa);  // u_c(τ_{k+1}) at a stop, Δ_k for friction
+  if (col.slip_offsets.size() > 0) kin -= col.slip_offsets;  // friction's slip relative to the counter-surface
   Eigen::VectorXd phi(size);
   s.collocation_penetration = -std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < size; ++i) {
@@ -508,7 +511,7 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
       s.collocation_penetration = std::max(s.collocation_penetration, kin(i) - col.gaps(i));
     }
   }
-  for (int c = 0; c < p.nc; ++c) {  // a stuck friction contact: u(τ_1) = 0
+  for (int c = 0; c < p.nc; ++c) {  // a stuck friction contact: u(τ_1) = 0 (relative: = s(τ_1))
     if (col.coulomb[static_cast<size_t>(c)] == 0) continue;
     bool slips = false;
     for (int k = 0; k < p.m; ++k) {
@@ -517,7 +520,7 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
     }
     if (slips) continue;
     const Eigen::VectorXd x_c = xa(Eigen::seq(c, Eigen::last, p.nc));
-    phi(c) = p.friction_weight() * col.trial_values.row(0).dot(x_c);
+    phi(c) = p.friction_weight() * (col.trial_values.row(0).dot(x_c) - (col.pin_offsets.size() > 0 ? col.pin_offsets(c) : 0.0));
   }
   s.complementarity = phi.cwiseAbs().maxCoeff();
   s.max_contact_force = lambda.cwiseAbs().maxCoeff();

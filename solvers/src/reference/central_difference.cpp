@@ -97,8 +97,12 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
   // The contact forces at q, the Jenkins elements stepping from their forces at the previous
   // contact displacements.
   Eigen::VectorXd f_contact = Eigen::VectorXd::Zero(nc), u_contact = Eigen::VectorXd::Zero(nc), u_new(nc);
-  auto update_contacts = [&](const Eigen::VectorXd& q) {
-    for (Eigen::Index i = 0; i < nc; ++i) u_new(i) = contacts[static_cast<size_t>(i)].displacement(q);
+  // Displacements relative to the counter-surfaces (ContactPoint::obstacle) at τ = t/T.
+  auto update_contacts = [&](const Eigen::VectorXd& q, double tau) {
+    for (Eigen::Index i = 0; i < nc; ++i) {
+      const auto& ct = contacts[static_cast<size_t>(i)];
+      u_new(i) = ct.displacement(q) - (ct.obstacle.moving() ? ct.obstacle.at(tau) : 0.0);
+    }
     for (Eigen::Index i = 0; i < nc; ++i) {
       const auto& ct = contacts[static_cast<size_t>(i)];
       if (const auto* jl = jenkins[static_cast<size_t>(i)]) {
@@ -118,7 +122,7 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
   Eigen::MatrixXd disp(n, p_count), vel(n, p_count), force(nc, p_count);
   Eigen::VectorXd previous_tip;
   auto& rep = out.report;
-  update_contacts(q);  // a preloaded penalty law pushes at rest; a Jenkins element starts unstretched
+  update_contacts(q, 0.0);  // a preloaded penalty law pushes at rest; a Jenkins element starts unstretched
   external(0.0);
   Eigen::VectorXd rhs = f_ext - k * q - c * v - e_cols * f_contact;  // the force balance at step k
   for (int period_index = 1; period_index <= options.max_periods; ++period_index) {
@@ -131,7 +135,8 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
       v_half.noalias() = minv * rhs;
       v_half = v + (0.5 * h) * v_half;
       q += h * v_half;
-      update_contacts(q);
+      // τ counts the periods from the start, so that a drifting counter-surface keeps sliding.
+      update_contacts(q, static_cast<double>(period_index - 1) + static_cast<double>(step + 1) / steps);
       external(static_cast<double>(step + 1) * h);
       f_end = f_ext;
       f_end.noalias() -= k * q;

@@ -149,6 +149,8 @@ PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& syste
   system.validate();
   forcing.validate(system.dofs());
   ContactPoint::validate(contacts, system.dofs());  // also the pairing of exact Coulomb contacts with stops
+  require_fixed_obstacles(contacts, "integrate_moreau_jean_to_periodic",
+                          "solve it by the weighted residual (any pair), which takes moving counter-surfaces");
   options.validate();
   forcing.require_resolved(options.samples_per_period,
                            "the P = " + std::to_string(options.samples_per_period) + " output samples per period",

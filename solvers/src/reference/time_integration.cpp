@@ -139,6 +139,8 @@ PeriodicResponse integrate_to_periodic(const MechanicalSystem& system, const Har
   system.validate();
   forcing.validate(system.dofs());
   ContactPoint::validate(contacts, system.dofs());
+  require_fixed_obstacles(contacts, "the BDF reference (time_integration.hpp)",
+                          "use integrate_central_difference_to_periodic, which takes them");
   refuse_rigid_stops(contacts, "integrate_to_periodic");
   options.validate();
   forcing.require_resolved(options.samples_per_period,
@@ -206,6 +208,7 @@ Trajectory integrate_free(const MechanicalSystem& system, const std::vector<Cont
                           const TimeIntegrationOptions& options) {
   system.validate();
   ContactPoint::validate(contacts, system.dofs());
+  require_fixed_obstacles(contacts, "integrate_free (a free motion: nothing else moves)", "fix the obstacles");
   refuse_rigid_stops(contacts, "integrate_free");
   options.validate();
   const int n = system.dofs();

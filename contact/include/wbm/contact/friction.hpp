@@ -22,7 +22,11 @@
 /// the second period repeats the first as soon as the first slips with a constant slip force; a
 /// varying one may need a third. (In floating point a stick sample within rounding of F_s may slip
 /// in one period and not the next, so the ends may alternate a few ulps apart; hence the
-/// tolerance. The last period is returned.) A period without slip is full
+/// tolerance. The last period is returned.) With a period_shift δ the samples of the next period
+/// are w_q + δ (w is not periodic: the displacement relative to a counter-surface that slides by
+/// −δ per period); the state carried into the next period is shifted by −δ, so that the force
+/// over the period is periodic. Under a slide |δ| larger than twice the loop's width the element
+/// slips at every sample after the first period. A period without slip is full
 /// stick: the slider stays where it started, at the origin, and f_q = k_t w_q (the convention of
 /// harmonic-balance codes for a stuck joint, whose mean force is otherwise undetermined).
 ///
@@ -74,9 +78,10 @@ struct JenkinsLoop {
 /// differ, a k_t that is not finite and > 0, a w or F_s that is not finite, or a negative F_s;
 /// std::runtime_error when the force at the period's end has not repeated after max_periods
 /// periods (both last values named; raise max_periods), which the proof above excludes for a
-/// constant slip force.
+/// constant slip force; std::invalid_argument for a period_shift δ [m] that is not finite.
 [[nodiscard]] JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
-                                       const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods = 8);
+                                       const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods = 8,
+                                       double period_shift = 0.0);
 
 /// A Jenkins element under a constant normal load, as a contact law along one tangent.
 struct JenkinsParameters {
@@ -102,23 +107,26 @@ class JenkinsLaw final : public ContactLaw {
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] bool hysteretic() const override { return true; }
   void evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
-                       Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const override;
-  /// The whole loop at the samples u (jenkins_loop), with its slip sensitivities and energy.
-  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u) const;
+                       Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                       double period_shift = 0.0) const override;
+  /// The whole loop at the samples u (jenkins_loop, the next period's samples u + period_shift),
+  /// with its slip sensitivities and energy.
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift = 0.0) const;
   /// A normal load that varies with the normal gap [YCM98; PE03 in docs/references.md]: the slip
   /// force at sample q is F_s,q = μ (N + n_q), n_q ≥ 0 [N] the force of the contact point's
   /// normal law (`normal`, one per sample; N the preload of the parameters, 0 if there is none).
   /// Where the normal law opens (n_q = 0, N = 0) F_s = 0: the tangential force vanishes and the
   /// slider follows, the separation of a 2D frictional contact. Throws std::invalid_argument for
   /// a normal of another size than u, or a normal load that is not finite and >= 0.
-  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u,
-                                 const Eigen::Ref<const Eigen::VectorXd>& normal) const;
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
+                                 double period_shift = 0.0) const;
   [[nodiscard]] bool takes_normal_load() const override { return true; }
   /// evaluate_period with F_s,q = μ (N + normal_q) (loop above); load_sensitivity = μ σ, the
   /// slip_sensitivity of the loop times μ (ContactLaw::evaluate_period_loaded).
   void evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
                               Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
-                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity) const override;
+                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
+                              double period_shift = 0.0) const override;
   /// One step of the return map, for time stepping: the force after the tangential displacement
   /// moves by du [m] from a state of force f [N], under the normal load n ≥ 0 [N] of the normal
   /// law: f* = f + k_t du, projected on |f| ≤ μ (N + n). Throws nothing.

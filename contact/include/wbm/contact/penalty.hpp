@@ -44,8 +44,12 @@ class ContactLaw {
   /// alike: force(q) = f_q, stiffness(q) = ∂f_q/∂u_q, and anchor(q) = r ≥ 0 when f_q also
   /// depends on one earlier sample, ∂f_q/∂u_r = −stiffness(q) (a Jenkins element's last slip),
   /// else −1. The default is evaluate() with every anchor −1. All four have the size of u.
+  /// period_shift [m]: the samples of the next period are u + period_shift (a displacement relative
+  /// to a counter-surface that slides by; 0 for a periodic u). A hysteretic law carries its state
+  /// across it (JenkinsLaw); a memoryless one ignores it.
   virtual void evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> force,
-                               Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor) const;
+                               Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
+                               double period_shift = 0.0) const;
 
   /// True for a friction law whose slip force follows a normal load that varies over the period
   /// (JenkinsLaw): evaluate_period_loaded() is then defined.
@@ -54,12 +58,13 @@ class ContactLaw {
   /// evaluate_period under a normal load N_q ≥ 0 [N] per sample (`normal`, from the normal law of
   /// the same contact point), with also load_sensitivity(q) = ∂f_q/∂N_r [-] at the sample
   /// r = q where stiffness(q) = 0 (slip), r = anchor(q) where stiffness(q) ≠ 0 and anchor(q) ≥ 0
-  /// (stick after a slip), and 0 in full stick. All six have the size of u. The default throws
-  /// std::logic_error (a law without a normal load: check takes_normal_load() first).
+  /// (stick after a slip), and 0 in full stick. All six have the size of u; period_shift as in
+  /// evaluate_period. The default throws std::logic_error (a law without a normal load: check
+  /// takes_normal_load() first).
   virtual void evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u,
                                       const Eigen::Ref<const Eigen::VectorXd>& normal, Eigen::Ref<Eigen::VectorXd> force,
                                       Eigen::Ref<Eigen::VectorXd> stiffness, Eigen::Ref<Eigen::VectorXi> anchor,
-                                      Eigen::Ref<Eigen::VectorXd> load_sensitivity) const;
+                                      Eigen::Ref<Eigen::VectorXd> load_sensitivity, double period_shift = 0.0) const;
 };
 
 /// Exponential penalty [JL14 Eq. (5)]:

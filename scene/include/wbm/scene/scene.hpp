@@ -169,6 +169,32 @@ struct Contact {
   /// (solvers::ContactPoint::along): {(dof, −1)} for a stop on the −x side, or a unit normal
   /// over several DOFs (matrices). Empty: +e_dof.
   std::vector<std::pair<int, double>> along;
+  /// `counter_surface` in the scene: the index in Scene::counter_surfaces of the moving
+  /// counter-surface this contact acts against (solvers::ContactPoint::obstacle); −1: fixed.
+  int counter_surface = -1;
+};
+
+/// [[counter_surface]]: a counter-surface that moves over the period of the response, named by
+/// contacts (Contact::counter_surface; solvers::ObstacleMotion gives the model).
+///  - "fourier": s(τ) = d τ + Σ_h (a_h cos 2πhτ + b_h sin 2πhτ) [m] along each contact's
+///    direction, τ = f t; the drift d [m per period] is a friction contact's sliding only.
+///  - "oval_casing": a casing whose radius varies as R + δ cos(nθ) around a blade tip that turns at
+///    Ω, with the response's frequency f = nΩ/(2π) (one lobe per period). A normal contact (the
+///    radial gap) sees s(τ) = δ cos(2πτ + φ); a friction contact (its direction along the
+///    rotation) the casing sliding back by one lobe, 2πR/n, per period: d = −2πR/n, no other term.
+struct CounterSurface {
+  std::string name;
+  std::string type = "fourier";   // "fourier" | "oval_casing"
+  std::vector<double> cosine;     // fourier: a_h [m], h = 1, 2, …
+  std::vector<double> sine;       // fourier: b_h [m]
+  double drift = 0.0;             // fourier: d [m per period]
+  double ovalization = 0.0;       // oval_casing: δ [m]
+  int lobes = 2;                  // oval_casing: n
+  double radius = 0.0;            // oval_casing: R [m]
+  double phase_rad = 0.0;         // oval_casing: φ [rad]
+  /// The motion along a contact's direction: a normal contact's (friction = false) or a friction
+  /// contact's tangent (friction = true), as above.
+  [[nodiscard]] solvers::ObstacleMotion motion(bool friction) const;
 };
 
 struct Basis {
@@ -252,6 +278,7 @@ struct Scene {
   Damping damping;
   std::optional<Forcing> forcing;      // absent only for basis-plot
   std::vector<Contact> contacts;
+  std::vector<CounterSurface> counter_surfaces;  // [[counter_surface]], in file order
   Basis basis;
   Solver solver;
   solvers::TimeIntegrationOptions timestep{};  // BDF, penalty laws

@@ -81,7 +81,8 @@ struct ImpactFlowResult {
 /// The event-driven flow of one structure, load and set of rigid stops (set-up once: the
 /// eigendecompositions per active set are formed on first use and kept; not thread-safe).
 /// Throws std::invalid_argument for invalid matrices or forcing, an empty or non-rigid contact list
-/// (penalty laws: FloquetAnalysis; friction is not covered), and at a flow whose linear part is
+/// (penalty laws: FloquetAnalysis; friction is not covered), a moving counter-surface
+/// (ContactPoint::obstacle: the stops here are fixed), and at a flow whose linear part is
 /// singular at a load harmonic (an undamped resonance, or a static load on a free structure).
 class ImpactFlow {
  public:

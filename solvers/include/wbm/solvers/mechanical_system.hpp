@@ -82,6 +82,33 @@ struct HarmonicForcing {
 /// functions; M/2 − 1 for M = 2^J, whose top Fourier function cos πMτ has no sine partner).
 [[nodiscard]] constexpr int highest_resolved_harmonic(int functions) noexcept { return (functions - 1) / 2; }
 
+/// The prescribed motion of a contact's counter-surface along the contact direction e_c (a moving
+/// obstacle: a casing that is out of round, a rotating disc, a shaker's table), over one period
+/// of the response, τ = f t:
+///   s(τ) = d τ + Σ_{h=1}^{H} (a_h cos 2πhτ + b_h sin 2πhτ)   [m],
+/// a_h = cosine[h − 1], b_h = sine[h − 1] (either list may be shorter: missing terms are 0), d the
+/// drift per period (a counter-surface sliding by: a friction contact's tangent only; a Jenkins
+/// element carries its slider across the period, ContactLaw::evaluate_period). The law of
+/// the contact is evaluated on the relative displacement u_c − s(τ): for a normal law the gap at τ
+/// is g0 + s(τ) − u_c (s > 0 moves the obstacle away), for a friction law the slip is that of
+/// u_c − s. Since s is given in τ, it does not change with the frequency; it is not scaled by
+/// the forcing (load stepping and amplitude continuation scale the loads only). Units: those of
+/// u_c (m for a unit direction over translations).
+struct ObstacleMotion {
+  std::vector<double> cosine = {};  // a_h [m], h = 1, 2, …
+  std::vector<double> sine = {};    // b_h [m], h = 1, 2, …
+  double drift = 0.0;               // d [m per period]
+  /// False for the fixed obstacle (every term zero).
+  [[nodiscard]] bool moving() const;
+  /// The highest h with a_h or b_h ≠ 0 (0 if none).
+  [[nodiscard]] int highest_harmonic() const;
+  /// s(τ) [m] and ds/dτ [m per period], for any real τ (the drift is not wrapped).
+  [[nodiscard]] double at(double tau) const;
+  [[nodiscard]] double rate(double tau) const;
+  /// max over τ of |s(τ) − d τ| bounded by Σ_h √(a_h² + b_h²) [m] (a length scale for reports).
+  [[nodiscard]] double amplitude_bound() const;
+};
+
 /// A contact law acting along a direction over the DOFs (law shared, immutable). The law is
 /// evaluated on the contact displacement u_c = e_cᵀ u, towards closing the gap g0 − u_c, and its
 /// force f_c ≥ 0 enters the equation of motion as −e_c f_c. The direction e_c is
@@ -107,6 +134,9 @@ struct ContactPoint {
   ///     residual and Moreau–Jean solve the two together.
   /// −1: a constant normal load.
   int normal = -1;
+  /// The counter-surface's prescribed motion along e_c (ObstacleMotion above); the default is a
+  /// fixed obstacle. A drift is for friction laws only (ContactPoint::validate).
+  ObstacleMotion obstacle = {};
   /// The nonzeros of e_c as (DOF, weight), in the order given.
   [[nodiscard]] std::vector<std::pair<int, double>> terms() const {
     if (!along.empty()) return along;
@@ -131,14 +161,30 @@ struct ContactPoint {
   /// that is out of range, names the contact itself, is given to a law that is neither exact
   /// Coulomb friction nor takes_normal_load(), names for a Jenkins element a law that is rigid or
   /// hysteretic, names for exact Coulomb friction a law that is not a rigid stop or a stop that
-  /// another friction contact names, or beside a Coulomb normal_load ≠ 0.
+  /// another friction contact names, or beside a Coulomb normal_load ≠ 0; for an obstacle motion
+  /// with a term that is not finite, or a drift ≠ 0 on a law that is not a friction law (a normal
+  /// gap that grows without bound has no periodic response).
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
+
+/// True if some contact's counter-surface moves (ObstacleMotion::moving).
+[[nodiscard]] bool any_moving_obstacle(const std::vector<ContactPoint>& contacts);
+
+/// The counter-surfaces' displacements s_c(τ_p) at the given instants (n_c × P, row c = contact
+/// c, column p = tau(p)) [m]; with derivative = 1, ds_c/dτ [m per period]. Zero rows for fixed
+/// obstacles.
+[[nodiscard]] Eigen::MatrixXd obstacle_samples(const std::vector<ContactPoint>& contacts,
+                                               const Eigen::Ref<const Eigen::VectorXd>& tau, int derivative = 0);
+
+/// Refuses moving counter-surfaces where `what` (e.g. "the Moreau-Jean reference") does not model
+/// them: throws std::invalid_argument naming the first moving contact, `what` and `fix`.
+void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what, const std::string& fix);
 
 /// The force of contact `c` over the Q uniform samples of one period, u (n_c × Q, row = contact,
 /// the contact displacements u_c(τ_q)): ContactLaw::evaluate_period, or for a friction contact
 /// with a `normal`, ContactLaw::evaluate_period_loaded under the normal contact's force at the
-/// same samples. force, stiffness (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries
+/// same samples; u is relative to the counter-surfaces, so a drifting one's samples move by −d over
+/// the next period (ContactLaw::evaluate_period's period_shift). force, stiffness (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries
 /// (load_sensitivity(q) = ∂f_q/∂n_r as documented there, 0 without a normal). Throws as the laws
 /// do (std::logic_error for a rigid law).
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,

@@ -42,13 +42,15 @@ struct PeriodicFields {
 
 /// Contact force f_c(u_c(τ_p)) of the first contact [N] at each sample (Eq. 5); zero without
 /// contact. displacement is n × P. Throws std::invalid_argument for a rigid stop (its force
-/// is the solution's contact_force_samples, not a function of u).
+/// is the solution's contact_force_samples, not a function of u) and for a moving
+/// counter-surface (ContactPoint::obstacle: the force depends on τ as well).
 [[nodiscard]] Eigen::VectorXd contact_force(const std::vector<ContactPoint>& contacts,
                                             const Eigen::MatrixXd& displacement);
 
 /// System energy at each sample [J] [JL14 Eq. (35)]:
 ///   E(τ_p) = ½ u̇ᵀ M u̇ + ½ uᵀ K u + Σ_c V_c(u_c),   V_c = ∫ f_c du (ContactLaw::potential).
-/// displacement and velocity are n × P. Throws std::invalid_argument on mismatched shapes.
+/// displacement and velocity are n × P. Throws std::invalid_argument on mismatched shapes, and
+/// for a moving counter-surface (ContactPoint::obstacle), which works on the structure.
 [[nodiscard]] Eigen::VectorXd system_energy(const MechanicalSystem& system, const std::vector<ContactPoint>& contacts,
                                             const Eigen::MatrixXd& displacement, const Eigen::MatrixXd& velocity);
 

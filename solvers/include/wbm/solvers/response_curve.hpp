@@ -213,7 +213,10 @@ struct ResponseCurveOptions {
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
 /// without contact (a linear curve needs no continuation: frequency_response()), and for
-/// stability = true with friction (no saltation matrices for stick–slip). With rigid stops the
+/// stability = true with friction (no saltation matrices for stick–slip) or with rigid stops
+/// whose counter-surface moves (ContactPoint::obstacle; the exact orbits are shot against fixed
+/// stops). A penalty law's monodromy matrix takes the displacements relative to a moving
+/// counter-surface. With rigid stops the
 /// stability of each point is that of the exact orbit near it (impact_stability: plastic impacts,
 /// its saltation monodromy; ResponsePoint::shooting_distance says how near), or unavailable with
 /// the reason (ResponsePoint::stability_available, ResponseCurve::unavailable_points); a

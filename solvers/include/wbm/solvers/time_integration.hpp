@@ -75,8 +75,9 @@ struct PeriodicResponse {
 /// ("rms of the relative error between the tip displacements for the i and i − 1 periods",
 /// [JL14 Sec. 4]) and returns period i. Throws std::invalid_argument for invalid inputs (and
 /// for rigid stops, which have no force law: integrate_moreau_jean_to_periodic; and for a load
-/// at a harmonic h with 2h ≥ P, which the output samples would alias); a run that
-/// hits max_periods or a GSL failure is reported in `report`, never thrown.
+/// at a harmonic h with 2h ≥ P, which the output samples would alias; and for a moving
+/// counter-surface, ContactPoint::obstacle: integrate_central_difference_to_periodic takes it);
+/// a run that hits max_periods or a GSL failure is reported in `report`, never thrown.
 [[nodiscard]] PeriodicResponse integrate_to_periodic(const MechanicalSystem& system,
                                                      const HarmonicForcing& forcing,
                                                      const std::vector<ContactPoint>& contacts,
@@ -122,7 +123,8 @@ struct MoreauJeanOptions {
 /// Jenkins elements to integrate_central_difference_to_periodic. Throws std::invalid_argument
 /// for invalid inputs (a load at 2h ≥ P included; a `normal` that is out of range, names a
 /// contact that is not a rigid stop, beside a normal_load ≠ 0, or names a stop another friction
-/// contact already names); a run that hits max_periods is reported.
+/// contact already names; a moving counter-surface, ContactPoint::obstacle, which the weighted
+/// residual takes); a run that hits max_periods is reported.
 [[nodiscard]] PeriodicResponse integrate_moreau_jean_to_periodic(const MechanicalSystem& system,
                                                                  const HarmonicForcing& forcing,
                                                                  const std::vector<ContactPoint>& contacts,
@@ -145,7 +147,10 @@ struct CentralDifferenceOptions {
 ///   (M + (h/2) C) v_{k+1} = M v_{k+½} + (h/2) (F_{k+1} − K q_{k+1} − Σ_c e_c f_c,k+1),
 /// with f_c,k+1 = f_c(u_c,k+1) for a memoryless law and, for a Jenkins element, one step of its
 /// return map from f_c,k (contact::JenkinsLaw::return_map) under the normal contact's force at
-/// q_{k+1}: the slider state is carried from step to step, with no basis and no period loop. The
+/// q_{k+1}: the slider state is carried from step to step, with no basis and no period loop. A
+/// moving counter-surface (ContactPoint::obstacle) enters as the laws' relative displacement
+/// u_c,k − s_c(t_k/T) (a periodic motion; its drift is refused by ContactPoint::validate for
+/// these laws). The
 /// scheme is second order on smooth forces; a stick–slip switch or a contact onset is a kink of
 /// the force, met within one step. Explicit: stable for h ω_max < 2, ω_max² the largest
 /// eigenvalue of (K + Σ_c k_c e_c e_cᵀ, M) with k_c the law's stiffness in contact (k_t for a

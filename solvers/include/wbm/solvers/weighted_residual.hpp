@@ -316,11 +316,20 @@ struct WeightedResidualSolution {
 /// with the line search it failed for DB6 at M = 64 and 256, without it converged there; in
 /// reproduce/friction_rigid_normal 28 of 30 solves converge, Haar:B-spline failing at two M.
 ///
+/// A moving counter-surface (ContactPoint::obstacle, s_c(τ) along e_c): every law sees the
+/// relative displacement u_c − s_c, i.e. f_c(u_c(τ_q) − s_c(τ_q)) at the Q samples (CellAverage:
+/// the slope δ_q less ṡ_c(τ_q)/Q), the gap g0 + s_c(τ_{k+1}) − u_c(τ_{k+1}) of a rigid stop, and the
+/// slip Δ_{c,k} − (s_c(τ_{k+1}) − s_c(τ_k)) of exact friction (a drift d included: τ_M = τ_0 + 1),
+/// whose full stick pins u_c(τ_1) = s_c(τ_1). s is a given function of τ, so the Jacobians and
+/// ∂r/∂f are unchanged, and it is not scaled by the load (∂r/∂s as without it). Its harmonics must
+/// satisfy 2h < M, like the loads'; s_r also covers its excursion (ObstacleMotion::amplitude_bound).
+///
 /// Throws std::invalid_argument for invalid inputs, for a load at a harmonic h with 2h ≥ M
 /// (HarmonicForcing::require_resolved: M functions would alias it), for M differing between trial and weighting,
 /// and for a pair/formulation that needs a derivative a basis lacks; the message names the
 /// basis, the order, the term of the equation and the formulation that works (e.g. Haar trial:
-/// Formulation::Distributional). Immutable after construction.
+/// Formulation::Distributional), and for a counter-surface moving at a harmonic 2h ≥ M.
+/// Immutable after construction.
 class WeightedResidual {
  public:
   WeightedResidual(MechanicalSystem system, HarmonicForcing forcing, std::vector<ContactPoint> contacts,
