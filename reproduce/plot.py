@@ -19,7 +19,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # plot_common, plot_friction beside this file
 from plot_common import LABELS, MARKERS, METHODS, STYLE, _load, plt, read_csv, read_status, save, wbm_plot  # noqa: E402
 from plot_friction import (friction_coulomb_exact, friction_den_hartog, friction_normal_load,  # noqa: E402,F401
-                           friction_rigid_normal)
+                           friction_oval_casing, friction_rigid_normal)
 
 
 def history(folder):

@@ -157,3 +157,37 @@ def friction_rigid_normal(folder):
     _history(axes[1], folder, meta, "moreau_jean [m]", "Moreau-Jean (Siconos fc2d)", "x [m]")
     fig.tight_layout()
     save(fig, folder, "friction_rigid_normal")
+
+
+def friction_oval_casing(folder):
+    """Issue #36: (a) the blade's amplitude against f/f1 (the rotation speed), rubbing an oval
+    casing with and without friction; (b) where the frictional amplitude is largest, the first tip
+    node's radial and friction forces over the period, and its gap."""
+    meta = json.loads((folder / "meta.json").read_text())
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    ax = axes[0]
+    for file, label, style in (("frictionless.csv", "frictionless", "k-"),
+                               ("friction.csv", f"μ = {meta['friction_coefficient']:g}", "C3-")):
+        table = wbm_plot.read_csv(folder / file)
+        ax.plot(table["f_over_f1 [-]"], table["amplitude [gap]"], style, lw=1.2, label=label)
+    ax.set_xlabel(f"f / f1 = {meta['lobes']} Ω / (2π f1) [-]")
+    ax.set_ylabel("circumferential amplitude [gap]")
+    ax.set_title(f"(a) {meta['lobes']} lobes, δ = {meta['ovalization_m'] / meta['gap_m']:g} gaps, "
+                 f"Fourier:Fourier H = {meta['harmonics']}", fontsize=9)
+    ax.legend(fontsize=8)
+    ax = axes[1]
+    peak = wbm_plot.read_csv(folder / "orbit.csv")
+    ax.plot(peak["tau [-]"], peak["normal_force [N]"], "k-", lw=1.0, label="radial force f_n")
+    ax.plot(peak["tau [-]"], peak["friction_force [N]"], "C3--", lw=1.0, label="friction force f_t")
+    ax.set_xlabel("τ = f t [-]")
+    ax.set_ylabel("force [N]")
+    gap = ax.twinx()
+    gap.plot(peak["tau [-]"], [g * 1e6 for g in peak["gap [m]"]], "C0:", lw=0.9, label="gap")
+    gap.set_ylabel("gap [µm]")
+    ratio = meta["largest_amplitude_frequency_hz"][1] / meta["f1_hz"]
+    ax.set_title(f"(b) at the largest frictional amplitude, f/f1 = {ratio:.4f}", fontsize=9)
+    lines = ax.get_legend_handles_labels()
+    more = gap.get_legend_handles_labels()
+    ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8)
+    fig.tight_layout()
+    save(fig, folder, "friction_oval_casing")

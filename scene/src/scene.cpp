@@ -202,7 +202,8 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
 solvers::ObstacleMotion CounterSurface::motion(bool friction) const {
   if (type == "oval_casing") {
     if (friction) return {.drift = -2.0 * std::numbers::pi * radius / lobes};
-    return {.cosine = {ovalization * std::cos(phase_rad)}, .sine = {-ovalization * std::sin(phase_rad)}};
+    const double phase = phase_deg * std::numbers::pi / 180.0;
+    return {.cosine = {ovalization * std::cos(phase)}, .sine = {-ovalization * std::sin(phase)}};
   }
   return {.cosine = cosine, .sine = sine, .drift = drift};
 }

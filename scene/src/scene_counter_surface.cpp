@@ -47,8 +47,6 @@ void Parser::counter_surfaces(const toml::table& root) {
       if (!cs.motion(false).moving() && !cs.motion(true).moving()) {
         r_.warn(t->source(), section + ": every term (cosine, sine, drift) is zero: the counter-surface does not move");
       }
-    } else if (t->contains("phase_deg")) {
-      cs.phase_rad = r_.number(*t, section, "phase_deg", detail::finite("deg")) * std::numbers::pi / 180.0;
     }
     s_.counter_surfaces.push_back(std::move(cs));
   }

@@ -251,8 +251,8 @@ const std::vector<DeclaredKey<CounterSurface>>& counter_surface_keys() {
                     "2πR/n per period")
           .is_required()
           .only_in({"oval_casing"}),
-      compound_key<S>("phase_deg", "number", "`0`", "finite [deg]", "φ: where the first lobe meets the tip at τ = 0",
-                      [](const S& s) { return nlohmann::json(s.phase_rad * 180.0 / std::numbers::pi); })
+      number_key<S>("phase_deg", [](auto& s) -> auto& { return s.phase_deg; }, finite("deg"),
+                    "φ: the lobe's phase at τ = 0, s(τ) = δ cos(2πτ + φ) on a normal contact")
           .only_in({"oval_casing"}),
   };
   return keys;

@@ -152,6 +152,13 @@ TEST(SceneCounterSurface, BadCounterSurfacesAreRefusedByName) {
   };
   EXPECT_NO_THROW((void)parse(head + fourier + linear + "counter_surface = \"s\"\n"));
   EXPECT_NO_THROW((void)parse(head + oval + linear + "counter_surface = \"s\"\n"));
+  {  // the lobe's phase: s = δ cos(2πτ + 90°) = −δ sin 2πτ on the normal contact; echoed as given
+    const Scene phased = parse(head + oval + "phase_deg = 90.0\n" + linear + "counter_surface = \"s\"\n");
+    const auto motion = phased.contact_points().at(0).obstacle;
+    EXPECT_NEAR(motion.cosine.at(0), 0.0, 1e-18);
+    EXPECT_DOUBLE_EQ(motion.sine.at(0), -1e-3);
+    EXPECT_EQ(wbm::scene::to_json(phased)["counter_surface"][0]["phase_deg"], 90.0);
+  }
   refused(head + fourier + linear + "counter_surface = \"t\"\n", {"contact[0].counter_surface", "\"t\"", "\"s\""});
   refused(head + linear + "counter_surface = \"t\"\n", {"contact[0].counter_surface", "there is none"});
   refused(head + sliding + linear + "counter_surface = \"s\"\n", {"contact[0].counter_surface", "drift", "grow every period"});

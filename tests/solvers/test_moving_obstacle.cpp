@@ -352,6 +352,48 @@ TEST(MovingObstacle, HarmonicBalanceConvergesToCentralDifferences) {
   EXPECT_LT(errors.back(), 3e-5);
 }
 
+// The full residual's Jacobian against central differences, with moving counter-surfaces on both
+// contacts of a 2D Jenkins contact: a linear normal spring whose obstacle oscillates (it opens and
+// closes) and a Jenkins element under its varying normal load, its counter-surface sliding by
+// 0.05 m per period (the slider carried across the period) and oscillating along the tangent.
+TEST(MovingObstacle, JacobianWithMovingCounterSurfacesMatchesCentralDifferences) {
+  const ObstacleOscillator o;
+  solvers::MechanicalSystem two;
+  two.mass = (o.m * Eigen::MatrixXd::Identity(2, 2)).sparseView();
+  two.stiffness = (o.k * Eigen::MatrixXd::Identity(2, 2)).sparseView();
+  two.damping = (o.c * Eigen::MatrixXd::Identity(2, 2)).sparseView();
+  const auto normal = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{1e5, 0.0});
+  const auto jenkins = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{1e5, 0.15, 0.0});
+  const std::vector<solvers::ContactPoint> contacts = {
+      {.dof = 0, .law = normal, .obstacle = {.cosine = {1e-3}}},
+      {.dof = 1, .law = jenkins, .normal = 0, .obstacle = {.cosine = {0.0, 2e-4}, .drift = -0.05}}};
+  const int harmonics = 8;
+  const TimeBasis basis = TimeBasis::fourier_harmonics(harmonics);
+  const solvers::WeightedResidual w(two, {0, 0.0, 20.0, {{0, 2.0, 0.0, 0}}}, contacts, basis, basis, {.time_samples = 256});
+  // A state where the normal spring opens over part of the period: u_x = 5e-4 + 1.2e-3 cos 2πτ,
+  // u_y = 3e-4 sin 2πτ (coefficients of the stacked layout: DOF-major within each function).
+  const int m = basis.dimension();
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(2 * m);
+  const Eigen::VectorXd tau = period_grid(m);
+  const Eigen::VectorXd ux = (5e-4 + 1.2e-3 * (2.0 * kPi * tau.array()).cos()).matrix();
+  const Eigen::VectorXd uy = (3e-4 * (2.0 * kPi * tau.array()).sin()).matrix();
+  const Eigen::MatrixXd fit = basis.values(tau, 0).colPivHouseholderQr().solve(
+      (Eigen::MatrixXd(m, 2) << ux, uy).finished());
+  for (int k = 0; k < m; ++k) {
+    a(2 * k) = fit(k, 0);
+    a(2 * k + 1) = fit(k, 1);
+  }
+  const Eigen::MatrixXd j = w.jacobian(a);
+  const double h = 1e-9;
+  for (int col = 0; col < 2 * m; ++col) {
+    Eigen::VectorXd ap = a, am = a;
+    ap(col) += h;
+    am(col) -= h;
+    const Eigen::VectorXd fd = (w.residual(ap) - w.residual(am)) / (2.0 * h);
+    EXPECT_LT((fd - j.col(col)).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << "column " << col;
+  }
+}
+
 // What is not modelled is refused by name, with the way out.
 TEST(MovingObstacle, WhatIsNotModelledIsRefused) {
   const ObstacleOscillator o;

@@ -191,7 +191,7 @@ struct CounterSurface {
   double ovalization = 0.0;       // oval_casing: δ [m]
   int lobes = 2;                  // oval_casing: n
   double radius = 0.0;            // oval_casing: R [m]
-  double phase_rad = 0.0;         // oval_casing: φ [rad]
+  double phase_deg = 0.0;         // oval_casing: φ [deg], as given (the echo reads back exactly)
   /// The motion along a contact's direction: a normal contact's (friction = false) or a friction
   /// contact's tangent (friction = true), as above.
   [[nodiscard]] solvers::ObstacleMotion motion(bool friction) const;

@@ -1,0 +1,317 @@
+// Beyond the papers (issue #36, items 3 and 8): the reduced compressor blade of ll11_blade rubbing
+// an oval casing with friction. The casing's radius is R + δ cos nθ in the engine's frame; the
+// blade turns at Ω about the engine axis (x), so each tip node meets a lobe every 2π/(nΩ): the
+// response's frequency is f = nΩ/(2π) and a continuation in f is one in the rotation speed. Each
+// of the 24 tip nodes has a radial penalty contact (k as ll11_blade_forced) against the casing,
+// whose gap moves by s = δ cos(2πτ + nθ_i) (θ_i the node's angle about the axis), and a Jenkins
+// element (k_t, μ = 0.15) along the rotation, its slip force μ times that radial force, against
+// the casing sliding back by one lobe, 2πR_i/n, per period (solvers::ContactPoint::obstacle). No
+// other load: the casing alone excites the blade. Traced by pseudo-arclength continuation with
+// Fourier:Fourier over 0.9 … 1.1 f1, with and without friction. Where the frictional amplitude is
+// largest, the orbit's
+// samples check Coulomb's sliding law (a sliding far faster than the vibration keeps every sample
+// in slip, f_t = μ f_n against the rotation) and the energy balance over a period (the casing's
+// work on the blade = the viscous dissipation; no other load works). Our own blade and parameters
+// (reproduce/scenes/friction_oval_casing.toml): LL11 has neither friction nor a moving casing.
+// Writes out/friction_oval_casing/{frictionless,friction,orbit}.csv, meta.json, report.md.
+// --quick: mesh size 5 mm, H = 3, coarse steps; run by ctest.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+
+#include <wbm/contact/friction.hpp>
+#include <wbm/contact/penalty.hpp>
+#include <wbm/fem/craig_bampton.hpp>
+#include <wbm/solvers/response_curve.hpp>
+
+#include <wbm/spectral/layout.hpp>
+
+#include "blade.hpp"
+#include "blade_forced.hpp"
+#include "combinations.hpp"
+#include "parameters.hpp"
+#include "run.hpp"
+
+namespace {
+
+using namespace wbm;
+using reproduce::Claim;
+using reproduce::format;
+constexpr double kPi = std::numbers::pi;
+// Coulomb's sliding law at the samples, relative to μ max f_n (the slips' forces are ±μ f_n to
+// rounding); the energy balance's quadrature (trapezoidal products of P samples across the
+// penalty's kinks, second order; measured in the note).
+constexpr double kSlidingTolerance = 1e-12, kBalanceTolerance = 1e-3;
+constexpr int kSamples = 2048;
+// The friction coefficient issue #36 asks for (a Rotor 37 rubbing benchmark's); the scan reports
+// whether the start converges there.
+constexpr double kIssueFrictionCoefficient = 0.15;
+
+struct Curve {
+  std::string label;
+  solvers::ResponseCurve curve;
+  double time_s = 0.0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  auto run = reproduce::Run::from_args(argc, argv, "friction_oval_casing");
+  return run.execute([](reproduce::Run& run) {
+    const auto parameters = reproduce::Parameters::load("friction_oval_casing", run.quick());
+    const double gap = parameters.number("contact.gap_m"), zeta = parameters.number("damping.zeta");
+    const double mu = parameters.number("contact.friction_coefficient");
+    const double delta = parameters.number("casing.ovalization_gaps") * gap;
+    const int lobes = parameters.integer("casing.lobes"), harmonics = parameters.integer("response.harmonics");
+    const double from = parameters.number("response.from_f1"), to = parameters.number("response.to_f1");
+    const models::ScratchFolder scratch("wbm_friction_oval_casing");
+    const auto blade = models::build_blade(scratch.dir, parameters.number("mesh.size_m"),
+                                           parameters.integer("interface.tip_nodes"));
+    const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary,
+                                       parameters.integer("interface.modes"));
+    // The forced model of ll11_blade_forced (scaled coordinates, radial stops, C = β K̂); its load
+    // is not used: the casing is the only excitation.
+    const auto model = reproduce::blade_forced_model(
+        blade, cb,
+        {.gap = gap, .zeta = zeta, .overload = 1.0, .stiffness_ratio = parameters.number("contact.stiffness_ratio"),
+         .from_f1 = from, .mode_harmonics = 3, .mode_samples = 24});
+    const double f1 = model.f1, k_pen = model.penalty_stiffness;
+    const double k_t = parameters.number("contact.tangential_stiffness_ratio") * k_pen;
+    const auto radial_law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{k_pen, gap});
+    const auto jenkins = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu, 0.0});
+    const auto nt = static_cast<int>(model.stops.size());
+    std::vector<solvers::ContactPoint> radial, rubbing;
+    std::vector<double> radius(static_cast<size_t>(nt)), theta(static_cast<size_t>(nt));
+    for (int i = 0; i < nt; ++i) {
+      // The node in the plane normal to the axis: (y, z + R_hub); it turns towards t = (−(z + R), y)/r.
+      const double y = blade.position(i, 1), z = blade.position(i, 2) + models::kHubRadius, r = std::hypot(y, z);
+      radius[static_cast<size_t>(i)] = r;
+      theta[static_cast<size_t>(i)] = std::atan2(z, y);  // grows along t
+      const double phase = lobes * theta[static_cast<size_t>(i)];
+      const auto& st = model.stops[static_cast<size_t>(i)];
+      radial.push_back({.dof = st.dof, .law = radial_law, .along = st.along,
+                        .obstacle = {.cosine = {delta * std::cos(phase)}, .sine = {-delta * std::sin(phase)}}});
+    }
+    rubbing = radial;
+    for (int i = 0; i < nt; ++i) {
+      const double y = blade.position(i, 1), z = blade.position(i, 2) + models::kHubRadius, r = radius[static_cast<size_t>(i)];
+      const int jy = 3 * i + 1, jz = 3 * i + 2;  // the scaled coordinates of the node's y and z
+      rubbing.push_back({.dof = jy, .law = jenkins, .along = {{jy, -z / r * model.scale(jy)}, {jz, y / r * model.scale(jz)}},
+                         .normal = i, .obstacle = {.drift = -2.0 * kPi * r / lobes}});
+    }
+    const solvers::HarmonicForcing casing_only{model.observed, 0.0, from * f1};
+
+    // Where the frictional start exists: the periodic solve at the start frequency for each μ of
+    // the file's scan, from the frictionless solution there (the default path alone: a direct
+    // Newton, then the contact homotopy, when that fails).
+    const auto scan_basis = solvers::TimeBasis::fourier_harmonics(harmonics);
+    const solvers::WeightedResidual dry_start(model.reduced, casing_only, radial, scan_basis, scan_basis,
+                                              {.formulation = reproduce::kFigureFormulation});
+    const auto dry_solution = dry_start.solve();
+    if (!dry_solution.converged()) run.fail("frictionless start: " + dry_solution.brief());
+    const std::vector<double> scan = parameters.numbers("contact.friction_scan");
+    std::vector<solvers::WeightedResidualSolution> scanned;
+    for (const double mu_scan : scan) {
+      auto contacts = rubbing;
+      const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_scan, 0.0});
+      for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
+      const solvers::WeightedResidual wet(model.reduced, casing_only, contacts, scan_basis, scan_basis,
+                                          {.formulation = reproduce::kFigureFormulation});
+      const Eigen::VectorXd x0 = wet.contact_unknowns(spectral::stacked(dry_solution.coefficients));
+      scanned.push_back(wet.solve(&x0));
+      std::printf("mu = %g at %g f1 from the frictionless solution: %s\n", mu_scan, from, scanned.back().brief().c_str());
+    }
+
+    std::vector<Curve> curves;
+    for (const bool friction : {false, true}) {
+      const auto t = std::chrono::steady_clock::now();
+      const auto basis = solvers::TimeBasis::fourier_harmonics(harmonics);
+      const solvers::WeightedResidual base(model.reduced, casing_only, friction ? rubbing : radial, basis, basis,
+                                           {.formulation = reproduce::kFigureFormulation});
+      solvers::ResponseCurveOptions o;
+      o.parameter_min = from * f1;
+      o.parameter_max = to * f1;
+      o.max_parameter_step = parameters.number("response.max_step_f1") * f1;
+      o.observed_dof = model.observed;
+      o.stability = false;  // friction: no monodromy of a stick–slip orbit
+      o.max_state = parameters.number("response.max_state");
+      for (int j = 0; j < static_cast<int>(model.reduced.mass.rows()); ++j) o.keep_dofs.push_back(j);
+      curves.push_back({friction ? "with friction (μ = " + format("%g", mu) + ")" : "frictionless",
+                        solvers::trace_response(base, o), models::seconds_since(t)});
+      const auto& c = curves.back();
+      if (!c.curve.converged()) {
+        run.fail(c.label + ": continuation stopped: " + std::string(solvers::to_string(c.curve.stop)) + ", " + c.curve.message);
+      }
+      std::printf("%s: %zu points, %.1f s, %s\n", c.label.c_str(), c.curve.points.size(), c.time_s, c.curve.message.c_str());
+    }
+
+    // Tables: per point f, f/f1, Ω = 2πf/n, the observed (circumferential) amplitude in gaps.
+    const auto write_curve = [&](const Curve& c, const std::string& file) {
+      const auto np = static_cast<Eigen::Index>(c.curve.points.size());
+      Eigen::VectorXd f(np), ratio(np), omega(np), amplitude(np), force(np);
+      for (Eigen::Index i = 0; i < np; ++i) {
+        const auto& p = c.curve.points[static_cast<size_t>(i)];
+        f(i) = p.frequency_hz;
+        ratio(i) = p.frequency_hz / f1;
+        omega(i) = 2.0 * kPi * p.frequency_hz / lobes;
+        amplitude(i) = p.amplitude * model.unit;
+        force(i) = p.max_contact_force;
+      }
+      run.table(file, {"frequency [Hz]", "f_over_f1 [-]", "rotation_speed [rad/s]", "amplitude [gap]", "max_contact_force [N]"},
+                {f, ratio, omega, amplitude, force});
+    };
+    write_curve(curves[0], "frictionless.csv");
+    write_curve(curves[1], "friction.csv");
+    const auto peak_of = [](const solvers::ResponseCurve& c) {
+      return std::max_element(c.points.begin(), c.points.end(),
+                              [](const auto& a, const auto& b) { return a.amplitude < b.amplitude; });
+    };
+    if (curves[1].curve.points.empty() || curves[0].curve.points.empty()) return;
+    const auto dry = peak_of(curves[0].curve), wet = peak_of(curves[1].curve);
+
+    // The orbit where the frictional curve's amplitude is largest, at P samples: every DOF from its
+    // trial coefficients.
+    const auto basis = solvers::TimeBasis::fourier_harmonics(harmonics);
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(kSamples, 0.0, 1.0 - 1.0 / kSamples);
+    const Eigen::MatrixXd q = basis.values(tau, 0), dq = basis.values(tau, 1);
+    const Eigen::MatrixXd u = wet->kept_coefficients * q.transpose();                          // n × P
+    const Eigen::MatrixXd v = wet->frequency_hz * (wet->kept_coefficients * dq.transpose());  // n × P, d/dt
+    const auto nc = static_cast<Eigen::Index>(rubbing.size());
+    Eigen::MatrixXd displacement(nc, kSamples);  // u_c(τ_p)
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      for (Eigen::Index p = 0; p < kSamples; ++p) displacement(c, p) = rubbing[static_cast<size_t>(c)].displacement(u.col(p));
+    }
+    const Eigen::MatrixXd relative = displacement - solvers::obstacle_samples(rubbing, tau);
+    Eigen::MatrixXd force(nc, kSamples);
+    Eigen::VectorXd fq(kSamples), kq(kSamples), sq(kSamples);
+    Eigen::VectorXi anchor(kSamples);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      solvers::evaluate_contact_period(rubbing, static_cast<int>(c), relative, fq, kq, anchor, sq);
+      force.row(c) = fq.transpose();
+    }
+    // Coulomb's sliding law, and the stick samples (none expected).
+    double sliding = 0.0, normal_max = 0.0;
+    int stuck = 0;
+    for (int i = 0; i < nt; ++i) {
+      for (Eigen::Index p = 0; p < kSamples; ++p) {
+        const double fn = force(i, p), ft = force(nt + i, p);
+        normal_max = std::max(normal_max, fn);
+        sliding = std::max(sliding, std::abs(ft - mu * fn));
+      }
+    }
+    for (Eigen::Index c = nt; c < nc; ++c) {
+      solvers::evaluate_contact_period(rubbing, static_cast<int>(c), relative, fq, kq, anchor, sq);
+      for (Eigen::Index p = 0; p < kSamples; ++p) stuck += kq(p) != 0.0 ? 1 : 0;
+    }
+    // The energy balance over the period: the contacts' work on the blade, −Σ_c ∮ f_c du_c (the
+    // force pushes along −e_c), against the viscous dissipation ∮ u̇ᵀ C u̇ dt. Both by the periodic
+    // trapezoidal rule over the P samples (∮ f du as Σ_p f_p (u_{p+1} − u_{p−1})/2).
+    double work = 0.0, viscous = 0.0, friction_work = 0.0;
+    const Eigen::MatrixXd cv = model.reduced.damping * v;
+    for (Eigen::Index p = 0; p < kSamples; ++p) {
+      viscous += v.col(p).dot(cv.col(p)) / (wet->frequency_hz * kSamples);
+      const Eigen::Index next = (p + 1) % kSamples, prev = (p + kSamples - 1) % kSamples;
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        const double w = -force(c, p) * 0.5 * (displacement(c, next) - displacement(c, prev));
+        work += w;
+        if (c >= nt) friction_work += w;
+      }
+    }
+    const double balance = std::abs(work - viscous) / viscous;
+    // What friction dissipates: its force against the casing's sliding, Σ_i ∮ f_t,i dτ · 2πR_i/n per
+    // period (the slips' work, the blade's own tangential motion aside).
+    double sliding_dissipation = 0.0;
+    for (int i = 0; i < nt; ++i) {
+      sliding_dissipation += force.row(nt + i).mean() * 2.0 * kPi * radius[static_cast<size_t>(i)] / lobes;
+    }
+    {
+      Eigen::VectorXd fn = force.row(model.onset).transpose(), ft = force.row(nt + model.onset).transpose();
+      Eigen::VectorXd gap_tau = (relative.row(model.onset).array() * -1.0 + gap).matrix().transpose();
+      run.table("orbit.csv", {"tau [-]", "normal_force [N]", "friction_force [N]", "gap [m]"}, {tau, fn, ft, gap_tau});
+    }
+
+    const auto issue_mu = std::find(scan.begin(), scan.end(), kIssueFrictionCoefficient);
+    const size_t issue_index = static_cast<size_t>(issue_mu - scan.begin());
+    std::vector<Claim> claims = {
+        {"the issue's μ = " + format("%g", kIssueFrictionCoefficient) + " has a periodic response at the start, " +
+             format("%g", from) + " f1, near the frictionless one",
+         issue_mu != scan.end() ? std::optional<bool>(scanned[issue_index].converged()) : std::nullopt,
+         issue_mu != scan.end() ? scanned[issue_index].brief() : "μ = 0.15 not in contact.friction_scan"},
+        {"both branches reach the range end " + format("%g", to) + " f1 (pseudo-arclength in f, i.e. in Ω = 2πf/" +
+             std::to_string(lobes) + ")",
+         curves[0].curve.converged() && curves[1].curve.converged(),
+         std::to_string(curves[0].curve.points.size()) + " and " + std::to_string(curves[1].curve.points.size()) +
+             " points; " + std::string(solvers::to_string(curves[1].curve.stop))},
+        {"where the frictional curve's amplitude is largest every Jenkins sample slides (the casing slides back by 2πR/n ≈ " +
+             format("%.3g", 2.0 * kPi * radius[static_cast<size_t>(model.onset)] / lobes) +
+             " m per period, far more than the tip moves) with Coulomb's f_t = μ f_n against the rotation, to " +
+             format("%g", kSlidingTolerance) + " of μ max f_n",
+         stuck == 0 && sliding <= kSlidingTolerance * mu * normal_max,
+         std::to_string(stuck) + " stuck samples of " + std::to_string(nt * kSamples) + "; largest |f_t − μ f_n| " +
+             format("%.1e", sliding) + " N against μ max f_n = " + format("%.3g", mu * normal_max) + " N"},
+        {"there the casing's work on the blade over a period equals the viscous dissipation (no "
+         "other load works), to " + format("%g", kBalanceTolerance) + " (P = " + std::to_string(kSamples) + " samples)",
+         std::isfinite(balance) ? std::optional<bool>(balance <= kBalanceTolerance) : std::nullopt,
+         "work " + format("%.4e", work) + " J, dissipation " + format("%.4e", viscous) + " J, difference " +
+             format("%.1e", balance) + "; of the work, the friction forces' " + format("%.4e", friction_work) + " J"}};
+
+    std::ostringstream md;
+    md << "## The LL11 blade rubbing an oval casing, with friction (issue #36)\n\n"
+       << "Files: `out/friction_oval_casing/friction_oval_casing.{png,pdf}`, `frictionless.csv`, `friction.csv`, "
+          "`orbit.csv`, `meta.json`. Beyond both papers: the reduced blade of `ll11_blade` ("
+       << nt << " tip nodes, " << parameters.integer("interface.modes") << " modes, f1 = " << format("%.2f", f1)
+       << " Hz) turns inside a casing of radius R + δ cos " << lobes << "θ, δ = "
+       << format("%g", parameters.number("casing.ovalization_gaps")) << " gaps (gap " << format("%g", gap * 1e3)
+       << " mm), with no other load. One lobe passes per period: f = " << lobes << "Ω/(2π). Each tip node has a "
+          "radial penalty contact (k = " << format("%.3g", k_pen) << " N/m, as `ll11_blade_forced`) whose gap moves "
+          "with the lobes, and a Jenkins element along the rotation (k_t = " << format("%.3g", k_t) << " N/m, μ = "
+       << format("%g", mu) << ") against the casing sliding back by 2πR/" << lobes << " per period, its slip force μ "
+          "times the radial force (solvers::ContactPoint::obstacle; docs/scenes.md, `[[counter_surface]]`). "
+          "Fourier:Fourier, H = " << harmonics << ", pseudo-arclength over " << format("%g", from) << " … "
+       << format("%g", to) << " f1. Amplitude: half the peak-to-peak circumferential displacement of the first "
+          "tip node to touch, in gaps. Both curves' amplitudes still grow at the range's end: with the casing the "
+          "blade's resonance lies above 1.1 f1 (the contacts stiffen it), so the table gives the largest amplitude in "
+          "the range, not a peak.\n\n"
+       << "| | points | largest amplitude at f/f1 | Ω [rad/s] | largest amplitude [gap] | time [s] |\n|---|---|---|---|---|---|\n";
+    for (const auto& [c, peak] : {std::pair{&curves[0], dry}, std::pair{&curves[1], wet}}) {
+      md << "| " << c->label << " | " << c->curve.points.size() << " | " << format("%.4f", peak->frequency_hz / f1) << " | "
+         << format("%.1f", 2.0 * kPi * peak->frequency_hz / lobes) << " | " << format("%.3f", peak->amplitude * model.unit)
+         << " | " << format("%.1f", c->time_s) << " |\n";
+    }
+    md << "\nThe periodic solve at " << format("%g", from) << " f1 from the frictionless solution, for each μ of the "
+          "scan (`contact.friction_scan`):\n\n| μ | status | Newton iterations | backward error |\n|---|---|---|---|\n";
+    for (size_t i = 0; i < scan.size(); ++i) {
+      md << "| " << format("%g", scan[i]) << " | " << solvers::to_string(scanned[i].report.status) << " | "
+         << scanned[i].report.iterations << " | " << format("%.1e", scanned[i].backward_error) << " |\n";
+    }
+    md << "\nThe curves use μ = " << format("%g", mu) << ", the largest of the scan whose start converges from the "
+          "frictionless solution in this run's file; where the issue's μ = " << format("%g", kIssueFrictionCoefficient)
+       << " fails, Newton stagnates with a residual that does not fall (the table): a fold of the branch in μ, or no "
+          "periodic response near the frictionless one, is not told apart here (no continuation in μ).\n";
+    md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1) << "), friction dissipates " << format("%.3g", sliding_dissipation)
+       << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes << "), drawn from the "
+          "rotation, not from the blade's vibration: its forces do " << format("%.3g", friction_work)
+       << " J on the blade, against a viscous dissipation of " << format("%.3g", viscous) << " J.\n\n"
+       << reproduce::claims_markdown(claims);
+    run.report(md.str());
+    run.meta({{"f1_hz", f1},
+              {"gap_m", gap},
+              {"ovalization_m", delta},
+              {"lobes", lobes},
+              {"penalty_stiffness_N_per_m", k_pen},
+              {"tangential_stiffness_N_per_m", k_t},
+              {"friction_coefficient", mu},
+              {"harmonics", harmonics},
+              {"friction_scan", scan},
+              {"tip_radius_m", radius},
+              {"tip_angle_rad", theta},
+              {"largest_amplitude_frequency_hz", {dry->frequency_hz, wet->frequency_hz}},
+              {"energy_balance", {{"work_J", work}, {"viscous_J", viscous}, {"friction_on_blade_J", friction_work},
+                                  {"sliding_dissipation_J", sliding_dissipation}}},
+              {"curve_time_s", {curves[0].time_s, curves[1].time_s}}});
+  });
+}
