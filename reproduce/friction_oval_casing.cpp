@@ -288,10 +288,16 @@ int main(int argc, char** argv) {
       md << "| " << format("%g", scan[i]) << " | " << solvers::to_string(scanned[i].report.status) << " | "
          << scanned[i].report.iterations << " | " << format("%.1e", scanned[i].backward_error) << " |\n";
     }
-    md << "\nThe curves use μ = " << format("%g", mu) << ", the largest of the scan whose start converges from the "
-          "frictionless solution in this run's file; where the issue's μ = " << format("%g", kIssueFrictionCoefficient)
-       << " fails, Newton stagnates with a residual that does not fall (the table): a fold of the branch in μ, or no "
-          "periodic response near the frictionless one, is not told apart here (no continuation in μ).\n";
+    double largest_converged = NAN;
+    for (size_t i = 0; i < scan.size(); ++i) {
+      if (scanned[i].converged()) largest_converged = std::isnan(largest_converged) ? scan[i] : std::max(largest_converged, scan[i]);
+    }
+    md << "\nThe curves use the file's μ = " << format("%g", mu) << " (`contact.friction_coefficient`); the largest μ "
+          "of the scan whose start converged is " << (std::isnan(largest_converged) ? std::string("none")
+                                                                                  : format("%g", largest_converged))
+       << ". Where a start fails, Newton stagnates with a residual that does not fall (the table): a fold of the "
+          "branch in μ, or no periodic response near the frictionless one, is not told apart here (no continuation "
+          "in μ).\n";
     md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1) << "), friction dissipates " << format("%.3g", sliding_dissipation)
        << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes << "), drawn from the "
           "rotation, not from the blade's vibration: its forces do " << format("%.3g", friction_work)
