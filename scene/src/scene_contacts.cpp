@@ -16,16 +16,9 @@ void Parser::contacts(const toml::table& root) {
     }
     return;
   }
-  std::vector<std::pair<const toml::table*, std::string>> tables;
-  if (n->is_table()) {
-    tables.emplace_back(n->as_table(), "contact");
-  } else if (n->is_array_of_tables()) {
-    const toml::array& a = *n->as_array();
-    for (size_t i = 0; i < a.size(); ++i) tables.emplace_back(a[i].as_table(), "contact[" + std::to_string(i) + "]");
-  } else {
-    r_.error(n->source(), "contact", "expected a table [contact] or tables [[contact]]");
-    return;
-  }
+  const auto given = table_list(*n, "contact");
+  if (!given) return;
+  const auto& tables = *given;
   std::set<std::pair<int, int>> dofs;  // (dof, against)
   const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
   std::vector<int> table_contact(tables.size(), -1);  // the contact a table located by node or dof became

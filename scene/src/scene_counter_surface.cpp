@@ -6,20 +6,27 @@
 
 namespace wbm::scene::detail {
 
+std::optional<std::vector<std::pair<const toml::table*, std::string>>> Parser::table_list(const toml::node& n,
+                                                                                         const std::string& key) {
+  std::vector<std::pair<const toml::table*, std::string>> tables;
+  if (n.is_table()) {
+    tables.emplace_back(n.as_table(), key);
+  } else if (n.is_array_of_tables()) {
+    const toml::array& a = *n.as_array();
+    for (size_t i = 0; i < a.size(); ++i) tables.emplace_back(a[i].as_table(), key + "[" + std::to_string(i) + "]");
+  } else {
+    r_.error(n.source(), key, "expected a table [" + key + "] or tables [[" + key + "]]");
+    return std::nullopt;
+  }
+  return tables;
+}
+
 void Parser::counter_surfaces(const toml::table& root) {
   const toml::node* n = root.get("counter_surface");
   if (n == nullptr) return;
-  std::vector<std::pair<const toml::table*, std::string>> tables;
-  if (n->is_table()) {
-    tables.emplace_back(n->as_table(), "counter_surface");
-  } else if (n->is_array_of_tables()) {
-    const toml::array& a = *n->as_array();
-    for (size_t i = 0; i < a.size(); ++i) tables.emplace_back(a[i].as_table(), "counter_surface[" + std::to_string(i) + "]");
-  } else {
-    r_.error(n->source(), "counter_surface", "expected a table [counter_surface] or tables [[counter_surface]]");
-    return;
-  }
-  for (const auto& [t, section] : tables) {
+  const auto tables = table_list(*n, "counter_surface");
+  if (!tables) return;
+  for (const auto& [t, section] : *tables) {
     CounterSurface cs;
     cs.type = r_.choice(*t, section, "type", {"fourier", "oval_casing"}, "fourier");
     read_keys(r_, *t, section, counter_surface_keys(), cs, "", cs.type);

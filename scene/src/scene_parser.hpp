@@ -156,6 +156,10 @@ class Parser {
   // a [[contact]]'s counter_surface: the index in Scene::counter_surfaces, −1 for none (errors:
   // an unknown name, an analysis without moving obstacles, a drift the law cannot take).
   void counter_surfaces(const toml::table& root);
+  // The tables of `key`, one [key] or an array [[key]], each with the section name its messages
+  // give ("key" or "key[i]"); std::nullopt after reporting any other value.
+  std::optional<std::vector<std::pair<const toml::table*, std::string>>> table_list(const toml::node& n,
+                                                                                    const std::string& key);
   int counter_surface_of(const toml::table& t, const std::string& section, const Contact& c);
 
   // Static condensation of massless DOFs (solvers/condensation.hpp), checked here so that a
