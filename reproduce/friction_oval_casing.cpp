@@ -18,16 +18,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
 #include <cstdio>
+#include <memory>
 #include <numbers>
 #include <sstream>
-
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/fem/craig_bampton.hpp>
 #include <wbm/solvers/response_curve.hpp>
-
 #include <wbm/spectral/layout.hpp>
 
 #include "blade.hpp"
@@ -69,16 +67,20 @@ int main(int argc, char** argv) {
     const int lobes = parameters.integer("casing.lobes"), harmonics = parameters.integer("response.harmonics");
     const double from = parameters.number("response.from_f1"), to = parameters.number("response.to_f1");
     const models::ScratchFolder scratch("wbm_friction_oval_casing");
-    const auto blade = models::build_blade(scratch.dir, parameters.number("mesh.size_m"),
-                                           parameters.integer("interface.tip_nodes"));
+    const auto blade =
+        models::build_blade(scratch.dir, parameters.number("mesh.size_m"), parameters.integer("interface.tip_nodes"));
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary,
                                        parameters.integer("interface.modes"));
     // The forced model of ll11_blade_forced (scaled coordinates, radial stops, C = β K̂); its load
     // is not used: the casing is the only excitation.
-    const auto model = reproduce::blade_forced_model(
-        blade, cb,
-        {.gap = gap, .zeta = zeta, .overload = 1.0, .stiffness_ratio = parameters.number("contact.stiffness_ratio"),
-         .from_f1 = from, .mode_harmonics = 3, .mode_samples = 24});
+    const auto model = reproduce::blade_forced_model(blade, cb,
+                                                     {.gap = gap,
+                                                      .zeta = zeta,
+                                                      .overload = 1.0,
+                                                      .stiffness_ratio = parameters.number("contact.stiffness_ratio"),
+                                                      .from_f1 = from,
+                                                      .mode_harmonics = 3,
+                                                      .mode_samples = 24});
     const double f1 = model.f1, k_pen = model.penalty_stiffness;
     const double k_t = parameters.number("contact.tangential_stiffness_ratio") * k_pen;
     const auto radial_law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{k_pen, gap});
@@ -93,15 +95,21 @@ int main(int argc, char** argv) {
       theta[static_cast<size_t>(i)] = std::atan2(z, y);  // grows along t
       const double phase = lobes * theta[static_cast<size_t>(i)];
       const auto& st = model.stops[static_cast<size_t>(i)];
-      radial.push_back({.dof = st.dof, .law = radial_law, .along = st.along,
+      radial.push_back({.dof = st.dof,
+                        .law = radial_law,
+                        .along = st.along,
                         .obstacle = {.cosine = {delta * std::cos(phase)}, .sine = {-delta * std::sin(phase)}}});
     }
     rubbing = radial;
     for (int i = 0; i < nt; ++i) {
-      const double y = blade.position(i, 1), z = blade.position(i, 2) + models::kHubRadius, r = radius[static_cast<size_t>(i)];
+      const double y = blade.position(i, 1), z = blade.position(i, 2) + models::kHubRadius,
+                   r = radius[static_cast<size_t>(i)];
       const int jy = 3 * i + 1, jz = 3 * i + 2;  // the scaled coordinates of the node's y and z
-      rubbing.push_back({.dof = jy, .law = jenkins, .along = {{jy, -z / r * model.scale(jy)}, {jz, y / r * model.scale(jz)}},
-                         .normal = i, .obstacle = {.drift = -2.0 * kPi * r / lobes}});
+      rubbing.push_back({.dof = jy,
+                         .law = jenkins,
+                         .along = {{jy, -z / r * model.scale(jy)}, {jz, y / r * model.scale(jz)}},
+                         .normal = i,
+                         .obstacle = {.drift = -2.0 * kPi * r / lobes}});
     }
     const solvers::HarmonicForcing casing_only{model.observed, 0.0, from * f1};
 
@@ -123,7 +131,8 @@ int main(int argc, char** argv) {
                                           {.formulation = reproduce::kFigureFormulation});
       const Eigen::VectorXd x0 = wet.contact_unknowns(spectral::stacked(dry_solution.coefficients));
       scanned.push_back(wet.solve(&x0));
-      std::printf("mu = %g at %g f1 from the frictionless solution: %s\n", mu_scan, from, scanned.back().brief().c_str());
+      std::printf("mu = %g at %g f1 from the frictionless solution: %s\n", mu_scan, from,
+                  scanned.back().brief().c_str());
     }
 
     std::vector<Curve> curves;
@@ -144,9 +153,11 @@ int main(int argc, char** argv) {
                         solvers::trace_response(base, o), models::seconds_since(t)});
       const auto& c = curves.back();
       if (!c.curve.converged()) {
-        run.fail(c.label + ": continuation stopped: " + std::string(solvers::to_string(c.curve.stop)) + ", " + c.curve.message);
+        run.fail(c.label + ": continuation stopped: " + std::string(solvers::to_string(c.curve.stop)) + ", " +
+                 c.curve.message);
       }
-      std::printf("%s: %zu points, %.1f s, %s\n", c.label.c_str(), c.curve.points.size(), c.time_s, c.curve.message.c_str());
+      std::printf("%s: %zu points, %.1f s, %s\n", c.label.c_str(), c.curve.points.size(), c.time_s,
+                  c.curve.message.c_str());
     }
 
     // Tables: per point f, f/f1, Ω = 2πf/n, the observed (circumferential) amplitude in gaps.
@@ -161,8 +172,10 @@ int main(int argc, char** argv) {
         amplitude(i) = p.amplitude * model.unit;
         force(i) = p.max_contact_force;
       }
-      run.table(file, {"frequency [Hz]", "f_over_f1 [-]", "rotation_speed [rad/s]", "amplitude [gap]", "max_contact_force [N]"},
-                {f, ratio, omega, amplitude, force});
+      run.table(
+          file,
+          {"frequency [Hz]", "f_over_f1 [-]", "rotation_speed [rad/s]", "amplitude [gap]", "max_contact_force [N]"},
+          {f, ratio, omega, amplitude, force});
     };
     write_curve(curves[0], "frictionless.csv");
     write_curve(curves[1], "friction.csv");
@@ -178,12 +191,14 @@ int main(int argc, char** argv) {
     const auto basis = solvers::TimeBasis::fourier_harmonics(harmonics);
     const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(kSamples, 0.0, 1.0 - 1.0 / kSamples);
     const Eigen::MatrixXd q = basis.values(tau, 0), dq = basis.values(tau, 1);
-    const Eigen::MatrixXd u = wet->kept_coefficients * q.transpose();                          // n × P
+    const Eigen::MatrixXd u = wet->kept_coefficients * q.transpose();                         // n × P
     const Eigen::MatrixXd v = wet->frequency_hz * (wet->kept_coefficients * dq.transpose());  // n × P, d/dt
     const auto nc = static_cast<Eigen::Index>(rubbing.size());
     Eigen::MatrixXd displacement(nc, kSamples);  // u_c(τ_p)
     for (Eigen::Index c = 0; c < nc; ++c) {
-      for (Eigen::Index p = 0; p < kSamples; ++p) displacement(c, p) = rubbing[static_cast<size_t>(c)].displacement(u.col(p));
+      for (Eigen::Index p = 0; p < kSamples; ++p) {
+        displacement(c, p) = rubbing[static_cast<size_t>(c)].displacement(u.col(p));
+      }
     }
     const Eigen::MatrixXd relative = displacement - solvers::obstacle_samples(rubbing, tau);
     Eigen::MatrixXd force(nc, kSamples);
@@ -246,7 +261,8 @@ int main(int argc, char** argv) {
          curves[0].curve.converged() && curves[1].curve.converged(),
          std::to_string(curves[0].curve.points.size()) + " and " + std::to_string(curves[1].curve.points.size()) +
              " points; " + std::string(solvers::to_string(curves[1].curve.stop))},
-        {"where the frictional curve's amplitude is largest every Jenkins sample slides (the casing slides back by 2πR/n ≈ " +
+        {"where the frictional curve's amplitude is largest every Jenkins sample slides (the casing slides back by "
+         "2πR/n ≈ " +
              format("%.3g", 2.0 * kPi * radius[static_cast<size_t>(model.onset)] / lobes) +
              " m per period, far more than the tip moves) with Coulomb's f_t = μ f_n against the rotation, to " +
              format("%g", kSlidingTolerance) + " of μ max f_n",
@@ -254,7 +270,8 @@ int main(int argc, char** argv) {
          std::to_string(stuck) + " stuck samples of " + std::to_string(nt * kSamples) + "; largest |f_t − μ f_n| " +
              format("%.1e", sliding) + " N against μ max f_n = " + format("%.3g", mu * normal_max) + " N"},
         {"there the casing's work on the blade over a period equals the viscous dissipation (no "
-         "other load works), to " + format("%g", kBalanceTolerance) + " (P = " + std::to_string(kSamples) + " samples)",
+         "other load works), to " +
+             format("%g", kBalanceTolerance) + " (P = " + std::to_string(kSamples) + " samples)",
          std::isfinite(balance) ? std::optional<bool>(balance <= kBalanceTolerance) : std::nullopt,
          "work " + format("%.4e", work) + " J, dissipation " + format("%.4e", viscous) + " J, difference " +
              format("%.1e", balance) + "; of the work, the friction forces' " + format("%.4e", friction_work) + " J"}};
@@ -264,25 +281,33 @@ int main(int argc, char** argv) {
        << "Files: `out/friction_oval_casing/friction_oval_casing.{png,pdf}`, `frictionless.csv`, `friction.csv`, "
           "`orbit.csv`, `meta.json`. Beyond both papers: the reduced blade of `ll11_blade` ("
        << nt << " tip nodes, " << parameters.integer("interface.modes") << " modes, f1 = " << format("%.2f", f1)
-       << " Hz) turns inside a casing of radius R + δ cos " << lobes << "θ, δ = "
-       << format("%g", parameters.number("casing.ovalization_gaps")) << " gaps (gap " << format("%g", gap * 1e3)
-       << " mm), with no other load. One lobe passes per period: f = " << lobes << "Ω/(2π). Each tip node has a "
-          "radial penalty contact (k = " << format("%.3g", k_pen) << " N/m, as `ll11_blade_forced`) whose gap moves "
-          "with the lobes, and a Jenkins element along the rotation (k_t = " << format("%.3g", k_t) << " N/m, μ = "
-       << format("%g", mu) << ") against the casing sliding back by 2πR/" << lobes << " per period, its slip force μ "
+       << " Hz) turns inside a casing of radius R + δ cos " << lobes
+       << "θ, δ = " << format("%g", parameters.number("casing.ovalization_gaps")) << " gaps (gap "
+       << format("%g", gap * 1e3) << " mm), with no other load. One lobe passes per period: f = " << lobes
+       << "Ω/(2π). Each tip node has a "
+          "radial penalty contact (k = "
+       << format("%.3g", k_pen)
+       << " N/m, as `ll11_blade_forced`) whose gap moves "
+          "with the lobes, and a Jenkins element along the rotation (k_t = "
+       << format("%.3g", k_t) << " N/m, μ = " << format("%g", mu) << ") against the casing sliding back by 2πR/"
+       << lobes
+       << " per period, its slip force μ "
           "times the radial force (solvers::ContactPoint::obstacle; docs/scenes.md, `[[counter_surface]]`). "
-          "Fourier:Fourier, H = " << harmonics << ", pseudo-arclength over " << format("%g", from) << " … "
-       << format("%g", to) << " f1. Amplitude: half the peak-to-peak circumferential displacement of the first "
+          "Fourier:Fourier, H = "
+       << harmonics << ", pseudo-arclength over " << format("%g", from) << " … " << format("%g", to)
+       << " f1. Amplitude: half the peak-to-peak circumferential displacement of the first "
           "tip node to touch, in gaps. Both curves' amplitudes still grow at the range's end: with the casing the "
           "blade's resonance lies above 1.1 f1 (the contacts stiffen it), so the table gives the largest amplitude in "
           "the range, not a peak.\n\n"
-       << "| | points | largest amplitude at f/f1 | Ω [rad/s] | largest amplitude [gap] | time [s] |\n|---|---|---|---|---|---|\n";
+       << "| | points | largest amplitude at f/f1 | Ω [rad/s] | largest amplitude [gap] | time [s] "
+          "|\n|---|---|---|---|---|---|\n";
     for (const auto& [c, peak] : {std::pair{&curves[0], dry}, std::pair{&curves[1], wet}}) {
-      md << "| " << c->label << " | " << c->curve.points.size() << " | " << format("%.4f", peak->frequency_hz / f1) << " | "
-         << format("%.1f", 2.0 * kPi * peak->frequency_hz / lobes) << " | " << format("%.3f", peak->amplitude * model.unit)
-         << " | " << format("%.1f", c->time_s) << " |\n";
+      md << "| " << c->label << " | " << c->curve.points.size() << " | " << format("%.4f", peak->frequency_hz / f1)
+         << " | " << format("%.1f", 2.0 * kPi * peak->frequency_hz / lobes) << " | "
+         << format("%.3f", peak->amplitude * model.unit) << " | " << format("%.1f", c->time_s) << " |\n";
     }
-    md << "\nThe periodic solve at " << format("%g", from) << " f1 from the frictionless solution, for each μ of the "
+    md << "\nThe periodic solve at " << format("%g", from)
+       << " f1 from the frictionless solution, for each μ of the "
           "scan (`contact.friction_scan`):\n\n| μ | status | Newton iterations | backward error |\n|---|---|---|---|\n";
     for (size_t i = 0; i < scan.size(); ++i) {
       md << "| " << format("%g", scan[i]) << " | " << solvers::to_string(scanned[i].report.status) << " | "
@@ -290,18 +315,24 @@ int main(int argc, char** argv) {
     }
     double largest_converged = NAN;
     for (size_t i = 0; i < scan.size(); ++i) {
-      if (scanned[i].converged()) largest_converged = std::isnan(largest_converged) ? scan[i] : std::max(largest_converged, scan[i]);
+      if (scanned[i].converged()) {
+        largest_converged = std::isnan(largest_converged) ? scan[i] : std::max(largest_converged, scan[i]);
+      }
     }
-    md << "\nThe curves use the file's μ = " << format("%g", mu) << " (`contact.friction_coefficient`); the largest μ "
-          "of the scan whose start converged is " << (std::isnan(largest_converged) ? std::string("none")
-                                                                                  : format("%g", largest_converged))
+    md << "\nThe curves use the file's μ = " << format("%g", mu)
+       << " (`contact.friction_coefficient`); the largest μ "
+          "of the scan whose start converged is "
+       << (std::isnan(largest_converged) ? std::string("none") : format("%g", largest_converged))
        << ". Where a start fails, Newton stagnates with a residual that does not fall (the table): a fold of the "
           "branch in μ, or no periodic response near the frictionless one, is not told apart here (no continuation "
           "in μ).\n";
-    md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1) << "), friction dissipates " << format("%.3g", sliding_dissipation)
-       << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes << "), drawn from the "
-          "rotation, not from the blade's vibration: its forces do " << format("%.3g", friction_work)
-       << " J on the blade, against a viscous dissipation of " << format("%.3g", viscous) << " J.\n\n"
+    md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1)
+       << "), friction dissipates " << format("%.3g", sliding_dissipation)
+       << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes
+       << "), drawn from the "
+          "rotation, not from the blade's vibration: its forces do "
+       << format("%.3g", friction_work) << " J on the blade, against a viscous dissipation of "
+       << format("%.3g", viscous) << " J.\n\n"
        << reproduce::claims_markdown(claims);
     run.report(md.str());
     run.meta({{"f1_hz", f1},
@@ -316,8 +347,11 @@ int main(int argc, char** argv) {
               {"tip_radius_m", radius},
               {"tip_angle_rad", theta},
               {"largest_amplitude_frequency_hz", {dry->frequency_hz, wet->frequency_hz}},
-              {"energy_balance", {{"work_J", work}, {"viscous_J", viscous}, {"friction_on_blade_J", friction_work},
-                                  {"sliding_dissipation_J", sliding_dissipation}}},
+              {"energy_balance",
+               {{"work_J", work},
+                {"viscous_J", viscous},
+                {"friction_on_blade_J", friction_work},
+                {"sliding_dissipation_J", sliding_dissipation}}},
               {"curve_time_s", {curves[0].time_s, curves[1].time_s}}});
   });
 }

@@ -24,7 +24,8 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   }
   if (max_periods < 2) throw std::invalid_argument("jenkins_loop: max_periods = " + std::to_string(max_periods) + " must be >= 2");
   if (!std::isfinite(period_shift)) {
-    throw std::invalid_argument("jenkins_loop: period_shift is not finite; give the change of w over one period [m] (0: periodic)");
+    throw std::invalid_argument(
+        "jenkins_loop: period_shift is not finite; give the change of w over one period [m] (0: periodic)");
   }
   for (Eigen::Index q = 0; q < w.size(); ++q) {
     if (!std::isfinite(w(q))) throw std::invalid_argument("jenkins_loop: w[" + std::to_string(q) + "] is not finite");
@@ -157,8 +158,8 @@ JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, double 
   return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()), 8, period_shift);
 }
 
-JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
-                             double period_shift) const {
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u,
+                             const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift) const {
   if (normal.size() != u.size()) {
     throw std::invalid_argument("JenkinsLaw::loop: normal has " + std::to_string(normal.size()) + " samples, u " +
                                 std::to_string(u.size()) + "; give the normal load at every sample of u");

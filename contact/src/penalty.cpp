@@ -41,9 +41,11 @@ void ContactLaw::evaluate_period(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
 
 void ContactLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& /*u*/,
                                         const Eigen::Ref<const Eigen::VectorXd>& /*normal*/,
-                                        Eigen::Ref<Eigen::VectorXd> /*force*/, Eigen::Ref<Eigen::VectorXd> /*stiffness*/,
+                                        Eigen::Ref<Eigen::VectorXd> /*force*/,
+                                        Eigen::Ref<Eigen::VectorXd> /*stiffness*/,
                                         Eigen::Ref<Eigen::VectorXi> /*anchor*/,
-                                        Eigen::Ref<Eigen::VectorXd> /*load_sensitivity*/, double /*period_shift*/) const {
+                                        Eigen::Ref<Eigen::VectorXd> /*load_sensitivity*/,
+                                        double /*period_shift*/) const {
   throw std::logic_error("ContactLaw::evaluate_period_loaded: the " + describe() + " takes no normal load; only a "
                          "friction law with takes_normal_load() (a Jenkins element) does");
 }

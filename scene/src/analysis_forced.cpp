@@ -71,7 +71,9 @@ void solve_one(const Scene& scene, AnalysisResult& out) {
       f.columns.push_back(force);
       if (const auto* coulomb = dynamic_cast<const contact::CoulombFriction*>(contacts[c].law.get())) {
         Eigen::VectorXd w(m);  // relative to a moving counter-surface (ContactPoint::obstacle)
-        for (int k = 0; k < m; ++k) w(k) = contacts[c].displacement(at_instants.col(k)) - contacts[c].obstacle.at(tk(k));
+        for (int k = 0; k < m; ++k) {
+          w(k) = contacts[c].displacement(at_instants.col(k)) - contacts[c].obstacle.at(tk(k));
+        }
         f.header.push_back("w_c_" + contact_label(scene, c) + " [m]");
         f.columns.push_back(w);
         // The slip force μ N, or μ times the normal stop's multiplier at the same instants.

@@ -140,7 +140,9 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
         Eigen::VectorXd normal = Eigen::VectorXd::Zero(tau.size());  // a varying normal load's n(τ_p)
         if (c.normal >= 0) {
           const auto& n = contacts[static_cast<size_t>(c.normal)];
-          for (Eigen::Index p = 0; p < tau.size(); ++p) normal(p) = n.law->force(relative(n, static_cast<size_t>(c.normal), p));
+          for (Eigen::Index p = 0; p < tau.size(); ++p) {
+            normal(p) = n.law->force(relative(n, static_cast<size_t>(c.normal), p));
+          }
         }
         const double shift = -c.obstacle.drift;  // w over the next period (a counter-surface sliding by)
         const contact::JenkinsLoop loop = c.normal >= 0 ? jenkins->loop(w, normal, shift) : jenkins->loop(w, shift);

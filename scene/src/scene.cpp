@@ -368,7 +368,9 @@ nlohmann::json to_json(const Scene& s) {
         for (const auto& [j, w] : c.along) d[s.structure->dof_name(j)] = w;
         o["direction"] = d;
       }
-      if (c.counter_surface >= 0) o["counter_surface"] = s.counter_surfaces.at(static_cast<size_t>(c.counter_surface)).name;
+      if (c.counter_surface >= 0) {
+        o["counter_surface"] = s.counter_surfaces.at(static_cast<size_t>(c.counter_surface)).name;
+      }
       list.push_back(o);
     }
     j["contact"] = list;

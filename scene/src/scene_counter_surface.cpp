@@ -7,7 +7,7 @@
 namespace wbm::scene::detail {
 
 std::optional<std::vector<std::pair<const toml::table*, std::string>>> Parser::table_list(const toml::node& n,
-                                                                                         const std::string& key) {
+                                                                                          const std::string& key) {
   std::vector<std::pair<const toml::table*, std::string>> tables;
   if (n.is_table()) {
     tables.emplace_back(n.as_table(), key);
@@ -33,8 +33,10 @@ void Parser::counter_surfaces(const toml::table& root) {
     cs.name = r_.text(*t, section, "name");
     for (const CounterSurface& other : s_.counter_surfaces) {
       if (other.name == cs.name) {
-        r_.error(Reader::source_of(*t, "name"), section + ".name", "= \"" + cs.name + "\" is given twice; name each "
-                                                                   "[[counter_surface]] once");
+        r_.error(Reader::source_of(*t, "name"), section + ".name",
+                 "= \"" + cs.name +
+                     "\" is given twice; name each "
+                     "[[counter_surface]] once");
       }
     }
     if (cs.type == "fourier") {
@@ -48,7 +50,8 @@ void Parser::counter_surfaces(const toml::table& root) {
         }
         std::vector<double>& out = std::string(key) == "cosine" ? cs.cosine : cs.sine;
         for (size_t i = 0; i < a->size(); ++i) {
-          out.push_back(r_.number_value((*a)[i], section + "." + key + "[" + std::to_string(i) + "]", detail::finite("m")));
+          out.push_back(
+              r_.number_value((*a)[i], section + "." + key + "[" + std::to_string(i) + "]", detail::finite("m")));
         }
       }
       if (!cs.motion(false).moving() && !cs.motion(true).moving()) {
@@ -70,12 +73,13 @@ int Parser::counter_surface_of(const toml::table& t, const std::string& section,
   const std::string name = n->as_string()->get();
   const auto kind = s_.analysis.kind;
   if (kind == AnalysisKind::NonlinearModes || kind == AnalysisKind::Timestep) {
-    r_.error(n->source(), full,
-             kind == AnalysisKind::NonlinearModes
-                 ? "analysis \"nnm\" computes free motions against fixed stops; a moving counter-surface forces the "
-                   "structure: use a forced response (solve, sweep, continuation), or remove counter_surface"
-                 : "analysis \"timestep\": the time-stepping references of scenes (BDF, Moreau–Jean) take fixed "
-                   "obstacles; use a weighted-residual analysis (solve, sweep, continuation), or remove counter_surface");
+    r_.error(
+        n->source(), full,
+        kind == AnalysisKind::NonlinearModes
+            ? "analysis \"nnm\" computes free motions against fixed stops; a moving counter-surface forces the "
+              "structure: use a forced response (solve, sweep, continuation), or remove counter_surface"
+            : "analysis \"timestep\": the time-stepping references of scenes (BDF, Moreau–Jean) take fixed "
+              "obstacles; use a weighted-residual analysis (solve, sweep, continuation), or remove counter_surface");
     return -1;
   }
   int index = -1;
@@ -85,24 +89,29 @@ int Parser::counter_surface_of(const toml::table& t, const std::string& section,
     known += (known.empty() ? "\"" : ", \"") + s_.counter_surfaces[i].name + "\"";
   }
   if (index < 0) {
-    r_.error(n->source(), full, "= \"" + name + "\" names no [[counter_surface]]" +
-                                    (known.empty() ? std::string("; there is none: add one with this name")
-                                                   : "; the names are " + known));
+    r_.error(n->source(), full,
+             "= \"" + name + "\" names no [[counter_surface]]" +
+                 (known.empty() ? std::string("; there is none: add one with this name") : "; the names are " + known));
     return -1;
   }
   const CounterSurface& cs = s_.counter_surfaces[static_cast<size_t>(index)];
   const bool friction = c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb;
   const bool drifts = cs.motion(friction).drift != 0.0;
   if (!friction && drifts) {
-    r_.error(n->source(), full, "= \"" + name + "\" slides by " + detail::number_text(cs.drift) + " m per period (its "
-                                "drift); on a normal contact (law \"" + std::string(to_string(c.law)) + "\") the gap would "
-                                "grow every period: a drift is a \"coulomb\" contact's sliding; set drift = 0 or name "
-                                "another counter_surface");
+    r_.error(n->source(), full,
+             "= \"" + name + "\" slides by " + detail::number_text(cs.drift) +
+                 " m per period (its "
+                 "drift); on a normal contact (law \"" +
+                 std::string(to_string(c.law)) +
+                 "\") the gap would "
+                 "grow every period: a drift is a \"coulomb\" contact's sliding; set drift = 0 or name "
+                 "another counter_surface");
   }
   if (c.law == ContactLawKind::Rigid && kind == AnalysisKind::Continuation && s_.analysis.stability) {
-    r_.error(n->source(), full, "a \"rigid\" contact on a moving counter-surface with analysis.stability = true (the "
-                                "default): the exact orbits with impacts are shot against fixed stops; set "
-                                "analysis.stability = false");
+    r_.error(n->source(), full,
+             "a \"rigid\" contact on a moving counter-surface with analysis.stability = true (the "
+             "default): the exact orbits with impacts are shot against fixed stops; set "
+             "analysis.stability = false");
   }
   return index;
 }

@@ -225,8 +225,9 @@ const std::vector<DeclaredKey<CounterSurface>>& counter_surface_keys() {
           .read_by_section(),
       choice_key<S>("type", {"fourier", "oval_casing"}, [](const S& s) { return s.type; },
                     [](S& s, const std::string& v) { s.type = v; },
-                    "`fourier`: s(τ) = d τ + Σ_h (a_h cos 2πhτ + b_h sin 2πhτ) along each contact's direction, τ = f t; "
-                    "`oval_casing`: a casing of radius R + δ cos nθ around a blade tip turning at Ω = 2πf/n (below)")
+                    "`fourier`: s(τ) = d τ + Σ_h (a_h cos 2πhτ + b_h sin 2πhτ) along each contact's direction, "
+                    "τ = f t; `oval_casing`: a casing of radius R + δ cos nθ around a blade tip turning at "
+                    "Ω = 2πf/n (below)")
           .documented_default("`\"fourier\"`")
           .read_by_section(),
       compound_key<S>("cosine", "list of numbers", "none", "finite [m]; entry h − 1 is harmonic h; 2h < M",

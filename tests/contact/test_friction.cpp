@@ -298,6 +298,6 @@ TEST(JenkinsLoop, ASlidingCounterSurfaceCarriesTheSliderAcrossPeriods) {
     EXPECT_LT((l.force.array() - std::copysign(fs, delta)).abs().maxCoeff(), 1e-15) << "delta = " << delta;
     EXPECT_NEAR(l.dissipated_energy, fs * std::abs(delta), 1e-12 * fs * std::abs(delta)) << "delta = " << delta;
   }
-  wbm::testing::expect_throw_with<std::invalid_argument>([&] { (void)jenkins_loop(kt, samples(0.0), slip, 8, std::nan("")); },
-                                                         {"period_shift", "finite"});
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)jenkins_loop(kt, samples(0.0), slip, 8, std::nan("")); }, {"period_shift", "finite"});
 }

@@ -5,15 +5,14 @@
 // friction force at μλ against the rotation, so y = −μ P0/k + μ δ cos 2πτ (the linear response to
 // −μλ, closed form); a spring on a moving obstacle has the closed-form amplitude of a base
 // excitation.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
 #include <wbm/scene/analysis.hpp>
 #include <wbm/scene/scene.hpp>
 
@@ -29,7 +28,8 @@ using wbm::testing::kPi;
 const std::string kOvalCasing = std::string(WBM_EXAMPLES) + "/oval_casing_rub.toml";
 
 // The column of `file` headed `header`.
-const Eigen::VectorXd& column_named(const wbm::scene::AnalysisResult& r, const std::string& file, const std::string& header) {
+const Eigen::VectorXd& column_named(const wbm::scene::AnalysisResult& r, const std::string& file,
+                                    const std::string& header) {
   for (const auto& t : r.tables) {
     if (t.file != file) continue;
     for (size_t i = 0; i < t.header.size(); ++i) {
@@ -136,15 +136,18 @@ counter_surface = "shaker"
 
 // Bad input is refused with the key, the value and the way out; nothing runs.
 TEST(SceneCounterSurface, BadCounterSurfacesAreRefusedByName) {
-  const std::string head = "structure = { dofs = [\"x\", \"y\"], mass = [1.0, 1.0], stiffness = [4e4, 4e4] }\n"
-                           "forcing = { amplitude = 1.0, dof = \"x\", frequency_hz = 8.0 }\n"
-                           "basis = { harmonics = 8 }\n";
+  const std::string head =
+      "structure = { dofs = [\"x\", \"y\"], mass = [1.0, 1.0], stiffness = [4e4, 4e4] }\n"
+      "forcing = { amplitude = 1.0, dof = \"x\", frequency_hz = 8.0 }\n"
+      "basis = { harmonics = 8 }\n";
   const std::string fourier = "[[counter_surface]]\nname = \"s\"\ncosine = [1e-3]\n";
   const std::string sliding = "[[counter_surface]]\nname = \"s\"\ndrift = -0.5\n";
-  const std::string oval = "[[counter_surface]]\nname = \"s\"\ntype = \"oval_casing\"\novalization = 1e-3\nradius = 0.2\n";
+  const std::string oval =
+      "[[counter_surface]]\nname = \"s\"\ntype = \"oval_casing\"\novalization = 1e-3\nradius = 0.2\n";
   const std::string linear = "[[contact]]\nlaw = \"linear\"\ndof = \"x\"\nstiffness = 1e5\ngap = 1e-3\n";
-  const std::string jenkins = "[[contact]]\nlaw = \"jenkins\"\ndof = \"y\"\ntangential_stiffness = 1e5\n"
-                              "friction_coefficient = 0.3\nnormal_load = 1.0\n";
+  const std::string jenkins =
+      "[[contact]]\nlaw = \"jenkins\"\ndof = \"y\"\ntangential_stiffness = 1e5\n"
+      "friction_coefficient = 0.3\nnormal_load = 1.0\n";
   std::string range = head;
   range.replace(range.find("frequency_hz = 8.0"), 18, "frequency_hz = [7.0, 9.0]");
   const auto refused = [](const std::string& text, std::vector<std::string> fragments) {
@@ -161,7 +164,8 @@ TEST(SceneCounterSurface, BadCounterSurfacesAreRefusedByName) {
   }
   refused(head + fourier + linear + "counter_surface = \"t\"\n", {"contact[0].counter_surface", "\"t\"", "\"s\""});
   refused(head + linear + "counter_surface = \"t\"\n", {"contact[0].counter_surface", "there is none"});
-  refused(head + sliding + linear + "counter_surface = \"s\"\n", {"contact[0].counter_surface", "drift", "grow every period"});
+  refused(head + sliding + linear + "counter_surface = \"s\"\n",
+          {"contact[0].counter_surface", "drift", "grow every period"});
   EXPECT_NO_THROW((void)parse(head + oval + jenkins + "counter_surface = \"s\"\n"));  // its slider slides along
   refused(head + fourier + fourier + linear, {"counter_surface[1].name", "twice"});
   refused(head + "[[counter_surface]]\nname = \"s\"\ncosine = [1e-3, 0, 0, 0, 0, 0, 0, 0, 0, 2e-4]\n" + linear +
@@ -169,8 +173,7 @@ TEST(SceneCounterSurface, BadCounterSurfacesAreRefusedByName) {
           {"counter_surface", "harmonic 10", "raise [basis] harmonics to at least 10"});
   refused(head + "[[counter_surface]]\nname = \"s\"\ntype = \"oval_casing\"\novalization = 1e-3\n" + linear,
           {"counter_surface[0].radius", "missing"});
-  refused(head + fourier + "drift = 1e-3\n" + "ovalization = 1.0\n" + linear,
-          {"counter_surface[0]", "ovalization"});
+  refused(head + fourier + "drift = 1e-3\n" + "ovalization = 1.0\n" + linear, {"counter_surface[0]", "ovalization"});
   refused(head + "analysis = { type = \"timestep\" }\n" + fourier + linear + "counter_surface = \"s\"\n",
           {"contact[0].counter_surface", "timestep", "fixed obstacles"});
   refused(range + "analysis = { type = \"continuation\" }\n" + fourier +

@@ -96,11 +96,13 @@ void expect_refused(const std::string& text, const std::vector<std::string>& fra
 // nothing of another variant.
 TEST(SceneKeys, EachVariantReadsItsOwnKeys) {
   const std::string forcing = "[forcing]\namplitude = 1.0\nfrequency_hz = 100.0\n";
-  expect_refused(std::string(kRod) + forcing + "[contact]\nlaw = \"linear\"\ngap = 1e-3\nstiffness = 1e6\ncoefficient = 1.0\n",
-                 {"contact.coefficient: unknown key; allowed here: law, gap, stiffness, counter_surface, node, dof, nodes, "
-                  "against, direction"});
+  expect_refused(
+      std::string(kRod) + forcing + "[contact]\nlaw = \"linear\"\ngap = 1e-3\nstiffness = 1e6\ncoefficient = 1.0\n",
+      {"contact.coefficient: unknown key; allowed here: law, gap, stiffness, counter_surface, node, dof, nodes, "
+       "against, direction"});
   expect_refused(std::string(kRod) + forcing + "[contact]\nlaw = \"rigid\"\ngap = 1e-3\nstiffness = 1e6\n",
-                 {"contact.stiffness: unknown key; allowed here: law, gap, counter_surface, node, dof, nodes, against, direction"});
+                 {"contact.stiffness: unknown key; allowed here: law, gap, counter_surface, node, dof, nodes, against, "
+                  "direction"});
   expect_refused(std::string(kRod) + "type = \"rod\"\nmass = 1.0\n" + forcing,
                  {"structure.mass: unknown key; allowed here: type, young_modulus, density, area, length, elements"});
   expect_refused(std::string(kRod) + forcing + "[analysis]\ntype = \"solve\"\nmax_points = 10\nlevels = [1.0]\n",

@@ -6,16 +6,15 @@
 // closed-form force of a mass pressed on a stop that moves; a counter-surface sliding by so fast
 // that friction slips one way at every instant (a constant force μN, closed form); and the
 // central-difference time stepping of the same problem with an exponential stop.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Dense>
-#include <gtest/gtest.h>
-
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
@@ -51,7 +50,8 @@ struct ObstacleOscillator {
 };
 
 // u(τ) on a grid of the period from trial coefficients (row 0).
-Eigen::VectorXd on_obstacle_grid(const TimeBasis& basis, const Eigen::MatrixXd& coefficients, const Eigen::VectorXd& tau) {
+Eigen::VectorXd on_obstacle_grid(const TimeBasis& basis, const Eigen::MatrixXd& coefficients,
+                                 const Eigen::VectorXd& tau) {
   return basis.values(tau, 0) * coefficients.row(0).transpose();
 }
 
@@ -66,7 +66,8 @@ std::complex<double> obstacle_harmonic(const solvers::ObstacleMotion& o, int h) 
 
 // The change of coordinates z = u − s of a 1-DOF oscillator: the load −(m s̈ + c ṡ + k s) on the
 // fixed-obstacle problem, one HarmonicLoad per harmonic of s.
-solvers::HarmonicForcing obstacle_shifted_forcing(const ObstacleOscillator& o, double f, const solvers::ObstacleMotion& s) {
+solvers::HarmonicForcing obstacle_shifted_forcing(const ObstacleOscillator& o, double f,
+                                                  const solvers::ObstacleMotion& s) {
   solvers::HarmonicForcing forcing{0, o.force, f};
   for (int h = 1; h <= s.highest_harmonic(); ++h) {
     const std::complex<double> load = -o.dynamic_stiffness(f, h) * obstacle_harmonic(s, h);
@@ -86,8 +87,8 @@ TEST(MovingObstacle, TheMotionIsItsFourierSeries) {
   EXPECT_FALSE((solvers::ObstacleMotion{.cosine = {0.0}, .sine = {0.0, 0.0}}).moving());
   EXPECT_EQ(s.highest_harmonic(), 3);
   for (double tau : {0.0, 0.13, 0.5, 0.97, 1.4}) {
-    const double expected = -0.3 * tau + 1e-3 * std::cos(2 * kPi * tau) + 2e-4 * std::cos(6 * kPi * tau) +
-                            5e-4 * std::sin(2 * kPi * tau);
+    const double expected =
+        -0.3 * tau + 1e-3 * std::cos(2 * kPi * tau) + 2e-4 * std::cos(6 * kPi * tau) + 5e-4 * std::sin(2 * kPi * tau);
     EXPECT_NEAR(s.at(tau), expected, 1e-16);
     const double h = 1e-6;
     EXPECT_NEAR(s.rate(tau), (s.at(tau + h) - s.at(tau - h)) / (2 * h), 1e-8);
@@ -107,14 +108,15 @@ TEST(MovingObstacle, ALinearSpringOnAMovingObstacleIsTheClosedFormResponse) {
   const ObstacleOscillator o;
   const double kp = 3.0 * o.k, g0 = -0.1, f = 8.0;
   const solvers::ObstacleMotion s{.cosine = {1e-3}, .sine = {0.0, 5e-4}};
-  const solvers::ContactPoint stop{.dof = 0,
-                                   .law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kp, g0}),
-                                   .obstacle = s};
+  const solvers::ContactPoint stop{
+      .dof = 0,
+      .law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kp, g0}),
+      .obstacle = s};
   const Eigen::VectorXd tau = period_grid(256);
   Eigen::VectorXd exact = Eigen::VectorXd::Constant(tau.size(), kp * g0 / (o.k + kp));
   for (int h = 1; h <= 2; ++h) {
-    const std::complex<double> u = ((h == 1 ? o.force : 0.0) + kp * obstacle_harmonic(s, h)) /
-                                   o.dynamic_stiffness(f, h, kp);
+    const std::complex<double> u =
+        ((h == 1 ? o.force : 0.0) + kp * obstacle_harmonic(s, h)) / o.dynamic_stiffness(f, h, kp);
     for (Eigen::Index p = 0; p < tau.size(); ++p) exact(p) += std::real(u * std::polar(1.0, 2 * kPi * h * tau(p)));
   }
   const double peak = (exact.array() - exact.mean()).abs().maxCoeff();
@@ -127,7 +129,8 @@ TEST(MovingObstacle, ALinearSpringOnAMovingObstacleIsTheClosedFormResponse) {
                          Case{"fourier", "fourier", solvers::ContactQuadrature::CellAverage, 1e-10},
                          Case{"bspline", "bspline", solvers::ContactQuadrature::Midpoint, 1e-5},
                          Case{"db6", "fourier", solvers::ContactQuadrature::Midpoint, 1e-3}}) {
-    const TimeBasis trial = cs.trial == "fourier" ? TimeBasis::fourier_harmonics(8) : TimeBasis::from_name(cs.trial, 64);
+    const TimeBasis trial =
+        cs.trial == "fourier" ? TimeBasis::fourier_harmonics(8) : TimeBasis::from_name(cs.trial, 64);
     const TimeBasis weighting = cs.weighting == "fourier" ? (cs.trial == "fourier" ? trial : TimeBasis::fourier(64))
                                                           : TimeBasis::from_name(cs.weighting, 64);
     const solvers::WeightedResidual w(o.system(), {0, o.force, f}, {stop}, trial, weighting,
@@ -166,15 +169,18 @@ TEST(MovingObstacle, AMovingObstacleIsAChangeOfCoordinates) {
   for (const Case& cs : {Case{"fourier", solvers::ContactQuadrature::Midpoint, 1e-9},
                          Case{"fourier", solvers::ContactQuadrature::CellAverage, 1e-9},
                          Case{"bspline", solvers::ContactQuadrature::Midpoint, 1e-3}}) {
-    const TimeBasis basis = cs.pair == "fourier" ? TimeBasis::fourier_harmonics(32) : TimeBasis::from_name(cs.pair, 128);
+    const TimeBasis basis =
+        cs.pair == "fourier" ? TimeBasis::fourier_harmonics(32) : TimeBasis::from_name(cs.pair, 128);
     const solvers::WeightedResidualOptions options{.contact_quadrature = cs.quadrature};
     const solvers::WeightedResidual moving(o.system(), {0, o.force, f}, {{.dof = 0, .law = law, .obstacle = s}}, basis,
                                            basis, options);
-    const solvers::WeightedResidual fixed(o.system(), obstacle_shifted_forcing(o, f, s), {{0, law}}, basis, basis, options);
+    const solvers::WeightedResidual fixed(o.system(), obstacle_shifted_forcing(o, f, s), {{0, law}}, basis, basis,
+                                          options);
     const auto a = moving.solve(), b = fixed.solve();
     ASSERT_TRUE(a.converged()) << cs.pair << ": " << a.brief();
     ASSERT_TRUE(b.converged()) << cs.pair << ": " << b.brief();
-    const Eigen::VectorXd u = on_obstacle_grid(basis, a.coefficients, tau), z = on_obstacle_grid(basis, b.coefficients, tau);
+    const Eigen::VectorXd u = on_obstacle_grid(basis, a.coefficients, tau),
+                          z = on_obstacle_grid(basis, b.coefficients, tau);
     ASSERT_GT(b.max_contact_force, 1e-3) << "the stop must close";
     ASSERT_LT(z.minCoeff(), g0) << "and open";
     const double peak = u.cwiseAbs().maxCoeff();
@@ -211,7 +217,8 @@ TEST(MovingObstacle, ExactContactAgainstAMovingObstacleIsAChangeOfCoordinates) {
         << law->describe();
     Eigen::VectorXd s_tau(tau.size());
     for (Eigen::Index p = 0; p < tau.size(); ++p) s_tau(p) = s.at(tau(p));
-    const Eigen::VectorXd u = on_obstacle_grid(basis, a.coefficients, tau), z = on_obstacle_grid(basis, b.coefficients, tau);
+    const Eigen::VectorXd u = on_obstacle_grid(basis, a.coefficients, tau),
+                          z = on_obstacle_grid(basis, b.coefficients, tau);
     EXPECT_LT((u - z - s_tau).cwiseAbs().maxCoeff(), 1e-9 * u.cwiseAbs().maxCoeff()) << law->describe();
     EXPECT_LT(a.complementarity, 1e-9 * moving.residual_scale()) << law->describe();
   }
@@ -227,8 +234,8 @@ TEST(MovingObstacle, AMassPressedOnAMovingStopFollowsIt) {
   const solvers::ObstacleMotion s{.cosine = {a}};
   const TimeBasis basis = TimeBasis::fourier_harmonics(8);
   solvers::HarmonicForcing forcing{0, 0.0, f, {{0, p0, 0.0, 0}}};
-  const solvers::WeightedResidual w(o.system(), forcing,
-                                    {{.dof = 0, .law = std::make_shared<contact::RigidStop>(g0), .obstacle = s}}, basis, basis);
+  const solvers::WeightedResidual w(
+      o.system(), forcing, {{.dof = 0, .law = std::make_shared<contact::RigidStop>(g0), .obstacle = s}}, basis, basis);
   const auto sol = w.solve();
   ASSERT_TRUE(sol.converged()) << sol.brief();
   const Eigen::VectorXd tk = w.collocation_times();
@@ -259,14 +266,16 @@ TEST(MovingObstacle, ASlidingCounterSurfaceMakesFrictionAConstantForce) {
     const TimeBasis basis = pair == "bspline" ? TimeBasis::from_name(pair, 64) : TimeBasis::fourier_harmonics(16);
     for (double drift : {-0.5, 0.5}) {
       const solvers::WeightedResidual w(o.system(), {0, o.force, f},
-                                        {{.dof = 0, .law = exact ? std::shared_ptr<const contact::ContactLaw>(law) : jenkins,
+                                        {{.dof = 0,
+                                          .law = exact ? std::shared_ptr<const contact::ContactLaw>(law) : jenkins,
                                           .obstacle = {.drift = drift}}},
                                         basis, basis);
       const auto sol = w.solve();
       ASSERT_TRUE(sol.converged()) << pair << " d = " << drift << ": " << sol.brief();
       const double sign = drift < 0.0 ? 1.0 : -1.0;  // the slip u − s grows when the surface recedes
       if (exact) {
-        EXPECT_LT((sol.contact_force_samples.array() - sign * mu * normal).abs().maxCoeff(), 1e-12 * mu * normal) << pair;
+        EXPECT_LT((sol.contact_force_samples.array() - sign * mu * normal).abs().maxCoeff(), 1e-12 * mu * normal)
+            << pair;
       } else {
         EXPECT_NEAR(sol.max_contact_force, mu * normal, 1e-12 * mu * normal);
       }
@@ -294,7 +303,9 @@ TEST(MovingObstacle, TheBranchAndItsFloquetMultipliersAreTheClosedForm) {
   const TimeBasis basis = TimeBasis::fourier_harmonics(8);
   const solvers::WeightedResidual w(
       o.system(), {0, o.force, 7.0},
-      {{.dof = 0, .law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kp, g0}), .obstacle = s}},
+      {{.dof = 0,
+        .law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kp, g0}),
+        .obstacle = s}},
       basis, basis);
   const solvers::ResponseCurve curve =
       solvers::trace_response(w, {.parameter_min = 7.0, .parameter_max = 9.0, .max_step = 0.05});
@@ -320,11 +331,11 @@ TEST(MovingObstacle, TheBranchAndItsFloquetMultipliersAreTheClosedForm) {
 }
 
 // Central differences in time (a different method: no basis, physical time; at 8192 steps per
-// period its difference from 4096 and 16384 steps is below 1e-6 here) of an exponential stop against an obstacle moving at
-// harmonics 1 and 2, below resonance (6 Hz, ζ = 5 %, a stable orbit that the time stepping
-// settles on). The harmonic balance with the cell-average quadrature (its slope relative to the
-// surface, u̇ − ṡ) converges to it at second order in H: measured rms 1.0e-4, 4.4e-5, 1.1e-5 at
-// H = 48, 96, 192, as with the obstacle fixed (2.1e-4, 9.1e-5, 2.3e-5 under a larger load).
+// period its difference from 4096 and 16384 steps is below 1e-6 here) of an exponential stop against an obstacle moving
+// at harmonics 1 and 2, below resonance (6 Hz, ζ = 5 %, a stable orbit that the time stepping settles on). The harmonic
+// balance with the cell-average quadrature (its slope relative to the surface, u̇ − ṡ) converges to it at second order
+// in H: measured rms 1.0e-4, 4.4e-5, 1.1e-5 at H = 48, 96, 192, as with the obstacle fixed (2.1e-4, 9.1e-5, 2.3e-5
+// under a larger load).
 TEST(MovingObstacle, HarmonicBalanceConvergesToCentralDifferences) {
   ObstacleOscillator o;
   o.c = 2.0 * 0.05 * std::sqrt(o.k * o.m);  // ζ = 5 %
@@ -369,7 +380,8 @@ TEST(MovingObstacle, JacobianWithMovingCounterSurfacesMatchesCentralDifferences)
       {.dof = 1, .law = jenkins, .normal = 0, .obstacle = {.cosine = {0.0, 2e-4}, .drift = -0.05}}};
   const int harmonics = 8;
   const TimeBasis basis = TimeBasis::fourier_harmonics(harmonics);
-  const solvers::WeightedResidual w(two, {0, 0.0, 20.0, {{0, 2.0, 0.0, 0}}}, contacts, basis, basis, {.time_samples = 256});
+  const solvers::WeightedResidual w(two, {0, 0.0, 20.0, {{0, 2.0, 0.0, 0}}}, contacts, basis, basis,
+                                    {.time_samples = 256});
   // A state where the normal spring opens over part of the period: u_x = 5e-4 + 1.2e-3 cos 2πτ,
   // u_y = 3e-4 sin 2πτ (coefficients of the stacked layout: DOF-major within each function).
   const int m = basis.dimension();
@@ -377,8 +389,8 @@ TEST(MovingObstacle, JacobianWithMovingCounterSurfacesMatchesCentralDifferences)
   const Eigen::VectorXd tau = period_grid(m);
   const Eigen::VectorXd ux = (5e-4 + 1.2e-3 * (2.0 * kPi * tau.array()).cos()).matrix();
   const Eigen::VectorXd uy = (3e-4 * (2.0 * kPi * tau.array()).sin()).matrix();
-  const Eigen::MatrixXd fit = basis.values(tau, 0).colPivHouseholderQr().solve(
-      (Eigen::MatrixXd(m, 2) << ux, uy).finished());
+  const Eigen::MatrixXd fit =
+      basis.values(tau, 0).colPivHouseholderQr().solve((Eigen::MatrixXd(m, 2) << ux, uy).finished());
   for (int k = 0; k < m; ++k) {
     a(2 * k) = fit(k, 0);
     a(2 * k + 1) = fit(k, 1);
@@ -402,20 +414,29 @@ TEST(MovingObstacle, WhatIsNotModelledIsRefused) {
   const auto spring = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{o.k, 1e-3});
   using wbm::testing::expect_throw_with;
   expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::WeightedResidual(o.system(), {0, 1.0, 8.0}, {{.dof = 0, .law = spring, .obstacle = {.drift = 1e-3}}}, basis, basis); },
+      [&] {
+        (void)solvers::WeightedResidual(o.system(), {0, 1.0, 8.0},
+                                        {{.dof = 0, .law = spring, .obstacle = {.drift = 1e-3}}}, basis, basis);
+      },
       {"obstacle", "drift", "no periodic response", "drift = 0"});
-  expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::WeightedResidual(o.system(), {0, 1.0, 8.0}, {{.dof = 0, .law = spring, .obstacle = {.sine = {0.0, NAN}}}}, basis, basis); },
-      {"sine[1]", "harmonic 2", "finite"});
   expect_throw_with<std::invalid_argument>(
       [&] {
         (void)solvers::WeightedResidual(o.system(), {0, 1.0, 8.0},
-                                        {{.dof = 0, .law = spring, .obstacle = {.cosine = std::vector<double>(9, 1e-4)}}}, basis, basis);
+                                        {{.dof = 0, .law = spring, .obstacle = {.sine = {0.0, NAN}}}}, basis, basis);
+      },
+      {"sine[1]", "harmonic 2", "finite"});
+  expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::WeightedResidual(
+            o.system(), {0, 1.0, 8.0},
+            {{.dof = 0, .law = spring, .obstacle = {.cosine = std::vector<double>(9, 1e-4)}}}, basis, basis);
       },
       {"harmonic 9", "M = 17", "raise the basis dimension"});
   const std::vector<solvers::ContactPoint> moving_stop = {{.dof = 0, .law = stop, .obstacle = {.cosine = {1e-4}}}};
   expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::integrate_moreau_jean_to_periodic(o.system(), {0, 1.0, 8.0}, moving_stop); },
+      [&] {
+        (void)solvers::integrate_moreau_jean_to_periodic(o.system(), {0, 1.0, 8.0}, moving_stop);
+      },
       {"integrate_moreau_jean_to_periodic", "moving counter-surface", "weighted residual"});
   expect_throw_with<std::invalid_argument>(
       [&] {
@@ -425,9 +446,14 @@ TEST(MovingObstacle, WhatIsNotModelledIsRefused) {
       {"stability = true", "moving counter-surface", "stability = false"});
   const std::vector<solvers::ContactPoint> moving_spring = {{.dof = 0, .law = spring, .obstacle = {.cosine = {1e-4}}}};
   expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::integrate_to_periodic(o.system(), {0, 1.0, 8.0}, moving_spring); },
+      [&] {
+        (void)solvers::integrate_to_periodic(o.system(), {0, 1.0, 8.0}, moving_spring);
+      },
       {"BDF", "integrate_central_difference_to_periodic"});
   expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::system_energy(o.system(), moving_spring, Eigen::MatrixXd::Zero(1, 4), Eigen::MatrixXd::Zero(1, 4)); },
+      [&] {
+        (void)solvers::system_energy(o.system(), moving_spring, Eigen::MatrixXd::Zero(1, 4),
+                                     Eigen::MatrixXd::Zero(1, 4));
+      },
       {"system_energy", "works on the structure"});
 }

@@ -192,18 +192,22 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
   for (size_t i = 0; i < contacts.size(); ++i) {
     const ContactPoint& c = contacts[i];
     const ObstacleMotion& o = c.obstacle;
-    const std::string where = "ContactPoint.obstacle (contact " + std::to_string(i) + " at DOF " + std::to_string(c.dof) + ")";
-    if (!std::isfinite(o.drift)) throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + ": must be finite [m]");
+    const std::string where =
+        "ContactPoint.obstacle (contact " + std::to_string(i) + " at DOF " + std::to_string(c.dof) + ")";
+    if (!std::isfinite(o.drift)) {
+      throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + ": must be finite [m]");
+    }
     for (const auto* list : {&o.cosine, &o.sine}) {
       for (size_t h = 0; h < list->size(); ++h) {
         if (std::isfinite((*list)[h])) continue;
-        throw std::invalid_argument(where + (list == &o.cosine ? ".cosine[" : ".sine[") + std::to_string(h) + "] = " +
-                                    format_number((*list)[h]) + " (harmonic " + std::to_string(h + 1) +
+        throw std::invalid_argument(where + (list == &o.cosine ? ".cosine[" : ".sine[") + std::to_string(h) +
+                                    "] = " + format_number((*list)[h]) + " (harmonic " + std::to_string(h + 1) +
                                     "): must be finite [m]");
       }
     }
     if (o.drift != 0.0 && !c.law->hysteretic()) {
-      throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + " m per period on a " + c.law->describe() +
+      throw std::invalid_argument(where + ".drift = " + format_number(o.drift) + " m per period on a " +
+                                  c.law->describe() +
                                   ": a normal gap that grows by the drift every period has no periodic response; a "
                                   "drift is a friction contact's sliding (set drift = 0 here)");
     }
@@ -332,8 +336,8 @@ bool any_moving_obstacle(const std::vector<ContactPoint>& contacts) {
   return std::any_of(contacts.begin(), contacts.end(), [](const ContactPoint& c) { return c.obstacle.moving(); });
 }
 
-Eigen::MatrixXd obstacle_samples(const std::vector<ContactPoint>& contacts, const Eigen::Ref<const Eigen::VectorXd>& tau,
-                                 int derivative) {
+Eigen::MatrixXd obstacle_samples(const std::vector<ContactPoint>& contacts,
+                                 const Eigen::Ref<const Eigen::VectorXd>& tau, int derivative) {
   if (derivative != 0 && derivative != 1) {
     throw std::invalid_argument("obstacle_samples: derivative = " + std::to_string(derivative) + " must be 0 or 1");
   }
@@ -348,7 +352,8 @@ Eigen::MatrixXd obstacle_samples(const std::vector<ContactPoint>& contacts, cons
   return out;
 }
 
-void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what, const std::string& fix) {
+void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what,
+                             const std::string& fix) {
   for (size_t c = 0; c < contacts.size(); ++c) {
     if (!contacts[c].obstacle.moving()) continue;
     throw std::invalid_argument(what + ": contact " + std::to_string(c) + " (DOF " + std::to_string(contacts[c].dof) +

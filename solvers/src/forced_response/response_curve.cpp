@@ -473,7 +473,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       if (resolved > uc.rows()) {
         const double last = 1.0 - 1.0 / static_cast<double>(resolved);
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
-        uc = relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
+        uc = relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(),
+                      fine);
       }
       FloquetResult fl = (*floquet)(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
@@ -481,8 +482,8 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
         const int steps = 4 * fl.steps;
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
-        const Eigen::MatrixXd ucf =
-            relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
+        const Eigen::MatrixXd ucf = relative(
+            base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
         fl = (*floquet)(ucf.transpose(), r.frequency_hz);
       }
       results[i] = std::move(fl);

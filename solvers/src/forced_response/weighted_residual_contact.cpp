@@ -208,7 +208,7 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
   const Eigen::MatrixXd u = contact_samples(x);
   Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
   if (cell_average_rule) slope = smp.trial_slope->to_time(spectral::as_coefficients(x, nc)) / static_cast<double>(q);
-  if (cell_average_rule && smp.obstacle_slope.size() > 0) slope -= smp.obstacle_slope;  // relative to the counter-surface
+  if (cell_average_rule && smp.obstacle_slope.size() > 0) slope -= smp.obstacle_slope;  // relative to the surface
   Eigen::MatrixXd force(nc, q);
   if (tangents != nullptr) tangents->assign(static_cast<size_t>(nc), {});
   Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample

@@ -520,7 +520,8 @@ WeightedResidualSolution WeightedResidual::solve_rigid(const Eigen::VectorXd* la
     }
     if (slips) continue;
     const Eigen::VectorXd x_c = xa(Eigen::seq(c, Eigen::last, p.nc));
-    phi(c) = p.friction_weight() * (col.trial_values.row(0).dot(x_c) - (col.pin_offsets.size() > 0 ? col.pin_offsets(c) : 0.0));
+    phi(c) = p.friction_weight() *
+             (col.trial_values.row(0).dot(x_c) - (col.pin_offsets.size() > 0 ? col.pin_offsets(c) : 0.0));
   }
   s.complementarity = phi.cwiseAbs().maxCoeff();
   s.max_contact_force = lambda.cwiseAbs().maxCoeff();

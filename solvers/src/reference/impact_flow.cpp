@@ -242,7 +242,8 @@ ImpactFlow::ImpactFlow(const MechanicalSystem& system, const HarmonicForcing& fo
   s.n = static_cast<int>(system.mass.rows());
   forcing.validate(s.n);
   ContactPoint::validate(contacts, s.n);
-  require_fixed_obstacles(contacts, "ImpactFlow (exact orbits with impacts)", "fix the stops (ContactPoint::obstacle = {})");
+  require_fixed_obstacles(contacts, "ImpactFlow (exact orbits with impacts)",
+                          "fix the stops (ContactPoint::obstacle = {})");
   if (contacts.empty()) throw std::invalid_argument("ImpactFlow: no contacts; an orbit without stops needs no events");
   s.nc = static_cast<int>(contacts.size());
   s.e.resize(s.n, s.nc);

@@ -118,8 +118,8 @@ class JenkinsLaw final : public ContactLaw {
   /// Where the normal law opens (n_q = 0, N = 0) F_s = 0: the tangential force vanishes and the
   /// slider follows, the separation of a 2D frictional contact. Throws std::invalid_argument for
   /// a normal of another size than u, or a normal load that is not finite and >= 0.
-  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& normal,
-                                 double period_shift = 0.0) const;
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u,
+                                 const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift = 0.0) const;
   [[nodiscard]] bool takes_normal_load() const override { return true; }
   /// evaluate_period with F_s,q = μ (N + normal_q) (loop above); load_sensitivity = μ σ, the
   /// slip_sensitivity of the loop times μ (ContactLaw::evaluate_period_loaded).

@@ -91,9 +91,10 @@ struct FloquetResult {
 /// period (P ≥ 8 steps; the row order of `contacts`). Without contacts pass a 0 × P matrix.
 /// With a moving counter-surface (ContactPoint::obstacle) pass the relative displacements
 /// u*_c(τ_p) − s_c(τ_p), which the laws see (trace_response does); s is prescribed, so it adds
-/// no term to the variational equation. Throws std::invalid_argument for P < 8, a row count other than n_c, non-finite samples,
-/// f ≤ 0, a rigid stop (contact::RigidStop: an impacting orbit needs saltation matrices, which
-/// impact_shooting.hpp computes on the exact orbit it shoots), friction, or a contact
+/// no term to the variational equation. Throws std::invalid_argument for P < 8, a row count
+/// other than n_c, non-finite samples, f ≤ 0, a rigid stop (contact::RigidStop: an impacting
+/// orbit needs saltation matrices, which impact_shooting.hpp computes on the exact orbit it
+/// shoots), friction, or a contact
 /// too stiff to resolve in 32 768 steps (above). P is raised for a stiff contact (above).
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,

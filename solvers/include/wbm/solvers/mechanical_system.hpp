@@ -178,15 +178,16 @@ struct ContactPoint {
 
 /// Refuses moving counter-surfaces where `what` (e.g. "the Moreau-Jean reference") does not model
 /// them: throws std::invalid_argument naming the first moving contact, `what` and `fix`.
-void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what, const std::string& fix);
+void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const std::string& what,
+                             const std::string& fix);
 
 /// The force of contact `c` over the Q uniform samples of one period, u (n_c × Q, row = contact,
 /// the contact displacements u_c(τ_q)): ContactLaw::evaluate_period, or for a friction contact
 /// with a `normal`, ContactLaw::evaluate_period_loaded under the normal contact's force at the
-/// same samples; u is relative to the counter-surfaces, so a drifting one's samples move by −d over
-/// the next period (ContactLaw::evaluate_period's period_shift). force, stiffness (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries
-/// (load_sensitivity(q) = ∂f_q/∂n_r as documented there, 0 without a normal). Throws as the laws
-/// do (std::logic_error for a rigid law).
+/// same samples; u is relative to the counter-surfaces, so a drifting one's samples move by −d
+/// over the next period (ContactLaw::evaluate_period's period_shift). force, stiffness
+/// (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries (load_sensitivity(q) = ∂f_q/∂n_r as
+/// documented there, 0 without a normal). Throws as the laws do (std::logic_error for a rigid law).
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity);
