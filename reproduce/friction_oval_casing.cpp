@@ -114,8 +114,8 @@ int main(int argc, char** argv) {
     const solvers::HarmonicForcing casing_only{model.observed, 0.0, from * f1};
 
     // Where the frictional start exists: the periodic solve at the start frequency for each μ of
-    // the file's scan, from the frictionless solution there (the default path alone: a direct
-    // Newton, then the contact homotopy, when that fails).
+    // the file's scan, by Newton from the frictionless solution there (with a start given,
+    // WeightedResidual::solve tries no homotopy).
     const auto scan_basis = solvers::TimeBasis::fourier_harmonics(harmonics);
     const solvers::WeightedResidual dry_start(model.reduced, casing_only, radial, scan_basis, scan_basis,
                                               {.formulation = reproduce::kFigureFormulation});
