@@ -37,6 +37,7 @@
 #include <wbm/spectral/layout.hpp>
 
 #include "kronecker_factorization.hpp"
+#include "weighted_residual_collocation.hpp"
 
 namespace wbm::solvers::detail {
 
@@ -289,25 +290,7 @@ struct WeightedResidual::Impl {
   // every instant sticks has its row k = 0 replaced by the position u(τ_1) = 0 (the k_t → ∞
   // limit of the Jenkins convention): the stuck rows (stuck_*), one entry per friction contact.
   bool rigid = false;
-  struct Collocation {
-    Eigen::VectorXd tau;
-    Eigen::MatrixXd trial_values, weights;
-    Eigen::MatrixXd increments;  // V(τ_{k+1}) − V(τ_k) (M × M), friction rows
-    Eigen::VectorXd gaps;        // g0 of contact c at row k·n_c + c
-    std::vector<char> coulomb;   // per contact: exact Coulomb friction (1) or a rigid stop (0)
-    Eigen::VectorXd slip_forces; // μ N of contact c (0 for a stop, and under a rigid normal stop)
-    // Per contact: the rigid stop whose multiplier is a friction contact's normal load
-    // (ContactPoint::normal, a 2D contact), or −1; and that contact's μ.
-    std::vector<int> normal_of;
-    Eigen::VectorXd friction_coefficients;
-    bool any_coulomb = false;
-    bool any_normal = false;  // some friction contact takes its normal load from a stop
-    // Moving counter-surfaces (ContactPoint::obstacle; empty when every obstacle is fixed): a
-    // stop's s(τ_{k+1}) is in `gaps`; a friction row's slip is relative, Δ_k − (s(τ_{k+1}) − s(τ_k)),
-    // slip_offsets(k·n_c + c) the counter-surface's own (0 on a stop's row); pin_offsets(c) = s_c(τ_1),
-    // where a contact in full stick is pinned (u_c(τ_1) − s_c(τ_1) = 0).
-    Eigen::VectorXd slip_offsets, pin_offsets;
-  };
+  using Collocation = detail::Collocation;  // weighted_residual_collocation.hpp
   std::shared_ptr<const Collocation> collocation;
   Eigen::MatrixXd delassus;
   Eigen::VectorXd u_lin;
