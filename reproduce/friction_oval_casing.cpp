@@ -4,10 +4,12 @@
 // response's frequency is f = nΩ/(2π) and a continuation in f is one in the rotation speed. Each
 // of the 24 tip nodes has a radial penalty contact (k as ll11_blade_forced) against the casing,
 // whose gap moves by s = δ cos(2πτ + nθ_i) (θ_i the node's angle about the axis), and a Jenkins
-// element (k_t, μ = 0.15) along the rotation, its slip force μ times that radial force, against
+// element (k_t, μ) along the rotation, its slip force μ times that radial force, against
 // the casing sliding back by one lobe, 2πR_i/n, per period (solvers::ContactPoint::obstacle). No
 // other load: the casing alone excites the blade. Traced by pseudo-arclength continuation with
-// Fourier:Fourier over 0.9 … 1.1 f1, with and without friction. Where the frictional amplitude is
+// Fourier:Fourier over 0.9 … 1.1 f1, with and without friction. At 0.9 f1, a pseudo-arclength
+// continuation in μ from the frictionless solution says which μ of the scan (the issue's 0.15
+// among them) has a response connected to it. Where the frictional amplitude is
 // largest, the orbit's
 // samples check Coulomb's sliding law (a sliding far faster than the vibration keeps every sample
 // in slip, f_t = μ f_n against the rotation) and the energy balance over a period (the casing's
@@ -19,12 +21,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/fem/craig_bampton.hpp>
+#include <wbm/solvers/continuation.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -45,9 +50,54 @@ constexpr double kPi = std::numbers::pi;
 // penalty's kinks, second order; measured in the note).
 constexpr double kSlidingTolerance = 1e-12, kBalanceTolerance = 1e-3;
 constexpr int kSamples = 2048;
-// The friction coefficient issue #36 asks for (a Rotor 37 rubbing benchmark's); the scan reports
-// whether the start converges there.
+// The friction coefficient issue #36 asks for (a Rotor 37 rubbing benchmark's); the continuation
+// in μ reports whether it reaches it.
 constexpr double kIssueFrictionCoefficient = 0.15;
+// The forward difference of ∂r/∂μ, in units of the scan's largest μ (FrictionFamily).
+constexpr double kMuDifference = 1e-7;
+
+// The condensed residual r(x; μ) of the rubbing blade at a fixed frequency, a ParametrizedSystem
+// of the continuation layer (solvers/linearization.hpp) for pseudo-arclength in μ: r and its
+// low-rank Jacobian from the problem of that μ (`make(μ)`, the last one cached), ∂r/∂μ by a forward
+// difference of step h. On each stick/slip pattern the Jenkins force is affine in μ (slip: ±μN,
+// stick: k_t (u − u_a) ± μN_a at the anchor a), so the difference has no truncation error there
+// (its rounding error is about ε/h of r).
+// Below μ = 0 (a predictor overshooting the range) no problem exists: NaN, and the step is halved.
+class FrictionFamily {
+ public:
+  FrictionFamily(std::function<solvers::WeightedResidual(double)> make, double h) : make_(std::move(make)), h_(h) {}
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double mu) const {
+    if (!(mu >= 0.0)) return Eigen::VectorXd::Constant(x.size(), NAN);
+    return at(mu).contact_residual(x);
+  }
+  [[nodiscard]] solvers::LowRankLinearization linearize(const Eigen::VectorXd& x, double mu) const {
+    solvers::LowRankLinearization l;
+    if (!(mu >= 0.0)) {
+      l.residual = l.parameter_derivative = Eigen::VectorXd::Constant(x.size(), NAN);
+      l.jacobian.capacitance = Eigen::MatrixXd::Constant(x.size(), x.size(), NAN);
+      return l;
+    }
+    const Eigen::VectorXd ahead = make_(mu + h_).contact_residual(x);
+    const auto& problem = at(mu);
+    l.residual = problem.contact_residual(x);
+    l.jacobian = problem.contact_jacobian_low_rank(x);
+    l.parameter_derivative = (ahead - l.residual) / h_;
+    return l;
+  }
+
+ private:
+  [[nodiscard]] const solvers::WeightedResidual& at(double mu) const {
+    if (!cache_ || cache_mu_ != mu) {
+      cache_.emplace(make_(mu));
+      cache_mu_ = mu;
+    }
+    return *cache_;
+  }
+  std::function<solvers::WeightedResidual(double)> make_;
+  double h_;
+  mutable std::optional<solvers::WeightedResidual> cache_;
+  mutable double cache_mu_ = 0.0;
+};
 
 struct Curve {
   std::string label;
@@ -113,27 +163,71 @@ int main(int argc, char** argv) {
     }
     const solvers::HarmonicForcing casing_only{model.observed, 0.0, from * f1};
 
-    // Where the frictional start exists: the periodic solve at the start frequency for each μ of
-    // the file's scan, by Newton from the frictionless solution there (with a start given,
-    // WeightedResidual::solve tries no homotopy).
+    // The frictional start by pseudo-arclength continuation in μ at the start frequency (the
+    // continuation layer, through folds): from μ = 0, the frictionless solution (a slider of no
+    // force), over [0, the scan's largest μ], landing on each value of the scan, |Δμ| per step at
+    // most contact.friction_step.
     const auto scan_basis = solvers::TimeBasis::fourier_harmonics(harmonics);
+    const auto with_friction = [&](double mu_value) {
+      auto contacts = rubbing;
+      const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_value, 0.0});
+      for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
+      return solvers::WeightedResidual(model.reduced, casing_only, contacts, scan_basis, scan_basis,
+                                       {.formulation = reproduce::kFigureFormulation});
+    };
     const solvers::WeightedResidual dry_start(model.reduced, casing_only, radial, scan_basis, scan_basis,
                                               {.formulation = reproduce::kFigureFormulation});
     const auto dry_solution = dry_start.solve();
     if (!dry_solution.converged()) run.fail("frictionless start: " + dry_solution.brief());
-    const std::vector<double> scan = parameters.numbers("contact.friction_scan");
-    std::vector<solvers::WeightedResidualSolution> scanned;
-    for (const double mu_scan : scan) {
-      auto contacts = rubbing;
-      const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_scan, 0.0});
-      for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
-      const solvers::WeightedResidual wet(model.reduced, casing_only, contacts, scan_basis, scan_basis,
-                                          {.formulation = reproduce::kFigureFormulation});
-      const Eigen::VectorXd x0 = wet.contact_unknowns(spectral::stacked(dry_solution.coefficients));
-      scanned.push_back(wet.solve(&x0));
-      std::printf("mu = %g at %g f1 from the frictionless solution: %s\n", mu_scan, from,
-                  scanned.back().brief().c_str());
+    std::vector<double> scan = parameters.numbers("contact.friction_scan");
+    std::sort(scan.begin(), scan.end());
+    if (scan.empty() || !(scan.front() > 0.0)) run.fail("contact.friction_scan: needs values of μ > 0");
+    const FrictionFamily family(with_friction, kMuDifference * scan.back());
+    solvers::PseudoArclengthOptions in_mu;
+    in_mu.parameter_min = 0.0;
+    in_mu.parameter_max = scan.back();
+    in_mu.parameter_scale = scan.back();
+    // x̂ = x / its largest start value, so that μ and the state weigh alike in the arclength.
+    const Eigen::VectorXd mu_x0 = with_friction(0.0).contact_unknowns(spectral::stacked(dry_solution.coefficients));
+    in_mu.state_scale = std::max(mu_x0.lpNorm<Eigen::Infinity>(), dry_start.residual_scale());
+    in_mu.initial_step = 2e-2;  // in that scaled metric (the defaults: 1e-2 and 5e-2)
+    in_mu.max_step = 1e-1;
+    in_mu.max_parameter_step = parameters.number("contact.friction_step");
+    in_mu.max_points = parameters.integer("contact.friction_points");
+    in_mu.max_state = parameters.number("contact.friction_max_state");
+    in_mu.land_on = scan;
+    const auto mu_start = std::chrono::steady_clock::now();
+    const auto mu_branch = solvers::pseudo_arclength(family, mu_x0, 0.0, in_mu);
+    const double mu_time = models::seconds_since(mu_start);
+    double mu_largest = 0.0;
+    for (const auto& p : mu_branch.points) mu_largest = std::max(mu_largest, p.parameter);
+    // Where the state grows without bound, ‖x‖∞ ≈ C/(μ* − μ) near a pole μ*: 1/‖x‖∞ extrapolated
+    // linearly to 0 through the branch's last two points.
+    double mu_pole = NAN;
+    if (mu_branch.points.size() >= 2) {
+      const auto& a = mu_branch.points[mu_branch.points.size() - 2];
+      const auto& b = mu_branch.points.back();
+      const double ia = 1.0 / a.x.lpNorm<Eigen::Infinity>(), ib = 1.0 / b.x.lpNorm<Eigen::Infinity>();
+      if (ia > ib) mu_pole = b.parameter + ib * (b.parameter - a.parameter) / (ia - ib);
     }
+    const bool unbounded = mu_branch.stop == solvers::StopReason::StateBound && std::isfinite(mu_pole);
+    const std::string pole_text = std::isfinite(mu_pole) ? format("%.4g", mu_pole) : std::string("—");
+    // Newton at each μ of the scan straight from the frictionless solution (no continuation): the
+    // solutions a start there finds, on the branch or off it.
+    std::vector<solvers::WeightedResidualSolution> direct;
+    for (const double mu_value : scan) direct.push_back(with_friction(mu_value).solve(&mu_x0));
+    const double mu_growth = mu_branch.points.empty() ? NAN
+                                                      : mu_branch.points.back().x.lpNorm<Eigen::Infinity>() /
+                                                            mu_x0.lpNorm<Eigen::Infinity>();
+    std::printf("continuation in mu at %g f1: %s; largest mu %g, %.1f s: %s\n", from, mu_branch.brief().c_str(),
+                mu_largest, mu_time, mu_branch.message.c_str());
+    // The scan's values the continuation landed on (each a converged point of the branch).
+    const auto landing = [&](double mu_value) -> const solvers::BranchPoint* {
+      for (const auto& p : mu_branch.landings) {
+        if (p.parameter == mu_value) return &p;
+      }
+      return nullptr;
+    };
 
     std::vector<Curve> curves;
     for (const bool friction : {false, true}) {
@@ -145,6 +239,7 @@ int main(int argc, char** argv) {
       o.parameter_min = from * f1;
       o.parameter_max = to * f1;
       o.max_parameter_step = parameters.number("response.max_step_f1") * f1;
+      o.max_step = parameters.number("response.max_step");
       o.observed_dof = model.observed;
       o.stability = false;  // friction: no monodromy of a stick–slip orbit
       o.max_state = parameters.number("response.max_state");
@@ -249,13 +344,17 @@ int main(int argc, char** argv) {
       run.table("orbit.csv", {"tau [-]", "normal_force [N]", "friction_force [N]", "gap [m]"}, {tau, fn, ft, gap_tau});
     }
 
-    const auto issue_mu = std::find(scan.begin(), scan.end(), kIssueFrictionCoefficient);
-    const size_t issue_index = static_cast<size_t>(issue_mu - scan.begin());
+    const auto* issue_point = landing(kIssueFrictionCoefficient);
+    const bool issue_in_scan = std::find(scan.begin(), scan.end(), kIssueFrictionCoefficient) != scan.end();
     std::vector<Claim> claims = {
         {"the issue's μ = " + format("%g", kIssueFrictionCoefficient) + " has a periodic response at the start, " +
-             format("%g", from) + " f1, near the frictionless one",
-         issue_mu != scan.end() ? std::optional<bool>(scanned[issue_index].converged()) : std::nullopt,
-         issue_mu != scan.end() ? scanned[issue_index].brief() : "μ = 0.15 not in contact.friction_scan"},
+             format("%g", from) + " f1, reached by continuation in μ from the frictionless one",
+         issue_in_scan ? std::optional<bool>(issue_point != nullptr) : std::nullopt,
+         issue_in_scan ? std::string(solvers::to_string(mu_branch.stop)) + " at μ = " + format("%.4g", mu_largest) +
+                             ", the contact unknowns " + format("%.3g", mu_growth) +
+                             " times those at μ = 0 (1/‖x‖∞ extrapolated to 0 at μ ≈ " + pole_text + "), " +
+                             std::to_string(mu_branch.points.size()) + " points"
+                       : "μ = " + format("%g", kIssueFrictionCoefficient) + " not in contact.friction_scan"},
         {"both branches reach the range end " + format("%g", to) + " f1 (pseudo-arclength in f, i.e. in Ω = 2πf/" +
              std::to_string(lobes) + ")",
          curves[0].curve.converged() && curves[1].curve.converged(),
@@ -306,26 +405,34 @@ int main(int argc, char** argv) {
          << " | " << format("%.1f", 2.0 * kPi * peak->frequency_hz / lobes) << " | "
          << format("%.3f", peak->amplitude * model.unit) << " | " << format("%.1f", c->time_s) << " |\n";
     }
-    md << "\nThe periodic solve at " << format("%g", from)
-       << " f1 from the frictionless solution, for each μ of the "
-          "scan (`contact.friction_scan`):\n\n| μ | status | Newton iterations | backward error |\n|---|---|---|---|\n";
+    md << "\nWhich μ has a periodic response at " << format("%g", from)
+       << " f1: a pseudo-arclength continuation in μ from the frictionless solution at μ = 0 (|Δμ| ≤ "
+       << format("%g", in_mu.max_parameter_step)
+       << " per step, `contact.friction_step`; ∂r/∂μ by a forward difference, exact on each stick/slip pattern, "
+          "where the Jenkins force is affine in μ) took "
+       << mu_branch.points.size() << " points and " << format("%.1f", mu_time) << " s, and ended "
+       << solvers::to_string(mu_branch.stop) << " at μ = " << format("%.4g", mu_largest) << " (" << mu_branch.message
+       << "; " << mu_branch.folds.size() << " folds). There the contact unknowns are " << format("%.3g", mu_growth)
+       << " times those at μ = 0"
+       << (unbounded
+               ? " and 1/‖x‖∞, extrapolated linearly through the last two points, would vanish near μ ≈ " + pole_text +
+                     " (an estimate, not a located singularity): the response grows without bound as μ nears a "
+                     "value a little above the branch's end, as at a resonance (the eigenvalues of the "
+                     "linearization are not computed here)"
+               : std::string())
+       << ". Beside it, Newton at each μ of `contact.friction_scan` straight from the frictionless solution:\n\n"
+       << "| μ | on the continuation in μ | its Newton iterations | Newton from μ = 0: status | iterations | "
+          "backward error |\n|---|---|---|---|---|---|\n";
     for (size_t i = 0; i < scan.size(); ++i) {
-      md << "| " << format("%g", scan[i]) << " | " << solvers::to_string(scanned[i].report.status) << " | "
-         << scanned[i].report.iterations << " | " << format("%.1e", scanned[i].backward_error) << " |\n";
+      const auto* p = landing(scan[i]);
+      md << "| " << format("%g", scan[i]) << " | " << (p != nullptr ? "reached" : "not reached") << " | "
+         << (p != nullptr ? std::to_string(p->corrector_iterations) : std::string()) << " | "
+         << solvers::to_string(direct[i].report.status) << " | " << direct[i].report.iterations << " | "
+         << format("%.1e", direct[i].backward_error) << " |\n";
     }
-    double largest_converged = NAN;
-    for (size_t i = 0; i < scan.size(); ++i) {
-      if (scanned[i].converged()) {
-        largest_converged = std::isnan(largest_converged) ? scan[i] : std::max(largest_converged, scan[i]);
-      }
-    }
-    md << "\nThe curves use the file's μ = " << format("%g", mu)
-       << " (`contact.friction_coefficient`); the largest μ "
-          "of the scan whose start converged is "
-       << (std::isnan(largest_converged) ? std::string("none") : format("%g", largest_converged))
-       << ". Where a start fails, Newton stagnates with a residual that does not fall (the table): a fold of the "
-          "branch in μ, or no periodic response near the frictionless one, is not told apart here (no continuation "
-          "in μ).\n";
+    md << "\nA μ beyond the branch's end whose Newton converges has a response on another branch, not connected to the "
+          "frictionless one at this frequency by a bounded path. The curves use the file's μ = "
+       << format("%g", mu) << " (`contact.friction_coefficient`).\n";
     md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1)
        << "), friction dissipates " << format("%.3g", sliding_dissipation)
        << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes
@@ -344,6 +451,14 @@ int main(int argc, char** argv) {
               {"friction_coefficient", mu},
               {"harmonics", harmonics},
               {"friction_scan", scan},
+              {"friction_continuation",
+               {{"stop", std::string(solvers::to_string(mu_branch.stop))},
+                {"points", mu_branch.points.size()},
+                {"largest_mu", mu_largest},
+                {"pole_mu", std::isfinite(mu_pole) ? nlohmann::json(mu_pole) : nlohmann::json()},
+                {"growth", mu_growth},
+                {"folds", mu_branch.folds.size()},
+                {"time_s", mu_time}}},
               {"tip_radius_m", radius},
               {"tip_angle_rad", theta},
               {"largest_amplitude_frequency_hz", {dry->frequency_hz, wet->frequency_hz}},
