@@ -219,6 +219,7 @@ int main(int argc, char** argv) {
     const double mu_growth = mu_branch.points.empty() ? NAN
                                                       : mu_branch.points.back().x.lpNorm<Eigen::Infinity>() /
                                                             mu_x0.lpNorm<Eigen::Infinity>();
+    const std::string growth_text = std::isfinite(mu_growth) ? format("%.3g", mu_growth) : std::string("—");
     std::printf("continuation in mu at %g f1: %s; largest mu %g, %.1f s: %s\n", from, mu_branch.brief().c_str(),
                 mu_largest, mu_time, mu_branch.message.c_str());
     // The scan's values the continuation landed on (each a converged point of the branch).
@@ -350,11 +351,11 @@ int main(int argc, char** argv) {
         {"the issue's μ = " + format("%g", kIssueFrictionCoefficient) + " has a periodic response at the start, " +
              format("%g", from) + " f1, reached by continuation in μ from the frictionless one",
          issue_in_scan ? std::optional<bool>(issue_point != nullptr) : std::nullopt,
-         issue_in_scan ? std::string(solvers::to_string(mu_branch.stop)) + " at μ = " + format("%.4g", mu_largest) +
-                             ", the contact unknowns " + format("%.3g", mu_growth) +
-                             " times those at μ = 0 (1/‖x‖∞ extrapolated to 0 at μ ≈ " + pole_text + "), " +
-                             std::to_string(mu_branch.points.size()) + " points"
-                       : "μ = " + format("%g", kIssueFrictionCoefficient) + " not in contact.friction_scan"},
+         issue_in_scan
+             ? std::string(solvers::to_string(mu_branch.stop)) + " at μ = " + format("%.4g", mu_largest) +
+                   ", the contact unknowns " + growth_text + " times those at μ = 0 (1/‖x‖∞ extrapolated to 0 at μ ≈ " +
+                   pole_text + "), " + std::to_string(mu_branch.points.size()) + " points"
+             : "μ = " + format("%g", kIssueFrictionCoefficient) + " not in contact.friction_scan"},
         {"both branches reach the range end " + format("%g", to) + " f1 (pseudo-arclength in f, i.e. in Ω = 2πf/" +
              std::to_string(lobes) + ")",
          curves[0].curve.converged() && curves[1].curve.converged(),
@@ -412,7 +413,7 @@ int main(int argc, char** argv) {
           "where the Jenkins force is affine in μ) took "
        << mu_branch.points.size() << " points and " << format("%.1f", mu_time) << " s, and ended "
        << solvers::to_string(mu_branch.stop) << " at μ = " << format("%.4g", mu_largest) << " (" << mu_branch.message
-       << "; " << mu_branch.folds.size() << " folds). There the contact unknowns are " << format("%.3g", mu_growth)
+       << "; " << mu_branch.folds.size() << " folds). There the contact unknowns are " << growth_text
        << " times those at μ = 0"
        << (unbounded
                ? " and 1/‖x‖∞, extrapolated linearly through the last two points, would vanish near μ ≈ " + pole_text +
@@ -430,8 +431,8 @@ int main(int argc, char** argv) {
          << solvers::to_string(direct[i].report.status) << " | " << direct[i].report.iterations << " | "
          << format("%.1e", direct[i].backward_error) << " |\n";
     }
-    md << "\nA μ beyond the branch's end whose Newton converges has a response on another branch, not connected to the "
-          "frictionless one at this frequency by a bounded path. The curves use the file's μ = "
+    md << "\nA μ beyond the branch's end whose Newton converges has a response on another branch: the one from the "
+          "frictionless solution does not reach it. The curves use the file's μ = "
        << format("%g", mu) << " (`contact.friction_coefficient`).\n";
     md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1)
        << "), friction dissipates " << format("%.3g", sliding_dissipation)
@@ -456,7 +457,7 @@ int main(int argc, char** argv) {
                 {"points", mu_branch.points.size()},
                 {"largest_mu", mu_largest},
                 {"pole_mu", std::isfinite(mu_pole) ? nlohmann::json(mu_pole) : nlohmann::json()},
-                {"growth", mu_growth},
+                {"growth", std::isfinite(mu_growth) ? nlohmann::json(mu_growth) : nlohmann::json()},
                 {"folds", mu_branch.folds.size()},
                 {"time_s", mu_time}}},
               {"tip_radius_m", radius},
