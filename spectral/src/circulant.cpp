@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <fftw3.h>
 
@@ -48,6 +49,21 @@ Circulant::Circulant(const Eigen::VectorXd& first_column) : column_(first_column
   if (column_.size() == 0) throw std::invalid_argument("Circulant: the first column is empty (M must be >= 1)");
   if (!column_.allFinite()) throw std::invalid_argument("Circulant: the first column has a non-finite entry");
   eigenvalues_ = real_dft_columns(column_).col(0);
+}
+
+Circulant Circulant::from_eigenvalues(const Eigen::VectorXcd& eigenvalues, int dimension) {
+  if (dimension < 1 || eigenvalues.size() != dimension / 2 + 1) {
+    throw std::invalid_argument("Circulant::from_eigenvalues: " + std::to_string(eigenvalues.size()) +
+                                " eigenvalues for M = " + std::to_string(dimension) + "; expected M/2 + 1 (M >= 1)");
+  }
+  if (!eigenvalues.allFinite()) {
+    throw std::invalid_argument("Circulant::from_eigenvalues: an eigenvalue is not finite");
+  }
+  Eigen::VectorXcd bins = eigenvalues;
+  bins(0) = bins(0).real();
+  if (dimension % 2 == 0) bins(dimension / 2) = bins(dimension / 2).real();
+  Eigen::VectorXd column = inverse_real_dft_columns(bins, dimension).col(0);
+  return {std::move(column), std::move(bins)};
 }
 
 double Circulant::reciprocal_condition() const {

@@ -1,5 +1,7 @@
 #include <wbm/spectral/circulant.hpp>
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Core>
@@ -30,4 +32,33 @@ TEST(Circulant, ProductsAndInverseMatchTheDenseMatrix) {
   EXPECT_FALSE(spectral::Circulant::is_circulant(not_circulant));
   EXPECT_THROW((void)spectral::Circulant(Eigen::VectorXd::Ones(4)).inverse(), std::domain_error);  // eigenvalues 4, 0, 0
   EXPECT_THROW(spectral::Circulant{Eigen::VectorXd()}, std::invalid_argument);
+}
+
+// Circulant::from_eigenvalues against a closed form: the second-difference circulant (first column
+// 2, −1, 0, …, 0, −1) has eigenvalues 2 − 2 cos(2πm/M). Built from them it gives back that column
+// and that matrix's products; lengths other than ⌊M/2⌋ + 1 and non-finite eigenvalues are refused.
+TEST(Circulant, FromEigenvaluesGivesTheCirculantOfThoseEigenvalues) {
+  constexpr double kPi = 3.14159265358979323846;
+  for (int m : {1, 2, 7, 16, 256}) {
+    SCOPED_TRACE(m);
+    Eigen::VectorXd column = Eigen::VectorXd::Zero(m);
+    column(0) += 2.0;
+    column((m - 1) % m) -= 1.0;
+    column(1 % m) -= 1.0;
+    Eigen::VectorXcd bins(m / 2 + 1);
+    for (int k = 0; k <= m / 2; ++k) bins(k) = 2.0 - 2.0 * std::cos(2.0 * kPi * k / m);
+    const spectral::Circulant c = spectral::Circulant::from_eigenvalues(bins, m);
+    EXPECT_LT((c.first_column() - column).norm(), 1e-14);
+    const Eigen::MatrixXd v = Eigen::MatrixXd::Random(m, 2);
+    Eigen::MatrixXd dense = 2.0 * Eigen::MatrixXd::Identity(m, m);
+    for (int i = 0; i < m; ++i) {
+      dense(i, (i + 1) % m) -= 1.0;
+      dense(i, (i + m - 1) % m) -= 1.0;
+    }
+    EXPECT_LT((c.apply(v) - dense * v).norm(), 1e-13 * (1.0 + (dense * v).norm()));
+  }
+  EXPECT_THROW((void)spectral::Circulant::from_eigenvalues(Eigen::VectorXcd::Ones(3), 8), std::invalid_argument);
+  Eigen::VectorXcd bad = Eigen::VectorXcd::Ones(5);
+  bad(2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((void)spectral::Circulant::from_eigenvalues(bad, 8), std::invalid_argument);
 }

@@ -30,7 +30,9 @@
 // every product exact, is that of G_c itself up to ε per term, smooth in f; the LU of the rounded
 // sum is its preconditioner, and one correction leaves an error near κ ε times the first one's
 // [Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., 2002, Sec. 12.1]. The modal
-// path has no such cancellation: it forms λ_i − ω² per mode.
+// path forms λ_i − ω² per mode; its circulant blocks (wavelet Galerkin pairs) cancelled in the
+// transform of their first column until they were combined on the time operators' eigenvalues
+// (stop 82, kronecker_factorization.cpp).
 #include "kronecker_factorization.hpp"
 
 #include <algorithm>

@@ -76,64 +76,6 @@ Eigen::Index joint_nonzeros(const TimeOperators& ops, const std::array<Eigen::Sp
   return joint.nonZeros();
 }
 
-// ‖G‖₁ from the Kronecker factors t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed:
-// the column (j, k) of G sums |Σ_s x_s(i, j) t_s(l, k)| over (i, l) = Σ_i ‖v_ij‖ Σ_l |Σ_s u_s t_s(l, k)|
-// with v_ij = (M_ij, C_ij, K_ij) = ‖v_ij‖ u. The column sums of |Σ_s u_s T_s| are computed once
-// per distinct direction u (to 1e-14), a few for a FE model: O(nnz(T)) each for sparse time
-// operators (Fourier:Fourier), O(M²) for dense ones, plus O(nnz(X) · M).
-double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
-                       const std::array<const Eigen::SparseMatrix<double>*, 3>& x) {
-  const auto n = x[0]->cols();
-  const auto m = t[0].cols();
-  // Time operators more than a quarter full (wavelet Galerkin, Petrov–Galerkin): dense sums.
-  const bool dense = static_cast<double>(t[0].nonZeros() + t[1].nonZeros() + t[2].nonZeros()) >
-                     0.25 * static_cast<double>(m) * static_cast<double>(m);
-  std::array<Eigen::MatrixXd, 3> td;
-  std::vector<std::pair<Eigen::Vector3d, Eigen::VectorXd>> directions;  // (u, column sums of Σ u_s T_s)
-  if (dense) {
-    for (int s = 0; s < 3; ++s) td[s] = Eigen::MatrixXd(t[s]);
-  }
-  double best = 0.0;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    Eigen::VectorXd colsum = Eigen::VectorXd::Zero(m);  // over k
-    // Rows i present in column j of any of M, C, K.
-    std::vector<Eigen::Index> rows;
-    for (const auto* xs : x) {
-      for (Eigen::SparseMatrix<double>::InnerIterator it(*xs, j); it; ++it) rows.push_back(it.row());
-    }
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    for (const Eigen::Index i : rows) {
-      const double v0 = x[0]->coeff(i, j), v1 = x[1]->coeff(i, j), v2 = x[2]->coeff(i, j);
-      // |s·Σ u_s T_s| = |s| |Σ u_s T_s|: one column sum per direction u = v/‖v‖ (a FE model has
-      // a few: the rod's interior diagonal, off-diagonal and end entries), reused to 1e-14.
-      const double norm = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
-      if (norm == 0.0) continue;
-      const Eigen::Vector3d u(v0 / norm, v1 / norm, v2 / norm);
-      auto it = std::find_if(directions.begin(), directions.end(), [&](const auto& d) {
-        return (d.first - u).template lpNorm<Eigen::Infinity>() <= 1e-14;
-      });
-      if (it == directions.end()) {
-        Eigen::VectorXd sums;
-        if (dense) {
-          sums = (u(0) * td[0] + u(1) * td[1] + u(2) * td[2]).cwiseAbs().colwise().sum().transpose();
-        } else {
-          const Eigen::SparseMatrix<double> comb = u(0) * t[0] + u(1) * t[1] + u(2) * t[2];
-          sums = Eigen::VectorXd::Zero(m);
-          for (Eigen::Index k = 0; k < m; ++k) {
-            for (Eigen::SparseMatrix<double>::InnerIterator c(comb, k); c; ++c) sums(k) += std::abs(c.value());
-          }
-        }
-        directions.emplace_back(u, std::move(sums));
-        it = std::prev(directions.end());
-      }
-      colsum += norm * it->second;
-    }
-    best = std::max(best, colsum.maxCoeff());
-  }
-  return best;
-}
-
 }  // namespace
 
 // One modal block A + λ_i B (M × M) and its inverse, in the form the time operators allow:
@@ -201,12 +143,14 @@ class KroneckerFactorization::ModeBlock {
       }
     }
   }
-  /// Circulant block with first column `column`; singular (not ok) when min |eigenvalue| ≤
-  /// 1e-14 max |eigenvalue|, i.e. zero to double precision.
-  explicit ModeBlock(const Eigen::VectorXd& column) : m_(column.size()), component_(nullptr) {
-    const spectral::Circulant c(column);
-    ok_ = c.reciprocal_condition() > 1e-14;
-    if (ok_) circulant_inverse_.emplace(c.inverse());
+  /// Circulant block of eigenvalues `bins` (ĉ_m, m = 0 … ⌊M/2⌋); singular (not ok) when one is not
+  /// finite or min |ĉ_m| ≤ 1e-14 max |ĉ_m|, i.e. zero to double precision. Its inverse has 1/ĉ_m.
+  ModeBlock(const Eigen::VectorXcd& bins, Eigen::Index m) : m_(m), component_(nullptr) {
+    const Eigen::VectorXd magnitude = bins.cwiseAbs();
+    ok_ = bins.allFinite() && magnitude.minCoeff() > 1e-14 * magnitude.maxCoeff();
+    if (ok_) {
+      circulant_inverse_.emplace(spectral::Circulant::from_eigenvalues(bins.cwiseInverse(), static_cast<int>(m)));
+    }
   }
   /// Sparse or dense LU of the block.
   explicit ModeBlock(const Eigen::MatrixXd& block) : m_(block.rows()), component_(nullptr) {
@@ -305,6 +249,10 @@ struct KroneckerFactorization::Setup {
   Eigen::VectorXd lambda;
   std::vector<std::vector<Eigen::Index>> components;  // of the time operators' sparsity graph
   bool circulant = false;                             // all three time operators circulant
+  // Circulant: the eigenvalues of A_M, A_C and A_K (bins 0 … ⌊M/2⌋), transformed once; each block
+  // is combined on them bin by bin, so a near-resonant bin carries only its own terms' rounding
+  // (docs/design.md, "Circulant blocks combined on their eigenvalues").
+  Eigen::VectorXcd mass_bins, damping_bins, stiffness_bins;
   bool supernodal = false;  // assembled path: the time operators' joint pattern is over ¼ full
   bool by_components = false;  // not modal: G factorized per component (kronecker_components.cpp)
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
@@ -376,6 +324,11 @@ KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, c
     setup->circulant = setup->components.empty() && !setup->fourier_weighting &&
                        spectral::Circulant::is_circulant(ops.mass) && spectral::Circulant::is_circulant(ops.damping) &&
                        spectral::Circulant::is_circulant(ops.stiffness);
+    if (setup->circulant) {
+      setup->mass_bins = spectral::real_dft_columns(ops.mass.col(0)).col(0);
+      setup->damping_bins = spectral::real_dft_columns(ops.damping.col(0)).col(0);
+      setup->stiffness_bins = spectral::real_dft_columns(ops.stiffness.col(0)).col(0);
+    }
   }
   // Nonzeros of the joint pattern of (A_M, A_C, A_K) against M²: above ¼, G's factors fill in
   // densely and the supernodal LU is faster (bench_weighted_residual, newton.hpp SupernodalLu).
@@ -402,23 +355,24 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
   if (su.modal) {
     // Mode i's block is a + λ_i bb with a = f² A_M + f c_M A_C and bb = f c_K A_C + A_K (c_M,
     // c_K: Setup::mass_part, stiffness_part), formed only where read: densely for a dense block,
-    // on the first column for a circulant one, on the components' entries for a block-diagonal
-    // one (ModeBlock), not at all for the Fourier-weighting form. c_K is the same for every mode,
-    // so bb is formed once; a too with Rayleigh damping, per mode for a classical C (its c_M,i).
+    // on the eigenvalues for a circulant one (Setup::mass_bins), on the components' entries for a
+    // block-diagonal one (ModeBlock), not at all for the Fourier-weighting form. c_K is the same
+    // for every mode, so bb is formed once; a too with Rayleigh damping, per mode for a classical C.
     const bool dense_blocks = !su.fourier_weighting && su.components.empty() && !su.circulant;
     const bool per_mode = su.mode_damping.size() > 0;
     const double ck = su.stiffness_part();
     Eigen::MatrixXd a, bb;
+    Eigen::VectorXcd a_bins, bb_bins;
     if (dense_blocks) {
       bb = fr * ck * ops.damping + ops.stiffness;
     } else if (su.circulant) {
-      bb = fr * ck * ops.damping.col(0) + ops.stiffness.col(0);
+      bb_bins = fr * ck * su.damping_bins + su.stiffness_bins;
     }
     const auto form_a = [&](double cm) {
       if (dense_blocks) {
         a = fr * fr * ops.mass + fr * cm * ops.damping;
       } else if (su.circulant) {
-        a = fr * fr * ops.mass.col(0) + fr * cm * ops.damping.col(0);
+        a_bins = fr * fr * su.mass_bins + fr * cm * su.damping_bins;
       }
     };
     if (!per_mode) form_a(su.c_m);
@@ -434,7 +388,8 @@ bool KroneckerFactorization::factorize(const KroneckerOperator& g) {
       } else if (!su.components.empty()) {
         blocks_.push_back(std::make_shared<const ModeBlock>(ops, fr, cm, ck, su.lambda(i), su.components));
       } else if (su.circulant) {
-        blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::VectorXd(a.col(0) + su.lambda(i) * bb.col(0))));
+        blocks_.push_back(
+            std::make_shared<const ModeBlock>(Eigen::VectorXcd(a_bins + su.lambda(i) * bb_bins), ops.mass.rows()));
       } else {
         blocks_.push_back(std::make_shared<const ModeBlock>(Eigen::MatrixXd(a + su.lambda(i) * bb)));
       }
@@ -573,12 +528,14 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     }
     return h;
   }
-  if (su.modal && su.circulant) {  // a sum of circulants is circulant: first columns only
+  if (su.modal && su.circulant) {  // a sum of circulants is circulant: summed bin by bin
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
-        Eigen::VectorXd column = Eigen::VectorXd::Zero(m);
-        for (size_t i = 0; i < blocks_.size(); ++i) column += weight(i, c, d) * blocks_[i]->circulant_inverse()->first_column();
-        structure->circulant.emplace_back(column);
+        Eigen::VectorXcd bins = Eigen::VectorXcd::Zero(m / 2 + 1);
+        for (size_t i = 0; i < blocks_.size(); ++i) {
+          bins += weight(i, c, d) * blocks_[i]->circulant_inverse()->eigenvalues();
+        }
+        structure->circulant.push_back(spectral::Circulant::from_eigenvalues(bins, static_cast<int>(m)));
         scatter(c, d, structure->circulant.back().dense());
       }
     }

@@ -27,6 +27,11 @@
 
 namespace wbm::solvers::detail {
 
+/// ‖G‖₁ of G = Σ_s t_s ⊗ x_s, t = (f² A_M, f A_C, A_K) and x = (M, C, K), G not formed
+/// (kronecker_norm.cpp): O(nnz(t)) per distinct direction of (M_ij, C_ij, K_ij) plus O(nnz(x) · M).
+double kronecker_norm1(const std::array<Eigen::SparseMatrix<double>, 3>& t,
+                       const std::array<const Eigen::SparseMatrix<double>*, 3>& x);
+
 /// The nonzeros (stacked row, weight) of one row of the contact selection P.
 using StackedTerms = std::vector<std::pair<Eigen::Index, double>>;
 

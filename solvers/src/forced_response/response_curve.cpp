@@ -323,11 +323,13 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
                                       [](const ContactPoint& c) { return c.law->hysteretic(); });
   if (branch.stop == StopReason::StepBelowMinimum && !std::isfinite(branch.stalled_residual) && !rigid &&
       hysteretic) {
-    // A Jenkins element's force has no f(u) to average over a cell (bench/bench_friction: DB6:DB6
-    // and B-spline:B-spline at 1024 samples stop near the damper's resonance); the cell-average
-    // advice below does not apply to it.
+    // A Jenkins element's force has no f(u) to average over a cell; the cell-average advice below
+    // does not apply to it. bench_friction's damper in DB6:DB6, M = 64, stops at 5.98 Hz with
+    // Q = 128 samples and crosses its resonance with Q = 256 (tests/solvers/test_circulant_blocks.cpp).
     curve.message += "; a hysteretic law (the Jenkins element) sampled at midpoints has a kink wherever a sample "
-                     "switches between stick and slip, and the cell average does not apply to it (it has no f(u))";
+                     "switches between stick and slip, and the cell average does not apply to it (it has no f(u)): "
+                     "raise the samples per period (WeightedResidualOptions::time_samples; scene: [basis] "
+                     "time_samples, e.g. 4M)";
   } else if (branch.stop == StopReason::StepBelowMinimum && !std::isfinite(branch.stalled_residual) && !rigid &&
              base.contact_quadrature() == ContactQuadrature::Midpoint) {
     // Sampled at midpoints, a law with a corner (a linear penalty k (u − g)₊) makes the residual

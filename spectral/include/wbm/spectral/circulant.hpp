@@ -29,6 +29,15 @@ namespace wbm::spectral {
 class Circulant {
  public:
   explicit Circulant(const Eigen::VectorXd& first_column);
+  /// The circulant of size M = `dimension` with eigenvalues ĉ_m, m = 0 … ⌊M/2⌋ (the others their
+  /// conjugates); its first column is their inverse real DFT. The imaginary parts of ĉ_0 and (M
+  /// even) ĉ_{M/2} are taken as 0, as a real circulant has them. A combination of circulants
+  /// Σ_i w_i C_i formed on their eigenvalues, Σ_i w_i ĉ_{i,m}, keeps each bin to the rounding of
+  /// its own terms, where forming the first column first and transforming it mixes every bin's
+  /// rounding into each (a stiffness operator's bins span (πM)²: its top bins' rounding would
+  /// swamp the near-resonant one). Throws std::invalid_argument unless `eigenvalues` has ⌊M/2⌋ +
+  /// 1 finite entries and M ≥ 1.
+  [[nodiscard]] static Circulant from_eigenvalues(const Eigen::VectorXcd& eigenvalues, int dimension);
 
   [[nodiscard]] int dimension() const noexcept { return static_cast<int>(column_.size()); }
   /// The first column c (length M).
