@@ -19,6 +19,8 @@
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
+#include "impact_oscillators.hpp"
+
 namespace wbm::solvers {
 namespace {
 
@@ -28,14 +30,7 @@ const double kDamperStiffness = std::pow(2.0 * kCirculantPi * 10.0, 2);  // k [N
 // bench/bench_friction's damper: 1 kg, f_n = 10 Hz, ζ = 0.5 %, 1 N at the DOF, a Jenkins element
 // of k_t = 1000 k and slip force μN = 0.2 N.
 MechanicalSystem friction_damper() {
-  MechanicalSystem s;
-  s.mass.resize(1, 1);
-  s.mass.insert(0, 0) = 1.0;
-  s.stiffness.resize(1, 1);
-  s.stiffness.insert(0, 0) = kDamperStiffness;
-  s.damping.resize(1, 1);
-  s.damping.insert(0, 0) = 2.0 * 0.005 * 2.0 * kCirculantPi * 10.0;
-  return s;
+  return wbm::testing::one_dof_system(1.0, 2.0 * 0.005 * 2.0 * kCirculantPi * 10.0, kDamperStiffness);
 }
 
 std::vector<ContactPoint> damper_jenkins() {
