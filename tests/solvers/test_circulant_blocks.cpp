@@ -1,6 +1,7 @@
 // G(f) on the modal path with circulant time operators (a periodized wavelet basis with itself:
 // DB6:DB6, B-spline:B-spline), each mode's block combined on the time operators' eigenvalues bin
-// by bin (kronecker_factorization.cpp, Setup::mass_bins). Truths from outside the code under test:
+// by bin (kronecker_factorization.cpp, Setup::mass_bins), and the other modal paths beside them.
+// Truths from outside the code under test:
 //  - the contact residual is smooth in the frequency near a resonance: its second difference over
 //    f(1 ± 1e-12) is 1e-24 f² ∂²r/∂f², far below rounding, so what it shows is the rounding of
 //    G(f) itself moving with f;
@@ -20,6 +21,7 @@
 #include <wbm/solvers/weighted_residual.hpp>
 
 #include "impact_oscillators.hpp"
+#include "weighted_residual_fixtures.hpp"
 
 namespace wbm::solvers {
 namespace {
@@ -38,17 +40,20 @@ std::vector<ContactPoint> damper_jenkins() {
 }
 
 TEST(CirculantBlocks, ContactResidualIsSmoothInTheFrequencyNearResonance) {
-  // 1e-4 Hz below f_n, at 1.5 times the linear response. Before the blocks were combined on the
+  // Every pair of [JL14 Table 2] in the distributional form, on the modal path: the circulant
+  // blocks (B-spline:B-spline, DB6:DB6, Haar:B-spline), the Fourier-weighting factors (Haar:Fourier,
+  // DB6:Fourier, which form λ − f² ω² per harmonic) and the components (Fourier:Fourier). 1e-4 Hz
+  // below f_n, at 1.5 times the linear response. Before the circulant blocks were combined on the
   // eigenvalues (their first column formed per frequency and transformed), the second difference
-  // was 2.3e-11, 1.9e-10, 9.3e-12 and 1.9e-10 of ‖r‖ for the four cases below; 3.4e-14 to 5.7e-14
-  // after.
+  // was 2.3e-11 and 1.9e-10 of ‖r‖ for DB6:DB6 at M = 64 and 256, 9.3e-12 and 1.9e-10 for
+  // B-spline:B-spline; 3.4e-14 to 6.8e-14 for every pair after.
   const double f0 = 9.9999;
-  for (const char* name : {"db6", "bspline"}) {
+  for (const auto& pair : wbm::testing::kTable2) {
     for (const int m : {64, 256}) {
-      SCOPED_TRACE(std::string(name) + " M = " + std::to_string(m));
-      const auto basis = TimeBasis::from_name(name, m);
-      const WeightedResidual w0(friction_damper(), {0, 1.0, 5.0}, damper_jenkins(), basis, basis,
-                                {.time_samples = 1024});
+      SCOPED_TRACE(std::string(pair.trial) + ":" + pair.weighting + " M = " + std::to_string(m));
+      const auto trial = TimeBasis::from_name(pair.trial, m), weighting = TimeBasis::from_name(pair.weighting, m);
+      const WeightedResidual w0(friction_damper(), {0, 1.0, 5.0}, damper_jenkins(), trial, weighting,
+                                {.formulation = Formulation::Distributional, .time_samples = 1024});
       ASSERT_EQ(w0.linear_solver(), "modal");
       const WeightedResidual w = w0.at_frequency(f0);  // the same scale s_r
       const Eigen::VectorXd x = 1.5 * w.contact_unknowns(w.linear_response());
