@@ -242,19 +242,26 @@ void timestep(const Scene& scene, const Progress& progress, AnalysisResult& out)
       progress(std::clamp(done, 0.0, 1.0), "period " + std::to_string(period) + ", δ = " + format("%.1e", delta));
     };
   }
-  const bool rigid = scene.rigid();
+  const bool rigid = scene.rigid(), jenkins = scene.jenkins();
   auto mj = scene.moreau_jean;
-  const auto response = rigid ? solvers::integrate_moreau_jean_to_periodic(system, forcing, contacts, mj)
-                              : solvers::integrate_to_periodic(system, forcing, contacts, options);
+  const auto& cd = scene.central_difference;
+  // Rigid stops and exact friction: Moreau–Jean; a Jenkins element (its slider state carried from
+  // step to step): explicit central differences; memoryless penalty laws: the BDF.
+  const auto response = rigid     ? solvers::integrate_moreau_jean_to_periodic(system, forcing, contacts, mj)
+                        : jenkins ? solvers::integrate_central_difference_to_periodic(system, forcing, contacts, cd)
+                                  : solvers::integrate_to_periodic(system, forcing, contacts, options);
   const auto& rep = response.report;
   out.status = rep.status;
-  const std::string method = rigid ? "Moreau–Jean (theta = 0.5, restitution " + format("%g", mj.restitution) + ", " +
-                                         std::to_string(mj.steps_per_period) + " steps per period)"
-                                   : "GSL msbdf (variable-order BDF)";
+  const std::string method =
+      rigid     ? "Moreau–Jean (theta = 0.5, restitution " + format("%g", mj.restitution) + ", " +
+                      std::to_string(mj.steps_per_period) + " steps per period)"
+      : jenkins ? "central differences (explicit, " + std::to_string(cd.steps_per_period) + " steps per period)"
+                : "GSL msbdf (variable-order BDF)";
   out.diagnostics["timestep"] = rep;
   out.diagnostics["timestep"]["method"] = method;
-  out.summary = (rigid ? "Moreau–Jean at " : "BDF at ") + format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " +
-                std::to_string(rep.steps) + " steps, " + format("%.3f", rep.wall_time_s) + " s";
+  out.summary = std::string(rigid ? "Moreau–Jean at " : jenkins ? "central differences at " : "BDF at ") +
+                format("%g", forcing.frequency_hz) + " Hz: " + rep.message + ", " + std::to_string(rep.steps) +
+                " steps, " + format("%.3f", rep.wall_time_s) + " s";
   if (!out.converged()) return;
   period_tables(scene, contacts, system, forcing.frequency_hz, response.tau, response.displacement,
                 &response.velocity, out);

@@ -404,7 +404,9 @@ nlohmann::json to_json(const Scene& s) {
     j["solver"] = echo_keys(solver_keys(), s.solver);
   }
   if (s.analysis.kind == AnalysisKind::Timestep) {
-    j["timestep"] = s.rigid() ? echo_keys(moreau_jean_keys(), s.moreau_jean) : echo_keys(bdf_keys(), s.timestep);
+    j["timestep"] = s.rigid()     ? echo_keys(moreau_jean_keys(), s.moreau_jean)
+                    : s.jenkins() ? echo_keys(central_difference_keys(), s.central_difference)
+                                  : echo_keys(bdf_keys(), s.timestep);
   }
   nlohmann::json out = echo_keys(output_keys(), s.output);  // samples, formats, harmonics
   if (!s.output.observe.empty() && s.structure) {

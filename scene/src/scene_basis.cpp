@@ -9,7 +9,7 @@ void Parser::basis(const toml::table& root) {
   const toml::table* t = r_.table(root, "basis", false);
   const bool plot = s_.analysis.kind == AnalysisKind::BasisPlot;
   if (t != nullptr && s_.analysis.kind == AnalysisKind::Timestep) {
-    r_.warn(t->source(), "[basis] is not used by analysis \"timestep\" (BDF); ignored");
+    r_.warn(t->source(), "[basis] is not used by analysis \"timestep\" (time stepping); ignored");
     return;
   }
   if (t == nullptr) {

@@ -40,16 +40,10 @@ void Parser::contacts(const toml::table& root) {
       c.gap = r_.number(*t, section, "gap", modes ? detail::positive("m; nnm normalizes energies by contact onset")
                                                   : detail::finite("m"));
     }
-    const bool timestep = s_.analysis.kind == AnalysisKind::Timestep;
     if (friction && modes) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
                "\"" + law + "\" (friction) is for forced responses: solve, sweep, continuation and timestep; analysis "
                "\"nnm\" has no friction law (nonlinear modes are conservative)");
-    }
-    if (c.law == ContactLawKind::Jenkins && timestep) {
-      r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"jenkins\" with analysis \"timestep\": the time-stepping reference of scenes (Moreau–Jean) takes "
-               "exact friction; use law = \"coulomb\", or a weighted-residual analysis (solve, sweep, continuation)");
     }
     if (friction && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",

@@ -78,8 +78,9 @@ int Parser::counter_surface_of(const toml::table& t, const std::string& section,
         kind == AnalysisKind::NonlinearModes
             ? "analysis \"nnm\" computes free motions against fixed stops; a moving counter-surface forces the "
               "structure: use a forced response (solve, sweep, continuation), or remove counter_surface"
-            : "analysis \"timestep\": the time-stepping references of scenes (BDF, Moreau–Jean) take fixed "
-              "obstacles; use a weighted-residual analysis (solve, sweep, continuation), or remove counter_surface");
+            : "analysis \"timestep\": the time-stepping references of scenes (BDF, Moreau–Jean, central "
+              "differences) take fixed obstacles; use a weighted-residual analysis (solve, sweep, continuation), "
+              "or remove counter_surface");
     return -1;
   }
   int index = -1;

@@ -225,6 +225,20 @@ const std::vector<DeclaredKey<solvers::MoreauJeanOptions>>& moreau_jean_keys() {
   return keys;
 }
 
+const std::vector<DeclaredKey<solvers::CentralDifferenceOptions>>& central_difference_keys() {
+  using T = solvers::CentralDifferenceOptions;
+  static const std::vector<DeclaredKey<T>> keys = {
+      integer_key<T>("steps_per_period", [](auto& o) -> auto& { return o.steps_per_period; }, 4, 1 << 26,
+                     "fixed steps per period, a multiple of `[output] samples`; explicit: fewer than the stability "
+                     "limit h ω_max < 2 (ω_max with the Jenkins elements' k_t) are refused with the smallest that "
+                     "passes"),
+      number_key<T>("periodicity_tolerance", [](auto& o) -> auto& { return o.periodicity_tolerance; }, positive(""),
+                    kPeriodicity),
+      integer_key<T>("max_periods", [](auto& o) -> auto& { return o.max_periods; }, 2, 10000000, kMaxPeriods),
+  };
+  return keys;
+}
+
 const std::vector<DeclaredKey<Output>>& output_keys() {
   using O = Output;
   static const std::vector<DeclaredKey<O>> keys = {
@@ -279,6 +293,7 @@ std::string key_table_markdown(const std::string& section) {
   if (section == "solver") return key_table(key_rows(solver_keys()));
   if (section == "timestep") return key_table(key_rows(bdf_keys()));
   if (section == "timestep.rigid") return key_table(key_rows(moreau_jean_keys()));
+  if (section == "timestep.jenkins") return key_table(key_rows(central_difference_keys()));
   if (section == "output") return key_table(key_rows(output_keys()));
   std::string known;
   for (const auto& s : declared_sections()) known += (known.empty() ? "\"" : ", \"") + s + "\"";
@@ -287,7 +302,8 @@ std::string key_table_markdown(const std::string& section) {
 
 std::vector<std::string> declared_sections() {
   return {"top",   "analysis", "structure", "damping",  "forcing",        "forcing.loads",
-          "contact", "counter_surface", "basis",  "solver",    "timestep", "timestep.rigid", "output"};
+          "contact", "counter_surface", "basis",  "solver",    "timestep", "timestep.rigid", "timestep.jenkins",
+          "output"};
 }
 
 }  // namespace wbm::scene

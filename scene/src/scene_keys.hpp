@@ -29,6 +29,7 @@ const std::vector<DeclaredKey<Basis>>& basis_keys();                            
 const std::vector<DeclaredKey<Solver>>& solver_keys();                            // [solver]
 const std::vector<DeclaredKey<solvers::TimeIntegrationOptions>>& bdf_keys();      // [timestep], penalty laws
 const std::vector<DeclaredKey<solvers::MoreauJeanOptions>>& moreau_jean_keys();   // [timestep], law = "rigid"
+const std::vector<DeclaredKey<solvers::CentralDifferenceOptions>>& central_difference_keys();  // [timestep], "jenkins"
 const std::vector<DeclaredKey<Output>>& output_keys();                            // [output]
 
 }  // namespace wbm::scene::detail

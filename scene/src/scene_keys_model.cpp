@@ -148,7 +148,8 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                     "exact contact (Signorini conditions; solve, sweep, continuation, timestep and "
                     "nnm; all contacts of a forced response rigid or none), or a Jenkins element: dry friction along "
                     "the contact's direction, a spring k_t in series with a Coulomb slider of slip force μN (solve, "
-                    "sweep, continuation without stability; Midpoint quadrature), or exact Coulomb friction along it "
+                    "sweep, continuation without stability; Midpoint quadrature; timestep by central differences), "
+                    "or exact Coulomb friction along it "
                     "(\"coulomb\": the k_t → ∞ limit, its force a multiplier at the collocation instants as a rigid "
                     "stop's, first order in 1/M; solve, sweep, continuation without stability; timestep by Moreau–Jean "
                     "with Siconos; all contacts of the forced response \"rigid\" or \"coulomb\", or none)")

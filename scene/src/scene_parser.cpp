@@ -75,6 +75,14 @@ Scene Parser::parse(const toml::table& root) {
                  std::to_string(s_.output.samples) + " (Moreau–Jean samples its fixed steps): use powers of two, "
                  "e.g. 65536 steps and 1024 samples");
   }
+  if (s_.analysis.kind == AnalysisKind::Timestep && s_.jenkins() &&
+      (s_.central_difference.steps_per_period < s_.output.samples ||
+       s_.central_difference.steps_per_period % s_.output.samples != 0)) {
+    r_.error(root.source(), "timestep.steps_per_period",
+             std::to_string(s_.central_difference.steps_per_period) + " is not a multiple of output.samples = " +
+                 std::to_string(s_.output.samples) + " (central differences sample their fixed steps): use powers "
+                 "of two, e.g. 65536 steps and 1024 samples");
+  }
   return std::move(s_);
 }
 
@@ -217,6 +225,12 @@ void Parser::timestep(const toml::table& root) {
                       "BDF's (penalty laws)");
     return;
   }
+  if (s_.jenkins()) {  // central differences: fixed explicit steps, the elements' slider state carried
+    read_keys(r_, *t, "timestep", central_difference_keys(), s_.central_difference,
+              "a Jenkins element is integrated by explicit central differences; relative_tolerance and "
+              "absolute_tolerance are the BDF's (memoryless penalty laws), restitution Moreau–Jean's");
+    return;
+  }
   read_keys(r_, *t, "timestep", bdf_keys(), s_.timestep,
                     "steps_per_period and restitution are the Moreau–Jean scheme's, for law = \"rigid\"");
 }
@@ -226,6 +240,7 @@ void Parser::output(const toml::table& root) {
   if (t == nullptr) {
     s_.timestep.samples_per_period = s_.output.samples;
     s_.moreau_jean.samples_per_period = s_.output.samples;
+    s_.central_difference.samples_per_period = s_.output.samples;
     return;
   }
   read_keys(r_, *t, "output", output_keys(), s_.output);  // samples; the others below
@@ -260,6 +275,7 @@ void Parser::output(const toml::table& root) {
   }
   s_.timestep.samples_per_period = s_.output.samples;
   s_.moreau_jean.samples_per_period = s_.output.samples;
+  s_.central_difference.samples_per_period = s_.output.samples;
   if (const toml::node* o = t->get("observe"); o != nullptr && s_.structure) {
     const bool sweep = s_.analysis.kind == AnalysisKind::Solve && s_.forcing && s_.forcing->range;
     if (!sweep && s_.analysis.kind != AnalysisKind::Continuation) {

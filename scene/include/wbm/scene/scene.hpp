@@ -283,9 +283,19 @@ struct Scene {
   Solver solver;
   solvers::TimeIntegrationOptions timestep{};  // BDF, penalty laws
   solvers::MoreauJeanOptions moreau_jean{};    // type = "timestep" with law = "rigid"
+  /// type = "timestep" with a "jenkins" contact: explicit central differences
+  /// (solvers::integrate_central_difference_to_periodic), whose element carries its slider state.
+  solvers::CentralDifferenceOptions central_difference{};
   /// True when the contacts are exact (every one "rigid" or "coulomb"): their forces are the
   /// multipliers of the weighted residual's collocation instants (solvers::WeightedResidual::rigid).
   [[nodiscard]] bool rigid() const { return !contacts.empty() && exact(contacts.front().law); }
+  /// True when a contact is a Jenkins element (law = "jenkins").
+  [[nodiscard]] bool jenkins() const {
+    for (const auto& c : contacts) {
+      if (c.law == ContactLawKind::Jenkins) return true;
+    }
+    return false;
+  }
   /// True when a contact is a friction law ("jenkins" or "coulomb").
   [[nodiscard]] bool friction() const {
     for (const auto& c : contacts) {
@@ -350,7 +360,8 @@ void reduce_structure(Scene& scene);
 /// or the declared text where a default depends on other keys; a key read by some variants only
 /// (analysis types, structure kinds, contact laws) says so first). `section`: one of
 /// declared_sections() ("top" is the top level; "timestep" the BDF of penalty laws and
-/// "timestep.rigid" Moreau–Jean; "forcing.loads" the [[forcing.loads]] tables).
+/// "timestep.rigid" Moreau–Jean, "timestep.jenkins" central differences; "forcing.loads" the
+/// [[forcing.loads]] tables).
 /// Throws std::invalid_argument for another section, naming the declared ones.
 [[nodiscard]] std::string key_table_markdown(const std::string& section);
 
