@@ -230,12 +230,12 @@ int main(int argc, char** argv) {
       return nullptr;
     };
 
+    // The curves start from the problems of the start scan: frictionless, and at the file's μ.
+    const solvers::WeightedResidual wet_start = with_friction(mu);
     std::vector<Curve> curves;
     for (const bool friction : {false, true}) {
       const auto t = std::chrono::steady_clock::now();
-      const auto basis = solvers::TimeBasis::fourier_harmonics(harmonics);
-      const solvers::WeightedResidual base(model.reduced, casing_only, friction ? rubbing : radial, basis, basis,
-                                           {.formulation = reproduce::kFigureFormulation});
+      const solvers::WeightedResidual& base = friction ? wet_start : dry_start;
       solvers::ResponseCurveOptions o;
       o.parameter_min = from * f1;
       o.parameter_max = to * f1;
