@@ -201,10 +201,11 @@ def response_curve(folder, title, written):
                 line, color = style[kind[start]]
                 ax.plot(f[start:end], amplitude[start:end], line, color=color)
                 start = i
-        for name in ("stable", "unstable", "unavailable"):
-            if name in kind or name != "unavailable":
-                ax.plot([], [], style[name][0], color=style[name][1],
-                        label=name if name != "unavailable" else "no stability verdict")
+        # (Not `name`: that is the amplitude's column, the axis label and the folds' lookup below.)
+        for verdict in ("stable", "unstable", "unavailable"):
+            if verdict in kind or verdict != "unavailable":
+                ax.plot([], [], style[verdict][0], color=style[verdict][1],
+                        label=verdict if verdict != "unavailable" else "no stability verdict")
     for k, (other, values) in enumerate(amplitudes[1:]):
         ax.plot(f, values, "-", color=f"C{k + 1}", linewidth=0.8, label=other)
     if listed(folder, "folds.csv"):

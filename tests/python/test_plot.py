@@ -133,11 +133,14 @@ def test_points_without_a_stability_verdict_are_drawn_apart(tmp_path):
     def save(fig, path, written):
         ax = fig.axes[0]
         drawn[path.name] = ([t.get_text() for t in ax.get_legend().get_texts()],
-                            [(line.get_linestyle(), len(line.get_xdata())) for line in ax.get_lines()])
+                            [(line.get_linestyle(), len(line.get_xdata())) for line in ax.get_lines()],
+                            ax.get_ylabel())
         original(fig, path, written)
 
     plot.save = save
     assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
-    legend, lines = drawn["response_curve.png"]
+    legend, lines, ylabel = drawn["response_curve.png"]
     assert legend.count("no stability verdict") == 1 and "stable" in legend and "unstable" in legend
     assert (":", 2) in lines  # the unavailable point, joined to the next
+    # The axis names the amplitude's column (the legend's loop once reused its variable: "unavailable").
+    assert ylabel == "amplitude_x1 [m]"
