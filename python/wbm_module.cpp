@@ -456,7 +456,8 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
 [Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
 matrix on `samples` steps; with rigid stops, the saltation monodromy of the exact orbit with plastic
-impacts near each point, by shooting; refused for friction: pass stability=False). Arguments as solve();
+impacts near each point, by shooting; with Jenkins elements, one more state per element, its force
+perturbation; refused for exact Coulomb friction: pass stability=False). Arguments as solve();
 max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|.
 Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable

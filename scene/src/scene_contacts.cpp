@@ -45,10 +45,11 @@ void Parser::contacts(const toml::table& root) {
                "\"" + law + "\" (friction) is for forced responses: solve, sweep, continuation and timestep; analysis "
                "\"nnm\" has no friction law (nonlinear modes are conservative)");
     }
-    if (friction && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
+    if (c.law == ContactLawKind::Coulomb && s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.stability) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
-               "\"" + law + "\" with analysis.stability = true: the monodromy matrix of a stick/slip orbit is not computed; "
-               "set stability = false");
+               "\"coulomb\" with analysis.stability = true: the monodromy matrix of an orbit of exact (rigid-plastic) "
+               "friction is not computed; set stability = false, or use law = \"jenkins\" (a stiff "
+               "tangential_stiffness), whose stability is computed");
     }
     if (!modes && !s_.contacts.empty() && exact(c.law) != exact(s_.contacts.front().law)) {
       r_.error(t->source(), section, "mixes exact contacts (\"rigid\", \"coulomb\") with penalty or \"jenkins\" laws; a "

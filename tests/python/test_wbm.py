@@ -317,6 +317,22 @@ def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
         wbm.JenkinsLaw(tangential_stiffness=1e4 * k, friction_coefficient=-0.1, normal_load=1.0)
 
 
+def test_a_jenkins_damper_branch_carries_stability_and_every_point_is_stable():
+    # trace_response with stability=True and a Jenkins element (solvers/floquet.hpp: the monodromy
+    # matrix carries the element's force perturbation): a viscously damped oscillator with Jenkins
+    # friction is incrementally passive, so no forced orbit is unstable; at 5 Hz, where the slider
+    # slips over nearly the whole cycle, |μ| is nearly the free oscillator's e^{−cT/2}.
+    m, k = 1.0, (2.0 * math.pi * 10.0) ** 2
+    c = 2.0 * 0.005 * math.sqrt(k * m)
+    system = wbm.MechanicalSystem([[m]], [[c]], [[k]])
+    basis = wbm.TimeBasis("fourier", 33)
+    law = wbm.JenkinsLaw(tangential_stiffness=1e3 * k, friction_coefficient=0.2, normal_load=1.0)
+    curve = wbm.trace_response(system, 0, 1.0, (5.0, 20.0), [(0, law)], basis, basis, samples=256)
+    assert curve["stable"].all() and curve["stability_available"].all()
+    assert np.max(curve["max_floquet_multiplier"]) < 1.0
+    assert curve["max_floquet_multiplier"][0] == pytest.approx(math.exp(-0.5 * c / (m * 5.0)), abs=1e-3)
+
+
 def test_a_normal_contact_at_rest_gives_the_constant_load_it_balances():
     # A point mass on springs k in x and y, pressed by a normal spring k_n of gap g < 0 and rubbing
     # along x through a Jenkins element whose slip force follows that spring, (dof, law, normal):

@@ -73,6 +73,15 @@ TEST(SceneFriction, TheDamperPeakIsTheFirstHarmonicEnergyBalance) {
   const double omega = std::sqrt(k / m);
   EXPECT_NEAR(amplitude.maxCoeff() / ((p - 4.0 * slip / kPi) / (c * omega)), 1.0, 1e-3);
   EXPECT_NEAR(force.maxCoeff(), slip, 1e-12);
+  // Every point stable, as incremental passivity requires of a damped structure with Jenkins
+  // elements (tests/solvers/test_floquet_jenkins.cpp); at 5 Hz, where the slider slips over nearly
+  // the whole cycle (its stick phases at the reversals are short: k_t = 1000 k), the multipliers
+  // are nearly those of the free oscillator, |μ| = e^{−cT/2} (measured 1.5e-4 below it).
+  const Eigen::VectorXd& stable = column(r, "branch.csv", 5);
+  const Eigen::VectorXd& multiplier = column(r, "branch.csv", 6);
+  EXPECT_EQ(stable.minCoeff(), 1.0);
+  EXPECT_LT(multiplier.maxCoeff(), 1.0);
+  EXPECT_NEAR(multiplier(0), std::exp(-0.5 * c / (m * 5.0)), 1e-3);
 }
 
 // One solve at 8 Hz: over a cycle the load's work equals the viscous dissipation plus the
@@ -82,7 +91,8 @@ TEST(SceneFriction, TheDamperPeakIsTheFirstHarmonicEnergyBalance) {
 TEST(SceneFriction, ASolveBalancesTheEnergyOfLoadViscosityAndFriction) {
   std::string text = slurp(kDamper);
   text.replace(text.find("frequency_hz = [5.0, 20.0]"), 26, "frequency_hz = 8.0");
-  text.replace(text.find("type = \"continuation\", stability = false"), 40, "type = \"solve\"");
+  const std::string continuation = "type = \"continuation\", stability = true";
+  text.replace(text.find(continuation), continuation.size(), "type = \"solve\"");
   const Scene s = parse(text);
   const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
   ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
@@ -152,9 +162,10 @@ TEST(SceneFriction, KeysAreReadEchoedAndRefusedWhereFrictionIsNotComputed) {
   refused(base + "contact = { law = \"jenkins\", tangential_stiffness = 4e7, friction_coefficient = 0.3, "
                  "normal_load = -1.0 }\n",
           {"contact.normal_load", ">= 0 [N]"});
-  refused("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 20.0] }\n" +
-              law + " }\nanalysis = { type = \"continuation\" }\n",
-          {"contact.law", "stability = true", "set stability = false"});
+  // A continuation computes its points' stability by default (floquet.hpp, "Jenkins elements").
+  EXPECT_TRUE(parse("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = "
+                    "[5.0, 20.0] }\n" + law + " }\nanalysis = { type = \"continuation\" }\n")
+                  .analysis.stability);
   // timestep takes a Jenkins element by central differences: their keys, not the BDF's.
   const Scene stepped = parse(base + law + " }\nanalysis = { type = \"timestep\" }\n[timestep]\n"
                                            "steps_per_period = 32768\nmax_periods = 900\n");
@@ -314,6 +325,9 @@ TEST(SceneFriction, CoulombKeysAreReadEchoedAndRefusedWhereNotComputed) {
   on_penalty.replace(on_penalty.find(rigid_law), rigid_law.size(), "law = \"linear\"\nstiffness = 1e6");
   refused(base + "analysis = { type = \"timestep\" }\n" + on_penalty,
           {"contact[1].normal_contact", "from a \"rigid\" contact"});
+  refused("structure = { mass = 1.0, stiffness = 4e4 }\nforcing = { amplitude = 1.0, frequency_hz = [5.0, 20.0] }\n"
+          "analysis = { type = \"continuation\" }\n" + law,
+          {"contact[0].law", "stability = true", "use law = \"jenkins\""});
 }
 
 // examples/scenes/friction_timestep_normal_load.toml: the scheme's energy account over the last

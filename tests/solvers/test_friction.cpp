@@ -275,7 +275,7 @@ TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
       {"Coulomb friction (exact)", "integrate_moreau_jean_to_periodic for exact Coulomb friction"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::floquet_multipliers(d.system(), {{0, d.coulomb()}}, Eigen::MatrixXd::Zero(1, 64), 15.0); },
-      {"Coulomb friction (exact)", "stability is not computed for friction"});
+      {"Coulomb friction (exact)", "stability is not computed for exact friction", "stiff Jenkins element"});
 }
 
 // Exact friction and rigid stops in one problem: on a 2-DOF chain with a rigid stop on DOF 0

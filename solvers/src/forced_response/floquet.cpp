@@ -11,6 +11,8 @@
 #include <Eigen/LU>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include <wbm/contact/friction.hpp>
+
 #include "floquet_stepping.hpp"
 
 namespace wbm::solvers {
@@ -24,11 +26,11 @@ int count_outside(const FloquetResult& r, double tolerance) {
   return k;
 }
 
-// Φ = D⁻¹ Φ̃ D: the monodromy matrix of (δu, δu̇) from that of the balanced state.
-Eigen::MatrixXd unbalanced(Eigen::MatrixXd phi, double sigma) {
-  const Eigen::Index n = phi.rows() / 2;
-  phi.topRightCorner(n, n) /= sigma;
-  phi.bottomLeftCorner(n, n) *= sigma;
+// Φ = D⁻¹ Φ̃ D: the monodromy matrix of (δu, δu̇, φ) from that of the balanced state (n DOFs;
+// the Jenkins forces φ, if any, are not scaled).
+Eigen::MatrixXd unbalanced(Eigen::MatrixXd phi, double sigma, Eigen::Index n) {
+  phi.middleCols(n, n) /= sigma;
+  phi.middleRows(n, n) *= sigma;
   return phi;
 }
 
@@ -86,10 +88,12 @@ Balanced balanced_system(const MechanicalSystem& system, const std::vector<Conta
 
 void check_floquet_contacts(const std::vector<ContactPoint>& contacts) {
   for (const auto& c : contacts) {
-    if (c.law->hysteretic()) {
-      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
-                                  c.law->describe() + "; its monodromy matrix needs the slider's stick/slip state "
-                                  "along the orbit, which is not implemented: stability is not computed for friction");
+    if (c.law->hysteretic() && c.law->rigid()) {
+      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is " +
+                                  c.law->describe() + ", rigid-plastic: the monodromy matrix of its orbit needs a "
+                                  "saltation matrix at every stick/slip switch of its impulses, which is not "
+                                  "implemented: stability is not computed for exact friction (give the contact a "
+                                  "stiff Jenkins element, contact::JenkinsLaw, whose stability is computed)");
     }
     if (c.law->rigid()) {
       throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
@@ -126,9 +130,11 @@ Eigen::Index resolution_factor(const std::vector<ContactPoint>& contacts, const 
   Eigen::Index worst = -1;
   for (Eigen::Index c = 0; c < nc; ++c) {
     double k = 0.0;
-    for (Eigen::Index p = 0; p < p_count; ++p) {
+    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(contacts[static_cast<size_t>(c)].law.get());
+    for (Eigen::Index p = 0; jenkins == nullptr && p < p_count; ++p) {
       k = std::max(k, contacts[static_cast<size_t>(c)].law->stiffness(contact_displacement(c, p)));
     }
+    if (jenkins != nullptr) k = jenkins->parameters().tangential_stiffness;  // its stiffness in stick
     const double w2 = k * flexibility.row(c).cwiseAbs().sum();
     if (w2 > omega2) {
       omega2 = w2;
@@ -160,14 +166,94 @@ Eigen::MatrixXd resolved_samples(const std::vector<ContactPoint>& contacts, cons
   const Eigen::Index s = resolution_factor(contacts, contact_displacement, frequency_hz, flexibility);
   const Eigen::Index nc = contact_displacement.rows(), p_count = contact_displacement.cols();
   if (s == 1) return contact_displacement;
+  // The samples of the next period are moved by −d for a drifting counter-surface (friction).
+  Eigen::VectorXd shift(nc);
+  for (Eigen::Index c = 0; c < nc; ++c) shift(c) = -contacts[static_cast<size_t>(c)].obstacle.drift;
   Eigen::MatrixXd fine(nc, s * p_count);
   for (Eigen::Index p = 0; p < p_count; ++p) {
+    const Eigen::VectorXd next =
+        p + 1 == p_count ? Eigen::VectorXd(contact_displacement.col(0) + shift) : contact_displacement.col(p + 1);
     for (Eigen::Index j = 0; j < s; ++j) {
       const double t = static_cast<double>(j) / static_cast<double>(s);
-      fine.col(p * s + j) = (1.0 - t) * contact_displacement.col(p) + t * contact_displacement.col((p + 1) % p_count);
+      fine.col(p * s + j) = (1.0 - t) * contact_displacement.col(p) + t * next;
     }
   }
   return fine;
+}
+
+std::vector<JenkinsSamples> jenkins_samples(const std::vector<ContactPoint>& contacts,
+                                            const Eigen::MatrixXd& contact_displacement) {
+  std::vector<JenkinsSamples> out;
+  const Eigen::Index p_count = contact_displacement.cols();
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    if (!contacts[c].law->hysteretic()) continue;
+    const auto* law = dynamic_cast<const contact::JenkinsLaw*>(contacts[c].law.get());
+    if (law == nullptr) {
+      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(contacts[c].dof) +
+                                  " is " + contacts[c].law->describe() + ", a hysteretic law other than "
+                                  "contact::JenkinsLaw: its monodromy matrix is not computed");
+    }
+    JenkinsSamples e;
+    e.contact = static_cast<Eigen::Index>(c);
+    e.normal = contacts[c].normal;
+    const double kt = law->parameters().tangential_stiffness;
+    e.tangential_stiffness = kt;
+    Eigen::VectorXd force(p_count), stiffness(p_count);
+    Eigen::VectorXi anchor(p_count);
+    e.load_sensitivity.resize(p_count);
+    evaluate_contact_period(contacts, static_cast<int>(c), contact_displacement, force, stiffness, anchor,
+                            e.load_sensitivity);
+    Eigen::VectorXd normal = Eigen::VectorXd::Zero(p_count);
+    if (e.normal >= 0) {
+      Eigen::VectorXd slope(p_count);
+      contacts[static_cast<size_t>(e.normal)].law->evaluate(contact_displacement.row(e.normal).transpose(), normal,
+                                                              slope);
+    }
+    const Eigen::VectorXd slip_force =
+        law->parameters().friction_coefficient * (law->parameters().normal_load + normal.array());
+    e.stick.resize(static_cast<size_t>(p_count));
+    for (Eigen::Index q = 0; q < p_count; ++q) e.stick[static_cast<size_t>(q)] = stiffness(q) != 0.0 ? 1 : 0;
+    e.full_stick = std::all_of(e.stick.begin(), e.stick.end(), [](char x) { return x != 0; });
+    const bool full_slip = std::none_of(e.stick.begin(), e.stick.end(), [](char x) { return x != 0; });
+    // w at sample q of any period (the next period's samples moved by −drift).
+    const double shift = -contacts[c].obstacle.drift;
+    auto w = [&](Eigen::Index q) {
+      const Eigen::Index wrapped = ((q % p_count) + p_count) % p_count;
+      const double periods = static_cast<double>((q - wrapped) / p_count);
+      return contact_displacement(e.contact, wrapped) + periods * shift;
+    };
+    auto at = [&](const Eigen::VectorXd& v, Eigen::Index q) { return v(((q % p_count) + p_count) % p_count); };
+    // A slip begins in step q (stick at q, slip at q + 1) where the elastic trial f_q + k_t θ Δw
+    // meets σ F_s(θ), F_s interpolated linearly (second order in the step), σ that of the slip.
+    std::vector<double> onset(static_cast<size_t>(p_count), -1.0);
+    for (Eigen::Index q = 0; !e.full_stick && !full_slip && q < p_count; ++q) {
+      if (e.stick[static_cast<size_t>(q)] == 0 || e.stick[static_cast<size_t>((q + 1) % p_count)] != 0) continue;
+      const double sigma = at(force, q + 1) >= 0.0 ? 1.0 : -1.0;
+      const double denominator = sigma * kt * (w(q + 1) - w(q)) - (at(slip_force, q + 1) - slip_force(q));
+      const double theta = denominator > 0.0 ? (slip_force(q) - sigma * force(q)) / denominator : 1.0;
+      onset[static_cast<size_t>(q)] = std::clamp(theta, 0.0, 1.0);
+      e.switches.emplace_back(static_cast<double>(q) + onset[static_cast<size_t>(q)], false);
+    }
+    // A slip ends (slip at q, stick at q + 1) where g = σ k_t w − F_s is largest: in slip the
+    // trial moves with w against the slip force, and returns inside the cone after g's maximum.
+    // The vertex of the parabola through g at q − 1, q, q + 1 (second order), within
+    // [q − ½, q + 1) and not before the onset of step q − 1; at q if g is not concave there.
+    for (Eigen::Index q = 0; !e.full_stick && !full_slip && q < p_count; ++q) {
+      if (e.stick[static_cast<size_t>(q)] != 0 || e.stick[static_cast<size_t>((q + 1) % p_count)] == 0) continue;
+      const double sigma = force(q) >= 0.0 ? 1.0 : -1.0;
+      auto g = [&](Eigen::Index r) { return sigma * kt * w(r) - at(slip_force, r); };
+      const double gm = g(q - 1), g0 = g(q), gp = g(q + 1), curvature = gm - 2.0 * g0 + gp;
+      double delta = curvature < 0.0 ? std::clamp(0.5 * (gm - gp) / curvature, -0.5, 0.999) : 0.0;
+      const double before = onset[static_cast<size_t>((q + p_count - 1) % p_count)];
+      if (before >= 0.0) delta = std::max(delta, before - 1.0);
+      e.switches.emplace_back(std::fmod(static_cast<double>(q) + delta + static_cast<double>(p_count),
+                                        static_cast<double>(p_count)),
+                              true);
+    }
+    std::sort(e.switches.begin(), e.switches.end());
+    out.push_back(std::move(e));
+  }
+  return out;
 }
 
 void analyse_monodromy(const Eigen::MatrixXd& phi, const Eigen::MatrixXd& phi_half, FloquetResult& out) {
@@ -222,7 +308,7 @@ FloquetResult balanced_floquet(const Balanced& balanced, const std::vector<Conta
   out.steps = static_cast<int>(p_count);
   const BalancedLinearPart linear{balanced, contacts};
   const Eigen::MatrixXd phi = stepped_monodromy(linear, contacts, samples, frequency_hz);
-  out.monodromy = unbalanced(phi, balanced.sigma);
+  out.monodromy = unbalanced(phi, balanced.sigma, balanced.a0.rows() / 2);
   Eigen::MatrixXd phi_half;
   if (p_count % 2 == 0 && p_count >= 16) {
     phi_half = stepped_monodromy(linear, contacts, even_samples(samples), frequency_hz);

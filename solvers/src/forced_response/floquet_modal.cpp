@@ -113,8 +113,9 @@ struct MonodromyProduct {
   const std::vector<ContactPoint>& contacts;
   const Eigen::MatrixXd& contact_displacement;
   double frequency_hz;
-  [[nodiscard]] Eigen::Index rows() const { return linear.states(); }
-  [[nodiscard]] Eigen::Index cols() const { return linear.states(); }
+  // 2n, and one state per Jenkins element (floquet_stepping.hpp)
+  [[nodiscard]] Eigen::Index rows() const { return linear.states() + detail::jenkins_states(contacts); }
+  [[nodiscard]] Eigen::Index cols() const { return rows(); }
   void perform_op(const double* x_in, double* y_out) const {
     const Eigen::MatrixXd v = Eigen::Map<const Eigen::VectorXd>(x_in, rows());
     Eigen::Map<Eigen::VectorXd>(y_out, rows()) =
@@ -132,7 +133,7 @@ std::optional<Eigen::VectorXcd> dominant_multipliers(const ModalLinearPart& line
                                                      const std::vector<ContactPoint>& contacts,
                                                      const Eigen::MatrixXd& contact_displacement, double frequency_hz) {
   MonodromyProduct op{linear, contacts, contact_displacement, frequency_hz};
-  const Eigen::Index states = linear.states();
+  const Eigen::Index states = op.rows();
   for (Eigen::Index nev = 8; nev + 2 <= states; nev *= 2) {
     const Eigen::Index ncv = std::min(states, std::max<Eigen::Index>(2 * nev + 1, 20));
     Spectra::GenEigsSolver<MonodromyProduct> arnoldi(op, nev, ncv);
@@ -217,7 +218,7 @@ FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displac
   FloquetResult out;
   out.steps = static_cast<int>(p_count);
   const ModalLinearPart linear{*modes_};
-  if (linear.states() > options_.dense_states) {
+  if (linear.states() + detail::jenkins_states(contacts_) > options_.dense_states) {
     if (auto mu = dominant_multipliers(linear, contacts_, samples, frequency_hz)) {
       out.multipliers = std::move(*mu);
       out.max_modulus = std::abs(out.multipliers(0));
@@ -242,14 +243,17 @@ FloquetResult FloquetAnalysis::operator()(const Eigen::MatrixXd& contact_displac
   }
   detail::analyse_monodromy(phi, phi_half, out);
   if (options_.monodromy) {
-    // Φ = T Φ_x T⁻¹ with T = diag(Φ, Φ S) and T⁻¹ = diag(Φᵀ M, S⁻¹ Φᵀ M).
-    const Eigen::Index n = modes_->phi.cols();
-    Eigen::MatrixXd left(2 * n, 2 * n), right(2 * n, 2 * n);
+    // Φ = T Φ_x T⁻¹ with T = diag(Φ, Φ S, I) and T⁻¹ = diag(Φᵀ M, S⁻¹ Φᵀ M, I) (I on the
+    // Jenkins forces, if any).
+    const Eigen::Index n = modes_->phi.cols(), nj = phi.rows() - 2 * n;
+    Eigen::MatrixXd left(2 * n + nj, 2 * n + nj), right(2 * n + nj, 2 * n + nj);
     left.topRows(n) = modes_->phi * phi.topRows(n);
-    left.bottomRows(n) = modes_->phi * (modes_->scale.matrix().asDiagonal() * phi.bottomRows(n));
+    left.middleRows(n, n) = modes_->phi * (modes_->scale.matrix().asDiagonal() * phi.middleRows(n, n));
+    left.bottomRows(nj) = phi.bottomRows(nj);
     right.leftCols(n) = left.leftCols(n) * modes_->mass_phi.transpose();
-    right.rightCols(n) =
-        left.rightCols(n) * (modes_->scale.inverse().matrix().asDiagonal() * modes_->mass_phi.transpose());
+    right.middleCols(n, n) =
+        left.middleCols(n, n) * (modes_->scale.inverse().matrix().asDiagonal() * modes_->mass_phi.transpose());
+    right.rightCols(nj) = left.rightCols(nj);
     out.monodromy = std::move(right);
   }
   return out;

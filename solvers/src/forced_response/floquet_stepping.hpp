@@ -10,6 +10,8 @@
 // Both are similar to the physical state, so they give the same multipliers.
 
 #include <algorithm>
+#include <iterator>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -82,6 +84,190 @@ inline constexpr Eigen::Index kMaxResolvedSteps = 32768;  // beyond, the contact
   return half;
 }
 
+/// A Jenkins element along the orbit of the monodromy's samples (floquet.hpp, "Jenkins elements"),
+/// one per hysteretic contact in contact order. floquet.cpp.
+struct JenkinsSamples {
+  Eigen::Index contact = 0;           // its index in the contacts
+  Eigen::Index normal = -1;           // ContactPoint::normal, or −1 (a constant normal load)
+  double tangential_stiffness = 0.0;  // k_t [N/m]
+  bool full_stick = false;            // no sample slips: a spring k_t (the slider's neutral direction left out)
+  Eigen::VectorXd load_sensitivity;   // ∂f_q/∂n_q = μ σ_q at a slip sample, 0 at a stick one [-]
+  std::vector<char> stick;            // per sample, from the periodic loop: the slider holds
+  /// The located switches in sample time t ∈ [0, P) (step p is [p, p + 1)), sorted, alternating:
+  /// (t, true) where a stick begins, (t, false) where a slip begins. Empty in full stick and in
+  /// permanent slip.
+  std::vector<std::pair<double, bool>> switches;
+  /// Whether the slider holds at sample time t (the last switch at or before t, cyclically).
+  [[nodiscard]] bool sticks_at(double t) const {
+    if (switches.empty()) return full_stick;
+    auto it = std::upper_bound(switches.begin(), switches.end(), t,
+                               [](double x, const std::pair<double, bool>& e) { return x < e.first; });
+    return it == switches.begin() ? switches.back().second : std::prev(it)->second;
+  }
+};
+
+/// The elements of the hysteretic contacts on contact_displacement (n_c × P, relative
+/// displacements): the periodic loop by evaluate_contact_period, and its switches located between
+/// the samples (floquet.hpp). Throws std::invalid_argument for a hysteretic law that is not a
+/// contact::JenkinsLaw.
+[[nodiscard]] std::vector<JenkinsSamples> jenkins_samples(const std::vector<ContactPoint>& contacts,
+                                                         const Eigen::MatrixXd& contact_displacement);
+
+/// The number of hysteretic contacts: the states the monodromy matrix carries beyond 2n.
+[[nodiscard]] inline Eigen::Index jenkins_states(const std::vector<ContactPoint>& contacts) {
+  return std::count_if(contacts.begin(), contacts.end(), [](const ContactPoint& c) { return c.law->hysteretic(); });
+}
+
+/// stepped_monodromy with Jenkins elements (floquet.hpp, "Jenkins elements"): the state (y, φ),
+/// φ_j the perturbation of Jenkins element j's force [N], (states + n_J) × (states + n_J), or that
+/// times `start` ((states + n_J) × r). Every step is stepped (no runs of powers), split at the
+/// penalty laws' interpolated crossings and at each element's located switches. Memoryless
+/// contacts kick as in stepped_monodromy; an element in full stick is a spring k_t, its φ row 0.
+template <class LinearPart>
+Eigen::MatrixXd stepped_monodromy_jenkins(const LinearPart& linear, const std::vector<ContactPoint>& contacts,
+                                          const Eigen::MatrixXd& contact_displacement, double frequency_hz,
+                                          const Eigen::MatrixXd* start) {
+  const auto nc = static_cast<Eigen::Index>(contacts.size());
+  const Eigen::Index p_count = contact_displacement.cols();
+  const Eigen::Index states = linear.states();
+  const std::vector<JenkinsSamples> jenkins = jenkins_samples(contacts, contact_displacement);
+  const auto nj = static_cast<Eigen::Index>(jenkins.size());
+  const Eigen::MatrixXd& u = linear.u();
+  const double h = 1.0 / (frequency_hz * static_cast<double>(p_count));
+  std::vector<Eigen::Index> element(static_cast<size_t>(nc), -1);  // contact → its Jenkins element
+  for (Eigen::Index j = 0; j < nj; ++j) element[static_cast<size_t>(jenkins[static_cast<size_t>(j)].contact)] = j;
+  Eigen::MatrixXd y, phi;  // states × cols, n_J × cols
+  if (start != nullptr) {
+    y = start->topRows(states);
+    phi = start->bottomRows(nj);
+  } else {
+    y = Eigen::MatrixXd::Identity(states, states + nj);
+    phi = Eigen::MatrixXd::Zero(nj, states + nj);
+    phi.rightCols(nj).setIdentity();
+  }
+  // The memoryless stiffnesses at the relative displacements uc: the laws' for penalty contacts,
+  // k_t for an element in full stick, 0 for the other elements (their force is φ). An element's
+  // row of uc is not read (a drift does not enter).
+  auto memoryless = [&](const Eigen::VectorXd& uc) {
+    Eigen::VectorXd k(nc);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      const Eigen::Index j = element[static_cast<size_t>(c)];
+      if (j < 0) {
+        k(c) = contacts[static_cast<size_t>(c)].law->stiffness(uc(c));
+      } else {
+        const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
+        k(c) = e.full_stick ? e.tangential_stiffness : 0.0;
+      }
+    }
+    return k;
+  };
+  auto displacement_at = [&](Eigen::Index p, double theta) {  // linear between the samples
+    return Eigen::VectorXd((1.0 - theta) * contact_displacement.col(p) +
+                           theta * contact_displacement.col((p + 1) % p_count));
+  };
+  // The memoryless stiffnesses at the samples, formed once (the pieces' ends at a sample use them).
+  Eigen::MatrixXd at_samples(nc, p_count);
+  for (Eigen::Index q = 0; q < p_count; ++q) at_samples.col(q) = memoryless(contact_displacement.col(q));
+  // The kick changes velocities only (e_cᵀ b_d = 0), so the contact displacements `rows` of y
+  // before it are those after it.
+  // Both linear parts kick the velocity half of the state only (u's top rows zero): that half is
+  // multiplied alone.
+  const Eigen::Index half = states / 2;
+  const bool velocity_rows = u.topRows(half).isZero(0.0);
+  Eigen::MatrixXd force(nc, y.cols());
+  auto kick = [&](const Eigen::Ref<const Eigen::VectorXd>& k, double hs, const Eigen::MatrixXd& rows) {
+    force.noalias() = (0.5 * hs) * (k.asDiagonal() * rows);
+    for (Eigen::Index j = 0; j < nj; ++j) force.row(jenkins[static_cast<size_t>(j)].contact) += (0.5 * hs) * phi.row(j);
+    if (velocity_rows) {
+      y.bottomRows(states - half).noalias() += u.bottomRows(states - half) * force;
+    } else {
+      y.noalias() += u * force;
+    }
+  };
+  // φ in slip: the slip force's perturbation μ σ n'(u_n) δu_n, n' the normal law's stiffness there
+  // (0 under a constant normal load), σ that of the nearest slip sample of step p.
+  auto set_slip_value = [&](Eigen::Index j, Eigen::Index p, double n_slope, const Eigen::MatrixXd& rows) {
+    const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
+    if (e.normal < 0) {
+      phi.row(j).setZero();
+      return;
+    }
+    const Eigen::Index q1 = (p + 1) % p_count, q = e.stick[static_cast<size_t>(q1)] ? p : q1;
+    phi.row(j).noalias() = (e.load_sensitivity(q) * n_slope) * rows.row(e.normal);
+  };
+  auto normal_slope = [&](Eigen::Index j, const Eigen::VectorXd& at) {
+    const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
+    return e.normal < 0 ? 0.0 : contacts[static_cast<size_t>(e.normal)].law->stiffness(at(e.normal));
+  };
+  const auto whole_step = linear.flight(h);
+  Eigen::MatrixXd previous = linear.rows(y);  // the contact displacements at φ's last update (and now)
+  std::vector<double> edges;
+  for (Eigen::Index p = 0; p < p_count; ++p) {
+    const Eigen::Index q1 = (p + 1) % p_count;
+    const auto tp = static_cast<double>(p);
+    edges.assign({0.0, 1.0});
+    for (Eigen::Index c = 0; c < nc; ++c) {  // penalty laws' gap crossings, as stepped_monodromy
+      if (element[static_cast<size_t>(c)] >= 0) continue;
+      const double g = contacts[static_cast<size_t>(c)].law->gap();
+      const double d0 = contact_displacement(c, p) - g, d1 = contact_displacement(c, q1) - g;
+      if ((d0 > 0.0) != (d1 > 0.0) && d0 != d1) edges.push_back(d0 / (d0 - d1));
+    }
+    for (const JenkinsSamples& e : jenkins) {  // the elements' switches inside this step
+      for (const auto& [t, sticks] : e.switches) {
+        if (t > tp && t < tp + 1.0) edges.push_back(t - tp);
+      }
+    }
+    std::sort(edges.begin(), edges.end());
+    for (size_t i = 0; i + 1 < edges.size(); ++i) {
+      const double a = edges[i], b = edges[i + 1], inside = 1e-9 * (b - a);
+      if (!(b > a)) continue;
+      const double hs = (b - a) * h;
+      const bool last = i + 2 == edges.size();
+      if (i == 0) {
+        kick(at_samples.col(p), hs, previous);
+      } else {
+        kick(memoryless(displacement_at(p, a + inside)), hs, previous);
+      }
+      if (a == 0.0 && b == 1.0) {
+        linear.apply(whole_step, y);  // a step without a switch: its flight formed once
+      } else {
+        linear.apply(linear.flight(hs), y);
+      }
+      const Eigen::VectorXd u_end = last ? Eigen::VectorXd() : displacement_at(p, b - inside);
+      const Eigen::MatrixXd now = linear.rows(y);
+      // φ at the piece's end: the stick recurrence φ + k_t (δw − δw_prev), or the slip value.
+      for (Eigen::Index j = 0; j < nj; ++j) {
+        const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
+        if (e.full_stick) {
+          phi.row(j).setZero();
+        } else if (e.sticks_at(tp + 0.5 * (a + b))) {
+          phi.row(j) += e.tangential_stiffness * (now.row(e.contact) - previous.row(e.contact));
+        } else {
+          const double n_slope = e.normal < 0 ? 0.0 : (last ? at_samples(e.normal, q1) : normal_slope(j, u_end));
+          set_slip_value(j, p, n_slope, now);
+        }
+      }
+      previous = now;
+      if (last) {
+        kick(at_samples.col(q1), hs, now);
+        continue;
+      }
+      kick(memoryless(u_end), hs, now);
+      for (Eigen::Index j = 0; j < nj; ++j) {  // a slip begins at b: the next piece starts from its value
+        const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
+        const double next = tp + 0.5 * (b + edges[i + 2]);
+        if (!e.full_stick && e.sticks_at(tp + 0.5 * (a + b)) && !e.sticks_at(next)) {
+          set_slip_value(j, p, normal_slope(j, displacement_at(p, b + inside)), now);
+        }
+      }
+    }
+  }
+  Eigen::MatrixXd out(states + nj, y.cols());
+  out.topRows(states) = y;
+  out.bottomRows(nj) = phi;
+  return out;
+}
+
 /// Φ = Y(T) in the coordinates of `linear`, by the stepping of floquet.hpp on the P =
 /// contact_displacement.cols() samples; with `start` (2n × r), Φ · start instead, stepping the r
 /// columns through every step (O(P n n_c r), no 2n × 2n powers: Arnoldi's products Φ v).
@@ -98,6 +284,9 @@ template <class LinearPart>
 Eigen::MatrixXd stepped_monodromy(const LinearPart& linear, const std::vector<ContactPoint>& contacts,
                                   const Eigen::MatrixXd& contact_displacement, double frequency_hz,
                                   const Eigen::MatrixXd* start = nullptr) {
+  if (jenkins_states(contacts) > 0) {
+    return stepped_monodromy_jenkins(linear, contacts, contact_displacement, frequency_hz, start);
+  }
   using Flight = decltype(linear.flight(1.0));
   const auto nc = static_cast<Eigen::Index>(contacts.size());
   const Eigen::Index p_count = contact_displacement.cols();

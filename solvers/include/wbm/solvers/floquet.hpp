@@ -41,6 +41,29 @@
 /// 32 768 steps per period is refused (std::invalid_argument naming its stiffness). Accuracy
 /// then comes from the error estimate, as for any P.
 ///
+/// Jenkins elements (contact::JenkinsLaw, friction.hpp). The element's force depends on its
+/// slider, so the state carries one more unknown per element, the perturbation φ_j of its force
+/// [N]: z = (δu, δu̇, φ), 2n + n_J, the elements in contact order, and the force perturbation in
+/// the kicks is φ_j instead of k_c e_cᵀ δu. Along the orbit the element's periodic loop on the
+/// samples (contact::jenkins_loop, under its normal contact's force where it has one) says where
+/// it sticks; φ then follows the linearized return map:
+///   stick: φ̇ = k_t e_cᵀ δu̇ (φ = k_t (δw − δs), the slider perturbation δs held);
+///   slip:  φ = μ σ n'(u_n) δu_n (σ the slip direction, n' the normal law's stiffness; 0 under a
+///          constant normal load): the slip force's perturbation, the earlier φ forgotten.
+/// In this force form every switch is continuous in the force, so no saltation matrix is needed:
+/// a perturbed orbit switches at a shifted instant, which changes the force by a second-order
+/// amount. A slip onset inside a step (where the elastic trial f_p + k_t θ Δw meets the
+/// interpolated slip force) splits the step there, as a penalty law's crossing does; a slip ends
+/// where the displacement reverses, at a sample of its linear interpolant. Multipliers: each
+/// element that slips somewhere contributes a multiplier 0 (the slip forgets φ). An element that
+/// never slips (full stick) would carry the slider's neutral direction, a multiplier 1 exactly
+/// (every slider position gives a periodic orbit; the solvers' convention puts it at the origin):
+/// it is stepped as a spring k_t, its φ row zero (a multiplier 0). Tested against the closed forms
+/// of full stick and of permanent slip under a normal load (mode coupling, [HFAG02] in
+/// docs/references.md),
+/// and against a finite-difference monodromy of an independent time stepping in stick–slip
+/// (tests/solvers/test_floquet_jenkins.cpp).
+///
 /// FloquetAnalysis (below) sets up once per branch what does not depend on the point, and for a
 /// classical damping matrix steps in modal coordinates, with every multiplier from the formed Φ up
 /// to 64 states and the dominant ones by Arnoldi above.
@@ -61,7 +84,9 @@ struct Balanced;  // floquet_stepping.hpp (private)
 }  // namespace detail
 
 struct FloquetResult {
-  Eigen::MatrixXd monodromy;          // Φ, 2n × 2n
+  /// Φ, 2n × 2n in (δu, δu̇); with Jenkins elements (2n + n_J) × (2n + n_J), their force
+  /// perturbations φ [N] last, in contact order (above).
+  Eigen::MatrixXd monodromy;
   Eigen::VectorXcd multipliers;       // eigenvalues of Φ, by decreasing modulus
   double max_modulus = 0.0;           // spectral radius of Φ
   /// Estimated error of each multiplier (same order): |(V⁻¹ (Φ_P − Φ_{P/2}) V)_ii| / 3, the
@@ -94,7 +119,8 @@ struct FloquetResult {
 /// no term to the variational equation. Throws std::invalid_argument for P < 8, a row count
 /// other than n_c, non-finite samples, f ≤ 0, a rigid stop (contact::RigidStop: an impacting
 /// orbit needs saltation matrices, which impact_shooting.hpp computes on the exact orbit it
-/// shoots), friction, or a contact
+/// shoots), exact Coulomb friction (contact::CoulombFriction; a Jenkins element is taken, above),
+/// or a contact
 /// too stiff to resolve in 32 768 steps (above). P is raised for a stiff contact (above).
 [[nodiscard]] FloquetResult floquet_multipliers(const MechanicalSystem& system,
                                                 const std::vector<ContactPoint>& contacts,
@@ -135,7 +161,7 @@ struct FloquetOptions {
 /// once. The multipliers are those of the similar matrix T⁻¹ Φ T, T = diag(Φ, Φ Ω); `monodromy`
 /// is Φ in (δu, δu̇) when options.monodromy. Otherwise (Balanced) each call gives
 /// floquet_multipliers' result, with its dense LU of M done once.
-/// Throws std::invalid_argument as floquet_multipliers does (friction and rigid stops at
+/// Throws std::invalid_argument as floquet_multipliers does (exact friction and rigid stops at
 /// construction), and for FloquetPath::Modal with a non-classical C.
 class FloquetAnalysis {
  public:
