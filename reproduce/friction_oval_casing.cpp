@@ -15,11 +15,15 @@
 // in slip, f_t = μ f_n against the rotation) and the energy balance over a period (the casing's
 // work on the blade = the viscous dissipation; no other load works). Our own blade and parameters
 // (reproduce/scenes/friction_oval_casing.toml): LL11 has neither friction nor a moving casing.
+// The Floquet multipliers (with the Jenkins elements' force perturbations) of the μ-branch at the
+// file's μ and at its end, and of the frictional curve's largest amplitude, say whether those
+// orbits are stable and what the μ-branch meets.
 // Writes out/friction_oval_casing/{frictionless,friction,orbit}.csv, meta.json, report.md.
 // --quick: mesh size 5 mm, H = 3, coarse steps; run by ctest.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -30,6 +34,7 @@
 #include <wbm/contact/penalty.hpp>
 #include <wbm/fem/craig_bampton.hpp>
 #include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -242,7 +247,9 @@ int main(int argc, char** argv) {
       o.max_parameter_step = parameters.number("response.max_step_f1") * f1;
       o.max_step = parameters.number("response.max_step");
       o.observed_dof = model.observed;
-      o.stability = false;  // friction: no monodromy of a stick–slip orbit
+      // Stability at a few orbits below, not at every point: each costs about 9 s (the stiff
+      // contacts need 65 536 steps of the monodromy's 2n + 24 states).
+      o.stability = false;
       o.max_state = parameters.number("response.max_state");
       for (int j = 0; j < static_cast<int>(model.reduced.mass.rows()); ++j) o.keep_dofs.push_back(j);
       curves.push_back({friction ? "with friction (μ = " + format("%g", mu) + ")" : "frictionless",
@@ -345,6 +352,67 @@ int main(int argc, char** argv) {
       run.table("orbit.csv", {"tau [-]", "normal_force [N]", "friction_force [N]", "gap [m]"}, {tau, fn, ft, gap_tau});
     }
 
+    // Floquet multipliers (solvers/floquet.hpp: the monodromy matrix carries each Jenkins element's
+    // force perturbation) of a few orbits: the μ-branch's first point past μ = 0, its landing on
+    // the file's μ and its last point, and the frictional curve's largest amplitude. They say what
+    // the μ-branch meets (a real multiplier through +1: a resonance of the forced response in μ,
+    // where I − Φ is singular; a complex pair leaving the circle: flutter, the mode coupling of
+    // friction-induced instability, [HFAG02] in docs/references.md) and whether those orbits are
+    // stable. The samples as trace_response takes them (the trial functions at the steps the
+    // stiffest contact needs).
+    struct Verdict {
+      std::string where;
+      double mu = 0.0, frequency_hz = 0.0, time_s = 0.0;
+      solvers::FloquetResult floquet;
+    };
+    const auto verdict_at = [&](const std::string& where, const Eigen::VectorXd& x, double mu_value, double hz) {
+      auto contacts = rubbing;
+      const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_value, 0.0});
+      for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
+      const auto t = std::chrono::steady_clock::now();
+      const solvers::FloquetAnalysis floquet(model.reduced, contacts, {.monodromy = false});
+      const Eigen::MatrixXd coefficients = spectral::as_coefficients(x, nc);  // n_c × M
+      const auto samples_at = [&](Eigen::Index count) {
+        const Eigen::VectorXd at = Eigen::VectorXd::LinSpaced(count, 0.0, 1.0 - 1.0 / static_cast<double>(count));
+        return Eigen::MatrixXd(coefficients * scan_basis.values(at, 0).transpose() -
+                               solvers::obstacle_samples(contacts, at));
+      };
+      Eigen::MatrixXd samples = samples_at(kSamples);
+      const Eigen::Index steps = floquet.resolved_steps(samples, hz);
+      if (steps > kSamples) samples = samples_at(steps);
+      Verdict v{where, mu_value, hz, 0.0, floquet(samples, hz)};
+      v.time_s = models::seconds_since(t);
+      return v;
+    };
+    // The μ-branch at the file's μ and at its end, and the frictional curve's largest amplitude.
+    std::optional<Verdict> at_file_mu, at_branch_end;
+    if (const auto* at_mu = landing(mu)) {
+      at_file_mu = verdict_at("the μ-branch at the file's μ", at_mu->x, mu, from * f1);
+    }
+    if (!mu_branch.points.empty()) {
+      at_branch_end = verdict_at("the μ-branch's last point", mu_branch.points.back().x,
+                                 mu_branch.points.back().parameter, from * f1);
+    }
+    const Verdict at_peak =
+        verdict_at("the largest frictional amplitude", wet->contact_unknowns, mu, wet->frequency_hz);
+    std::vector<const Verdict*> verdicts;
+    if (at_file_mu) verdicts.push_back(&*at_file_mu);
+    if (at_branch_end) verdicts.push_back(&*at_branch_end);
+    verdicts.push_back(&at_peak);
+    for (const Verdict* v : verdicts) {
+      const std::complex<double> lead = v->floquet.multipliers(0);
+      std::printf("floquet, %s (mu = %.5g, f = %.5g f1): |mu| = %.6f, arg = %.4f, %d steps, %s, %.1f s\n",
+                  v->where.c_str(), v->mu, v->frequency_hz / f1, std::abs(lead), std::arg(lead), v->floquet.steps,
+                  v->floquet.settled() ? "settled" : "not settled", v->time_s);
+    }
+    const auto lead_arg = [](const Verdict& v) { return std::abs(std::arg(v.floquet.multipliers(0))); };
+    const auto stable_verdict = [](const Verdict& v) { return v.floquet.stable() && v.floquet.settled(); };
+    const auto describe = [](const Verdict& v) {
+      const std::complex<double> lead = v.floquet.multipliers(0);
+      return "|μ|max " + format("%.4f", std::abs(lead)) + " at arg " + format("%.3f", std::arg(lead)) + " rad" +
+             (v.floquet.settled() ? "" : " (not settled)");
+    };
+
     const auto* issue_point = landing(kIssueFrictionCoefficient);
     const bool issue_in_scan = std::find(scan.begin(), scan.end(), kIssueFrictionCoefficient) != scan.end();
     std::vector<Claim> claims = {
@@ -369,6 +437,20 @@ int main(int argc, char** argv) {
          stuck == 0 && sliding <= kSlidingTolerance * mu * normal_max,
          std::to_string(stuck) + " stuck samples of " + std::to_string(nt * kSamples) + "; largest |f_t − μ f_n| " +
              format("%.1e", sliding) + " N against μ max f_n = " + format("%.3g", mu * normal_max) + " N"},
+        {"along the continuation in μ the orbits stay stable and the leading pair of Floquet multipliers turns "
+         "towards +1 as the branch ends (its argument shrinks): the response meets a resonance in μ, a mode of the "
+         "frictional linearization reaching the excitation, not flutter (a pair leaving the unit circle)",
+         at_file_mu && at_branch_end
+             ? std::optional<bool>(stable_verdict(*at_file_mu) && stable_verdict(*at_branch_end) &&
+                                   lead_arg(*at_branch_end) < lead_arg(*at_file_mu))
+             : std::nullopt,
+         at_file_mu && at_branch_end
+             ? "at μ = " + format("%g", mu) + " " + describe(*at_file_mu) + "; at μ = " +
+                   format("%.4g", at_branch_end->mu) + " " + describe(*at_branch_end)
+             : std::string("the branch did not land on the file's μ")},
+        {"the frictional curve's orbit where its amplitude is largest is stable (every |μ| < 1, a verdict its error "
+         "estimate cannot overturn)",
+         stable_verdict(at_peak), describe(at_peak) + ", " + std::to_string(at_peak.floquet.steps) + " steps"},
         {"there the casing's work on the blade over a period equals the viscous dissipation (no "
          "other load works), to " +
              format("%g", kBalanceTolerance) + " (P = " + std::to_string(kSamples) + " samples)",
@@ -418,8 +500,8 @@ int main(int argc, char** argv) {
        << (unbounded
                ? " and 1/‖x‖∞, extrapolated linearly through the last two points, would vanish near μ ≈ " + pole_text +
                      " (an estimate, not a located singularity): the response grows without bound as μ nears a "
-                     "value a little above the branch's end, as at a resonance (the eigenvalues of the "
-                     "linearization are not computed here)"
+                     "value a little above the branch's end, as at a resonance (the Floquet multipliers below say "
+                     "which kind)"
                : std::string())
        << ". Beside it, Newton at each μ of `contact.friction_scan` straight from the frictionless solution:\n\n"
        << "| μ | on the continuation in μ | its Newton iterations | Newton from μ = 0: status | iterations | "
@@ -434,6 +516,24 @@ int main(int argc, char** argv) {
     md << "\nA μ beyond the branch's end whose Newton converges has a response on another branch: the one from the "
           "frictionless solution does not reach it. The curves use the file's μ = "
        << format("%g", mu) << " (`contact.friction_coefficient`).\n";
+    md << "\nFloquet multipliers (solvers/floquet.hpp: the monodromy matrix carries each Jenkins element's force "
+          "perturbation, 2n + "
+       << nt << " = " << 2 * model.reduced.mass.rows() + nt
+       << " states; the dominant ones by Arnoldi on the modal path; the steps the stiff contacts need):\n\n"
+       << "| orbit | μ | f/f1 | leading multiplier | modulus | argument [rad] | verdict | steps | time [s] "
+          "|\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const Verdict* v : verdicts) {
+      const std::complex<double> lead = v->floquet.multipliers(0);
+      md << "| " << v->where << " | " << format("%.4g", v->mu) << " | " << format("%.4f", v->frequency_hz / f1)
+         << " | " << format("%.4f", lead.real()) << (lead.imag() < 0.0 ? " − " : " + ")
+         << format("%.4f", std::abs(lead.imag())) << "i | " << format("%.4f", std::abs(lead)) << " | "
+         << format("%.3f", std::arg(lead)) << " | "
+         << (v->floquet.settled() ? (v->floquet.stable() ? "stable" : "unstable") : "not settled") << " | "
+         << v->floquet.steps << " | " << format("%.1f", v->time_s) << " |\n";
+    }
+    md << "\nA multiplier of a lightly damped mode is e^{(−ζω ± iω_d)T}: its modulus stays near e^{−ζωT} while its "
+          "argument ω_d T (mod 2π) goes to 0 where the mode's frequency reaches a multiple of the excitation's, "
+          "the forced response's resonance.\n";
     md << "\nWhere the frictional curve's amplitude is largest (f/f1 = " << format("%.4f", wet->frequency_hz / f1)
        << "), friction dissipates " << format("%.3g", sliding_dissipation)
        << " J per period against the casing's sliding (Σ_i ∮ μ f_n,i dτ · 2πR_i/" << lobes
@@ -460,6 +560,22 @@ int main(int argc, char** argv) {
                 {"growth", std::isfinite(mu_growth) ? nlohmann::json(mu_growth) : nlohmann::json()},
                 {"folds", mu_branch.folds.size()},
                 {"time_s", mu_time}}},
+              {"floquet",
+               [&] {
+                 nlohmann::json list = nlohmann::json::array();
+                 for (const Verdict* v : verdicts) {
+                   const std::complex<double> lead = v->floquet.multipliers(0);
+                   list.push_back({{"orbit", v->where},
+                                   {"friction_coefficient", v->mu},
+                                   {"frequency_hz", v->frequency_hz},
+                                   {"leading_multiplier", {lead.real(), lead.imag()}},
+                                   {"settled", v->floquet.settled()},
+                                   {"stable", v->floquet.stable()},
+                                   {"steps", v->floquet.steps},
+                                   {"time_s", v->time_s}});
+                 }
+                 return list;
+               }()},
               {"tip_radius_m", radius},
               {"tip_angle_rad", theta},
               {"largest_amplitude_frequency_hz", {dry->frequency_hz, wet->frequency_hz}},
