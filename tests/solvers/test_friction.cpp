@@ -19,6 +19,7 @@
 #include <wbm/contact/signorini.hpp>
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
+#include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/time_integration.hpp>
 #include <wbm/spectral/layout.hpp>
 #include <wbm/solvers/time_basis.hpp>
@@ -276,6 +277,16 @@ TEST(Friction, ExactCoulombIsRefusedWhereItIsNotComputed) {
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::floquet_multipliers(d.system(), {{0, d.coulomb()}}, Eigen::MatrixXd::Zero(1, 64), 15.0); },
       {"Coulomb friction (exact)", "stability is not computed for exact friction", "stiff Jenkins element"});
+  solvers::ResponseCurveOptions o;
+  o.parameter_min = 5.0;
+  o.parameter_max = 20.0;
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] {
+        (void)solvers::trace_response(solvers::WeightedResidual(d.system(), {0, d.p0, 5.0}, {{0, d.coulomb()}}, fourier,
+                                                                fourier),
+                                      o);
+      },
+      {"stability = true with exact Coulomb friction", "stiff Jenkins element"});
 }
 
 // Exact friction and rigid stops in one problem: on a 2-DOF chain with a rigid stop on DOF 0

@@ -344,7 +344,8 @@ TEST(RigidContact, RefusesWhatItCannotDo) {
       {c.stop[0], {c.tip - 5, std::make_shared<contact::CoulombFriction>(contact::CoulombParameters{0.3, 2.0})}},
       fourier, fourier);
   wbm::testing::expect_throw_with<std::invalid_argument>(
-      [&] { (void)solvers::trace_response(friction, {}); }, {"friction", "stick–slip", "stability = false"});
+      [&] { (void)solvers::trace_response(friction, {}); },
+      {"exact Coulomb friction", "rigid-plastic", "stability = false", "stiff Jenkins element"});
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)solvers::integrate_to_periodic(c.system, c.forcing, c.stop); }, {"integrate_moreau_jean_to_periodic"});
   wbm::testing::expect_throw_with<std::invalid_argument>(

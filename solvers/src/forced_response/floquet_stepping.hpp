@@ -10,6 +10,7 @@
 // Both are similar to the physical state, so they give the same multipliers.
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <utility>
 #include <vector>
@@ -168,10 +169,9 @@ Eigen::MatrixXd stepped_monodromy_jenkins(const LinearPart& linear, const std::v
   // The memoryless stiffnesses at the samples, formed once (the pieces' ends at a sample use them).
   Eigen::MatrixXd at_samples(nc, p_count);
   for (Eigen::Index q = 0; q < p_count; ++q) at_samples.col(q) = memoryless(contact_displacement.col(q));
-  // The kick changes velocities only (e_cᵀ b_d = 0), so the contact displacements `rows` of y
-  // before it are those after it.
-  // Both linear parts kick the velocity half of the state only (u's top rows zero): that half is
-  // multiplied alone.
+  // The kick changes velocities only (e_cᵀ b_d = 0, u's top rows zero in both linear parts): the
+  // contact displacements `rows` of y before it are those after it, and only the velocity half of
+  // the state is multiplied.
   const Eigen::Index half = states / 2;
   const bool velocity_rows = u.topRows(half).isZero(0.0);
   Eigen::MatrixXd force(nc, y.cols());
@@ -248,16 +248,17 @@ Eigen::MatrixXd stepped_monodromy_jenkins(const LinearPart& linear, const std::v
         }
       }
       previous = now;
-      if (last) {
-        kick(at_samples.col(q1), hs, now);
-        continue;
-      }
-      kick(memoryless(u_end), hs, now);
-      for (Eigen::Index j = 0; j < nj; ++j) {  // a slip begins at b: the next piece starts from its value
+      kick(last ? Eigen::VectorXd(at_samples.col(q1)) : memoryless(u_end), hs, now);
+      // A slip that begins at b (inside the step, or at its end when a located onset falls on the
+      // sample): the next piece starts from the slip value.
+      const double period = static_cast<double>(p_count);
+      const double next = std::fmod(last ? tp + 1.0 + 1e-9 : tp + 0.5 * (b + edges[i + 2]), period);
+      for (Eigen::Index j = 0; j < nj; ++j) {
         const JenkinsSamples& e = jenkins[static_cast<size_t>(j)];
-        const double next = tp + 0.5 * (b + edges[i + 2]);
         if (!e.full_stick && e.sticks_at(tp + 0.5 * (a + b)) && !e.sticks_at(next)) {
-          set_slip_value(j, p, normal_slope(j, displacement_at(p, b + inside)), now);
+          set_slip_value(j, p, last ? (e.normal < 0 ? 0.0 : at_samples(e.normal, q1))
+                                    : normal_slope(j, displacement_at(p, b + inside)),
+                         now);
         }
       }
     }

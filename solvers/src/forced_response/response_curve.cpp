@@ -245,8 +245,10 @@ void ResponseCurveOptions::validate() const {
 ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& o) {
   const bool rigid = base.rigid();
   if (rigid && o.stability && !rigid_stops_only(base)) {
-    throw std::invalid_argument("trace_response: stability = true with friction: the monodromy matrix of a "
-                                "stick–slip orbit is not computed; set ResponseCurveOptions::stability = false");
+    throw std::invalid_argument("trace_response: stability = true with exact Coulomb friction: the monodromy "
+                                "matrix of its rigid-plastic orbit is not computed; set "
+                                "ResponseCurveOptions::stability = false, or use a stiff Jenkins element "
+                                "(contact::JenkinsLaw), whose stability is computed");
   }
   if (rigid && o.stability) {
     require_fixed_obstacles(base.contacts(), "trace_response with rigid stops and stability = true (the exact orbit "
