@@ -320,8 +320,9 @@ def test_a_jenkins_element_tends_to_den_hartogs_coulomb_amplitude():
 def test_a_jenkins_damper_branch_carries_stability_and_every_point_is_stable():
     # trace_response with stability=True and a Jenkins element (solvers/floquet.hpp: the monodromy
     # matrix carries the element's force perturbation): a viscously damped oscillator with Jenkins
-    # friction is incrementally passive, so no forced orbit is unstable; at 5 Hz, where the slider
-    # slips over nearly the whole cycle, |μ| is nearly the free oscillator's e^{−cT/2}.
+    # friction under a constant normal load is incrementally passive, so no forced orbit is
+    # unstable; at 5 Hz, where the slider slips over nearly the whole cycle, |μ| is nearly the free
+    # oscillator's e^{−cT/2}.
     m, k = 1.0, (2.0 * math.pi * 10.0) ** 2
     c = 2.0 * 0.005 * math.sqrt(k * m)
     system = wbm.MechanicalSystem([[m]], [[c]], [[k]])

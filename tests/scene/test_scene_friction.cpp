@@ -74,9 +74,10 @@ TEST(SceneFriction, TheDamperPeakIsTheFirstHarmonicEnergyBalance) {
   EXPECT_NEAR(amplitude.maxCoeff() / ((p - 4.0 * slip / kPi) / (c * omega)), 1.0, 1e-3);
   EXPECT_NEAR(force.maxCoeff(), slip, 1e-12);
   // Every point stable, as incremental passivity requires of a damped structure with Jenkins
-  // elements (tests/solvers/test_floquet_jenkins.cpp); at 5 Hz, where the slider slips over nearly
-  // the whole cycle (its stick phases at the reversals are short: k_t = 1000 k), the multipliers
-  // are nearly those of the free oscillator, |μ| = e^{−cT/2} (measured 1.5e-4 below it).
+  // elements under constant normal loads (tests/solvers/test_floquet_jenkins.cpp); at 5 Hz, where
+  // the slider slips over nearly the whole cycle (its stick phases at the reversals are short:
+  // k_t = 1000 k), the multipliers are nearly those of the free oscillator, |μ| = e^{−cT/2}
+  // (measured 1.5e-4 below it).
   const Eigen::VectorXd& stable = column(r, "branch.csv", 5);
   const Eigen::VectorXd& multiplier = column(r, "branch.csv", 6);
   EXPECT_EQ(stable.minCoeff(), 1.0);

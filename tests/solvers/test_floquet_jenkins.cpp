@@ -9,8 +9,9 @@
 //    eigenvalues, stable below the flutter threshold and unstable above it;
 //  - stick–slip: the finite-difference monodromy of an independent explicit time stepping with
 //    the element's return map, written here (velocity Verlet, 2^16 steps per period);
-//  - incremental passivity: a viscously damped oscillator with a Jenkins element dissipates the
-//    energy of the difference of two motions, so no forced orbit is unstable.
+//  - incremental passivity: under a constant normal load, a viscously damped oscillator with a
+//    Jenkins element dissipates the energy of the difference of two motions, so no forced orbit is
+//    unstable (a normal load that varies can break it: the mode-coupling case above).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -345,8 +346,9 @@ TEST(FloquetJenkins, TheBalancedModalAndArnoldiPathsAgree) {
 
 // A continuation with stability = true over the damper's resonance: every point has a verdict,
 // and every verdict is stable, as incremental passivity requires of a viscously damped structure
-// with Jenkins elements (the energy of the difference of two motions, with the springs' and the
-// sliders' stored energy, only decreases; a multiplier at |μ| = 1 would need an undamped mode).
+// with Jenkins elements under constant normal loads: the energy of the difference of two motions
+// (kinetic, elastic and the Jenkins springs' δf²/(2k_t)) only decreases, the sliders dissipating
+// (f₁ − f₂)(ṡ₁ − ṡ₂) ≥ 0 by Coulomb's maximal dissipation, and the viscous damping strictly.
 TEST(FloquetJenkins, EveryPointOfADamperBranchIsStable) {
   const double k = kOscillatorStiffness;
   const MechanicalSystem s = wbm::testing::one_dof_system(1.0, 2.0 * 0.005 * std::sqrt(k), k);
