@@ -173,11 +173,15 @@ int main(int argc, char** argv) {
     // force), over [0, the scan's largest μ], landing on each value of the scan, |Δμ| per step at
     // most contact.friction_step.
     const auto scan_basis = solvers::TimeBasis::fourier_harmonics(harmonics);
-    const auto with_friction = [&](double mu_value) {
+    // The rubbing contacts with the Jenkins elements' friction coefficient set to μ.
+    const auto rubbing_at = [&](double mu_value) {
       auto contacts = rubbing;
       const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_value, 0.0});
       for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
-      return solvers::WeightedResidual(model.reduced, casing_only, contacts, scan_basis, scan_basis,
+      return contacts;
+    };
+    const auto with_friction = [&](double mu_value) {
+      return solvers::WeightedResidual(model.reduced, casing_only, rubbing_at(mu_value), scan_basis, scan_basis,
                                        {.formulation = reproduce::kFigureFormulation});
     };
     const solvers::WeightedResidual dry_start(model.reduced, casing_only, radial, scan_basis, scan_basis,
@@ -366,9 +370,7 @@ int main(int argc, char** argv) {
       solvers::FloquetResult floquet;
     };
     const auto verdict_at = [&](const std::string& where, const Eigen::VectorXd& x, double mu_value, double hz) {
-      auto contacts = rubbing;
-      const auto law = std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{k_t, mu_value, 0.0});
-      for (int i = nt; i < 2 * nt; ++i) contacts[static_cast<size_t>(i)].law = law;
+      const auto contacts = rubbing_at(mu_value);
       const auto t = std::chrono::steady_clock::now();
       const solvers::FloquetAnalysis floquet(model.reduced, contacts, {.monodromy = false});
       const Eigen::MatrixXd coefficients = spectral::as_coefficients(x, nc);  // n_c × M
