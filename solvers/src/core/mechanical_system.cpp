@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <memory>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -376,6 +377,53 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
   Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
   contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal, normal_stiffness);
   point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity, shift);
+}
+
+double common_friction_coefficient(const std::vector<ContactPoint>& contacts) {
+  int first = -1;
+  double mu = 0.0;
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    const auto& law = contacts[c].law;
+    if (dynamic_cast<const contact::CoulombFriction*>(law.get()) != nullptr) {
+      throw std::invalid_argument("friction coefficient continuation: contact " + std::to_string(c) + " (DOF " +
+                                  std::to_string(contacts[c].dof) + ") is exact Coulomb friction (law \"coulomb\"), "
+                                  "whose mu is not a parameter of the weighted residual's rigid path; use a stiff "
+                                  "Jenkins element (law \"jenkins\", contact::JenkinsLaw)");
+    }
+    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(law.get());
+    if (jenkins == nullptr) continue;
+    const double m = jenkins->parameters().friction_coefficient;
+    if (first < 0) {
+      first = static_cast<int>(c);
+      mu = m;
+    } else if (m != mu) {
+      throw std::invalid_argument("friction coefficient continuation: the Jenkins elements of contacts " +
+                                  std::to_string(first) + " and " + std::to_string(c) + " have mu = " +
+                                  format_number(mu) + " and " + format_number(m) + "; the parameter is one mu "
+                                  "shared by every element: give them all the start's mu");
+    }
+  }
+  if (first < 0) {
+    throw std::invalid_argument("friction coefficient continuation: no contact is a Jenkins element "
+                                "(contact::JenkinsLaw, law \"jenkins\"): there is no friction coefficient to vary");
+  }
+  return mu;
+}
+
+std::vector<ContactPoint> with_friction_coefficient(const std::vector<ContactPoint>& contacts, double mu) {
+  if (!(mu >= 0.0) || !std::isfinite(mu)) {
+    throw std::invalid_argument("friction coefficient mu = " + format_number(mu) + ": must be finite and >= 0");
+  }
+  (void)common_friction_coefficient(contacts);
+  std::vector<ContactPoint> out = contacts;
+  for (auto& c : out) {
+    if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
+      contact::JenkinsParameters p = jenkins->parameters();
+      p.friction_coefficient = mu;
+      c.law = std::make_shared<contact::JenkinsLaw>(p);
+    }
+  }
+  return out;
 }
 
 Eigen::SparseMatrix<double> modal_damping(const MechanicalSystem& system, double ratio) {

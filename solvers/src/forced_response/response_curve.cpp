@@ -23,6 +23,10 @@ ForcedResponseFamily::ForcedResponseFamily(const WeightedResidual& base, Continu
   if (parameter_ == ContinuationParameter::Amplitude && base_amplitude_ == 0.0) {
     throw std::invalid_argument("ForcedResponseFamily: amplitude continuation needs a base problem with F != 0");
   }
+  if (parameter_ == ContinuationParameter::FrictionCoefficient) {
+    cache_lambda_ = common_friction_coefficient(base.contacts());
+    cache_.emplace(base.at_frequency(base.frequency_hz()));  // G factorized once, kept for every μ
+  }
 }
 
 double ForcedResponseFamily::load(double lambda) const {
@@ -31,6 +35,13 @@ double ForcedResponseFamily::load(double lambda) const {
 
 const WeightedResidual& ForcedResponseFamily::at(double lambda) const {
   if (parameter_ == ContinuationParameter::Amplitude) return *base_;
+  if (parameter_ == ContinuationParameter::FrictionCoefficient) {
+    if (cache_lambda_ != lambda) {
+      cache_->set_friction_coefficient(lambda);
+      cache_lambda_ = lambda;
+    }
+    return *cache_;
+  }
   if (!cache_ || cache_lambda_ != lambda) {
     cache_.emplace(base_->at_frequency(lambda));
     cache_lambda_ = lambda;
@@ -42,7 +53,12 @@ const WeightedResidual& ForcedResponseFamily::at(double lambda) const {
 // exists there, so the residual is NaN and the corrector fails, and the step is halved, instead
 // of at_frequency throwing out of the continuation.
 bool ForcedResponseFamily::defined(double lambda) const {
-  return parameter_ != ContinuationParameter::Frequency || (lambda > 0.0 && std::isfinite(lambda));
+  switch (parameter_) {
+    case ContinuationParameter::Frequency: return lambda > 0.0 && std::isfinite(lambda);
+    case ContinuationParameter::FrictionCoefficient: return lambda >= 0.0 && std::isfinite(lambda);
+    case ContinuationParameter::Amplitude: break;
+  }
+  return true;
 }
 
 Eigen::VectorXd ForcedResponseFamily::residual(const Eigen::VectorXd& x, double lambda) const {
@@ -71,6 +87,8 @@ LowRankLinearization ForcedResponseFamily::linearize(const Eigen::VectorXd& x, d
   l.jacobian = wr.contact_jacobian_low_rank(x);
   if (parameter_ == ContinuationParameter::Frequency) {
     l.parameter_derivative = wr.contact_residual_frequency_derivative(x);
+  } else if (parameter_ == ContinuationParameter::FrictionCoefficient) {
+    l.parameter_derivative = wr.contact_residual_friction_derivative(x);
   } else {
     l.parameter_derivative = -wr.contact_unknowns(wr.linear_response()) / (wr.residual_scale() * base_amplitude_);
   }
@@ -164,7 +182,7 @@ void replace_last_by_landing(Branch& branch, const ResponseCurveOptions& o) {
 // decays with the harmonic: well below 1 % there), and the message names the mode.
 constexpr double kTopShare = 0.5;
 
-void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch) {
+void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch, bool frequency) {
   const int m = base.dimension();
   if (!base.trial().is_fourier() || m % 2 == 1) return;
   const auto nc = static_cast<Eigen::Index>(base.contacts().size());
@@ -172,7 +190,7 @@ void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch)
     const Eigen::MatrixXd x = spectral::as_coefficients(branch.points[i].x, nc);  // n_c × M
     const double top = x.col(m - 1).cwiseAbs().maxCoeff(), all = x.cwiseAbs().maxCoeff();
     if (!(top > kTopShare * all)) continue;
-    const double f = branch.points[i].parameter;
+    const double f = frequency ? branch.points[i].parameter : base.frequency_hz();
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(base.system().stiffness),
                                                                         Eigen::MatrixXd(base.system().mass),
                                                                         Eigen::EigenvaluesOnly);
@@ -260,7 +278,14 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   }
   o.validate();  // after the refusals of the problem itself, which say more than the options
   const bool frequency = o.parameter == ContinuationParameter::Frequency;
-  const double lambda0 = frequency ? base.frequency_hz() : base.forcing().amplitude;
+  const bool friction = o.parameter == ContinuationParameter::FrictionCoefficient;
+  const double lambda0 = frequency  ? base.frequency_hz()
+                         : friction ? common_friction_coefficient(base.contacts())
+                                    : base.forcing().amplitude;
+  if (friction && o.parameter_min < 0.0) {
+    throw std::invalid_argument("trace_response: parameter_min = " + format_number(o.parameter_min) +
+                                " for a friction coefficient: must be >= 0 (no friction below mu = 0)");
+  }
   if (!(lambda0 >= o.parameter_min && lambda0 <= o.parameter_max)) {
     throw std::invalid_argument("trace_response: the start " + std::to_string(lambda0) + " lies outside [" +
                                 std::to_string(o.parameter_min) + ", " + std::to_string(o.parameter_max) +
@@ -292,6 +317,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.parameter_min = o.parameter_min;
   pa.parameter_max = o.parameter_max;
   pa.parameter_scale = std::abs(lambda0) > 0.0 ? std::abs(lambda0) : 1.0;
+  // μ may start at 0 or far below the end of its range (0.05 → 2): scaled by the range's largest
+  // |μ|, so that the steps are fractions of the range asked for.
+  if (friction) pa.parameter_scale = std::max(std::abs(o.parameter_min), std::abs(o.parameter_max));
   // λ in newtons: scaled so that c λ is compared with s_r, as the residual is.
   pa.state_scale = rigid ? base.residual_scale() / base.force_compliance() : base.residual_scale();
   // Rigid stops alone: pieces and events (SignoriniResponseFamily). With friction the branch has
@@ -315,7 +343,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   Branch branch = pieces ? pseudo_arclength(SignoriniResponseFamily(family), x0, lambda0, pa)
                          : pseudo_arclength(family, x0, lambda0, pa);
   // Rigid stops never drive the top function: it vanishes at every impulse instant.
-  if (!rigid) cut_at_undamped_top_resonance(base, branch);
+  if (!rigid) cut_at_undamped_top_resonance(base, branch, frequency);
   replace_last_by_landing(branch, o);
   curve.folds = branch.folds;
   curve.stop = branch.stop;
@@ -401,16 +429,18 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     }
     const Eigen::MatrixXd uc = q * spectral::as_coefficients(x, nc).transpose();  // P × n_c
     const Eigen::MatrixXd ur = relative(uc, tau);                                 // what the laws see
+    // The laws at this point (in a continuation in μ, its Jenkins elements at μ = λ).
+    const auto& laws = friction ? family.at(parameter).contacts() : contacts;
     for (int c = 0; c < nc; ++c) {
-      if (contacts[c].law->hysteretic()) {  // the periodic loop over the P samples; |f| (friction)
+      if (laws[c].law->hysteretic()) {  // the periodic loop over the P samples; |f| (friction)
         Eigen::VectorXd f(ur.rows()), k(ur.rows()), sensitivity(ur.rows());
         Eigen::VectorXi anchor(ur.rows());
-        evaluate_contact_period(contacts, c, ur.transpose(), f, k, anchor, sensitivity);
+        evaluate_contact_period(laws, c, ur.transpose(), f, k, anchor, sensitivity);
         r.max_contact_force = std::max(r.max_contact_force, f.cwiseAbs().maxCoeff());
         continue;
       }
       for (Eigen::Index k = 0; k < ur.rows(); ++k) {
-        r.max_contact_force = std::max(r.max_contact_force, contacts[c].law->force(ur(k, c)));
+        r.max_contact_force = std::max(r.max_contact_force, laws[c].law->force(ur(k, c)));
       }
     }
     if (observed_contact >= 0 && o.keep_dofs.empty()) {
@@ -448,8 +478,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     const auto t0 = std::chrono::steady_clock::now();
     // Rigid stops: the exact orbit near each point, by shooting, and its saltation monodromy
     // (impact_stability). The flow is set up per point (its frequency and load).
+    // In a continuation in μ each point's Jenkins elements differ: each has its own analysis.
     std::optional<FloquetAnalysis> floquet;
-    if (!rigid) floquet.emplace(base.system(), contacts, FloquetOptions{.monodromy = false});
+    if (!rigid && !friction) floquet.emplace(base.system(), contacts, FloquetOptions{.monodromy = false});
     std::vector<FloquetResult> results(curve.points.size());
     // Per point what the curve keeps of it (not its orbit and monodromy: 2n × 2n each).
     struct Exact {
@@ -479,17 +510,22 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         return;
       }
       const ResponsePoint& r = curve.points[i];
+      std::optional<FloquetAnalysis> own;
+      if (friction) {
+        own.emplace(base.system(), with_friction_coefficient(contacts, r.parameter), FloquetOptions{.monodromy = false});
+      }
+      const FloquetAnalysis& analysis = friction ? *own : *floquet;
       Eigen::MatrixXd uc = relative(q * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), tau);
       // A contact stiff against its mass needs more steps (floquet.hpp): the orbit is evaluated
       // there from the trial functions, rather than interpolated between the P samples.
-      const Eigen::Index resolved = floquet->resolved_steps(uc.transpose(), r.frequency_hz);
+      const Eigen::Index resolved = analysis.resolved_steps(uc.transpose(), r.frequency_hz);
       if (resolved > uc.rows()) {
         const double last = 1.0 - 1.0 / static_cast<double>(resolved);
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
         uc = relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(),
                       fine);
       }
-      FloquetResult fl = (*floquet)(uc.transpose(), r.frequency_hz);
+      FloquetResult fl = analysis(uc.transpose(), r.frequency_hz);
       // Refine where the error estimate could overturn the verdict (near a collision of two
       // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
       for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
@@ -497,7 +533,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
         const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
         const Eigen::MatrixXd ucf = relative(
             base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
-        fl = (*floquet)(ucf.transpose(), r.frequency_hz);
+        fl = analysis(ucf.transpose(), r.frequency_hz);
       }
       results[i] = std::move(fl);
     };

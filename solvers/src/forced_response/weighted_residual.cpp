@@ -155,6 +155,41 @@ Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Ei
   return p.gather(p.solve_stacked(p.frequency_derivative_times(a), false)) / p.scale;
 }
 
+void WeightedResidual::set_friction_coefficient(double mu) {
+  impl_->contacts = with_friction_coefficient(impl_->contacts, mu);
+}
+
+Eigen::VectorXd WeightedResidual::contact_residual_friction_derivative(const Eigen::VectorXd& x) const {
+  const auto& p = *impl_;
+  p.refuse_rigid("contact_residual_friction_derivative");
+  p.require_factorized();
+  (void)common_friction_coefficient(p.contacts);
+  const Eigen::MatrixXd u = p.contact_samples(x);  // n_c × Q, relative to the counter-surfaces
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(p.nc, p.q);  // ∂f_c(τ_q)/∂μ [N]
+  Eigen::VectorXd normal(p.q), normal_stiffness(p.q);
+  for (int c = 0; c < p.nc; ++c) {
+    const ContactPoint& point = p.contacts[static_cast<size_t>(c)];
+    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
+    if (jenkins == nullptr) continue;
+    const double shift = -point.obstacle.drift;  // as evaluate_contact_period
+    contact::JenkinsLoop loop;
+    if (point.normal >= 0) {
+      p.contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal,
+                                                                  normal_stiffness);
+      loop = jenkins->loop(u.row(c).transpose(), normal, shift);
+    } else {
+      normal.setZero();
+      loop = jenkins->loop(u.row(c).transpose(), shift);
+    }
+    const double preload = jenkins->parameters().normal_load;
+    for (int q = 0; q < p.q; ++q) {
+      const int r = loop.stiffness(q) != 0.0 && loop.anchor(q) >= 0 ? loop.anchor(q) : q;
+      d(c, q) = loop.slip_sensitivity(q) * (preload + normal(r));
+    }
+  }
+  return p.compliance_times(Eigen::VectorXd(spectral::stacked(p.sampling->weighting->project(d)))) / p.scale;
+}
+
 Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) const {
   const auto& p = *impl_;
   p.require_factorized();

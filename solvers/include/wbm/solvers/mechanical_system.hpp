@@ -192,6 +192,19 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity);
 
+/// The friction coefficient μ [-] every Jenkins element (contact::JenkinsLaw) of `contacts`
+/// shares: the continuation parameter of ContinuationParameter::FrictionCoefficient
+/// (response_curve.hpp). Throws std::invalid_argument when there is no Jenkins element, when two
+/// of them differ (both named: give every element the start's μ), or for exact Coulomb friction
+/// (contact::CoulombFriction: its μ sits in the rigid path's collocation; use a stiff Jenkins
+/// element).
+[[nodiscard]] double common_friction_coefficient(const std::vector<ContactPoint>& contacts);
+
+/// `contacts` with every Jenkins element's μ set to `mu` (its k_t and preload N kept, a new law
+/// object each; the other contacts shared as they are). Throws std::invalid_argument for a μ that
+/// is not finite and >= 0, and as common_friction_coefficient does for the contacts.
+[[nodiscard]] std::vector<ContactPoint> with_friction_coefficient(const std::vector<ContactPoint>& contacts, double mu);
+
 /// Checks a contact direction over the DOFs, given as (DOF, weight) pairs: every DOF in
 /// [0, dofs), none twice, finite weights, not all zero, and `dof` (the DOF that names the
 /// contact) among them. Throws std::invalid_argument starting with `where`, naming the entry.

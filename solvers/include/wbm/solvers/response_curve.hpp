@@ -24,29 +24,41 @@ namespace wbm::solvers {
 enum class ContinuationParameter {
   Frequency,  // λ = f [Hz]; G(f) is refactorized at each new f (WeightedResidual::at_frequency)
   Amplitude,  // λ = F [N]; the condensed residual is linear in F (r = (x − (F/F₀) x_lin + H n)/s_r)
+  /// λ = μ [-], the friction coefficient every Jenkins element shares (common_friction_coefficient,
+  /// mechanical_system.hpp), at the base problem's frequency and load: G is factorized once for
+  /// the branch and kept (WeightedResidual::set_friction_coefficient), ∂r/∂μ is exact on each
+  /// stick/slip pattern (contact_residual_friction_derivative). Under a constant normal load only
+  /// the slip force μN enters, so a branch in μ is also one in the preload N (N = λ N₀/μ₀, the
+  /// friction damper's optimal-load curve). Jenkins elements only: exact Coulomb is refused.
+  FrictionCoefficient,
 };
 
 /// The condensed residual r(x; λ) of a WeightedResidual as a ParametrizedSystem:
 ///   residual(x, λ) = contact_residual at λ,
-///   linearize(x, λ) = {r, ∂r/∂x, ∂r/∂λ} with ∂r/∂f from contact_residual_frequency_derivative
-///   and ∂r/∂F = −x_lin/(F₀ s_r); ∂r/∂x identity plus low rank (contact_jacobian_low_rank, or
-///   signorini_jacobian with rigid stops).
+///   linearize(x, λ) = {r, ∂r/∂x, ∂r/∂λ} with ∂r/∂f from contact_residual_frequency_derivative,
+///   ∂r/∂F = −x_lin/(F₀ s_r) and ∂r/∂μ from contact_residual_friction_derivative; ∂r/∂x identity
+///   plus low rank (contact_jacobian_low_rank, or signorini_jacobian with rigid stops).
 /// The WeightedResidual of the last frequency asked for is cached (continuation asks each f
-/// several times). At a frequency ≤ 0 or non-finite (a predictor overshooting on a steep branch)
-/// residual and linearization are NaN, so the corrector fails there and the step is halved.
+/// several times); for μ, one copy of the base problem (one factorization of G) whose Jenkins
+/// elements take each μ asked for. At a frequency ≤ 0, a μ < 0, or a non-finite λ (a predictor
+/// overshooting the range) residual and linearization are NaN, so the corrector fails there and
+/// the step is halved. Throws std::invalid_argument for an amplitude parameter with F = 0, and
+/// for μ as common_friction_coefficient does (no Jenkins element, unequal μ, exact Coulomb).
 /// Not thread-safe (the cache is mutable).
 class ForcedResponseFamily {
  public:
   ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter);
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const;
   [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const;
-  /// The problem at λ (a frequency, or the base problem for an amplitude parameter).
+  /// The problem at λ (a frequency; the base problem for an amplitude; for μ the family's copy
+  /// with its Jenkins elements at μ = λ, valid until the next call with another λ).
   [[nodiscard]] const WeightedResidual& at(double lambda) const;
-  /// Forcing scale s = F/F₀ at λ (1 for a frequency parameter).
+  /// Forcing scale s = F/F₀ at λ (1 for a frequency or friction coefficient parameter).
   [[nodiscard]] double load(double lambda) const;
   [[nodiscard]] ContinuationParameter parameter() const { return parameter_; }
   [[nodiscard]] const WeightedResidual& base() const { return *base_; }
-  /// False at a frequency ≤ 0 or non-finite (no problem exists there; residuals are NaN).
+  /// False at a frequency ≤ 0, a μ < 0, or a non-finite λ (no problem exists there; residuals
+  /// are NaN).
   [[nodiscard]] bool defined(double lambda) const;
 
  private:
@@ -89,7 +101,7 @@ class SignoriniResponseFamily {
 
 /// One point of a forced-response curve.
 struct ResponsePoint {
-  double parameter = 0.0;              // f [Hz] or F [N]
+  double parameter = 0.0;              // f [Hz], F [N] or μ [-] (ResponseCurveOptions::parameter)
   double frequency_hz = 0.0;
   double amplitude_n = 0.0;            // F [N]
   Eigen::VectorXd contact_unknowns;    // x (n_c·M, x(k·n_c + c)) [m]; the rest: family.at(λ).expand(x);
@@ -212,8 +224,10 @@ struct ResponseCurveOptions {
 /// a failed landing keeps the overshooting point and says so in the message). Scaling: λ̂ = λ/λ₀, x̂ = x/s_r (the gap, WeightedResidual::residual_scale).
 /// The start is solved with base.solve() (load stepping if needed). Throws
 /// std::invalid_argument for a start outside [parameter_min, parameter_max] or a base problem
-/// without contact (a linear curve needs no continuation: frequency_response()), and for
-/// stability = true with friction (no saltation matrices for stick–slip) or with rigid stops
+/// without contact (a linear curve needs no continuation: frequency_response()), for a
+/// friction coefficient parameter as ForcedResponseFamily does or with parameter_min < 0, and
+/// for stability = true with exact Coulomb friction (no saltation matrices for its rigid-plastic
+/// stick–slip; Jenkins elements have their stability) or with rigid stops
 /// whose counter-surface moves (ContactPoint::obstacle; the exact orbits are shot against fixed
 /// stops). A penalty law's monodromy matrix takes the displacements relative to a moving
 /// counter-surface. With rigid stops the
@@ -226,7 +240,9 @@ struct ResponseCurveOptions {
 /// (SignoriniResponseFamily): every change of the active instants is an event, located and
 /// crossed, and counted in ResponseCurve::events and switches. With exact friction (three
 /// branches per row) the continuation restarts at the corners of the branch instead
-/// (PseudoArclengthOptions::corner_restart), with the generalized Jacobian.
+/// (PseudoArclengthOptions::corner_restart), with the generalized Jacobian. In a continuation in
+/// μ (ContinuationParameter::FrictionCoefficient) every point is at the base problem's frequency
+/// (ResponsePoint::parameter is its μ), and its stability is that of its own Jenkins elements.
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
 }  // namespace wbm::solvers

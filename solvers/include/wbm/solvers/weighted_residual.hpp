@@ -482,6 +482,26 @@ class WeightedResidual {
   [[nodiscard]] Eigen::VectorXd contact_residual_frequency_derivative(const Eigen::VectorXd& x,
                                                                       double load = 1.0) const;
 
+  /// Sets the friction coefficient μ [-] of every Jenkins element (contact::JenkinsLaw) to `mu`,
+  /// keeping its k_t and preload (with_friction_coefficient, mechanical_system.hpp). Everything
+  /// else is kept as it is, G's factorization included: a Jenkins law enters only the contact
+  /// forces n_c(x) (a tangential law has no gap, so s_r does not move). Continuation in μ
+  /// (ContinuationParameter::FrictionCoefficient) sets it on its own copy. Throws
+  /// std::invalid_argument for a μ that is not finite and >= 0, for a problem without a Jenkins
+  /// element, or with exact Coulomb friction (common_friction_coefficient).
+  void set_friction_coefficient(double mu);
+  /// ∂r/∂μ of contact_residual at x, with μ the friction coefficient every Jenkins element shares
+  /// (common_friction_coefficient) [m per unit μ, scaled by 1/s_r like r]:
+  ///   ∂r/∂μ = H ∂n_c/∂μ / s_r,   ∂f_q/∂μ = σ_r (N + n_r),
+  /// on the element's loop at x (contact::JenkinsLoop): r = q in slip, r the anchor (its last
+  /// slip) in stick, σ_r = ±1 the slip direction there, N the preload and n_r the normal law's
+  /// force at sample r under a varying normal load (0 otherwise); 0 in full stick. Exact on
+  /// each stick/slip pattern, where the force is affine in μ; at μ = 0 every sample slips with
+  /// σ = sign(w_q − w_(q−1)), the direction the first slip of a small μ takes. Shape n_c·M,
+  /// ordering of x. Throws as set_friction_coefficient for the contacts, std::logic_error for
+  /// rigid stops.
+  [[nodiscard]] Eigen::VectorXd contact_residual_friction_derivative(const Eigen::VectorXd& x) const;
+
   /// The contact homotopy of SolutionPath::ContactHomotopy as a ParametrizedSystem
   /// (linearization.hpp) in λ = log₁₀ σ, on the contact unknowns x (length n_c·M):
   ///   r(x, λ) = (x − x_lin + σ H n_c(x)) / s_r,   ∂r/∂x = (I + σ H N(x)) / s_r,
