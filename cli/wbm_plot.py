@@ -14,7 +14,8 @@ them with the rest of the old result. Figures (each only when its CSV is listed)
                        energy dissipated per cycle
   harmonics.png        amplitudes A_h of harmonics.csv (log scale)
   frequency_response.png  max/min displacement per output DOF of a sweep (restarts marked)
-  response_curve.png   amplitude along a continuation branch, stable solid, unstable dashed,
+  response_curve.png   amplitude along a continuation branch (against the frequency, or against
+                       mu for a branch in the friction coefficient), stable solid, unstable dashed,
                        folds marked (a fold of the dynamics filled, of the truncation open),
                        and bifurcations.csv's changes of stability by kind
   backbone.png         frequency against energy of an nnm backbone, folds marked
@@ -183,7 +184,10 @@ def response_curve(folder, title, written):
     if not listed(folder, "branch.csv"):
         return
     table = read_csv(folder / "branch.csv")
-    f = table["frequency [Hz]"]
+    # The branch's parameter: the frequency, or mu in a branch in the friction coefficient (its
+    # first column; folds.csv and bifurcations.csv then locate their points in mu too).
+    x_column = "friction_coefficient [-]" if "friction_coefficient [-]" in table else "frequency [Hz]"
+    f = table[x_column]
     amplitudes = columns(table, "amplitude_")  # the forced DOF first, then [output] observe's
     name, amplitude = amplitudes[0]
     stable = table.get("stable [-]")
@@ -213,7 +217,7 @@ def response_curve(folder, title, written):
         # Each fold at its own state (the amplitude written at the fold): on a multivalued curve
         # the nearest point in frequency may lie on another sheet.
         at_fold = folds[name] if name in folds else None
-        for k, (hz, crossing) in enumerate(zip(folds["frequency [Hz]"], folds["floquet_crossing [-]"])):
+        for k, (hz, crossing) in enumerate(zip(folds[x_column], folds["floquet_crossing [-]"])):
             if at_fold is not None:
                 y = at_fold[k]
             else:  # a result written before folds.csv held the fold's amplitude
@@ -229,12 +233,15 @@ def response_curve(folder, title, written):
         shown = set()
         for k, kind in enumerate(crossings["status"]):
             marker, color = markers.get(kind, ("x", "k"))
-            hz = crossings["frequency [Hz]"][k]
+            hz = crossings[x_column][k]
             y = at[k] if at is not None else amplitude[min(range(len(f)), key=lambda i: abs(f[i] - hz))]
             ax.plot(hz, y, marker, color=color, fillstyle="none", markersize=9,
                     label=None if kind in shown else f"stability change: {kind}")
             shown.add(kind)
-    ax.set_xlabel("frequency [Hz]")
+    if x_column == "frequency [Hz]":
+        ax.set_xlabel("frequency [Hz]")
+    else:  # the branch's frequency is one value: say it beside mu
+        ax.set_xlabel(f"friction coefficient μ [-] (at {table['frequency [Hz]'][0]:g} Hz)")
     ax.set_ylabel(name if len(amplitudes) == 1 else "amplitude [m]")
     mark(ax, title, NOTE)
     ax.legend()

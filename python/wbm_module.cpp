@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <optional>
 #include <tuple>
 #include <memory>
 #include <stdexcept>
@@ -381,34 +382,61 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
 (n_c × M [N], exact contacts only: the multipliers) and collocation_times (M, their instants τ_k). Non-convergence is returned, not raised; bad input raises ValueError.)");
   m.def(
       "trace_response",
-      [](const solvers::MechanicalSystem& system, int dof, double amplitude, std::pair<double, double> frequency_hz,
-         const std::vector<ContactSpec>& contacts, const solvers::TimeBasis& trial,
-         const solvers::TimeBasis& weighting, const std::string& formulation, bool stability, double max_step,
-         double max_frequency_step_hz, int max_points, int samples, const std::vector<Load>& loads,
-         const std::vector<int>& harmonics, const std::string& contact_quadrature) {
+      [](const solvers::MechanicalSystem& system, int dof, double amplitude,
+         const std::variant<double, std::pair<double, double>>& frequency_hz, const std::vector<ContactSpec>& contacts,
+         const solvers::TimeBasis& trial, const solvers::TimeBasis& weighting, const std::string& formulation,
+         bool stability, double max_step, double max_frequency_step_hz, int max_points, int samples,
+         const std::vector<Load>& loads, const std::vector<int>& harmonics, const std::string& contact_quadrature,
+         const std::optional<std::pair<double, double>>& friction_coefficient, int time_samples) {
         solvers::WeightedResidualOptions options;
+        options.time_samples = time_samples;
         options.formulation = solvers::parse_formulation(formulation);
         options.harmonics = harmonics;
         options.contact_quadrature = quadrature(contact_quadrature);
-        const solvers::WeightedResidual base(system, forcing(dof, amplitude, frequency_hz.first, loads), points(contacts),
-                                             trial, weighting, options);
+        // A branch in f over frequency_hz = (from, to), or in μ over friction_coefficient = (from, to)
+        // at the one frequency frequency_hz = f.
+        const bool in_mu = friction_coefficient.has_value();
+        const auto* one = std::get_if<double>(&frequency_hz);
+        if (in_mu && one == nullptr) {
+          throw std::invalid_argument("trace_response: frequency_hz is a range (from, to) beside "
+                                      "friction_coefficient = (from, to); a branch in mu is at one frequency: pass "
+                                      "frequency_hz = f");
+        }
+        if (!in_mu && one != nullptr) {
+          throw std::invalid_argument("trace_response: frequency_hz = " + solvers::format_number(*one) +
+                                      " is one frequency; give the range (from, to) of the branch, or "
+                                      "friction_coefficient = (from, to) for a branch in mu at that frequency");
+        }
+        const std::pair<double, double> range =
+            in_mu ? *friction_coefficient : std::get<std::pair<double, double>>(frequency_hz);
+        std::vector<solvers::ContactPoint> laws = points(contacts);
+        if (in_mu) laws = solvers::with_friction_coefficient(laws, range.first);  // the branch starts at `from`
+        const solvers::WeightedResidual base(system, forcing(dof, amplitude, in_mu ? *one : range.first, loads),
+                                             std::move(laws), trial, weighting, options);
         solvers::ResponseCurveOptions o;
-        o.parameter_min = std::min(frequency_hz.first, frequency_hz.second);
-        o.parameter_max = std::max(frequency_hz.first, frequency_hz.second);
-        o.direction = frequency_hz.second > frequency_hz.first ? +1 : -1;
+        if (in_mu) o.parameter = solvers::ContinuationParameter::FrictionCoefficient;
+        o.parameter_min = std::min(range.first, range.second);
+        o.parameter_max = std::max(range.first, range.second);
+        o.direction = range.second > range.first ? +1 : -1;
         o.stability = stability;
         o.max_step = max_step;
         o.initial_step = std::min(o.initial_step, max_step);
+        if (in_mu && max_frequency_step_hz != 0.0) {
+          throw std::invalid_argument("trace_response: max_frequency_step_hz caps |df| of a branch in frequency; a "
+                                      "branch in mu is at one frequency: leave it 0");
+        }
         o.max_parameter_step = max_frequency_step_hz;
         o.max_points = max_points;
         o.samples = samples;
         const auto curve = solvers::trace_response(base, o);
         const auto n = static_cast<Eigen::Index>(curve.points.size());
         Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n), dropped(n), distance(n);
+        Eigen::VectorXd friction(n);
         Eigen::Matrix<bool, Eigen::Dynamic, 1> stable(n), available(n);
         for (Eigen::Index i = 0; i < n; ++i) {
           const auto& p = curve.points[static_cast<size_t>(i)];
           f(i) = p.frequency_hz;
+          friction(i) = p.parameter;
           umax(i) = p.max_displacement;
           umin(i) = p.min_displacement;
           amp(i) = p.amplitude;
@@ -429,6 +457,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
         out["stop"] = std::string(solvers::to_string(curve.stop));
         out["message"] = curve.message;
         out["frequency_hz"] = py::cast(f);
+        if (in_mu) out["friction_coefficient"] = py::cast(friction);
         out["max_displacement"] = py::cast(umax);
         out["min_displacement"] = py::cast(umin);
         out["amplitude"] = py::cast(amp);
@@ -441,7 +470,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
           out["stability_available"] = py::cast(available);
           if (base.rigid()) out["shooting_distance"] = py::cast(distance);  // the exact orbit's, relative
         }
-        out["folds_hz"] = folds;
+        out[in_mu ? "folds_friction_coefficient" : "folds_hz"] = folds;
         out["fold_amplitudes"] = fold_amplitudes;
         out["fold_confirmed"] = curve.fold_confirmed;
         out["wall_time_s"] = curve.wall_time_s;
@@ -452,18 +481,26 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
       py::arg("trial"), py::arg("weighting"), py::arg("formulation") = "distributional", py::arg("stability") = true,
       py::arg("max_step") = 2e-2, py::arg("max_frequency_step_hz") = 0.0, py::arg("max_points") = 5000,
       py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
-      py::arg("contact_quadrature") = "midpoint",
+      py::arg("contact_quadrature") = "midpoint", py::arg("friction_coefficient") = py::none(),
+      py::arg("time_samples") = 0,
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
-[Hz] (solvers::trace_response; folds passed), with Floquet stability of every point (monodromy
+[Hz] (solvers::trace_response; folds passed); or, with friction_coefficient = (from, to), a branch
+in the friction coefficient mu shared by every Jenkins element (it starts at `from`, replacing the
+elements' own mu) at the one frequency frequency_hz = f [Hz] (ContinuationParameter::
+FrictionCoefficient: G factorized once; under a constant normal load the damper's curve of
+amplitude against mu N); with Floquet stability of every point (monodromy
 matrix on `samples` steps; with rigid stops, the saltation monodromy of the exact orbit with plastic
 impacts near each point, by shooting; with Jenkins elements, one more state per element, its force
 perturbation; refused for exact Coulomb friction: pass stability=False). Arguments as solve();
-max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|.
+max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|; time_samples: Q samples
+per period of the contact forces (0: max(256, 2M); a Jenkins element's stick/slip kinks are milder
+with more, e.g. 4M, as the stop message advises).
 Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
 (bool), max_floquet_multiplier, max_floquet_multiplier_error (NaN where stability_available (bool)
 is false: no exact orbit found near a point with rigid stops), with rigid stops shooting_distance
-(the exact orbit's rms distance from the point's, relative); and folds_hz (turning points),
+(the exact orbit's rms distance from the point's, relative); and folds_hz (turning points; in a
+branch in mu folds_friction_coefficient instead, and friction_coefficient per point),
 fold_amplitudes [m] (the forced DOF's amplitude at each fold's own state, Hermite-interpolated on
 its step: on a multivalued curve not the nearest point's), fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
 message, wall_time_s, stability_time_s; with harmonics (a selection, as in solve()):

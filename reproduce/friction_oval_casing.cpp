@@ -25,7 +25,6 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
-#include <functional>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -58,52 +57,6 @@ constexpr int kSamples = 2048;
 // The friction coefficient issue #36 asks for (a Rotor 37 rubbing benchmark's); the continuation
 // in μ reports whether it reaches it.
 constexpr double kIssueFrictionCoefficient = 0.15;
-// The forward difference of ∂r/∂μ, in units of the scan's largest μ (FrictionFamily).
-constexpr double kMuDifference = 1e-7;
-
-// The condensed residual r(x; μ) of the rubbing blade at a fixed frequency, a ParametrizedSystem
-// of the continuation layer (solvers/linearization.hpp) for pseudo-arclength in μ: r and its
-// low-rank Jacobian from the problem of that μ (`make(μ)`, the last one cached), ∂r/∂μ by a forward
-// difference of step h. On each stick/slip pattern the Jenkins force is affine in μ (slip: ±μN,
-// stick: k_t (u − u_a) ± μN_a at the anchor a), so the difference has no truncation error there
-// (its rounding error is about ε/h of r).
-// Below μ = 0 (a predictor overshooting the range) no problem exists: NaN, and the step is halved.
-class FrictionFamily {
- public:
-  FrictionFamily(std::function<solvers::WeightedResidual(double)> make, double h) : make_(std::move(make)), h_(h) {}
-  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double mu) const {
-    if (!(mu >= 0.0)) return Eigen::VectorXd::Constant(x.size(), NAN);
-    return at(mu).contact_residual(x);
-  }
-  [[nodiscard]] solvers::LowRankLinearization linearize(const Eigen::VectorXd& x, double mu) const {
-    solvers::LowRankLinearization l;
-    if (!(mu >= 0.0)) {
-      l.residual = l.parameter_derivative = Eigen::VectorXd::Constant(x.size(), NAN);
-      l.jacobian.capacitance = Eigen::MatrixXd::Constant(x.size(), x.size(), NAN);
-      return l;
-    }
-    const Eigen::VectorXd ahead = make_(mu + h_).contact_residual(x);
-    const auto& problem = at(mu);
-    l.residual = problem.contact_residual(x);
-    l.jacobian = problem.contact_jacobian_low_rank(x);
-    l.parameter_derivative = (ahead - l.residual) / h_;
-    return l;
-  }
-
- private:
-  [[nodiscard]] const solvers::WeightedResidual& at(double mu) const {
-    if (!cache_ || cache_mu_ != mu) {
-      cache_.emplace(make_(mu));
-      cache_mu_ = mu;
-    }
-    return *cache_;
-  }
-  std::function<solvers::WeightedResidual(double)> make_;
-  double h_;
-  mutable std::optional<solvers::WeightedResidual> cache_;
-  mutable double cache_mu_ = 0.0;
-};
-
 struct Curve {
   std::string label;
   solvers::ResponseCurve curve;
@@ -191,13 +144,16 @@ int main(int argc, char** argv) {
     std::vector<double> scan = parameters.numbers("contact.friction_scan");
     std::sort(scan.begin(), scan.end());
     if (scan.empty() || !(scan.front() > 0.0)) run.fail("contact.friction_scan: needs values of μ > 0");
-    const FrictionFamily family(with_friction, kMuDifference * scan.back());
+    // The library's continuation in μ: one factorization of G, every Jenkins element at each μ
+    // asked for, ∂r/∂μ exact on each stick/slip pattern (ContinuationParameter::FrictionCoefficient).
+    const solvers::WeightedResidual mu_problem = with_friction(0.0);
+    const solvers::ForcedResponseFamily family(mu_problem, solvers::ContinuationParameter::FrictionCoefficient);
     solvers::PseudoArclengthOptions in_mu;
     in_mu.parameter_min = 0.0;
     in_mu.parameter_max = scan.back();
     in_mu.parameter_scale = scan.back();
     // x̂ = x / its largest start value, so that μ and the state weigh alike in the arclength.
-    const Eigen::VectorXd mu_x0 = with_friction(0.0).contact_unknowns(spectral::stacked(dry_solution.coefficients));
+    const Eigen::VectorXd mu_x0 = mu_problem.contact_unknowns(spectral::stacked(dry_solution.coefficients));
     in_mu.state_scale = std::max(mu_x0.lpNorm<Eigen::Infinity>(), dry_start.residual_scale());
     in_mu.initial_step = 2e-2;  // in that scaled metric (the defaults: 1e-2 and 5e-2)
     in_mu.max_step = 1e-1;
@@ -493,8 +449,8 @@ int main(int argc, char** argv) {
     md << "\nWhich μ has a periodic response at " << format("%g", from)
        << " f1: a pseudo-arclength continuation in μ from the frictionless solution at μ = 0 (|Δμ| ≤ "
        << format("%g", in_mu.max_parameter_step)
-       << " per step, `contact.friction_step`; ∂r/∂μ by a forward difference, exact on each stick/slip pattern, "
-          "where the Jenkins force is affine in μ) took "
+       << " per step, `contact.friction_step`; the library's ContinuationParameter::FrictionCoefficient, G factorized "
+          "once, ∂r/∂μ analytic, exact on each stick/slip pattern, where the Jenkins force is affine in μ) took "
        << mu_branch.points.size() << " points and " << format("%.1f", mu_time) << " s, and ended "
        << solvers::to_string(mu_branch.stop) << " at μ = " << format("%.4g", mu_largest) << " (" << mu_branch.message
        << "; " << mu_branch.folds.size() << " folds). There the contact unknowns are " << growth_text

@@ -23,7 +23,10 @@ namespace {
 // points; the multiplier is the unstable side's largest, whose argument gives the kind
 // (classify_crossing: fold / period doubling / Neimark–Sacker). bifurcations.csv gets a row per
 // crossing (written only when there is one); result.json the same list, empty when none.
-nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std::string& dof, AnalysisResult& out) {
+// In a branch in μ the crossing is located in μ instead (friction_coefficient [-] and
+// friction_coefficient, between; the frequency is the branch's).
+nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std::string& dof, bool in_mu,
+                                  AnalysisResult& out) {
   nlohmann::json list = nlohmann::json::array();
   std::vector<double> hz, before, after, amplitude, modulus, argument, lost;
   std::vector<std::string> kind;
@@ -36,17 +39,17 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
     const double span = b.max_multiplier - a.max_multiplier;
     const double t = std::abs(span) > 0.0 ? std::clamp((1.0 - a.max_multiplier) / span, 0.0, 1.0) : 0.5;
     const solvers::ResponsePoint& unstable = b.stable ? a : b;
-    hz.push_back(a.frequency_hz + t * (b.frequency_hz - a.frequency_hz));
-    before.push_back(a.frequency_hz);
-    after.push_back(b.frequency_hz);
+    hz.push_back(a.parameter + t * (b.parameter - a.parameter));
+    before.push_back(a.parameter);
+    after.push_back(b.parameter);
     amplitude.push_back(a.amplitude + t * (b.amplitude - a.amplitude));
     modulus.push_back(std::abs(unstable.leading_multiplier));
     argument.push_back(std::arg(unstable.leading_multiplier));
     lost.push_back(b.stable ? 0.0 : 1.0);
     kind.emplace_back(solvers::to_string(b.crossing));
     list.push_back({{"kind", kind.back()},
-                    {"frequency_hz", hz.back()},
-                    {"between_hz", {before.back(), after.back()}},
+                    {in_mu ? "friction_coefficient" : "frequency_hz", hz.back()},
+                    {in_mu ? "between" : "between_hz", {before.back(), after.back()}},
                     {"amplitude_m", {{dof, amplitude.back()}}},
                     {"multiplier", {{"modulus", modulus.back()}, {"argument_rad", argument.back()}}},
                     {"stability", lost.back() == 1.0 ? "lost" : "regained"}});
@@ -56,7 +59,10 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
       return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
     };
     out.tables.push_back({"bifurcations.csv",
-                          {"frequency [Hz]", "frequency_before [Hz]", "frequency_after [Hz]", "amplitude_" + dof + " [m]",
+                          {in_mu ? "friction_coefficient [-]" : "frequency [Hz]",
+                           in_mu ? "friction_coefficient_before [-]" : "frequency_before [Hz]",
+                           in_mu ? "friction_coefficient_after [-]" : "frequency_after [Hz]",
+                           "amplitude_" + dof + " [m]",
                            "floquet_multiplier_modulus [-]", "floquet_multiplier_argument [rad]", "stability_lost [-]"},
                           {column(hz), column(before), column(after), column(amplitude), column(modulus), column(argument),
                            column(lost)},
@@ -69,16 +75,33 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
 
 void continuation(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const auto started = std::chrono::steady_clock::now();
-  const auto& range = *scene.forcing->range;
-  const solvers::WeightedResidual base(scene.system(), scene.harmonic_forcing(range.from_hz), scene.contact_points(),
-                                       scene.trial(), scene.weighting(), scene.weighted_residual_options());
+  // A branch in the forcing frequency over its range, or in μ (every Jenkins element's, from the
+  // range's start) at the one forcing frequency.
+  const bool in_mu = scene.analysis.parameter == BranchParameter::FrictionCoefficient;
+  const double from = in_mu ? scene.analysis.friction_from : scene.forcing->range->from_hz;
+  const double to = in_mu ? scene.analysis.friction_to : scene.forcing->range->to_hz;
+  std::vector<solvers::ContactPoint> contacts = scene.contact_points();
+  if (in_mu) {
+    const double given = solvers::common_friction_coefficient(contacts);
+    if (given != from) {
+      out.warnings.push_back("continuation in mu: the \"jenkins\" contacts' friction_coefficient = " +
+                             format("%g", given) + " is replaced by the branch's mu, from analysis.friction_coefficient = [" +
+                             format("%g", from) + ", " + format("%g", to) + "]");
+    }
+    contacts = solvers::with_friction_coefficient(contacts, from);
+  }
+  const solvers::WeightedResidual base(scene.system(),
+                                       scene.harmonic_forcing(in_mu ? std::nullopt : std::optional(from)),
+                                       std::move(contacts), scene.trial(), scene.weighting(),
+                                       scene.weighted_residual_options());
   solvers::ResponseCurveOptions o;
-  o.parameter_min = std::min(range.from_hz, range.to_hz);
-  o.parameter_max = std::max(range.from_hz, range.to_hz);
-  o.direction = range.to_hz > range.from_hz ? +1 : -1;
+  o.parameter = in_mu ? solvers::ContinuationParameter::FrictionCoefficient : solvers::ContinuationParameter::Frequency;
+  o.parameter_min = std::min(from, to);
+  o.parameter_max = std::max(from, to);
+  o.direction = to > from ? +1 : -1;
   o.max_step = scene.analysis.max_step;
   o.initial_step = std::min(o.initial_step, o.max_step);
-  o.max_parameter_step = scene.analysis.max_frequency_step_hz;
+  o.max_parameter_step = in_mu ? 0.0 : scene.analysis.max_frequency_step_hz;
   o.max_points = scene.analysis.max_points;
   o.max_state = scene.analysis.max_state;
   o.stability = scene.analysis.stability;
@@ -97,9 +120,11 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   double reached = 0.0;  // the largest fraction of the range covered so far (a branch turns back at folds)
   if (progress) {
     o.on_point = [&](size_t i, const solvers::BranchPoint& p) {
-      reached = std::max(reached, std::abs(p.parameter - range.from_hz) / std::abs(range.to_hz - range.from_hz));
-      progress(std::min(reached, 1.0), "point " + std::to_string(i + 1) + ", f = " + format("%.6g", p.parameter) +
-                                           " Hz, step " + format("%.2g", p.step));
+      reached = std::max(reached, std::abs(p.parameter - from) / std::abs(to - from));
+      progress(std::min(reached, 1.0), "point " + std::to_string(i + 1) +
+                                           (in_mu ? ", mu = " + format("%.6g", p.parameter)
+                                                  : ", f = " + format("%.6g", p.parameter) + " Hz") +
+                                           ", step " + format("%.2g", p.step));
     };
   }
   const auto curve = solvers::trace_response(base, o);
@@ -107,6 +132,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   const auto n = static_cast<Eigen::Index>(curve.points.size());
   const bool rigid = base.rigid();
   Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), stable(n), mu(n), mu_error(n), steps(n), its(n);
+  Eigen::VectorXd friction(n);  // a branch in μ: each point's
   Eigen::VectorXd distance(n), impacts(n);
   std::vector<std::string> verdict(static_cast<size_t>(n));
   std::string first_unavailable;
@@ -120,6 +146,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                       : p.stability_settled                    ? "settled"
                                                                                : "within its error estimate";
     f(i) = p.frequency_hz;
+    friction(i) = p.parameter;
     umax(i) = p.max_displacement;
     umin(i) = p.min_displacement;
     amp(i) = p.amplitude;
@@ -132,13 +159,20 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     impacts(i) = std::isfinite(p.shooting_distance) ? p.impacts : NAN;
     if (!p.stability_available) {  // no verdict: empty cells
       stable(i) = mu(i) = mu_error(i) = NAN;
-      if (first_unavailable.empty()) first_unavailable = format("%.6g", p.frequency_hz) + " Hz: " + p.stability_message;
+      if (first_unavailable.empty()) {
+        first_unavailable = (in_mu ? "mu = " + format("%.6g", p.parameter) : format("%.6g", p.frequency_hz) + " Hz") +
+                            ": " + p.stability_message;
+      }
     }
   }
   if (n > 0) {
     std::vector<std::string> header = {"frequency [Hz]", "u_max_" + dof + " [m]", "u_min_" + dof + " [m]",
                                        "amplitude_" + dof + " [m]", "max_contact_force [N]"};
     std::vector<Eigen::VectorXd> columns = {f, umax, umin, amp, force};
+    if (in_mu) {  // the branch's parameter first; the frequency column is then constant
+      header.insert(header.begin(), "friction_coefficient [-]");
+      columns.insert(columns.begin(), friction);
+    }
     if (o.stability) {
       header.insert(header.end(), {"stable [-]", "max_floquet_multiplier [-]", "max_floquet_multiplier_error [-]"});
       columns.insert(columns.end(), {stable, mu, mu_error});
@@ -214,10 +248,13 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
         amplitudes[scene.structure->dof_name(observed[d])] = fold_observed[d](k);
       }
     }
-    folds.push_back({{"frequency_hz", fold.parameter}, {"floquet_crossing", crossing}, {"amplitude_m", amplitudes}});
+    folds.push_back({{in_mu ? "friction_coefficient" : "frequency_hz", fold.parameter},
+                     {"floquet_crossing", crossing},
+                     {"amplitude_m", amplitudes}});
   }
   if (nf > 0) {
-    std::vector<std::string> header = {"frequency [Hz]", "floquet_crossing [-]", "u_max_" + dof + " [m]",
+    std::vector<std::string> header = {in_mu ? "friction_coefficient [-]" : "frequency [Hz]", "floquet_crossing [-]",
+                                       "u_max_" + dof + " [m]",
                                        "u_min_" + dof + " [m]", "amplitude_" + dof + " [m]"};
     std::vector<Eigen::VectorXd> columns = {fold_hz, fold_ok, fold_max, fold_min, fold_amp};
     for (size_t d = 0; per_point && d < observed.size(); ++d) {
@@ -227,7 +264,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
     }
     out.tables.push_back({"folds.csv", header, columns});
   }
-  const nlohmann::json bifurcations = o.stability ? write_bifurcations(curve, dof, out) : nlohmann::json();
+  const nlohmann::json bifurcations = o.stability ? write_bifurcations(curve, dof, in_mu, out) : nlohmann::json();
   out.stop = curve.stop;
   out.status = curve.status();
   out.diagnostics["continuation"] = {{"points", curve.points.size()},
@@ -257,7 +294,9 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                            "no exact orbit with impacts was found near them; the first at " + first_unavailable);
   }
   out.summary = base.trial().name() + ":" + base.weighting().name() + ", M = " + std::to_string(base.dimension()) +
-                ", continuation " + format("%g", range.from_hz) + " → " + format("%g", range.to_hz) + " Hz: " +
+                (in_mu ? ", continuation in mu " + format("%g", from) + " → " + format("%g", to) + " at " +
+                             format("%g", base.frequency_hz()) + " Hz: "
+                       : ", continuation " + format("%g", from) + " → " + format("%g", to) + " Hz: ") +
                 std::to_string(curve.points.size()) + " points, " + std::to_string(curve.folds.size()) + " folds, " +
                 std::string(solvers::to_string(curve.stop)) + way_out(scene, curve.stop, curve.stalled_residual) +
                 " (" +

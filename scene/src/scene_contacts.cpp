@@ -22,6 +22,10 @@ void Parser::contacts(const toml::table& root) {
   std::set<std::pair<int, int>> dofs;  // (dof, against)
   const bool modes = s_.analysis.kind == AnalysisKind::NonlinearModes;
   std::vector<int> table_contact(tables.size(), -1);  // the contact a table located by node or dof became
+  const bool in_mu =
+      s_.analysis.kind == AnalysisKind::Continuation && s_.analysis.parameter == BranchParameter::FrictionCoefficient;
+  std::string jenkins_section;  // the first "jenkins" table, and its μ (a branch in μ)
+  double jenkins_mu = 0.0;
   for (size_t table = 0; table < tables.size(); ++table) {
     const auto& [t, section] = tables[table];
     Contact c;
@@ -66,6 +70,25 @@ void Parser::contacts(const toml::table& root) {
     // The law's own keys: coefficient and exponent (exponential), stiffness (linear).
     read_keys(r_, *t, section, contact_keys(), c, "", law);
     c.counter_surface = counter_surface_of(*t, section, c);
+    // A branch in μ varies one μ every "jenkins" contact shares (the start, analysis.
+    // friction_coefficient's from, replaces it); "coulomb"'s μ is not a parameter of its rigid path.
+    if (in_mu && c.law == ContactLawKind::Coulomb) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"coulomb\" with analysis.parameter = \"friction_coefficient\": exact Coulomb friction's mu is not a "
+               "parameter of its rigid path; use law = \"jenkins\" (a stiff tangential_stiffness)");
+    }
+    if (in_mu && c.law == ContactLawKind::Jenkins) {
+      if (jenkins_section.empty()) {
+        jenkins_section = section;
+        jenkins_mu = c.friction_coefficient;
+      } else if (c.friction_coefficient != jenkins_mu) {
+        r_.error(Reader::source_of(*t, "friction_coefficient"), section + ".friction_coefficient",
+                 "= " + detail::number_text(c.friction_coefficient) + " beside " + jenkins_section +
+                     ".friction_coefficient = " + detail::number_text(jenkins_mu) + ": a branch in mu varies one mu "
+                     "shared by every \"jenkins\" contact; give them the same value (analysis.friction_coefficient's "
+                     "from replaces it)");
+      }
+    }
     if (friction) {  // a constant normal load, or one that follows a normal contact (jenkins)
       // Jenkins: a penalty normal contact; coulomb: a rigid one (a 2D contact: the weighted residual
       // and Moreau–Jean solve the stop and the friction together).
@@ -123,6 +146,11 @@ void Parser::contacts(const toml::table& root) {
     s_.contacts.push_back(c);
   }
   normal_contacts(tables, table_contact);
+  if (in_mu && jenkins_section.empty()) {
+    r_.error(tables.empty() ? root.source() : tables.front().first->source(), "[contact]",
+             "analysis.parameter = \"friction_coefficient\" varies the mu of \"jenkins\" contacts, and there is none; "
+             "add one, or set parameter = \"frequency\"");
+  }
 }
 
 void Parser::normal_contacts(const std::vector<std::pair<const toml::table*, std::string>>& tables,

@@ -145,12 +145,19 @@ void Parser::forcing(const toml::table& root) {
       r_.error(p->source(), "forcing.points", "only used with a range " + key + " = [from, to]; remove it");
     }
   }
-  if (freq != nullptr && (!freq->is_array() || list) && s_.analysis.kind == AnalysisKind::Continuation) {
+  const bool in_mu = s_.analysis.kind == AnalysisKind::Continuation &&
+                     s_.analysis.parameter == BranchParameter::FrictionCoefficient;
+  if (freq != nullptr && (!freq->is_array() || list) && s_.analysis.kind == AnalysisKind::Continuation && !in_mu) {
     r_.error(freq->source(), full,
              "analysis \"continuation\" follows the branch over a range: give frequency_hz = [from, to] "
              "(or frequency_rad_s)");
   }
-  if (f.range && s_.analysis.kind == AnalysisKind::Continuation && t->contains("points")) {
+  if (freq != nullptr && freq->is_array() && in_mu) {
+    r_.error(freq->source(), full,
+             "analysis.parameter = \"friction_coefficient\" follows mu at one forcing frequency: give frequency_hz = "
+             "f (one number), or parameter = \"frequency\" for a branch over [from, to]");
+  }
+  if (f.range && s_.analysis.kind == AnalysisKind::Continuation && !in_mu && t->contains("points")) {
     r_.error(Reader::source_of(*t, "points"), "forcing.points",
              "continuation chooses its own points (analysis.max_step, max_frequency_step_hz); remove it");
   }

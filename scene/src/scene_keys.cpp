@@ -97,10 +97,12 @@ const std::vector<DeclaredKey<Analysis>>& analysis_keys() {
                     "∫₀¹ φ_{J,k} = 1 is the paper's scaling [JL14 Sec. 3.3] (wavelets only)")
           .only_in({"basis-plot"}),
       number_key<A>("max_step", [](auto& a) -> auto& { return a.max_step; }, arclength_step(),
-                    "largest step in the scaled arclength (state / largest gap, frequency / start frequency)")
+                    "largest step in the scaled arclength (state / largest gap, frequency / start frequency, μ / the "
+                    "largest \\|μ\\| of analysis.friction_coefficient)")
           .only_in({"continuation"}),
       number_key<A>("max_frequency_step_hz", [](auto& a) -> auto& { return a.max_frequency_step_hz; },
-                    non_negative("Hz"), "> 0 also caps \\|Δf\\| per step [Hz], for a dense curve")
+                    non_negative("Hz"), "> 0 also caps \\|Δf\\| per step [Hz], for a dense curve (parameter = "
+                    "\"frequency\")")
           .only_in({"continuation"}),
       integer_key<A>("max_points", [](auto& a) -> auto& { return a.max_points; }, 2, 1000000,
                      "the branch stops after this many points")
@@ -113,10 +115,33 @@ const std::vector<DeclaredKey<Analysis>>& analysis_keys() {
           .only_in({"continuation"}),
       boolean_key<A>("stability", [](auto& a) -> auto& { return a.stability; },
                      "Floquet multipliers of every point (monodromy matrix; with rigid stops that of the exact "
-                     "orbit with plastic impacts near the point, by shooting, through saltation matrices; friction "
-                     "laws refuse `true`)")
+                     "orbit with plastic impacts near the point, by shooting, through saltation matrices; with "
+                     "\"jenkins\" contacts one more state per element, its force perturbation; \"coulomb\" "
+                     "refuses `true`)")
           .documented_default("`true`")
           .read_by_section()
+          .only_in({"continuation"}),
+      choice_key<A>("parameter", {"frequency", "friction_coefficient"},
+                    [](const A& a) {
+                      return a.parameter == BranchParameter::Frequency ? "frequency" : "friction_coefficient";
+                    },
+                    [](A& a, const std::string& v) {
+                      a.parameter =
+                          v == "frequency" ? BranchParameter::Frequency : BranchParameter::FrictionCoefficient;
+                    },
+                    "what the branch follows: the forcing frequency over forcing.frequency_hz = [from, to], or the "
+                    "friction coefficient μ of every \"jenkins\" contact over friction_coefficient = [from, to] at "
+                    "one forcing frequency (G factorized once; under a constant normal_load, μ N is all that "
+                    "enters, so this is also a branch in the load)")
+          .only_in({"continuation"}),
+      compound_key<A>("friction_coefficient", "`[from, to]`", "— (required with parameter = \"friction_coefficient\")",
+                      "0 ≤ from ≠ to", "the range of μ [-], from the start `from`; the contacts' own "
+                      "friction_coefficient is replaced (a warning says so where it differs)",
+                      [](const A& a) {
+                        return a.parameter == BranchParameter::FrictionCoefficient
+                                   ? nlohmann::json({a.friction_from, a.friction_to})
+                                   : nlohmann::json();
+                      })
           .only_in({"continuation"}),
       compound_key<A>("energy", "`[from, to]`", "— (required)", "0 < from < to",
                       "normalized modal energy range (1 = contact onset)",

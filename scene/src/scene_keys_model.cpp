@@ -107,7 +107,8 @@ const std::vector<DeclaredKey<Forcing>>& forcing_keys() {
                       "the amplitude [N] of F_i cos(2π f t) on every DOF i (nonzero entries become loads; the resolved "
                       "scene lists them as `loads`)"),
       compound_key<F>("frequency_hz", "number or `[from, to]`", "—", "> 0",
-                      "f [Hz]; a two-number list is a sweep (solve) or the continuation range (required there)"),
+                      "f [Hz]; a two-number list is a sweep (solve) or the continuation range (required there, except "
+                      "in a branch in μ: one number)"),
       compound_key<F>("frequency_rad_s", "number or `[from, to]`", "—", "> 0",
                       "the same in rad/s (ω = 2πf), instead of `frequency_hz`; results and the resolved scene are in Hz"),
       compound_key<F>("frequencies_hz", "list of ≥ 2 numbers", "—", "> 0",

@@ -106,10 +106,46 @@ bool Parser::analysis(const toml::table& root) {
   if (s_.analysis.kind == AnalysisKind::NonlinearModes) nnm(*t);
   if (s_.analysis.kind == AnalysisKind::Continuation) {
     Analysis& a = s_.analysis;
-    read_values(r_, *t, "analysis", analysis_keys(), a, kind);  // max_step, max_frequency_step_hz, max_points, max_state
+    read_values(r_, *t, "analysis", analysis_keys(), a, kind);  // max_step, max_frequency_step_hz, max_points,
+                                                                 // max_state, parameter
     a.stability = r_.boolean(*t, "analysis", "stability", a.stability);
+    branch_parameter(*t);
   }
   return true;
+}
+
+// parameter = "friction_coefficient": its range [from, to] (required), at one forcing frequency
+// (scene_forcing.cpp checks that) and without max_frequency_step_hz; otherwise no range.
+void Parser::branch_parameter(const toml::table& t) {
+  Analysis& a = s_.analysis;
+  const toml::node* n = t.get("friction_coefficient");
+  if (a.parameter == BranchParameter::Frequency) {
+    if (n != nullptr) {
+      r_.error(n->source(), "analysis.friction_coefficient",
+               "only used with parameter = \"friction_coefficient\" (a branch in mu); remove it, or set that "
+               "parameter");
+    }
+    return;
+  }
+  if (const toml::node* m = t.get("max_frequency_step_hz")) {
+    r_.error(m->source(), "analysis.max_frequency_step_hz",
+             "caps |df| of a branch in frequency; a branch in mu (parameter = \"friction_coefficient\") is at one "
+             "frequency: remove it (analysis.max_step sets the step)");
+  }
+  const toml::array* range = n != nullptr ? n->as_array() : nullptr;
+  if (range == nullptr || range->size() != 2) {
+    r_.error(n != nullptr ? n->source() : t.source(), "analysis.friction_coefficient",
+             std::string(n == nullptr ? "missing" : "expected [from, to]") +
+                 " with parameter = \"friction_coefficient\"; give friction_coefficient = [from, to], the range of mu "
+                 "(>= 0) the branch follows from `from`, e.g. [0.0, 0.5]");
+    return;
+  }
+  a.friction_from = r_.number_value((*range)[0], "analysis.friction_coefficient[0]", detail::non_negative("-"));
+  a.friction_to = r_.number_value((*range)[1], "analysis.friction_coefficient[1]", detail::non_negative("-"));
+  if (a.friction_from == a.friction_to) {
+    r_.error(n->source(), "analysis.friction_coefficient",
+             "the range is empty (from = to); give from != to (the branch runs from `from` towards `to`)");
+  }
 }
 
 void Parser::nnm(const toml::table& t) {

@@ -112,6 +112,7 @@ class Parser {
 
   // [analysis] of type "nnm": energy = [from, to] (normalized, 1 = contact onset), N, m, the
   // outer algorithm, steps and the levels whose mode shapes are written.
+  void branch_parameter(const toml::table& t);
   void nnm(const toml::table& t);
 
   void structure(const toml::table& root);

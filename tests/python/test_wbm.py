@@ -334,6 +334,34 @@ def test_a_jenkins_damper_branch_carries_stability_and_every_point_is_stable():
     assert curve["max_floquet_multiplier"][0] == pytest.approx(math.exp(-0.5 * c / (m * 5.0)), abs=1e-3)
 
 
+def test_a_branch_in_the_friction_coefficient_meets_the_dampers_closed_forms():
+    # trace_response with friction_coefficient=(from, to) at one frequency: the damper at its
+    # resonance (ζ = 0.5 %, k_t = 1000 k, N = 1 N). While the slider slips the amplitude is the
+    # first-harmonic balance (P − 4μN/π)/(cω); stuck at every instant (μN above k_t X) the mass
+    # rides on k + k_t: X = P/(k + k_t − mω²). Ranges given the wrong way round are refused.
+    m, k = 1.0, (2.0 * math.pi * 10.0) ** 2
+    c, kt, omega = 2.0 * 0.005 * math.sqrt(k * m), 1e3 * k, 2.0 * math.pi * 10.0
+    system = wbm.MechanicalSystem([[m]], [[c]], [[k]])
+    basis = wbm.TimeBasis("fourier", 65)
+    law = wbm.JenkinsLaw(tangential_stiffness=kt, friction_coefficient=0.3, normal_load=1.0)
+    # Q = 1024 (not the default 256, where the corrector stalls at the onset of full stick, a kink
+    # of the sampled loop; the stop message says to raise the samples).
+    curve = wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis, stability=False,
+                               friction_coefficient=(0.1, 1.2), time_samples=1024)
+    assert curve["converged"], curve["message"]
+    mu, amplitude = curve["friction_coefficient"], curve["amplitude"]
+    assert mu[0] == 0.1 and mu[-1] == 1.2 and np.all(curve["frequency_hz"] == 10.0)
+    slipping = mu < 0.6
+    assert np.count_nonzero(slipping) > 10
+    first_harmonic = (1.0 - 4.0 * mu[slipping] / math.pi) / (c * omega)
+    assert np.max(np.abs(amplitude[slipping] / first_harmonic - 1.0)) < 1e-4
+    assert amplitude[-1] == pytest.approx(1.0 / (k + kt - m * omega ** 2), rel=1e-9)
+    with pytest.raises(ValueError, match="a branch in mu is at one frequency"):
+        wbm.trace_response(system, 0, 1.0, (5.0, 20.0), [(0, law)], basis, basis, friction_coefficient=(0.1, 1.2))
+    with pytest.raises(ValueError, match="is one frequency"):
+        wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis)
+
+
 def test_a_normal_contact_at_rest_gives_the_constant_load_it_balances():
     # A point mass on springs k in x and y, pressed by a normal spring k_n of gap g < 0 and rubbing
     # along x through a Jenkins element whose slip force follows that spring, (dof, law, normal):

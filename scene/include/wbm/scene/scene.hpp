@@ -24,8 +24,9 @@
 ///                              periodicity_tolerance, max_periods)
 ///   [analysis]                 type = "solve" | "timestep" | "basis-plot" | "continuation" | "nnm"
 ///                              (+ functions, derivative, normalization for basis-plot; max_step,
-///                              max_frequency_step_hz, max_points, max_state, stability for
-///                              continuation; energy, harmonics, samples, algorithm,
+///                              max_frequency_step_hz, max_points, max_state, stability,
+///                              parameter, friction_coefficient for continuation;
+///                              energy, harmonics, samples, algorithm,
 ///                              max_energy_step, max_points, levels for nnm)
 ///   [output]                   samples per period, nodes | dofs to write, harmonics, formats
 ///                              ("csv", "mat")
@@ -142,6 +143,12 @@ enum class ContactLawKind { Exponential, Linear, Rigid, Jenkins, Coulomb };
 }
 [[nodiscard]] std::string_view to_string(ContactLawKind law) noexcept;
 
+/// What a continuation follows: the forcing frequency over forcing.frequency_hz = [from, to]
+/// ("frequency"), or the friction coefficient μ of every "jenkins" contact over
+/// analysis.friction_coefficient = [from, to] at one forcing frequency ("friction_coefficient";
+/// solvers::ContinuationParameter::FrictionCoefficient).
+enum class BranchParameter { Frequency, FrictionCoefficient };
+
 /// The outer algorithm of type = "nnm": "continuation" (pseudo-arclength on the KKT
 /// conditions), "simultaneous" or "sequential" ([LL11 Algs. 1, 2], energy stepping).
 enum class NnmAlgorithm { Continuation, Simultaneous, Sequential };
@@ -241,6 +248,8 @@ struct Analysis {
   int max_points = 5000;
   double max_state = 100.0;         // > 0: stop once ‖x‖∞ > max_state · s_r (s_r = max(largest gap, ‖x_lin‖∞)); 0: no bound
   bool stability = true;            // Floquet multipliers of every point
+  BranchParameter parameter = BranchParameter::Frequency;
+  double friction_from = 0.0, friction_to = 0.0;  // parameter = friction_coefficient: μ from → to [-]
   // nnm (first nonlinear normal mode against the stops, solvers/nonlinear_modes.hpp):
   double energy_min = 0.5, energy_max = 0.0;  // normalized energy range (1 = contact onset)
   int harmonics = 16;               // N
