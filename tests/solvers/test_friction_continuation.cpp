@@ -35,8 +35,8 @@
 namespace wbm::solvers {
 namespace {
 
-constexpr double kMuPi = std::numbers::pi;
-const double kMuOscillatorStiffness = std::pow(2.0 * kMuPi * 10.0, 2);  // 1 kg at f_n = 10 Hz
+using wbm::testing::kPi;
+const double kMuOscillatorStiffness = std::pow(2.0 * kPi * 10.0, 2);  // 1 kg at f_n = 10 Hz
 
 std::shared_ptr<const contact::JenkinsLaw> element(double kt, double mu, double normal_load) {
   return std::make_shared<contact::JenkinsLaw>(contact::JenkinsParameters{kt, mu, normal_load});
@@ -46,7 +46,7 @@ std::shared_ptr<const contact::JenkinsLaw> element(double kt, double mu, double 
 // r = ω/ω_n (m = 1 kg, P0 = 1 N): x0 = (P0/k) √((1/(1 − r²))² − (F0 U/P0)²), U = tan(π/(2r))/r
 // (the derivation is in test_friction.cpp, Den Hartog, Phil. Mag. (7) 9 (1930) 801–817).
 double den_hartog_amplitude(double r, double f0) {
-  const double k = kMuOscillatorStiffness, u = std::tan(kMuPi / (2.0 * r)) / r;
+  const double k = kMuOscillatorStiffness, u = std::tan(kPi / (2.0 * r)) / r;
   return 1.0 / k * std::sqrt(std::pow(1.0 / (1.0 - r * r), 2) - std::pow(f0 * u, 2));
 }
 
@@ -89,7 +89,7 @@ TEST(FrictionContinuation, EveryPointOfTheBranchInMuIsDenHartogsSteadyStateAtIts
 // tangential with a Jenkins element whose slip force is μ (N + n(u_0)); both DOFs driven at 8 Hz
 // so that the element sticks and slips within the period.
 struct Pressed {
-  double k0 = std::pow(2.0 * kMuPi * 10.0, 2), k1 = std::pow(2.0 * kMuPi * 12.0, 2), c = 1.0;
+  double k0 = std::pow(2.0 * kPi * 10.0, 2), k1 = std::pow(2.0 * kPi * 12.0, 2), c = 1.0;
   [[nodiscard]] MechanicalSystem system() const {
     MechanicalSystem s;
     s.mass = Eigen::MatrixXd::Identity(2, 2).sparseView();
