@@ -144,3 +144,30 @@ def test_points_without_a_stability_verdict_are_drawn_apart(tmp_path):
     assert (":", 2) in lines  # the unavailable point, joined to the next
     # The axis names the amplitude's column (the legend's loop once reused its variable: "unavailable").
     assert ylabel == "amplitude_x1 [m]"
+
+
+def test_a_branch_in_the_friction_coefficient_is_drawn_against_mu(tmp_path):
+    # branch.csv of analysis.parameter = "friction_coefficient" starts with μ; its frequency column
+    # is constant. The curve is drawn against μ, its folds at their μ, and the axis says which
+    # frequency the branch is at.
+    write_csv(tmp_path / "branch.csv", ["friction_coefficient [-]", "frequency [Hz]", "amplitude_x [m]"],
+              [(0.0, 10.0, 3e-2), (0.4, 10.0, 2e-2), (0.8, 10.0, 1e-4)])
+    write_csv(tmp_path / "folds.csv", ["friction_coefficient [-]", "floquet_crossing [-]", "amplitude_x [m]"],
+              [(0.4, 0.0, 2e-2)])
+    result = {"converged": True, "files": ["branch.csv", "folds.csv"], "scene": {"title": "damper"},
+              "diagnostics": {}}
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    drawn = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        ax = fig.axes[0]
+        drawn[path.name] = (ax.get_xlabel(), [list(line.get_xdata()) for line in ax.get_lines()])
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    xlabel, lines = drawn["response_curve.png"]
+    assert xlabel == "friction coefficient μ [-] (at 10 Hz)"
+    assert [0.0, 0.4, 0.8] in lines and [0.4] in lines  # the curve and its fold, in μ
