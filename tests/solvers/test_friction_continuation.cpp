@@ -128,9 +128,11 @@ TEST(FrictionContinuation, TheDerivativeInMuMatchesDifferencesOfProblemsBuiltAtE
       const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(1024, 0.5 / 1024, 1.0 - 0.5 / 1024);
       const Eigen::MatrixXd u = basis.values(tau, 0) * solved.coefficients.transpose();  // Q × 2
       Eigen::VectorXd normal(u.rows()), normal_stiffness(u.rows());
-      d.contacts(mu, varying)[0].law->evaluate(u.col(0), normal, normal_stiffness);
+      const std::vector<ContactPoint> contacts = d.contacts(mu, varying);  // owns the laws read below
+      contacts[0].law->evaluate(u.col(0), normal, normal_stiffness);
       if (!varying) normal.setZero();
-      const auto* law = dynamic_cast<const contact::JenkinsLaw*>(d.contacts(mu, varying)[1].law.get());
+      const auto* law = dynamic_cast<const contact::JenkinsLaw*>(contacts[1].law.get());
+      ASSERT_NE(law, nullptr);
       const int slipping = law->loop(u.col(1), normal).slipping_samples;
       EXPECT_GT(slipping, 100) << name;
       EXPECT_LT(slipping, 924) << name;
