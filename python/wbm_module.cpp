@@ -387,7 +387,8 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
          const solvers::TimeBasis& trial, const solvers::TimeBasis& weighting, const std::string& formulation,
          bool stability, double max_step, double max_frequency_step_hz, int max_points, int samples,
          const std::vector<Load>& loads, const std::vector<int>& harmonics, const std::string& contact_quadrature,
-         const std::optional<std::pair<double, double>>& friction_coefficient, int time_samples) {
+         const std::optional<std::pair<double, double>>& friction_coefficient, int time_samples,
+         const std::string& stick_slip_events) {
         solvers::WeightedResidualOptions options;
         options.time_samples = time_samples;
         options.formulation = solvers::parse_formulation(formulation);
@@ -428,6 +429,14 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
         o.max_parameter_step = max_frequency_step_hz;
         o.max_points = max_points;
         o.samples = samples;
+        if (stick_slip_events == "always") {
+          o.stick_slip_events = solvers::StickSlipEvents::Always;
+        } else if (stick_slip_events == "never") {
+          o.stick_slip_events = solvers::StickSlipEvents::Never;
+        } else if (stick_slip_events != "on-stall") {
+          throw std::invalid_argument("trace_response: stick_slip_events = \"" + stick_slip_events +
+                                      "\" is not one of \"on-stall\", \"always\", \"never\" (default \"on-stall\")");
+        }
         const auto curve = solvers::trace_response(base, o);
         const auto n = static_cast<Eigen::Index>(curve.points.size());
         Eigen::VectorXd f(n), umax(n), umin(n), amp(n), force(n), mu(n), mu_error(n), dropped(n), distance(n);
@@ -475,6 +484,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
         out["fold_confirmed"] = curve.fold_confirmed;
         out["wall_time_s"] = curve.wall_time_s;
         out["stability_time_s"] = curve.stability_time_s;
+        out["events"] = curve.events;
         return out;
       },
       py::arg("system"), py::arg("dof"), py::arg("amplitude"), py::arg("frequency_hz"), py::arg("contacts"),
@@ -482,7 +492,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
       py::arg("max_step") = 2e-2, py::arg("max_frequency_step_hz") = 0.0, py::arg("max_points") = 5000,
       py::arg("samples") = 512, py::arg("loads") = std::vector<Load>{}, py::arg("harmonics") = std::vector<int>{},
       py::arg("contact_quadrature") = "midpoint", py::arg("friction_coefficient") = py::none(),
-      py::arg("time_samples") = 0,
+      py::arg("time_samples") = 0, py::arg("stick_slip_events") = "on-stall",
       R"(Frequency-response curve by pseudo-arclength continuation in f over frequency_hz = (from, to)
 [Hz] (solvers::trace_response; folds passed); or, with friction_coefficient = (from, to), a branch
 in the friction coefficient mu shared by every Jenkins element (it starts at `from`, replacing the
@@ -494,7 +504,9 @@ impacts near each point, by shooting; with Jenkins elements, one more state per 
 perturbation; refused for exact Coulomb friction: pass stability=False). Arguments as solve();
 max_step: scaled arclength per step; max_frequency_step_hz > 0 caps |Δf|; time_samples: Q samples
 per period of the contact forces (0: max(256, 2M); a Jenkins element's stick/slip kinks are milder
-with more, e.g. 4M, as the stop message advises).
+with more, e.g. 4M, as the stop message advises); stick_slip_events: "on-stall" (the nonsmooth
+corrector, and piece by piece on located stick/slip events where it stalls), "always" or "never"
+(solvers::StickSlipEvents).
 Returns a dict of arrays in branch order (length = points): frequency_hz, max_displacement,
 min_displacement, amplitude [m] of the forced DOF, max_contact_force [N]; with stability: stable
 (bool), max_floquet_multiplier, max_floquet_multiplier_error (NaN where stability_available (bool)
@@ -503,7 +515,8 @@ is false: no exact orbit found near a point with rigid stops), with rigid stops 
 branch in mu folds_friction_coefficient instead, and friction_coefficient per point),
 fold_amplitudes [m] (the forced DOF's amplitude at each fold's own state, Hermite-interpolated on
 its step: on a multivalued curve not the nearest point's), fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
-message, wall_time_s, stability_time_s; with harmonics (a selection, as in solve()):
+message, wall_time_s, stability_time_s, events (stick/slip or impulse switches located and
+crossed); with harmonics (a selection, as in solve()):
 dropped_harmonics_residual per point. Non-convergence is returned, not raised.)");
   m.def(
       "nonlinear_mode",

@@ -10,7 +10,8 @@
 namespace wbm::contact {
 
 JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
-                         const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods, double period_shift) {
+                         const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods, double period_shift,
+                         const std::vector<std::uint8_t>* pattern) {
   const double kt = tangential_stiffness;
   if (!(kt > 0.0) || !std::isfinite(kt)) {
     std::ostringstream m;
@@ -27,6 +28,10 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
     throw std::invalid_argument(
         "jenkins_loop: period_shift is not finite; give the change of w over one period [m] (0: periodic)");
   }
+  if (pattern != nullptr && static_cast<Eigen::Index>(pattern->size()) != w.size()) {
+    throw std::invalid_argument("jenkins_loop: pattern has " + std::to_string(pattern->size()) + " entries, w " +
+                                std::to_string(w.size()) + " samples; give one stick (0) or slip (1) per sample");
+  }
   for (Eigen::Index q = 0; q < w.size(); ++q) {
     if (!std::isfinite(w(q))) throw std::invalid_argument("jenkins_loop: w[" + std::to_string(q) + "] is not finite");
     if (!(slip_force(q) >= 0.0) || !std::isfinite(slip_force(q))) {
@@ -41,6 +46,7 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
   out.stiffness.resize(n);
   out.anchor.resize(n);
   out.slip_sensitivity.resize(n);
+  out.margin.resize(n);
   double f_prev = 0.0, w_prev = 0.0;  // the unstretched spring at w = 0 before sample 0
   // The elastic predictor from the last slip (or from the start), f_a + k_t (w_q − w_a), not
   // accumulated sample by sample, so that rounding does not drift along a long stick.
@@ -65,7 +71,10 @@ JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eig
       const double trial = f_anchor + kt * (w(q) - w_anchor);  // the elastic predictor
       double f = trial;
       double sigma_here = 0.0;  // σ if this sample slips
-      if (std::abs(trial) <= slip_force(q)) {  // stick
+      out.margin(q) = slip_force(q) - std::abs(trial);
+      const bool stick =
+          pattern != nullptr ? (*pattern)[static_cast<size_t>(q)] == 0 : std::abs(trial) <= slip_force(q);
+      if (stick) {
         out.stiffness(q) = kt;
         out.anchor(q) = last_slip;
         out.slip_sensitivity(q) = last_slip >= 0 ? sigma_last : 0.0;
@@ -154,12 +163,15 @@ std::string JenkinsLaw::describe() const {
   return d.str();
 }
 
-JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift) const {
-  return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()), 8, period_shift);
+JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift,
+                             const std::vector<std::uint8_t>* pattern) const {
+  return jenkins_loop(p_.tangential_stiffness, u, Eigen::VectorXd::Constant(u.size(), slip_force()), 8, period_shift,
+                      pattern);
 }
 
 JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u,
-                             const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift) const {
+                             const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift,
+                             const std::vector<std::uint8_t>* pattern) const {
   if (normal.size() != u.size()) {
     throw std::invalid_argument("JenkinsLaw::loop: normal has " + std::to_string(normal.size()) + " samples, u " +
                                 std::to_string(u.size()) + "; give the normal load at every sample of u");
@@ -173,7 +185,7 @@ JenkinsLoop JenkinsLaw::loop(const Eigen::Ref<const Eigen::VectorXd>& u,
     }
   }
   const Eigen::VectorXd fs = p_.friction_coefficient * (normal.array() + p_.normal_load).matrix();
-  return jenkins_loop(p_.tangential_stiffness, u, fs, 8, period_shift);
+  return jenkins_loop(p_.tangential_stiffness, u, fs, 8, period_shift, pattern);
 }
 
 void JenkinsLaw::evaluate_period_loaded(const Eigen::Ref<const Eigen::VectorXd>& u,

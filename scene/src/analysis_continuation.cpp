@@ -105,6 +105,11 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
   o.max_points = scene.analysis.max_points;
   o.max_state = scene.analysis.max_state;
   o.stability = scene.analysis.stability;
+  switch (scene.analysis.stick_slip_events) {
+    case StickSlipEvents::OnStall: o.stick_slip_events = solvers::StickSlipEvents::OnStall; break;
+    case StickSlipEvents::Always: o.stick_slip_events = solvers::StickSlipEvents::Always; break;
+    case StickSlipEvents::Never: o.stick_slip_events = solvers::StickSlipEvents::Never; break;
+  }
   o.corrector_tolerance = scene.solver.newton.tolerance;
   o.samples = scene.output.samples;
   // Observed DOFs: their amplitudes (beyond the forced DOF's) and harmonics along the branch.

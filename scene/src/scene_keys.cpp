@@ -134,6 +134,23 @@ const std::vector<DeclaredKey<Analysis>>& analysis_keys() {
                     "one forcing frequency (G factorized once; under a constant normal_load, μ N is all that "
                     "enters, so this is also a branch in the load)")
           .only_in({"continuation"}),
+      choice_key<A>("stick_slip_events", {"on-stall", "always", "never"},
+                    [](const A& a) {
+                      return a.stick_slip_events == StickSlipEvents::Always  ? "always"
+                             : a.stick_slip_events == StickSlipEvents::Never ? "never"
+                                                                             : "on-stall";
+                    },
+                    [](A& a, const std::string& v) {
+                      a.stick_slip_events = v == "always"  ? StickSlipEvents::Always
+                                            : v == "never" ? StickSlipEvents::Never
+                                                           : StickSlipEvents::OnStall;
+                    },
+                    "\"jenkins\" contacts: how the branch crosses a sample's switch between stick and slip. "
+                    "\"on-stall\": the nonsmooth corrector while it converges, and where it stalls at such a kink "
+                    "the branch goes on piece by piece, each switch located and crossed as an event (and back "
+                    "where the pieces cycle); \"always\": piece by piece from the start (every sample's switch an "
+                    "event: slower); \"never\": the nonsmooth corrector alone")
+          .only_in({"continuation"}),
       compound_key<A>("friction_coefficient", "`[from, to]`", "— (required with parameter = \"friction_coefficient\")",
                       "0 ≤ from ≠ to", "the range of μ [-], from the start `from`; the contacts' own "
                       "friction_coefficient is replaced (a warning says so where it differs)",

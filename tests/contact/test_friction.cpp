@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -300,4 +301,75 @@ TEST(JenkinsLoop, ASlidingCounterSurfaceCarriesTheSliderAcrossPeriods) {
   }
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)jenkins_loop(kt, samples(0.0), slip, 8, std::nan("")); }, {"period_shift", "finite"});
+}
+
+// A stick/slip pattern names one piece of the piecewise-linear return map (jenkins_loop with a
+// pattern). Truths: the return map's own pattern is the map itself; the pieces meet continuously
+// (at the amplitude where one sample's margin F_s − |f*| vanishes, its stick and its slip piece
+// give the same forces, whatever the rest of the loop); and a piece's derivatives equal central
+// differences of that piece's force even where its pattern is not the return map's (its affine
+// extension beyond the piece).
+TEST(JenkinsLoop, APatternIsAPieceTheReturnMapMeetsContinuously) {
+  const double kt = 1e6, fs = 10.0;
+  const int q = 64;
+  const Eigen::VectorXd theta = angles(q);
+  const Eigen::VectorXd shape = theta.array().cos() + 0.2 * (3.0 * theta.array() + 0.4).sin();
+  const Eigen::VectorXd slip = Eigen::VectorXd::Constant(q, fs);
+  auto pattern_of = [](const JenkinsLoop& l) {
+    std::vector<std::uint8_t> p(static_cast<size_t>(l.force.size()));
+    for (Eigen::Index i = 0; i < l.force.size(); ++i) p[static_cast<size_t>(i)] = l.stiffness(i) == 0.0 ? 1 : 0;
+    return p;
+  };
+  const double a0 = 3.0 * fs / kt;
+  const JenkinsLoop free = jenkins_loop(kt, a0 * shape, slip);
+  const std::vector<std::uint8_t> own = pattern_of(free);
+  const JenkinsLoop same = jenkins_loop(kt, a0 * shape, slip, 8, 0.0, &own);
+  EXPECT_EQ(same.force, free.force);
+  for (int i = 0; i < q; ++i) EXPECT_EQ(same.margin(i) >= 0.0, own[static_cast<size_t>(i)] == 0) << i;
+  // As the amplitude grows on the piece of a0, the first stick sample whose margin turns negative
+  // (the piece's boundary), and bisection on its margin for where it vanishes.
+  int switching = -1;
+  double hi = a0;
+  while (switching < 0 && hi < 100.0 * a0) {
+    hi *= 1.05;
+    const Eigen::VectorXd m = jenkins_loop(kt, hi * shape, slip, 8, 0.0, &own).margin;
+    for (int i = 0; i < q && switching < 0; ++i) {
+      if (own[static_cast<size_t>(i)] == 0 && m(i) < 0.0) switching = i;
+    }
+  }
+  ASSERT_GE(switching, 0);
+  double lo = hi / 1.05;
+  auto margin_at = [&](double a) { return jenkins_loop(kt, a * shape, slip, 8, 0.0, &own).margin(switching); };
+  ASSERT_GT(margin_at(lo), 0.0);
+  ASSERT_LT(margin_at(hi), 0.0);
+  for (int k = 0; k < 200 && hi - lo > 1e-15 * a0; ++k) (margin_at(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+  std::vector<std::uint8_t> flipped = own;
+  flipped[static_cast<size_t>(switching)] = 1;
+  const JenkinsLoop stick = jenkins_loop(kt, lo * shape, slip, 8, 0.0, &own);
+  const JenkinsLoop slipping = jenkins_loop(kt, lo * shape, slip, 8, 0.0, &flipped);
+  EXPECT_LT((stick.force - slipping.force).cwiseAbs().maxCoeff(), 1e-9 * fs);
+  EXPECT_EQ(slipping.stiffness(switching), 0.0);
+  // Beyond the piece (amplitude 2 a0 on the pattern of a0, where the return map would slip
+  // elsewhere): the piece's derivatives against central differences of the piece.
+  const Eigen::VectorXd w = 2.0 * a0 * shape;
+  const JenkinsLoop l = jenkins_loop(kt, w, slip, 8, 0.0, &own);
+  ASSERT_NE(pattern_of(jenkins_loop(kt, w, slip)), own);
+  const Eigen::MatrixXd jw = displacement_jacobian(l, kt), jf = slip_force_jacobian(l);
+  const double hw = 1e-7 * a0, hf = 1e-7 * fs;
+  for (int r = 0; r < q; ++r) {
+    Eigen::VectorXd wp = w, wm = w, fp = slip, fm = slip;
+    wp(r) += hw;
+    wm(r) -= hw;
+    fp(r) += hf;
+    fm(r) -= hf;
+    const Eigen::VectorXd dw =
+        (jenkins_loop(kt, wp, slip, 8, 0.0, &own).force - jenkins_loop(kt, wm, slip, 8, 0.0, &own).force) / (2.0 * hw);
+    const Eigen::VectorXd df =
+        (jenkins_loop(kt, w, fp, 8, 0.0, &own).force - jenkins_loop(kt, w, fm, 8, 0.0, &own).force) / (2.0 * hf);
+    EXPECT_LT((dw - jw.col(r)).cwiseAbs().maxCoeff(), 1e-6 * kt) << "w sample " << r;
+    EXPECT_LT((df - jf.col(r)).cwiseAbs().maxCoeff(), 1e-6) << "slip force sample " << r;
+  }
+  const std::vector<std::uint8_t> short_pattern(3, 0);
+  wbm::testing::expect_throw_with<std::invalid_argument>(
+      [&] { (void)jenkins_loop(kt, w, slip, 8, 0.0, &short_pattern); }, {"pattern has 3 entries, w 64 samples"});
 }

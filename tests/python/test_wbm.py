@@ -344,11 +344,15 @@ def test_a_branch_in_the_friction_coefficient_meets_the_dampers_closed_forms():
     system = wbm.MechanicalSystem([[m]], [[c]], [[k]])
     basis = wbm.TimeBasis("fourier", 65)
     law = wbm.JenkinsLaw(tangential_stiffness=kt, friction_coefficient=0.3, normal_load=1.0)
-    # Q = 1024 (not the default 256, where the corrector stalls at the onset of full stick, a kink
-    # of the sampled loop; the stop message says to raise the samples).
+    # At the default Q = 256 the nonsmooth corrector stalls at the onset of full stick (a kink of
+    # the sampled loop); the branch goes on there on stick/slip events ("never" stops instead).
+    stalled = wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis, stability=False,
+                                 friction_coefficient=(0.1, 1.2), stick_slip_events="never")
+    assert not stalled["converged"] and stalled["events"] == 0
     curve = wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis, stability=False,
-                               friction_coefficient=(0.1, 1.2), time_samples=1024)
+                               friction_coefficient=(0.1, 1.2))
     assert curve["converged"], curve["message"]
+    assert curve["events"] > 0
     mu, amplitude = curve["friction_coefficient"], curve["amplitude"]
     assert mu[0] == 0.1 and mu[-1] == 1.2 and np.all(curve["frequency_hz"] == 10.0)
     slipping = mu < 0.6
@@ -360,6 +364,9 @@ def test_a_branch_in_the_friction_coefficient_meets_the_dampers_closed_forms():
         wbm.trace_response(system, 0, 1.0, (5.0, 20.0), [(0, law)], basis, basis, friction_coefficient=(0.1, 1.2))
     with pytest.raises(ValueError, match="is one frequency"):
         wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis)
+    with pytest.raises(ValueError, match='stick_slip_events = "sometimes" is not one of'):
+        wbm.trace_response(system, 0, 1.0, 10.0, [(0, law)], basis, basis, friction_coefficient=(0.1, 1.2),
+                           stick_slip_events="sometimes")
 
 
 def test_a_normal_contact_at_rest_gives_the_constant_load_it_balances():

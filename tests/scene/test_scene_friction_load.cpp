@@ -95,6 +95,11 @@ TEST(SceneFrictionLoad, KeysAreReadAndRefusedWithTheWayOut) {
   EXPECT_EQ(s.analysis.friction_from, 0.1);
   EXPECT_EQ(s.analysis.friction_to, 0.9);
   refused(structure + one + jenkins + in_mu, {"analysis.friction_coefficient: missing", "[from, to]"});
+  refused(structure + one + jenkins + in_mu + "friction_coefficient = [0.1, 0.9]\nstick_slip_events = \"sometimes\"\n",
+          {"analysis.stick_slip_events", "\"sometimes\" is not one of \"on-stall\", \"always\", \"never\""});
+  const Scene always =
+      parse(structure + one + jenkins + in_mu + "friction_coefficient = [0.1, 0.9]\nstick_slip_events = \"always\"\n");
+  EXPECT_EQ(always.analysis.stick_slip_events, wbm::scene::StickSlipEvents::Always);
   refused(structure + one + jenkins + in_mu + "friction_coefficient = [0.2, 0.2]\n", {"from = to"});
   refused(structure + one + jenkins + in_mu + "friction_coefficient = [-0.1, 0.5]\n",
           {"analysis.friction_coefficient[0]", ">= 0"});
@@ -130,3 +135,30 @@ TEST(SceneFrictionLoad, KeysAreReadAndRefusedWithTheWayOut) {
   EXPECT_EQ(branch_column(r, "friction_coefficient [-]")(0), 0.1);
 }
 
+
+// The same scene at Q = 256 samples: with stick_slip_events = "never" the nonsmooth corrector
+// stalls at the onset of full stick (near μ = 0.998) and the run says so; by default the branch
+// goes on there on stick/slip events and lands on μ = 1.2 in full stick, X = P/|k + k_t − mω² +
+// icω| (the linear oscillator; measured 5e-11, the peak read at the output samples).
+TEST(SceneFrictionLoad, AtFewSamplesTheBranchCrossesTheOnsetOfFullStickOnEvents) {
+  Scene s = wbm::scene::load_scene(kDamperLoad);
+  s.basis.time_samples = 256;
+  s.analysis.stability = false;
+  s.analysis.stick_slip_events = wbm::scene::StickSlipEvents::Never;
+  const wbm::scene::AnalysisResult stalled = wbm::scene::run_analysis(s);
+  EXPECT_FALSE(stalled.converged());
+  EXPECT_EQ(stalled.diagnostics["continuation"]["events"], 0);
+  s.analysis.stick_slip_events = wbm::scene::StickSlipEvents::OnStall;
+  const wbm::scene::AnalysisResult r = wbm::scene::run_analysis(s);
+  ASSERT_TRUE(r.converged()) << r.diagnostics.dump();
+  EXPECT_GT(r.diagnostics["continuation"]["events"].get<int>(), 0);
+  const Eigen::VectorXd& mu = branch_column(r, "friction_coefficient [-]");
+  const Eigen::VectorXd& amplitude = branch_column(r, "amplitude_dof0 [m]");
+  EXPECT_EQ(mu(mu.size() - 1), 1.2);
+  const wbm::solvers::MechanicalSystem sys = s.system();
+  const double m = sys.mass.coeff(0, 0), k = sys.stiffness.coeff(0, 0), c = sys.damping.coeff(0, 0);
+  const double kt = s.contacts[0].tangential_stiffness, omega = 2.0 * kPi * s.forcing->frequency_hz;
+  const double exact = s.forcing->amplitude / std::hypot(k + kt - m * omega * omega, c * omega);
+  EXPECT_NEAR(amplitude(amplitude.size() - 1) / exact, 1.0, 1e-9);
+  EXPECT_EQ(wbm::scene::to_json(s)["analysis"]["stick_slip_events"], "on-stall");
+}

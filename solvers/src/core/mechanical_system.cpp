@@ -365,10 +365,34 @@ void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const st
 
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
-                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity) {
+                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
+                             const std::vector<std::uint8_t>* pattern, Eigen::VectorXd* margin) {
   const ContactPoint& point = contacts[static_cast<size_t>(c)];
   // u is relative to the counter-surface: over the next period it moves by −d (its drift).
   const double shift = -point.obstacle.drift;
+  if (pattern != nullptr || margin != nullptr) {
+    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
+    if (jenkins == nullptr) {
+      throw std::logic_error("evaluate_contact_period: a stick/slip pattern or margins for contact " +
+                             std::to_string(c) + " (" + point.law->describe() + "), which is not a Jenkins element");
+    }
+    contact::JenkinsLoop loop;
+    if (point.normal >= 0) {
+      Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
+      contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal,
+                                                               normal_stiffness);
+      loop = jenkins->loop(u.row(c).transpose(), normal, shift, pattern);
+      load_sensitivity = jenkins->parameters().friction_coefficient * loop.slip_sensitivity;
+    } else {
+      loop = jenkins->loop(u.row(c).transpose(), shift, pattern);
+      load_sensitivity.setZero();
+    }
+    force = loop.force;
+    stiffness = loop.stiffness;
+    anchor = loop.anchor;
+    if (margin != nullptr) *margin = std::move(loop.margin);
+    return;
+  }
   if (point.normal < 0) {
     point.law->evaluate_period(u.row(c).transpose(), force, stiffness, anchor, shift);
     load_sensitivity.setZero();

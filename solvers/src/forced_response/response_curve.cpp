@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/spectral/layout.hpp>
 
@@ -138,7 +139,6 @@ Eigen::VectorXd SignoriniResponseFamily::events(const Eigen::VectorXd& x, double
   if (!family_->defined(lambda)) return Eigen::VectorXd::Constant(x.size(), NAN);
   return family_->at(lambda).signorini_events(x, family_->load(lambda), piece);
 }
-
 }  // namespace wbm::solvers
 
 namespace wbm::solvers {
@@ -212,6 +212,55 @@ void cut_at_undamped_top_resonance(const WeightedResidual& base, Branch& branch,
     return;
   }
 }
+
+// StickSlipEvents::OnStall: one part of a branch with Jenkins elements ended where its way of
+// crossing the stick/slip switches cannot go on: the nonsmooth corrector stalled at a kink (a step
+// below minimum above the rounding floor), or the pieces cycled around a switching point where
+// many samples' surfaces meet (a degenerate event). The branch goes on from its last point with
+// the other `system` (JenkinsResponseFamily or the family itself), in the direction its last
+// tangent took, and the parts are joined: the new part's first point is the old last (dropped),
+// its folds' indices are shifted, the counts add up, and the stop and message are the new part's,
+// after what ended the old one. Returns whether the new part added a point.
+template <class System>
+bool continue_branch(const System& system, PseudoArclengthOptions pa, Branch& branch, const char* how) {
+  const BranchPoint last = branch.points.back();
+  const auto n = last.x.size();
+  pa.direction = last.tangent(n) < 0.0 ? -1 : 1;
+  pa.max_points = std::max(1, pa.max_points - static_cast<int>(branch.points.size()) + 1);
+  const size_t offset = branch.points.size() - 1;
+  if (pa.on_point) {
+    pa.on_point = [on = pa.on_point, offset](size_t index, const BranchPoint& p) {
+      if (index > 0) on(offset + index, p);
+    };
+  }
+  Branch more = pseudo_arclength(system, last.x, last.parameter, pa);
+  const std::string ended = branch.message;
+  for (size_t i = 1; i < more.points.size(); ++i) {
+    more.points[i].arclength += last.arclength;
+    branch.points.push_back(std::move(more.points[i]));
+  }
+  for (Fold f : more.folds) {
+    f.after += offset;
+    branch.folds.push_back(std::move(f));
+  }
+  for (auto& l : more.landings) {
+    l.arclength += last.arclength;
+    branch.landings.push_back(std::move(l));
+  }
+  branch.stop = more.stop;
+  branch.message = more.message + " (continued " + how + " from λ = " + format_number(last.parameter) + ", where " +
+                   ended + ")";
+  branch.rejected_steps += more.rejected_steps;
+  branch.kinks += more.kinks;
+  branch.events += more.events;
+  branch.switches += more.switches;
+  branch.corrector_iterations += more.corrector_iterations;
+  branch.wall_time_s += more.wall_time_s;
+  branch.stalled_residual = more.stalled_residual;
+  branch.rounding_floor = more.rounding_floor;
+  return more.points.size() > 1;
+}
+
 
 }  // namespace
 
@@ -340,8 +389,29 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   // The ends of the range are landed on by the continuation (an end the branch starts on is
   // landed on at its first step, and not again).
   pa.land_on = {o.parameter_min, o.parameter_max};
+  const bool jenkins = !rigid && std::any_of(base.contacts().begin(), base.contacts().end(), [](const ContactPoint& c) {
+    return dynamic_cast<const contact::JenkinsLaw*>(c.law.get()) != nullptr;
+  });
   Branch branch = pieces ? pseudo_arclength(SignoriniResponseFamily(family), x0, lambda0, pa)
-                         : pseudo_arclength(family, x0, lambda0, pa);
+                  : jenkins && o.stick_slip_events == StickSlipEvents::Always
+                      ? pseudo_arclength(JenkinsResponseFamily(family), x0, lambda0, pa)
+                      : pseudo_arclength(family, x0, lambda0, pa);
+  if (jenkins && o.stick_slip_events == StickSlipEvents::OnStall) {
+    // The parts alternate: the nonsmooth corrector until it stalls, then events until the pieces
+    // cycle, and so on, while each part adds a point (at most kParts parts).
+    constexpr int kParts = 16;
+    bool on_events = false;
+    for (int part = 1; part < kParts && !branch.points.empty(); ++part) {
+      const bool stalled = !on_events && branch.stop == StopReason::StepBelowMinimum &&
+                           !std::isfinite(branch.stalled_residual);
+      const bool cycled = on_events && branch.stop == StopReason::DegenerateEvent;
+      if (!stalled && !cycled) break;
+      on_events = !on_events;
+      const bool moved = on_events ? continue_branch(JenkinsResponseFamily(family), pa, branch, "on stick/slip events")
+                                   : continue_branch(family, pa, branch, "by the nonsmooth corrector");
+      if (!moved) break;
+    }
+  }
   // Rigid stops never drive the top function: it vanishes at every impulse instant.
   if (!rigid) cut_at_undamped_top_resonance(base, branch, frequency);
   replace_last_by_landing(branch, o);
@@ -360,6 +430,10 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
                      "switches between stick and slip, and the cell average does not apply to it (it has no f(u)): "
                      "raise the samples per period (WeightedResidualOptions::time_samples; scene: [basis] "
                      "time_samples, e.g. 4M)";
+    if (o.stick_slip_events == StickSlipEvents::Never) {
+      curve.message += ", or cross the switches as events (ResponseCurveOptions::stick_slip_events = OnStall; scene: "
+                       "[analysis] stick_slip_events = \"on-stall\")";
+    }
   } else if (branch.stop == StopReason::StepBelowMinimum && !std::isfinite(branch.stalled_residual) && !rigid &&
              base.contact_quadrature() == ContactQuadrature::Midpoint) {
     // Sampled at midpoints, a law with a corner (a linear penalty k (u − g)₊) makes the residual

@@ -125,8 +125,9 @@ double WeightedResidual::dropped_harmonics_residual(const Eigen::VectorXd& x, do
   return r.norm() / (bnorm > 0.0 ? bnorm : 1.0);
 }
 
-Eigen::VectorXd WeightedResidual::contact_residual(const Eigen::VectorXd& x, double load) const {
-  return impl_->contact_residual(x, load);
+Eigen::VectorXd WeightedResidual::contact_residual(const Eigen::VectorXd& x, double load,
+                                                   const ActiveSet* piece) const {
+  return impl_->contact_residual(x, load, piece);
 }
 
 WeightedResidual::WeightedResidual(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -142,12 +143,13 @@ WeightedResidual WeightedResidual::at_frequency(double frequency_hz) const {
 double WeightedResidual::frequency_hz() const { return impl_->forcing.frequency_hz; }
 double WeightedResidual::residual_scale() const { return impl_->scale; }
 
-Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Eigen::VectorXd& x, double load) const {
+Eigen::VectorXd WeightedResidual::contact_residual_frequency_derivative(const Eigen::VectorXd& x, double load,
+                                                                       const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.require_factorized();
   Eigen::VectorXd rhs = load * p.b;
   if (p.nc > 0) {
-    const Eigen::VectorXd nx = p.contact_forces(x, nullptr);
+    const Eigen::VectorXd nx = p.contact_forces(x, nullptr, piece);
     p.scatter(rhs, nx, -1.0);
   }
   if (const auto gathered = p.gathered_solve(rhs, true)) return *gathered / p.scale;
@@ -159,11 +161,14 @@ void WeightedResidual::set_friction_coefficient(double mu) {
   impl_->contacts = with_friction_coefficient(impl_->contacts, mu);
 }
 
-Eigen::VectorXd WeightedResidual::contact_residual_friction_derivative(const Eigen::VectorXd& x) const {
+Eigen::VectorXd WeightedResidual::contact_residual_friction_derivative(const Eigen::VectorXd& x,
+                                                                      const ActiveSet* piece) const {
   const auto& p = *impl_;
   p.refuse_rigid("contact_residual_friction_derivative");
   p.require_factorized();
   (void)common_friction_coefficient(p.contacts);
+  if (piece != nullptr) p.check_jenkins_piece(*piece, "contact_residual_friction_derivative");
+  int jenkins_index = 0;
   const Eigen::MatrixXd u = p.contact_samples(x);  // n_c × Q, relative to the counter-surfaces
   Eigen::MatrixXd d = Eigen::MatrixXd::Zero(p.nc, p.q);  // ∂f_c(τ_q)/∂μ [N]
   Eigen::VectorXd normal(p.q), normal_stiffness(p.q);
@@ -172,14 +177,17 @@ Eigen::VectorXd WeightedResidual::contact_residual_friction_derivative(const Eig
     const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
     if (jenkins == nullptr) continue;
     const double shift = -point.obstacle.drift;  // as evaluate_contact_period
+    std::vector<std::uint8_t> pattern;
+    if (piece != nullptr) pattern = p.jenkins_pattern(*piece, jenkins_index++);
+    const std::vector<std::uint8_t>* on = piece != nullptr ? &pattern : nullptr;
     contact::JenkinsLoop loop;
     if (point.normal >= 0) {
       p.contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal,
                                                                   normal_stiffness);
-      loop = jenkins->loop(u.row(c).transpose(), normal, shift);
+      loop = jenkins->loop(u.row(c).transpose(), normal, shift, on);
     } else {
       normal.setZero();
-      loop = jenkins->loop(u.row(c).transpose(), shift);
+      loop = jenkins->loop(u.row(c).transpose(), shift, on);
     }
     const double preload = jenkins->parameters().normal_load;
     for (int q = 0; q < p.q; ++q) {
@@ -198,9 +206,48 @@ Eigen::MatrixXd WeightedResidual::contact_jacobian(const Eigen::VectorXd& x) con
   return p.identity_plus_hn(tangents) / p.scale;
 }
 
-LowRankJacobian WeightedResidual::contact_jacobian_low_rank(const Eigen::VectorXd& x) const {
+LowRankJacobian WeightedResidual::contact_jacobian_low_rank(const Eigen::VectorXd& x, const ActiveSet* piece) const {
   impl_->require_factorized();
-  return impl_->low_rank_contact_jacobian(x);
+  return impl_->low_rank_contact_jacobian(x, piece);
+}
+
+ActiveSet WeightedResidual::jenkins_active_set(const Eigen::VectorXd& x) const {
+  const auto& p = *impl_;
+  p.refuse_rigid("jenkins_active_set");
+  const std::vector<int> elements = p.jenkins_contacts();
+  const Eigen::MatrixXd u = p.contact_samples(x);
+  ActiveSet piece;
+  piece.reserve(elements.size() * static_cast<size_t>(p.q));
+  Eigen::VectorXd f(p.q), k(p.q), sensitivity(p.q);
+  Eigen::VectorXi anchor(p.q);
+  for (int c : elements) {
+    evaluate_contact_period(p.contacts, c, u, f, k, anchor, sensitivity);
+    for (int q = 0; q < p.q; ++q) piece.push_back(k(q) == 0.0 ? 1U : 0U);  // slip: ∂f_q/∂w_q = 0
+  }
+  return piece;
+}
+
+Eigen::VectorXd WeightedResidual::jenkins_events(const Eigen::VectorXd& x, const ActiveSet& piece) const {
+  const auto& p = *impl_;
+  p.refuse_rigid("jenkins_events");
+  p.check_jenkins_piece(piece, "jenkins_events");
+  const std::vector<int> elements = p.jenkins_contacts();
+  const Eigen::MatrixXd u = p.contact_samples(x);
+  Eigen::VectorXd events(static_cast<Eigen::Index>(piece.size()));
+  Eigen::VectorXd f(p.q), k(p.q), sensitivity(p.q), margin;
+  Eigen::VectorXi anchor(p.q);
+  for (size_t j = 0; j < elements.size(); ++j) {
+    const int c = elements[j];
+    const std::vector<std::uint8_t> pattern = p.jenkins_pattern(piece, static_cast<int>(j));
+    evaluate_contact_period(p.contacts, c, u, f, k, anchor, sensitivity, &pattern, &margin);
+    const auto& law = dynamic_cast<const contact::JenkinsLaw&>(*p.contacts[static_cast<size_t>(c)].law);
+    const double kt = law.parameters().tangential_stiffness;
+    for (int q = 0; q < p.q; ++q) {
+      events(static_cast<Eigen::Index>(j) * p.q + q) = (pattern[static_cast<size_t>(q)] != 0 ? -1.0 : 1.0) *
+                                                       margin(q) / (kt * p.scale);
+    }
+  }
+  return events;
 }
 
 Eigen::VectorXd WeightedResidual::expand(const Eigen::VectorXd& x) const {

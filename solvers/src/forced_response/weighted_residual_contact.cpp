@@ -202,8 +202,32 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_block(const Eigen::VectorXd& kc,
 }
 
 
-Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
+std::vector<int> WeightedResidual::Impl::jenkins_contacts() const {
+  std::vector<int> out;
+  for (int c = 0; c < nc; ++c) {
+    const auto* law = contacts[static_cast<size_t>(c)].law.get();
+    if (dynamic_cast<const contact::JenkinsLaw*>(law) != nullptr) out.push_back(c);
+  }
+  return out;
+}
+
+
+void WeightedResidual::Impl::check_jenkins_piece(const ActiveSet& piece, const char* what) const {
+  const size_t expected = jenkins_contacts().size() * static_cast<size_t>(q);
+  if (piece.size() != expected) {
+    throw std::invalid_argument(std::string("WeightedResidual::") + what + ": the stick/slip piece has " +
+                                std::to_string(piece.size()) + " entries; it needs Q = " + std::to_string(q) +
+                                " per Jenkins element (" + std::to_string(expected) + ", jenkins_active_set's layout)");
+  }
+}
+
+
+Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::VectorXd& x,
+                                                              std::vector<ContactTangent>* tangents,
+                                                              const ActiveSet* piece) const {
   refuse_rigid("contact forces as a function of the displacement");
+  if (piece != nullptr) check_jenkins_piece(*piece, "contact forces");
+  int jenkins_index = 0;  // the block of `piece` of the next Jenkins element
   const Sampling& smp = *sampling;
   const Eigen::MatrixXd u = contact_samples(x);
   Eigen::MatrixXd slope;  // δ_q = u̇_c(τ_q)/Q, CellAverage only
@@ -222,7 +246,12 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
                                     contacts[c].law->describe() + ", whose force depends on the history: use "
                                     "contact_quadrature = Midpoint");
       }
-      evaluate_contact_period(contacts, c, u, fc, kc, anchor, load_sensitivity);
+      if (piece != nullptr && dynamic_cast<const contact::JenkinsLaw*>(contacts[c].law.get()) != nullptr) {
+        const std::vector<std::uint8_t> pattern = jenkins_pattern(*piece, jenkins_index++);
+        evaluate_contact_period(contacts, c, u, fc, kc, anchor, load_sensitivity, &pattern);
+      } else {
+        evaluate_contact_period(contacts, c, u, fc, kc, anchor, load_sensitivity);
+      }
     } else if (cell_average_rule) {
       for (int r = 0; r < q; ++r) detail::cell_average(*contacts[c].law, u(c, r), slope(c, r), fc(r), kc(r), kd(r));
     } else {
@@ -382,9 +411,10 @@ std::pair<Eigen::VectorXd, Eigen::VectorXd> WeightedResidual::Impl::sloped_sampl
 }
 
 
-LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::VectorXd& x) const {
+LowRankJacobian WeightedResidual::Impl::low_rank_contact_jacobian(const Eigen::VectorXd& x,
+                                                                  const ActiveSet* piece) const {
   std::vector<ContactTangent> tangents;
-  (void)contact_forces(x, &tangents);
+  (void)contact_forces(x, &tangents, piece);
   return contact_jacobian_from(tangents);
 }
 
@@ -532,10 +562,11 @@ LowRankJacobian WeightedResidual::Impl::shift_kernel_jacobian(const std::vector<
 }
 
 
-Eigen::VectorXd WeightedResidual::Impl::contact_residual(const Eigen::VectorXd& x, double load) const {
+Eigen::VectorXd WeightedResidual::Impl::contact_residual(const Eigen::VectorXd& x, double load,
+                                                         const ActiveSet* piece) const {
   refuse_rigid("contact_residual");
   require_factorized();
-  return (x - load * x_lin + compliance_times(contact_forces(x, nullptr))) / scale;
+  return (x - load * x_lin + compliance_times(contact_forces(x, nullptr, piece))) / scale;
 }
 
 

@@ -549,12 +549,25 @@ struct WeightedResidual::Impl {
 
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally
   // the law's derivatives at the samples, one ContactTangent per contact.
-  Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const {
-    return spectral::stacked(sampling->weighting->project(contact_force_samples(x, tangents)));
+  // With a stick/slip piece (WeightedResidual::jenkins_active_set's layout), the Jenkins elements
+  // take that piece's branches.
+  Eigen::VectorXd contact_forces(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents,
+                                 const ActiveSet* piece = nullptr) const {
+    return spectral::stacked(sampling->weighting->project(contact_force_samples(x, tangents, piece)));
   }
 
   // f_c(u_c(τ_q)) (f̄_q for CellAverage), n_c × Q, and optionally the tangents.
-  Eigen::MatrixXd contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents) const;
+  Eigen::MatrixXd contact_force_samples(const Eigen::VectorXd& x, std::vector<ContactTangent>* tangents,
+                                        const ActiveSet* piece = nullptr) const;
+  // The contacts that are Jenkins elements, in contact order: the blocks of Q entries of a
+  // stick/slip piece. Throws std::invalid_argument for a piece of another length than Q per element.
+  [[nodiscard]] std::vector<int> jenkins_contacts() const;
+  void check_jenkins_piece(const ActiveSet& piece, const char* what) const;
+  // Block j of a piece (Q entries), the pattern of the j-th Jenkins element.
+  [[nodiscard]] std::vector<std::uint8_t> jenkins_pattern(const ActiveSet& piece, int j) const {
+    const auto begin = piece.begin() + static_cast<std::ptrdiff_t>(j) * q;
+    return {begin, begin + q};
+  }
 
   // N(x) = ∂n_c/∂x (n_c·M square, dense) from the tangents.
   [[nodiscard]] Eigen::MatrixXd contact_force_jacobian(const std::vector<ContactTangent>& tangents) const;
@@ -610,7 +623,8 @@ struct WeightedResidual::Impl {
   // r × r LU then saves less than the two products with V cost (bench_weighted_residual).
   // Either gives way to the sparse form (sparse_contact_jacobian) when its capacitance holds
   // fewer entries than theirs (r², or (n_c·M)²).
-  [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x) const;
+  [[nodiscard]] LowRankJacobian low_rank_contact_jacobian(const Eigen::VectorXd& x,
+                                                          const ActiveSet* piece = nullptr) const;
   // The same from the tangents (whatever law or factor gave them).
   [[nodiscard]] LowRankJacobian contact_jacobian_from(const std::vector<ContactTangent>& tangents) const;
 
@@ -630,7 +644,8 @@ struct WeightedResidual::Impl {
   [[nodiscard]] LowRankJacobian shift_kernel_jacobian(const std::vector<ContactTangent>& tangents, LowRankJacobian jac,
                                                       Eigen::Index rank) const;
 
-  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load) const;
+  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load,
+                                                 const ActiveSet* piece = nullptr) const;
 
   // What makes G singular, in words (model_checks.hpp), or the generic reasons.
   [[nodiscard]] std::string singular_reason() const;

@@ -37,12 +37,23 @@
 /// at most two entries in a row of ∂f/∂w: only the stick samples carry rank. The derivatives are
 /// exact away from the samples where the state switches (a set of measure zero in w).
 ///
+/// A stick/slip pattern (1 = slip, 0 = stick, one entry per sample) names one piece of that
+/// piecewise-linear map: given a pattern, every sample takes the branch the pattern names instead
+/// of the one |f*| ≤ F_s picks (a slip sample f_q = σ_q F_s,q with σ_q = sign f*, a stick sample
+/// f_q = f*, full stick when no sample slips), so the force is the same affine function of (w,
+/// F_s) on the whole pattern's piece and beyond it, the piece's own extension. Its switching
+/// functions are the margins F_s,q − |f*_q|: ≥ 0 on a stick sample and ≤ 0 on a slip sample
+/// exactly where the return map picks the pattern's branch. The pieces of the piecewise-smooth
+/// continuation of the weighted residual (solvers::JenkinsResponseFamily) are these patterns.
+///
 /// [J62] Jenkins, G.M. (1962). Analysis of the stress–strain relationships in reactor grade
 /// graphite. Br. J. Appl. Phys. 13, 30–32. [G80] Griffin, J.H. (1980). Friction damping of
 /// resonant stresses in gas turbine engine airfoils. J. Eng. Power 102, 329–333.
 
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -62,6 +73,9 @@ struct JenkinsLoop {
   /// ∂f_q/∂F_s,r [-]: σ_a at r = anchor(q) in stick after a slip, σ_q at r = q in slip, 0 in full
   /// stick (σ = ±1, the slip direction).
   Eigen::VectorXd slip_sensitivity;
+  /// F_s,q − |f*_q| [N], f*_q the elastic predictor at q: the margin of the return map (≥ 0:
+  /// the map sticks there). The switching functions of a pattern's piece.
+  Eigen::VectorXd margin;
   int slipping_samples = 0;   // samples in slip
   int periods = 0;            // periods run until the end force repeated (≥ 2)
   /// The work of the slider over the period, Σ_q f̄_q Δs_q ≥ 0 [J], with the slider increment
@@ -79,9 +93,12 @@ struct JenkinsLoop {
 /// std::runtime_error when the force at the period's end has not repeated after max_periods
 /// periods (both last values named; raise max_periods), which the proof above excludes for a
 /// constant slip force; std::invalid_argument for a period_shift δ [m] that is not finite.
+/// With a `pattern` (Q entries, 1 = slip, 0 = stick) the samples take the pattern's branches
+/// (the piece above; std::invalid_argument for a pattern of another size); without one, the
+/// return map's.
 [[nodiscard]] JenkinsLoop jenkins_loop(double tangential_stiffness, const Eigen::Ref<const Eigen::VectorXd>& w,
                                        const Eigen::Ref<const Eigen::VectorXd>& slip_force, int max_periods = 8,
-                                       double period_shift = 0.0);
+                                       double period_shift = 0.0, const std::vector<std::uint8_t>* pattern = nullptr);
 
 /// A Jenkins element under a constant normal load, as a contact law along one tangent.
 struct JenkinsParameters {
@@ -111,7 +128,9 @@ class JenkinsLaw final : public ContactLaw {
                        double period_shift = 0.0) const override;
   /// The whole loop at the samples u (jenkins_loop, the next period's samples u + period_shift),
   /// with its slip sensitivities and energy.
-  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift = 0.0) const;
+  /// With a stick/slip pattern, that pattern's piece (jenkins_loop).
+  [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u, double period_shift = 0.0,
+                                 const std::vector<std::uint8_t>* pattern = nullptr) const;
   /// A normal load that varies with the normal gap [YCM98; PE03 in docs/references.md]: the slip
   /// force at sample q is F_s,q = μ (N + n_q), n_q ≥ 0 [N] the force of the contact point's
   /// normal law (`normal`, one per sample; N the preload of the parameters, 0 if there is none).
@@ -119,7 +138,8 @@ class JenkinsLaw final : public ContactLaw {
   /// slider follows, the separation of a 2D frictional contact. Throws std::invalid_argument for
   /// a normal of another size than u, or a normal load that is not finite and >= 0.
   [[nodiscard]] JenkinsLoop loop(const Eigen::Ref<const Eigen::VectorXd>& u,
-                                 const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift = 0.0) const;
+                                 const Eigen::Ref<const Eigen::VectorXd>& normal, double period_shift = 0.0,
+                                 const std::vector<std::uint8_t>* pattern = nullptr) const;
   [[nodiscard]] bool takes_normal_load() const override { return true; }
   /// evaluate_period with F_s,q = μ (N + normal_q) (loop above); load_sensitivity = μ σ, the
   /// slip_sensitivity of the loop times μ (ContactLaw::evaluate_period_loaded).

@@ -148,6 +148,8 @@ enum class ContactLawKind { Exponential, Linear, Rigid, Jenkins, Coulomb };
 /// analysis.friction_coefficient = [from, to] at one forcing frequency ("friction_coefficient";
 /// solvers::ContinuationParameter::FrictionCoefficient).
 enum class BranchParameter { Frequency, FrictionCoefficient };
+/// [analysis] stick_slip_events: "on-stall", "always", "never" (solvers::StickSlipEvents).
+enum class StickSlipEvents { OnStall, Always, Never };
 
 /// The outer algorithm of type = "nnm": "continuation" (pseudo-arclength on the KKT
 /// conditions), "simultaneous" or "sequential" ([LL11 Algs. 1, 2], energy stepping).
@@ -250,6 +252,7 @@ struct Analysis {
   bool stability = true;            // Floquet multipliers of every point
   BranchParameter parameter = BranchParameter::Frequency;
   double friction_from = 0.0, friction_to = 0.0;  // parameter = friction_coefficient: μ from → to [-]
+  StickSlipEvents stick_slip_events = StickSlipEvents::OnStall;  // "jenkins" contacts: how switches are crossed
   // nnm (first nonlinear normal mode against the stops, solvers/nonlinear_modes.hpp):
   double energy_min = 0.5, energy_max = 0.0;  // normalized energy range (1 = contact onset)
   int harmonics = 16;               // N

@@ -2,6 +2,7 @@
 /// Second-order mechanical system M ü + C u̇ + K u = f_ext(t) − Σ_c e_c f_c(u_c) [JL14 Eq. (7)].
 /// Units: SI (kg, N·s/m, N/m, N, m, s, Hz where the name says _hz).
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -188,9 +189,14 @@ void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const st
 /// over the next period (ContactLaw::evaluate_period's period_shift). force, stiffness
 /// (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries (load_sensitivity(q) = ∂f_q/∂n_r as
 /// documented there, 0 without a normal). Throws as the laws do (std::logic_error for a rigid law).
+/// For a Jenkins element (contact::JenkinsLaw), a stick/slip `pattern` (Q entries, 1 = slip)
+/// evaluates that pattern's piece instead of the return map's (contact::jenkins_loop), and
+/// `margin`, if given, receives the margins F_s,q − |f*_q| [N] (Q entries); std::logic_error
+/// when either is given for another law.
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
-                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity);
+                             Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
+                             const std::vector<std::uint8_t>* pattern = nullptr, Eigen::VectorXd* margin = nullptr);
 
 /// The friction coefficient μ [-] every Jenkins element (contact::JenkinsLaw) of `contacts`
 /// shares: the continuation parameter of ContinuationParameter::FrictionCoefficient

@@ -99,6 +99,38 @@ class SignoriniResponseFamily {
   const ForcedResponseFamily* family_;
 };
 
+/// Jenkins elements (contact::JenkinsLaw) without rigid stops: the family's residual on the
+/// elements' stick/slip pieces as a PiecewiseSmoothSystem (linearization.hpp). A piece names, at
+/// every sample of every element, stick (0) or slip (1) (WeightedResidual::jenkins_active_set's
+/// layout); on it the sampled return map is one affine function of the samples and of μN (the
+/// piece's own extension beyond its boundary, contact::jenkins_loop with a pattern), so the
+/// residual is smooth there (affine in x under a constant normal load) and a stick/slip switch is
+/// where an event function changes sign: the slider's margin (F_s,q − |f*_q|)/(k_t s_r), positive
+/// on the piece (WeightedResidual::jenkins_events). pseudo_arclength then locates each switch and
+/// crosses it onto the neighbouring piece (continuation.hpp) instead of halving its step at a kink
+/// whose geometry does not change with the step: on a piecewise-affine residual a corner looks
+/// the same at every scale. The nonsmooth residual and linearization are the family's;
+/// active_set is the return map's piece at (x, λ). A normal law under a varying normal load keeps
+/// its own kinks (only the elements' samples are pieces). Throws std::invalid_argument
+/// (construction) for rigid stops or a problem without a Jenkins element.
+class JenkinsResponseFamily {
+ public:
+  explicit JenkinsResponseFamily(const ForcedResponseFamily& family);
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
+    return family_->residual(x, lambda);
+  }
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const {
+    return family_->linearize(x, lambda);
+  }
+  [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double lambda) const;
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+  [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
+
+ private:
+  const ForcedResponseFamily* family_;
+};
+
 /// One point of a forced-response curve.
 struct ResponsePoint {
   double parameter = 0.0;              // f [Hz], F [N] or μ [-] (ResponseCurveOptions::parameter)
@@ -157,8 +189,8 @@ struct ResponseCurve {
   double stalled_residual = std::numeric_limits<double>::quiet_NaN();
   int rejected_steps = 0;
   int kinks = 0;
-  int events = 0;                      // switching points located (rigid stops without friction)
-  int switches = 0;                    // impulses that started or ended there
+  int events = 0;                      // switching points located (rigid stops without friction, Jenkins pieces)
+  int switches = 0;                    // impulses or stick/slip samples that switched there
   long corrector_iterations = 0;
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
   double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
@@ -178,8 +210,23 @@ struct ResponseCurve {
   }
 };
 
+/// How a branch with Jenkins elements crosses their stick/slip switches (ResponseCurveOptions).
+enum class StickSlipEvents {
+  /// The nonsmooth corrector with the return map's generalized Jacobian, as long as it converges;
+  /// where it stalls (step below minimum, not at the rounding floor), the branch goes on from its
+  /// last point piece by piece (JenkinsResponseFamily), every switch located and crossed.
+  OnStall,
+  Always,  // piece by piece from the start
+  Never,   // the nonsmooth corrector alone (a stall ends the branch)
+};
+
 struct ResponseCurveOptions {
   ContinuationParameter parameter = ContinuationParameter::Frequency;
+  /// Jenkins elements: how their stick/slip switches are crossed (StickSlipEvents). OnStall keeps
+  /// the cheaper nonsmooth corrector wherever it works, since every sample's switch is an event
+  /// (the damper of examples/scenes/friction_damper_load.toml at Q = 256 stalls at the onset of
+  /// full stick, μ = 0.998, and completes on events).
+  StickSlipEvents stick_slip_events = StickSlipEvents::OnStall;
   double parameter_min = 0.0, parameter_max = 0.0;  // range of λ; the start is the base problem's
   int direction = +1;                               // sign of dλ at the start
   double initial_step = 5e-3, min_step = 1e-7, max_step = 2e-2;  // scaled arclength (see continuation.hpp)
@@ -243,6 +290,10 @@ struct ResponseCurveOptions {
 /// (PseudoArclengthOptions::corner_restart), with the generalized Jacobian. In a continuation in
 /// μ (ContinuationParameter::FrictionCoefficient) every point is at the base problem's frequency
 /// (ResponsePoint::parameter is its μ), and its stability is that of its own Jenkins elements.
+/// With Jenkins elements the branch crosses their stick/slip switches as options.stick_slip_events
+/// says: by default with the nonsmooth corrector, and on located events (JenkinsResponseFamily)
+/// from where that stalls, back where the pieces cycle; ResponseCurve::events counts them and the
+/// message says where each part ended.
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
 }  // namespace wbm::solvers

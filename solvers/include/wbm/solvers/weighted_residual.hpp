@@ -380,7 +380,13 @@ class WeightedResidual {
 
   /// The condensed system on the contact unknowns (satisfies NonlinearSystem); x(k·n_c + c).
   /// `load` scales the forcing (s·F): r = (x − s·x_lin + H n_c(x)) / s_r, so ∂r/∂s = −x_lin/s_r.
-  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load = 1.0) const;
+  /// With a stick/slip `piece` (jenkins_active_set's layout) the Jenkins elements take that
+  /// piece's branches (contact::jenkins_loop with a pattern): the smooth residual of the piece,
+  /// for the piecewise-smooth continuation (JenkinsResponseFamily); std::invalid_argument for a
+  /// piece of another length. contact_jacobian_low_rank, contact_residual_frequency_derivative
+  /// and contact_residual_friction_derivative take the same piece.
+  [[nodiscard]] Eigen::VectorXd contact_residual(const Eigen::VectorXd& x, double load = 1.0,
+                                                 const ActiveSet* piece = nullptr) const;
   /// ∂r/∂x = (I + H N(x)) / s_r (n_c·M square, dense), N = ∂n_c/∂x.
   [[nodiscard]] Eigen::MatrixXd contact_jacobian(const Eigen::VectorXd& x) const;
   /// The same Jacobian in the form Newton uses (newton.hpp, WoodburyLu): N = W V has the rank
@@ -398,7 +404,20 @@ class WeightedResidual {
   /// with r up to 768). dense() equals contact_jacobian(x) to rounding. The products hold their
   /// own data (shared), not a reference to this object.
   /// Throws std::runtime_error if G is singular.
-  [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x) const;
+  [[nodiscard]] LowRankJacobian contact_jacobian_low_rank(const Eigen::VectorXd& x,
+                                                          const ActiveSet* piece = nullptr) const;
+  /// Jenkins elements (contact::JenkinsLaw): the stick/slip piece the return map picks at x, 1
+  /// where sample q of an element slips (|f*_q| > F_s,q), 0 where it sticks; Q entries per
+  /// element, the elements in contact order (element j's sample q at j·Q + q). Empty without a
+  /// Jenkins element. Throws std::logic_error for rigid stops.
+  [[nodiscard]] ActiveSet jenkins_active_set(const Eigen::VectorXd& x) const;
+  /// The event functions of a stick/slip piece at x (same layout and length):
+  ///   e_q = (F_s,q − |f*_q|) / (k_t s_r) on a stick entry,  −(F_s,q − |f*_q|) / (k_t s_r) on a slip one,
+  /// f*_q the elastic predictor of the piece's loop and k_t the element's tangential stiffness:
+  /// the slider's margin in metres, scaled like the residual. All ≥ 0 exactly where the return
+  /// map picks the piece's branches, so a branch leaves the piece where one changes sign
+  /// (contact::jenkins_loop, "A stick/slip pattern"). Throws as contact_residual with a piece.
+  [[nodiscard]] Eigen::VectorXd jenkins_events(const Eigen::VectorXd& x, const ActiveSet& piece) const;
   [[nodiscard]] Eigen::VectorXd contact_unknowns(const Eigen::VectorXd& a) const;  // x = P a
   /// Harmonic selection (WeightedResidualOptions::harmonics): ‖(I − Π) R(a(x))‖₂ / ‖s b‖₂ at the
   /// contact unknowns x and load s (a(x) = G⁻¹Π(s b − Pᵀ n(x))): the weighted residual of the
@@ -479,8 +498,8 @@ class WeightedResidual {
   /// ∂r/∂f of contact_residual at x and load s [1/Hz]: with a(x) = G⁻¹(s b − Pᵀ n_c(x)),
   ///   ∂r/∂f = P G⁻¹ G′(f) a(x) / s_r,   G′(f) = 2f A_M ⊗ M + A_C ⊗ C,
   /// since b does not depend on f in normalized time τ = f t. Two solves with the factorized G.
-  [[nodiscard]] Eigen::VectorXd contact_residual_frequency_derivative(const Eigen::VectorXd& x,
-                                                                      double load = 1.0) const;
+  [[nodiscard]] Eigen::VectorXd contact_residual_frequency_derivative(const Eigen::VectorXd& x, double load = 1.0,
+                                                                      const ActiveSet* piece = nullptr) const;
 
   /// Sets the friction coefficient μ [-] of every Jenkins element (contact::JenkinsLaw) to `mu`,
   /// keeping its k_t and preload (with_friction_coefficient, mechanical_system.hpp). Everything
@@ -500,7 +519,8 @@ class WeightedResidual {
   /// σ = sign(w_q − w_(q−1)), the direction the first slip of a small μ takes. Shape n_c·M,
   /// ordering of x. Throws as set_friction_coefficient for the contacts, std::logic_error for
   /// rigid stops.
-  [[nodiscard]] Eigen::VectorXd contact_residual_friction_derivative(const Eigen::VectorXd& x) const;
+  [[nodiscard]] Eigen::VectorXd contact_residual_friction_derivative(const Eigen::VectorXd& x,
+                                                                     const ActiveSet* piece = nullptr) const;
 
   /// The contact homotopy of SolutionPath::ContactHomotopy as a ParametrizedSystem
   /// (linearization.hpp) in λ = log₁₀ σ, on the contact unknowns x (length n_c·M):
