@@ -63,6 +63,27 @@ Eigen::MatrixXd slip_force_jacobian(const JenkinsLoop& l) {
   return j;
 }
 
+// The loop's derivatives ∂f/∂w and ∂f/∂F_s (displacement_jacobian, slip_force_jacobian of
+// loop_at(w, F_s)) against central differences of loop_at's force in every sample of w (step hw)
+// and of F_s (step hf).
+template <class LoopAt>
+void expect_derivatives_match_central_differences(const LoopAt& loop_at, double kt, const Eigen::VectorXd& w,
+                                                  const Eigen::VectorXd& fs, double hw, double hf) {
+  const JenkinsLoop l = loop_at(w, fs);
+  const Eigen::MatrixXd jw = displacement_jacobian(l, kt), jf = slip_force_jacobian(l);
+  for (Eigen::Index r = 0; r < w.size(); ++r) {
+    Eigen::VectorXd wp = w, wm = w, fp = fs, fm = fs;
+    wp(r) += hw;
+    wm(r) -= hw;
+    fp(r) += hf;
+    fm(r) -= hf;
+    const Eigen::VectorXd dw = (loop_at(wp, fs).force - loop_at(wm, fs).force) / (2.0 * hw);
+    const Eigen::VectorXd df = (loop_at(w, fp).force - loop_at(w, fm).force) / (2.0 * hf);
+    EXPECT_LT((dw - jw.col(r)).cwiseAbs().maxCoeff(), 1e-6 * kt) << "w sample " << r;
+    EXPECT_LT((df - jf.col(r)).cwiseAbs().maxCoeff(), 1e-6) << "slip force sample " << r;
+  }
+}
+
 }  // namespace
 
 // The loop at the samples equals [G80]'s closed form (rounding of the increments only), the
@@ -166,19 +187,9 @@ TEST(JenkinsLoop, JacobiansMatchCentralDifferencesAndTheStateIsPeriodic) {
   ASSERT_GT(l.slipping_samples, 0);
   ASSERT_LT(l.slipping_samples, q);
   EXPECT_LE(l.periods, 3);
-  const Eigen::MatrixXd jw = displacement_jacobian(l, kt), jf = slip_force_jacobian(l);
-  const double hw = 1e-7 * a, hf = 1e-7 * f0;
-  for (int r = 0; r < q; ++r) {
-    Eigen::VectorXd wp = w, wm = w, fp = fs, fm = fs;
-    wp(r) += hw;
-    wm(r) -= hw;
-    fp(r) += hf;
-    fm(r) -= hf;
-    const Eigen::VectorXd dw = (jenkins_loop(kt, wp, fs).force - jenkins_loop(kt, wm, fs).force) / (2.0 * hw);
-    const Eigen::VectorXd df = (jenkins_loop(kt, w, fp).force - jenkins_loop(kt, w, fm).force) / (2.0 * hf);
-    EXPECT_LT((dw - jw.col(r)).cwiseAbs().maxCoeff(), 1e-6 * kt) << "w sample " << r;
-    EXPECT_LT((df - jf.col(r)).cwiseAbs().maxCoeff(), 1e-6) << "slip force sample " << r;
-  }
+  expect_derivatives_match_central_differences(
+      [&](const Eigen::VectorXd& ws, const Eigen::VectorXd& f) { return jenkins_loop(kt, ws, f); }, kt, w, fs,
+      1e-7 * a, 1e-7 * f0);
   for (int shift : {1, 17, q / 2}) {
     Eigen::VectorXd ws(q), fss(q);
     for (int i = 0; i < q; ++i) {
@@ -352,23 +363,10 @@ TEST(JenkinsLoop, APatternIsAPieceTheReturnMapMeetsContinuously) {
   // Beyond the piece (amplitude 2 a0 on the pattern of a0, where the return map would slip
   // elsewhere): the piece's derivatives against central differences of the piece.
   const Eigen::VectorXd w = 2.0 * a0 * shape;
-  const JenkinsLoop l = jenkins_loop(kt, w, slip, 8, 0.0, &own);
   ASSERT_NE(pattern_of(jenkins_loop(kt, w, slip)), own);
-  const Eigen::MatrixXd jw = displacement_jacobian(l, kt), jf = slip_force_jacobian(l);
-  const double hw = 1e-7 * a0, hf = 1e-7 * fs;
-  for (int r = 0; r < q; ++r) {
-    Eigen::VectorXd wp = w, wm = w, fp = slip, fm = slip;
-    wp(r) += hw;
-    wm(r) -= hw;
-    fp(r) += hf;
-    fm(r) -= hf;
-    const Eigen::VectorXd dw =
-        (jenkins_loop(kt, wp, slip, 8, 0.0, &own).force - jenkins_loop(kt, wm, slip, 8, 0.0, &own).force) / (2.0 * hw);
-    const Eigen::VectorXd df =
-        (jenkins_loop(kt, w, fp, 8, 0.0, &own).force - jenkins_loop(kt, w, fm, 8, 0.0, &own).force) / (2.0 * hf);
-    EXPECT_LT((dw - jw.col(r)).cwiseAbs().maxCoeff(), 1e-6 * kt) << "w sample " << r;
-    EXPECT_LT((df - jf.col(r)).cwiseAbs().maxCoeff(), 1e-6) << "slip force sample " << r;
-  }
+  expect_derivatives_match_central_differences(
+      [&](const Eigen::VectorXd& ws, const Eigen::VectorXd& f) { return jenkins_loop(kt, ws, f, 8, 0.0, &own); }, kt,
+      w, slip, 1e-7 * a0, 1e-7 * fs);
   const std::vector<std::uint8_t> short_pattern(3, 0);
   wbm::testing::expect_throw_with<std::invalid_argument>(
       [&] { (void)jenkins_loop(kt, w, slip, 8, 0.0, &short_pattern); }, {"pattern has 3 entries, w 64 samples"});

@@ -25,6 +25,23 @@ def write_csv(path, header, rows):
     path.write_text(",".join(header) + "\n" + "".join(",".join(str(v) for v in r) + "\n" for r in rows))
 
 
+def plot_folder(tmp_path, result, capture):
+    """Writes result.json into tmp_path, runs cli/wbm_plot.py there and returns {picture: capture(figure)}
+    for every picture it saves."""
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    plot = load_plot_module()
+    captured = {}
+    original = plot.save
+
+    def save(fig, path, written):
+        captured[path.name] = capture(fig)
+        original(fig, path, written)
+
+    plot.save = save
+    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    return captured
+
+
 def test_an_incomplete_backbone_is_marked_and_unlisted_files_are_not_drawn(tmp_path):
     write_csv(tmp_path / "backbone.csv", ["energy [-]", "frequency [Hz]"], [(0.5, 100.0), (1.5, 104.0), (2.483, 107.0)])
     write_csv(tmp_path / "branch.csv", ["frequency [Hz]", "amplitude_u [m]"], [(1.0, 1.0), (2.0, 2.0)])  # an old run's
@@ -32,17 +49,7 @@ def test_an_incomplete_backbone_is_marked_and_unlisted_files_are_not_drawn(tmp_p
     result = {"converged": False, "files": ["backbone.csv"],
               "scene": {"title": "two masses", "analysis": {"type": "nnm", "energy": [0.5, 10.0]}},
               "diagnostics": {"nnm": {"message": message, "complete": False}}}
-    (tmp_path / "result.json").write_text(json.dumps(result))
-    plot = load_plot_module()
-    titles = {}
-    original = plot.save
-
-    def save(fig, path, written):
-        titles[path.name] = fig.axes[0].get_title()
-        original(fig, path, written)
-
-    plot.save = save
-    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    titles = plot_folder(tmp_path, result, lambda fig: fig.axes[0].get_title())
     assert sorted(titles) == ["backbone.png"]  # branch.csv is not this result's
     assert "INCOMPLETE (range 0.5 to 10): " in titles["backbone.png"]
     assert "2.483" in titles["backbone.png"]
@@ -70,18 +77,12 @@ def test_a_friction_contact_draws_its_hysteresis_loop_with_its_area(tmp_path):
         rows.append(((q + 0.5) / n, 0.1 * (q + 0.5) / n, -f0 * math.sin(theta), a * math.cos(theta)))
     write_csv(tmp_path / "contact_force.csv", ["tau [-]", "time [s]", "f_c_x [N]", "w_c_x [m]"], rows)
     result = {"converged": True, "files": ["contact_force.csv"], "scene": {"title": "damper"}, "diagnostics": {}}
-    (tmp_path / "result.json").write_text(json.dumps(result))
-    plot = load_plot_module()
-    legends = {}
-    original = plot.save
 
-    def save(fig, path, written):
+    def legend_texts(fig):
         legend = fig.axes[0].get_legend()
-        legends[path.name] = [t.get_text() for t in legend.get_texts()] if legend else []
-        original(fig, path, written)
+        return [t.get_text() for t in legend.get_texts()] if legend else []
 
-    plot.save = save
-    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    legends = plot_folder(tmp_path, result, legend_texts)
     assert "hysteresis.png" in legends
     (text,) = legends["hysteresis.png"]
     assert text.startswith("x: loop area ")
@@ -102,17 +103,7 @@ def test_each_kind_of_stability_change_is_marked_once_in_the_legend(tmp_path):
                (36.0, 35.0, 40.0, 1.8e-3, 1.05, math.pi, 1.0, "period-doubling")])
     result = {"converged": True, "files": ["branch.csv", "bifurcations.csv"], "scene": {"title": "2 DOF"},
               "diagnostics": {}}
-    (tmp_path / "result.json").write_text(json.dumps(result))
-    plot = load_plot_module()
-    legends = {}
-    original = plot.save
-
-    def save(fig, path, written):
-        legends[path.name] = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-        original(fig, path, written)
-
-    plot.save = save
-    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    legends = plot_folder(tmp_path, result, lambda fig: [t.get_text() for t in fig.axes[0].get_legend().get_texts()])
     entries = legends["response_curve.png"]
     assert entries.count("stability change: Neimark-Sacker") == 1
     assert entries.count("stability change: period-doubling") == 1
@@ -125,20 +116,13 @@ def test_points_without_a_stability_verdict_are_drawn_apart(tmp_path):
     write_csv(tmp_path / "branch.csv", ["frequency [Hz]", "amplitude_x1 [m]", "stable [-]"],
               [(30.0, 1e-3, 1.0), (35.0, 2e-3, ""), (40.0, 1.5e-3, 0.0), (45.0, 1e-3, 1.0)])
     result = {"converged": True, "files": ["branch.csv"], "scene": {"title": "rigid stop"}, "diagnostics": {}}
-    (tmp_path / "result.json").write_text(json.dumps(result))
-    plot = load_plot_module()
-    drawn = {}
-    original = plot.save
 
-    def save(fig, path, written):
+    def legend_lines_ylabel(fig):
         ax = fig.axes[0]
-        drawn[path.name] = ([t.get_text() for t in ax.get_legend().get_texts()],
-                            [(line.get_linestyle(), len(line.get_xdata())) for line in ax.get_lines()],
-                            ax.get_ylabel())
-        original(fig, path, written)
+        return ([t.get_text() for t in ax.get_legend().get_texts()],
+                [(line.get_linestyle(), len(line.get_xdata())) for line in ax.get_lines()], ax.get_ylabel())
 
-    plot.save = save
-    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    drawn = plot_folder(tmp_path, result, legend_lines_ylabel)
     legend, lines, ylabel = drawn["response_curve.png"]
     assert legend.count("no stability verdict") == 1 and "stable" in legend and "unstable" in legend
     assert (":", 2) in lines  # the unavailable point, joined to the next
@@ -156,18 +140,8 @@ def test_a_branch_in_the_friction_coefficient_is_drawn_against_mu(tmp_path):
               [(0.4, 0.0, 2e-2)])
     result = {"converged": True, "files": ["branch.csv", "folds.csv"], "scene": {"title": "damper"},
               "diagnostics": {}}
-    (tmp_path / "result.json").write_text(json.dumps(result))
-    plot = load_plot_module()
-    drawn = {}
-    original = plot.save
-
-    def save(fig, path, written):
-        ax = fig.axes[0]
-        drawn[path.name] = (ax.get_xlabel(), [list(line.get_xdata()) for line in ax.get_lines()])
-        original(fig, path, written)
-
-    plot.save = save
-    assert plot.main(["wbm_plot.py", str(tmp_path), "--quiet"]) == 0
+    drawn = plot_folder(tmp_path, result,
+                        lambda fig: (fig.axes[0].get_xlabel(), [list(l.get_xdata()) for l in fig.axes[0].get_lines()]))
     xlabel, lines = drawn["response_curve.png"]
     assert xlabel == "friction coefficient μ [-] (at 10 Hz)"
     assert [0.0, 0.4, 0.8] in lines and [0.4] in lines  # the curve and its fold, in μ

@@ -10,7 +10,8 @@
 
 namespace wbm::solvers {
 
-JenkinsResponseFamily::JenkinsResponseFamily(const ForcedResponseFamily& family) : family_(&family) {
+JenkinsResponseFamily::JenkinsResponseFamily(const ForcedResponseFamily& family)
+    : PiecewiseResponseFamily(family) {
   const auto& contacts = family.base().contacts();
   if (family.base().rigid() || std::none_of(contacts.begin(), contacts.end(), [](const ContactPoint& c) {
         return dynamic_cast<const contact::JenkinsLaw*>(c.law.get()) != nullptr;

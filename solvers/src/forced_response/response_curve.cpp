@@ -105,7 +105,8 @@ bool rigid_stops_only(const WeightedResidual& wr) {
 }
 }  // namespace
 
-SignoriniResponseFamily::SignoriniResponseFamily(const ForcedResponseFamily& family) : family_(&family) {
+SignoriniResponseFamily::SignoriniResponseFamily(const ForcedResponseFamily& family)
+    : PiecewiseResponseFamily(family) {
   if (!rigid_stops_only(family.base())) {
     throw std::invalid_argument("SignoriniResponseFamily: the problem's contacts must all be rigid stops "
                                 "(contact::RigidStop) without friction; continue it with ForcedResponseFamily");

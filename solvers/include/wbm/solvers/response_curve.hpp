@@ -69,6 +69,23 @@ class ForcedResponseFamily {
   mutable double cache_lambda_ = 0.0;
 };
 
+/// What the piecewise-smooth views of a ForcedResponseFamily share (SignoriniResponseFamily,
+/// JenkinsResponseFamily): the family's nonsmooth residual and linearization, which the
+/// continuation verifies every accepted point on. The family must outlive the view.
+class PiecewiseResponseFamily {
+ public:
+  explicit PiecewiseResponseFamily(const ForcedResponseFamily& family) : family_(&family) {}
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
+    return family_->residual(x, lambda);
+  }
+  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const {
+    return family_->linearize(x, lambda);
+  }
+
+ protected:
+  const ForcedResponseFamily* family_;
+};
+
 /// Rigid stops without friction: the family's Signorini conditions on the impulses as a
 /// PiecewiseSmoothSystem (linearization.hpp). Its pieces are the active instants (1: the sample
 /// touches its stop, the row g0 − u(λ) = 0; 0: it is free, c λ = 0), on each of which the
@@ -81,22 +98,15 @@ class ForcedResponseFamily {
 /// residual and linearization are the family's; active_set is the min's piece at (x, λ).
 /// Throws std::invalid_argument (construction) unless the family's problem is rigid without
 /// friction.
-class SignoriniResponseFamily {
+class SignoriniResponseFamily : public PiecewiseResponseFamily {
  public:
   explicit SignoriniResponseFamily(const ForcedResponseFamily& family);
-  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
-    return family_->residual(x, lambda);
-  }
-  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const {
-    return family_->linearize(x, lambda);
-  }
+  using PiecewiseResponseFamily::linearize;
+  using PiecewiseResponseFamily::residual;
   [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double lambda) const;
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
   [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
   [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
-
- private:
-  const ForcedResponseFamily* family_;
 };
 
 /// Jenkins elements (contact::JenkinsLaw) without rigid stops: the family's residual on the
@@ -113,22 +123,15 @@ class SignoriniResponseFamily {
 /// active_set is the return map's piece at (x, λ). A normal law under a varying normal load keeps
 /// its own kinks (only the elements' samples are pieces). Throws std::invalid_argument
 /// (construction) for rigid stops or a problem without a Jenkins element.
-class JenkinsResponseFamily {
+class JenkinsResponseFamily : public PiecewiseResponseFamily {
  public:
   explicit JenkinsResponseFamily(const ForcedResponseFamily& family);
-  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda) const {
-    return family_->residual(x, lambda);
-  }
-  [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda) const {
-    return family_->linearize(x, lambda);
-  }
+  using PiecewiseResponseFamily::linearize;
+  using PiecewiseResponseFamily::residual;
   [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double lambda) const;
   [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
   [[nodiscard]] LowRankLinearization linearize(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
   [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double lambda, const ActiveSet& piece) const;
-
- private:
-  const ForcedResponseFamily* family_;
 };
 
 /// One point of a forced-response curve.
