@@ -130,22 +130,18 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
     };
     nlohmann::json friction = nlohmann::json::array();
     std::vector<std::pair<size_t, Eigen::VectorXd>> slip_displacements;  // (contact, w) of friction contacts
+    Eigen::MatrixXd u(static_cast<Eigen::Index>(contacts.size()), tau.size());  // n_c × P, relative
+    for (size_t j = 0; j < contacts.size(); ++j) {
+      for (Eigen::Index p = 0; p < tau.size(); ++p) u(static_cast<Eigen::Index>(j), p) = relative(contacts[j], j, p);
+    }
     for (size_t k = 0; k < contacts.size(); ++k) {
       const auto& c = contacts[k];
       Eigen::VectorXd force(tau.size());
       if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
-        // The element's periodic loop over the P output samples (tau uniform over one period).
-        Eigen::VectorXd w(tau.size());
-        for (Eigen::Index p = 0; p < tau.size(); ++p) w(p) = relative(c, k, p);
-        Eigen::VectorXd normal = Eigen::VectorXd::Zero(tau.size());  // a varying normal load's n(τ_p)
-        if (c.normal >= 0) {
-          const auto& n = contacts[static_cast<size_t>(c.normal)];
-          for (Eigen::Index p = 0; p < tau.size(); ++p) {
-            normal(p) = n.law->force(relative(n, static_cast<size_t>(c.normal), p));
-          }
-        }
-        const double shift = -c.obstacle.drift;  // w over the next period (a counter-surface sliding by)
-        const contact::JenkinsLoop loop = c.normal >= 0 ? jenkins->loop(w, normal, shift) : jenkins->loop(w, shift);
+        // The element's periodic loop over the P output samples (tau uniform over one period),
+        // under its normal contact's force there, the counter-surface's drift carried over.
+        const Eigen::VectorXd w = u.row(static_cast<Eigen::Index>(k)).transpose();
+        const contact::JenkinsLoop loop = solvers::jenkins_contact_loop(contacts, static_cast<int>(k), u);
         force = loop.force;
         slip_displacements.emplace_back(k, w);
         // The slider's position, its drift's ramp removed (w + d τ is periodic).
@@ -157,7 +153,7 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
                             {"dissipated_power_W", loop.dissipated_energy * frequency_hz},
                             {"output_samples", tau.size()}});
       } else {
-        for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(relative(c, k, p));
+        for (Eigen::Index p = 0; p < tau.size(); ++p) force(p) = c.law->force(u(static_cast<Eigen::Index>(k), p));
       }
       f.header.push_back("f_c_" + contact_label(scene, k) + " [N]");
       f.columns.push_back(force);

@@ -366,31 +366,21 @@ void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const st
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
-                             const std::vector<std::uint8_t>* pattern, Eigen::VectorXd* margin) {
+                             const std::vector<std::uint8_t>* pattern) {
   const ContactPoint& point = contacts[static_cast<size_t>(c)];
   // u is relative to the counter-surface: over the next period it moves by −d (its drift).
   const double shift = -point.obstacle.drift;
-  if (pattern != nullptr || margin != nullptr) {
-    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
-    if (jenkins == nullptr) {
-      throw std::logic_error("evaluate_contact_period: a stick/slip pattern or margins for contact " +
-                             std::to_string(c) + " (" + point.law->describe() + "), which is not a Jenkins element");
-    }
-    contact::JenkinsLoop loop;
-    if (point.normal >= 0) {
-      Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
-      contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal,
-                                                               normal_stiffness);
-      loop = jenkins->loop(u.row(c).transpose(), normal, shift, pattern);
-      load_sensitivity = jenkins->parameters().friction_coefficient * loop.slip_sensitivity;
-    } else {
-      loop = jenkins->loop(u.row(c).transpose(), shift, pattern);
-      load_sensitivity.setZero();
-    }
+  if (pattern != nullptr) {
+    const contact::JenkinsLoop loop = jenkins_contact_loop(contacts, c, u, pattern);
     force = loop.force;
     stiffness = loop.stiffness;
     anchor = loop.anchor;
-    if (margin != nullptr) *margin = std::move(loop.margin);
+    if (point.normal >= 0) {
+      load_sensitivity = dynamic_cast<const contact::JenkinsLaw&>(*point.law).parameters().friction_coefficient *
+                         loop.slip_sensitivity;
+    } else {
+      load_sensitivity.setZero();
+    }
     return;
   }
   if (point.normal < 0) {
@@ -401,6 +391,26 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
   Eigen::VectorXd normal(u.cols()), normal_stiffness(u.cols());
   contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal, normal_stiffness);
   point.law->evaluate_period_loaded(u.row(c).transpose(), normal, force, stiffness, anchor, load_sensitivity, shift);
+}
+
+contact::JenkinsLoop jenkins_contact_loop(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
+                                          const std::vector<std::uint8_t>* pattern, Eigen::VectorXd* normal) {
+  const ContactPoint& point = contacts[static_cast<size_t>(c)];
+  const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
+  if (jenkins == nullptr) {
+    throw std::logic_error("jenkins_contact_loop: contact " + std::to_string(c) + " (" + point.law->describe() +
+                           ") is not a Jenkins element");
+  }
+  const double shift = -point.obstacle.drift;  // as evaluate_contact_period
+  if (point.normal < 0) {
+    if (normal != nullptr) *normal = Eigen::VectorXd::Zero(u.cols());
+    return jenkins->loop(u.row(c).transpose(), shift, pattern);
+  }
+  Eigen::VectorXd n(u.cols()), normal_stiffness(u.cols());
+  contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), n, normal_stiffness);
+  contact::JenkinsLoop loop = jenkins->loop(u.row(c).transpose(), n, shift, pattern);
+  if (normal != nullptr) *normal = std::move(n);
+  return loop;
 }
 
 double common_friction_coefficient(const std::vector<ContactPoint>& contacts) {

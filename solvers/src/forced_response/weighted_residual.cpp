@@ -171,24 +171,14 @@ Eigen::VectorXd WeightedResidual::contact_residual_friction_derivative(const Eig
   int jenkins_index = 0;
   const Eigen::MatrixXd u = p.contact_samples(x);  // n_c × Q, relative to the counter-surfaces
   Eigen::MatrixXd d = Eigen::MatrixXd::Zero(p.nc, p.q);  // ∂f_c(τ_q)/∂μ [N]
-  Eigen::VectorXd normal(p.q), normal_stiffness(p.q);
+  Eigen::VectorXd normal;
   for (int c = 0; c < p.nc; ++c) {
-    const ContactPoint& point = p.contacts[static_cast<size_t>(c)];
-    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(point.law.get());
+    const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(p.contacts[static_cast<size_t>(c)].law.get());
     if (jenkins == nullptr) continue;
-    const double shift = -point.obstacle.drift;  // as evaluate_contact_period
     std::vector<std::uint8_t> pattern;
     if (piece != nullptr) pattern = p.jenkins_pattern(*piece, jenkins_index++);
-    const std::vector<std::uint8_t>* on = piece != nullptr ? &pattern : nullptr;
-    contact::JenkinsLoop loop;
-    if (point.normal >= 0) {
-      p.contacts[static_cast<size_t>(point.normal)].law->evaluate(u.row(point.normal).transpose(), normal,
-                                                                  normal_stiffness);
-      loop = jenkins->loop(u.row(c).transpose(), normal, shift, on);
-    } else {
-      normal.setZero();
-      loop = jenkins->loop(u.row(c).transpose(), shift, on);
-    }
+    const contact::JenkinsLoop loop =
+        jenkins_contact_loop(p.contacts, c, u, piece != nullptr ? &pattern : nullptr, &normal);
     const double preload = jenkins->parameters().normal_load;
     for (int q = 0; q < p.q; ++q) {
       const int r = loop.stiffness(q) != 0.0 && loop.anchor(q) >= 0 ? loop.anchor(q) : q;
@@ -218,10 +208,8 @@ ActiveSet WeightedResidual::jenkins_active_set(const Eigen::VectorXd& x) const {
   const Eigen::MatrixXd u = p.contact_samples(x);
   ActiveSet piece;
   piece.reserve(elements.size() * static_cast<size_t>(p.q));
-  Eigen::VectorXd f(p.q), k(p.q), sensitivity(p.q);
-  Eigen::VectorXi anchor(p.q);
   for (int c : elements) {
-    evaluate_contact_period(p.contacts, c, u, f, k, anchor, sensitivity);
+    const Eigen::VectorXd k = jenkins_contact_loop(p.contacts, c, u).stiffness;
     for (int q = 0; q < p.q; ++q) piece.push_back(k(q) == 0.0 ? 1U : 0U);  // slip: ∂f_q/∂w_q = 0
   }
   return piece;
@@ -234,12 +222,10 @@ Eigen::VectorXd WeightedResidual::jenkins_events(const Eigen::VectorXd& x, const
   const std::vector<int> elements = p.jenkins_contacts();
   const Eigen::MatrixXd u = p.contact_samples(x);
   Eigen::VectorXd events(static_cast<Eigen::Index>(piece.size()));
-  Eigen::VectorXd f(p.q), k(p.q), sensitivity(p.q), margin;
-  Eigen::VectorXi anchor(p.q);
   for (size_t j = 0; j < elements.size(); ++j) {
     const int c = elements[j];
     const std::vector<std::uint8_t> pattern = p.jenkins_pattern(piece, static_cast<int>(j));
-    evaluate_contact_period(p.contacts, c, u, f, k, anchor, sensitivity, &pattern, &margin);
+    const Eigen::VectorXd margin = jenkins_contact_loop(p.contacts, c, u, &pattern).margin;
     const auto& law = dynamic_cast<const contact::JenkinsLaw&>(*p.contacts[static_cast<size_t>(c)].law);
     const double kt = law.parameters().tangential_stiffness;
     for (int q = 0; q < p.q; ++q) {

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <wbm/contact/friction.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/fem/rod.hpp>
 
@@ -190,13 +191,24 @@ void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const st
 /// (∂f_q/∂u_c,q), anchor and load_sensitivity have Q entries (load_sensitivity(q) = ∂f_q/∂n_r as
 /// documented there, 0 without a normal). Throws as the laws do (std::logic_error for a rigid law).
 /// For a Jenkins element (contact::JenkinsLaw), a stick/slip `pattern` (Q entries, 1 = slip)
-/// evaluates that pattern's piece instead of the return map's (contact::jenkins_loop), and
-/// `margin`, if given, receives the margins F_s,q − |f*_q| [N] (Q entries); std::logic_error
-/// when either is given for another law.
+/// evaluates that pattern's piece instead of the return map's (jenkins_contact_loop);
+/// std::logic_error when one is given for another law.
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
-                             const std::vector<std::uint8_t>* pattern = nullptr, Eigen::VectorXd* margin = nullptr);
+                             const std::vector<std::uint8_t>* pattern = nullptr);
+
+/// The whole loop (contact::JenkinsLoop: forces, slip sensitivities, margins) of the Jenkins
+/// element of contact `c` over the Q samples u (n_c × Q, relative to the counter-surfaces, whose
+/// drift carries into the next period as in evaluate_contact_period): JenkinsLaw::loop, under the
+/// force of the contact's normal law at the same samples where it has one, on the piece of a
+/// stick/slip `pattern` if given. `normal`, if given, receives that normal force [N] (Q entries,
+/// 0 without a normal contact). Throws std::logic_error if contact c is not a Jenkins element,
+/// and as JenkinsLaw::loop does.
+[[nodiscard]] contact::JenkinsLoop jenkins_contact_loop(const std::vector<ContactPoint>& contacts, int c,
+                                                        const Eigen::MatrixXd& u,
+                                                        const std::vector<std::uint8_t>* pattern = nullptr,
+                                                        Eigen::VectorXd* normal = nullptr);
 
 /// The friction coefficient μ [-] every Jenkins element (contact::JenkinsLaw) of `contacts`
 /// shares: the continuation parameter of ContinuationParameter::FrictionCoefficient
