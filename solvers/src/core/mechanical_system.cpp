@@ -19,6 +19,8 @@
 #include <wbm/solvers/model_checks.hpp>
 #include <wbm/solvers/status.hpp>
 
+#include "second_tangents.hpp"
+
 namespace wbm::solvers {
 
 void MechanicalSystem::validate() const {
@@ -213,6 +215,7 @@ void ContactPoint::validate(const std::vector<ContactPoint>& contacts, int dofs)
                                   "drift is a friction contact's sliding (set drift = 0 here)");
     }
   }
+  detail::validate_second_tangents(contacts);
   const auto count = static_cast<int>(contacts.size());
   for (int i = 0; i < count; ++i) {
     const ContactPoint& c = contacts[static_cast<size_t>(i)];
@@ -368,6 +371,17 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
                              const std::vector<std::uint8_t>* pattern) {
   const ContactPoint& point = contacts[static_cast<size_t>(c)];
+  if (point.second_tangent >= 0) {
+    if (pattern != nullptr) {
+      throw std::logic_error("evaluate_contact_period: contact " + std::to_string(c) + " is a " +
+                             point.law->describe() + ", which has no stick/slip pieces");
+    }
+    force = jenkins_disc_contact_loop(contacts, c, u, nullptr, false).force.row(0).transpose();
+    stiffness.setZero();
+    anchor.setConstant(-1);
+    load_sensitivity.setZero();
+    return;
+  }
   // u is relative to the counter-surface: over the next period it moves by −d (its drift).
   const double shift = -point.obstacle.drift;
   if (pattern != nullptr) {
@@ -418,6 +432,12 @@ double common_friction_coefficient(const std::vector<ContactPoint>& contacts) {
   double mu = 0.0;
   for (size_t c = 0; c < contacts.size(); ++c) {
     const auto& law = contacts[c].law;
+    if (dynamic_cast<const contact::JenkinsDiscLaw*>(law.get()) != nullptr) {
+      throw std::invalid_argument("friction coefficient continuation: contact " + std::to_string(c) + " (DOF " +
+                                  std::to_string(contacts[c].dof) + ") is a Jenkins element with two tangents "
+                                  "(second_tangent), whose mu is not a continuation parameter; continue in frequency, "
+                                  "or give it one tangent");
+    }
     if (dynamic_cast<const contact::CoulombFriction*>(law.get()) != nullptr) {
       throw std::invalid_argument("friction coefficient continuation: contact " + std::to_string(c) + " (DOF " +
                                   std::to_string(contacts[c].dof) + ") is exact Coulomb friction (law \"coulomb\"), "

@@ -88,6 +88,12 @@ Balanced balanced_system(const MechanicalSystem& system, const std::vector<Conta
 
 void check_floquet_contacts(const std::vector<ContactPoint>& contacts) {
   for (const auto& c : contacts) {
+    if (c.second_tangent >= 0) {
+      throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is a " +
+                                  c.law->describe() + ": the monodromy matrix of an element whose slip direction "
+                                  "turns with the motion is not computed; continue without stability "
+                                  "(ResponseCurveOptions::stability = false; scene: analysis.stability = false)");
+    }
     if (c.law->hysteretic() && c.law->rigid()) {
       throw std::invalid_argument("floquet_multipliers: the contact at DOF " + std::to_string(c.dof) + " is " +
                                   c.law->describe() + ", rigid-plastic: the monodromy matrix of its orbit needs a "

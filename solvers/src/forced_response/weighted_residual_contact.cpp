@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 
 #include <unsupported/Eigen/KroneckerProduct>
 
@@ -238,14 +239,33 @@ Eigen::MatrixXd WeightedResidual::Impl::contact_force_samples(const Eigen::Vecto
   Eigen::VectorXd fc(q), kc(q), kd = Eigen::VectorXd::Zero(q);  // f, ∂f/∂u, ∂f/∂δ per sample
   Eigen::VectorXi anchor = Eigen::VectorXi::Constant(q, -1);     // a hysteretic law's last slip
   Eigen::VectorXd load_sensitivity = Eigen::VectorXd::Zero(q);    // ∂f_q/∂n_r under a varying normal load
+  contact::JenkinsDiscLoop disc;  // the loop of a two-tangent element, formed at its first tangent
   for (int c = 0; c < nc; ++c) {
-    if (contacts[c].law->hysteretic()) {
-      if (cell_average_rule) {
-        throw std::invalid_argument("WeightedResidual: contact_quadrature = CellAverage averages a law f(u) over each "
-                                    "sample's cell; the contact at DOF " + std::to_string(contacts[c].dof) + " is a " +
-                                    contacts[c].law->describe() + ", whose force depends on the history: use "
-                                    "contact_quadrature = Midpoint");
+    if (cell_average_rule && contacts[c].law->hysteretic()) {
+      throw std::invalid_argument("WeightedResidual: contact_quadrature = CellAverage averages a law f(u) over each "
+                                  "sample's cell; the contact at DOF " + std::to_string(contacts[c].dof) + " is a " +
+                                  contacts[c].law->describe() + ", whose force depends on the history: use "
+                                  "contact_quadrature = Midpoint");
+    }
+    if (const int second = contacts[c].second_tangent; second >= 0) {
+      // Tangent 0 of the loop is the element's lower contact index.
+      const int first = std::min(c, second), last = std::max(c, second), own = c == first ? 0 : 1;
+      if (c == first) disc = jenkins_disc_contact_loop(contacts, first, u, nullptr, tangents != nullptr);
+      force.row(c) = disc.force.row(own);
+      if (tangents == nullptr) continue;
+      ContactTangent& t = (*tangents)[static_cast<size_t>(c)];
+      t.kc = Eigen::VectorXd::Zero(q);
+      t.kd = Eigen::VectorXd::Zero(q);
+      t.anchor = Eigen::VectorXi::Constant(q, -1);
+      for (int j = 0; j < 2; ++j) t.dense.emplace_back(j == 0 ? first : last, disc.jacobian.block(own * q, j * q, q, q));
+      if (const int n = contacts[c].normal; n >= 0) {  // ∂f/∂u_n = ∂f/∂n · diag(n'(u_n))
+        Eigen::VectorXd fn(q), kn(q);
+        contacts[n].law->evaluate(u.row(n).transpose(), fn, kn);
+        t.dense.emplace_back(n, disc.load_jacobian.middleRows(own * q, q) * kn.asDiagonal());
       }
+      continue;
+    }
+    if (contacts[c].law->hysteretic()) {
       if (piece != nullptr && dynamic_cast<const contact::JenkinsLaw*>(contacts[c].law.get()) != nullptr) {
         const std::vector<std::uint8_t> pattern = jenkins_pattern(*piece, jenkins_index++);
         evaluate_contact_period(contacts, c, u, fc, kc, anchor, load_sensitivity, &pattern);
@@ -312,6 +332,20 @@ std::vector<WeightedResidual::Impl::ForceBlock> WeightedResidual::Impl::contact_
       }
       block -= anchored_product(t.anchored, kq, slips);
     }
+    if (!t.dense.empty()) {
+      // A Jenkins element with two tangents: + Σ_q Σ_r p_j(τ_q) (∂f_c,q/∂u_c',r)/Q q_k(τ_r), dense.
+      std::vector<int> all(static_cast<size_t>(q));
+      std::iota(all.begin(), all.end(), 0);
+      const Eigen::MatrixXd p = weighting_rows_at(all), v = trial_rows_at(all);
+      for (const auto& [column, d] : t.dense) {
+        Eigen::MatrixXd b = p.transpose() * (d / q) * v;
+        if (column == c) {
+          block += b;
+        } else {
+          blocks.push_back({c, column, std::move(b)});
+        }
+      }
+    }
     blocks.push_back({c, c, std::move(block)});
     if (!t.coupled.empty()) {
       // A varying normal load: + Σ_q p_j(τ_q) (∂f_q/∂u_n,r)/Q q_k(τ_r) into the columns of the
@@ -342,6 +376,7 @@ void WeightedResidual::Impl::scale_tangents(std::vector<ContactTangent>& tangent
     t.kc *= sigma;
     t.kd *= sigma;
     for (double& w : t.coupled_weight) w *= sigma;
+    for (auto& d : t.dense) d.second *= sigma;
   }
 }
 
@@ -426,7 +461,8 @@ LowRankJacobian WeightedResidual::Impl::contact_jacobian_from(const std::vector<
   bool anchored = false;  // a hysteretic law's samples hang on earlier ones: W V is not diagonal in the samples
   for (const auto& t : tangents) {
     rank += static_cast<Eigen::Index>(t.active.size() + t.sloped.size());
-    anchored = anchored || !t.anchored.empty() || t.normal >= 0;  // a varying normal load couples two contacts
+    // A varying normal load couples two contacts; a two-tangent element is dense in the samples.
+    anchored = anchored || !t.anchored.empty() || t.normal >= 0 || !t.dense.empty();
   }
   const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
   jac.rows = size;

@@ -438,6 +438,9 @@ struct WeightedResidual::Impl {
     int normal = -1;
     std::vector<int> coupled, coupled_at;
     std::vector<double> coupled_weight;
+    /// A Jenkins element with two tangents: (contact c', ∂f_c,q/∂u_c',r at the Q samples, Q × Q),
+    /// dense, for c' = c, its second tangent and its normal contact.
+    std::vector<std::pair<int, Eigen::MatrixXd>> dense;
   };
 
   // n_c(x) = (1/Q) Σ_q p(τ_q) f_c(u_c(τ_q)) stacked like x (f̄_q for CellAverage); optionally

@@ -29,6 +29,7 @@ namespace {
 // stiffness just past the gap (a linear law's k, an exponential law's onset a_c α).
 double contact_stiffness(const contact::ContactLaw& law) {
   if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(&law)) return jenkins->parameters().tangential_stiffness;
+  if (const auto* disc = dynamic_cast<const contact::JenkinsDiscLaw*>(&law)) return disc->parameters().tangential_stiffness;
   const double g = law.gap();
   return law.stiffness(g + 1e-9 * std::max(1.0, std::abs(g)));
 }
@@ -51,7 +52,8 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
   for (Eigen::Index i = 0; i < nc; ++i) {
     const auto& ct = contacts[static_cast<size_t>(i)];
     jenkins[static_cast<size_t>(i)] = dynamic_cast<const contact::JenkinsLaw*>(ct.law.get());
-    if (ct.law->rigid() || (ct.law->hysteretic() && jenkins[static_cast<size_t>(i)] == nullptr)) {
+    const bool disc = ct.second_tangent >= 0;  // a JenkinsDiscLaw (ContactPoint::validate)
+    if (ct.law->rigid() || (ct.law->hysteretic() && jenkins[static_cast<size_t>(i)] == nullptr && !disc)) {
       throw std::invalid_argument("integrate_central_difference_to_periodic: the contact at DOF " + std::to_string(ct.dof) +
                                   " is a " + ct.law->describe() + "; this scheme takes force laws (penalty laws and "
                                   "Jenkins elements): use integrate_moreau_jean_to_periodic for rigid stops");
@@ -105,10 +107,16 @@ PeriodicResponse integrate_central_difference_to_periodic(const MechanicalSystem
     }
     for (Eigen::Index i = 0; i < nc; ++i) {
       const auto& ct = contacts[static_cast<size_t>(i)];
+      const double normal = ct.normal >= 0 ? contacts[static_cast<size_t>(ct.normal)].law->force(u_new(ct.normal)) : 0.0;
       if (const auto* jl = jenkins[static_cast<size_t>(i)]) {
-        const double normal = ct.normal >= 0 ? contacts[static_cast<size_t>(ct.normal)].law->force(u_new(ct.normal)) : 0.0;
         f_contact(i) = jl->return_map(f_contact(i), u_new(i) - u_contact(i), normal);
-      } else {
+      } else if (const Eigen::Index j = ct.second_tangent; j > i) {  // both tangents of the disc at its first
+        const auto& disc = static_cast<const contact::JenkinsDiscLaw&>(*ct.law);
+        const Eigen::Vector2d f = disc.return_map({f_contact(i), f_contact(j)},
+                                                  {u_new(i) - u_contact(i), u_new(j) - u_contact(j)}, normal);
+        f_contact(i) = f(0);
+        f_contact(j) = f(1);
+      } else if (j < 0) {
         f_contact(i) = ct.law->force(u_new(i));
       }
     }

@@ -12,6 +12,7 @@
 #include <Eigen/SparseCore>
 
 #include <wbm/contact/friction.hpp>
+#include <wbm/contact/jenkins_disc.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/fem/rod.hpp>
 
@@ -136,6 +137,13 @@ struct ContactPoint {
   ///     residual and Moreau–Jean solve the two together.
   /// −1: a constant normal load.
   int normal = -1;
+  /// A Jenkins element with two tangents (contact::JenkinsDiscLaw, an isotropic slip disc [MY98]):
+  /// the index, in the same contact list, of the contact along its other tangent. The two
+  /// contacts share the law object and name each other; their directions must be orthogonal and
+  /// of equal length (e_1ᵀ e_2 = 0, |e_1| = |e_2|), so that the disc is isotropic; they share their
+  /// `normal`. The force along each tangent depends on the displacements along both
+  /// (jenkins_disc_contact_loop). −1: a contact with one direction.
+  int second_tangent = -1;
   /// The counter-surface's prescribed motion along e_c (ObstacleMotion above); the default is a
   /// fixed obstacle. A drift is for friction laws only (ContactPoint::validate).
   ObstacleMotion obstacle = {};
@@ -165,7 +173,10 @@ struct ContactPoint {
   /// hysteretic, names for exact Coulomb friction a law that is not a rigid stop or a stop that
   /// another friction contact names, or beside a Coulomb normal_load ≠ 0; for an obstacle motion
   /// with a term that is not finite, or a drift ≠ 0 on a law that is not a friction law (a normal
-  /// gap that grows without bound has no periodic response).
+  /// gap that grows without bound has no periodic response); for a second_tangent out of range or
+  /// naming the contact itself, one that does not name it back, two contacts that do not share one
+  /// contact::JenkinsDiscLaw, directions that are not orthogonal or of unequal length, or
+  /// different `normal`s; for a JenkinsDiscLaw without a second_tangent.
   static void validate(const std::vector<ContactPoint>& contacts, int dofs);
 };
 
@@ -192,7 +203,11 @@ void require_fixed_obstacles(const std::vector<ContactPoint>& contacts, const st
 /// documented there, 0 without a normal). Throws as the laws do (std::logic_error for a rigid law).
 /// For a Jenkins element (contact::JenkinsLaw), a stick/slip `pattern` (Q entries, 1 = slip)
 /// evaluates that pattern's piece instead of the return map's (jenkins_contact_loop);
-/// std::logic_error when one is given for another law.
+/// std::logic_error when one is given for another law. For a Jenkins element with two tangents
+/// (ContactPoint::second_tangent) force is contact c's component of jenkins_disc_contact_loop,
+/// stiffness 0, anchor −1 and load_sensitivity 0 (the forces only: the element's
+/// derivatives are dense and couple the two tangents, so a caller that linearizes reads them from
+/// jenkins_disc_contact_loop).
 void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, const Eigen::MatrixXd& u,
                              Eigen::Ref<Eigen::VectorXd> force, Eigen::Ref<Eigen::VectorXd> stiffness,
                              Eigen::Ref<Eigen::VectorXi> anchor, Eigen::Ref<Eigen::VectorXd> load_sensitivity,
@@ -209,6 +224,19 @@ void evaluate_contact_period(const std::vector<ContactPoint>& contacts, int c, c
                                                         const Eigen::MatrixXd& u,
                                                         const std::vector<std::uint8_t>* pattern = nullptr,
                                                         Eigen::VectorXd* normal = nullptr);
+
+/// The loop (contact::JenkinsDiscLoop) of the Jenkins element with two tangents that contact `c`
+/// carries with its second_tangent t: JenkinsDiscLaw::loop on the rows (c, t) of u (n_c × Q,
+/// relative to the counter-surfaces, whose drifts carry into the next period as in
+/// evaluate_contact_period), under the force of their normal law at the same samples where they
+/// have one. Tangent 0 of the result is contact c's, tangent 1 is t's. `normal`, if given,
+/// receives that normal force [N] (Q entries, 0 without a normal contact); derivatives as in
+/// contact::jenkins_disc_loop. Throws std::logic_error if contact c has no second tangent, and as
+/// JenkinsDiscLaw::loop does.
+[[nodiscard]] contact::JenkinsDiscLoop jenkins_disc_contact_loop(const std::vector<ContactPoint>& contacts, int c,
+                                                                 const Eigen::MatrixXd& u,
+                                                                 Eigen::VectorXd* normal = nullptr,
+                                                                 bool derivatives = true);
 
 /// The friction coefficient μ [-] every Jenkins element (contact::JenkinsLaw) of `contacts`
 /// shares: the continuation parameter of ContinuationParameter::FrictionCoefficient

@@ -147,7 +147,9 @@ struct CentralDifferenceOptions {
 ///   (M + (h/2) C) v_{k+1} = M v_{k+½} + (h/2) (F_{k+1} − K q_{k+1} − Σ_c e_c f_c,k+1),
 /// with f_c,k+1 = f_c(u_c,k+1) for a memoryless law and, for a Jenkins element, one step of its
 /// return map from f_c,k (contact::JenkinsLaw::return_map) under the normal contact's force at
-/// q_{k+1}: the slider state is carried from step to step, with no basis and no period loop. A
+/// q_{k+1}: the slider state is carried from step to step, with no basis and no period loop (a
+/// Jenkins element with two tangents, ContactPoint::second_tangent, steps both forces together by
+/// contact::JenkinsDiscLaw::return_map, the projection on its disc). A
 /// moving counter-surface (ContactPoint::obstacle) enters as the laws' relative displacement
 /// u_c,k − s_c(t_k/T) (a periodic motion; its drift is refused by ContactPoint::validate for
 /// these laws). The
