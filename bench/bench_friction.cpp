@@ -13,10 +13,12 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include <wbm/contact/friction.hpp>
+#include <wbm/contact/jenkins_disc.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
@@ -97,8 +99,50 @@ void BM_Friction_Continuation(benchmark::State& state) {
   state.counters["points_per_s"] = static_cast<double>(points) / wall;
 }
 
+// Two tangents: a point mass on x, y (the damper's k, 2 % damping) under a rotating 2 N force at
+// 9 Hz, with one Jenkins element on both tangents (an isotropic disc, k_t = 2k, μN = 0.3 N; kind 1)
+// or with one element per tangent (kind 0, the same k_t and μN each: a square instead of a disc),
+// Fourier H = 8, one solve per Q = range(1): the disc's sample Jacobian is dense (O(Q²) to form,
+// and its blocks O(Q² M)) where the elements along one tangent are sparse.
+void BM_FrictionDisc_Solve(benchmark::State& state) {
+  const bool disc = state.range(0) == 1;
+  const auto q = static_cast<int>(state.range(1));
+  state.SetLabel(std::string(disc ? "one element on two tangents" : "one element per tangent") + ", Q = " +
+                 std::to_string(q));
+  wbm::solvers::MechanicalSystem s;
+  s.mass.resize(2, 2);
+  s.stiffness.resize(2, 2);
+  s.damping.resize(2, 2);
+  for (int i = 0; i < 2; ++i) {
+    s.mass.insert(i, i) = 1.0;
+    s.stiffness.insert(i, i) = kStiffness;
+    s.damping.insert(i, i) = 2.0 * 0.02 * 2.0 * kPi * 10.0;
+  }
+  const wbm::contact::JenkinsParameters p{2.0 * kStiffness, 0.3, 1.0};
+  std::vector<wbm::solvers::ContactPoint> contacts;
+  if (disc) {
+    const auto shared = std::make_shared<wbm::contact::JenkinsDiscLaw>(p);
+    contacts = {{0, shared}, {1, shared}};
+    contacts[0].second_tangent = 1;
+    contacts[1].second_tangent = 0;
+  } else {
+    contacts = {{0, std::make_shared<wbm::contact::JenkinsLaw>(p)}, {1, std::make_shared<wbm::contact::JenkinsLaw>(p)}};
+  }
+  const auto fourier = wbm::solvers::TimeBasis::fourier_harmonics(8);
+  const wbm::solvers::WeightedResidual w(s, {0, 2.0, 9.0, {{1, 2.0, -kPi / 2.0}}}, contacts, fourier, fourier,
+                                         {.time_samples = q});
+  int iterations = 0;
+  for (auto _ : state) {
+    const auto solution = w.solve();
+    if (!solution.converged()) state.SkipWithError(solution.brief().c_str());
+    iterations = solution.report.iterations;
+  }
+  state.counters["newton_iterations"] = iterations;
+}
+
 }  // namespace
 
+BENCHMARK(BM_FrictionDisc_Solve)->ArgsProduct({{0, 1}, {256, 1024}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Friction_Solve)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Friction_Continuation)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <wbm/contact/friction.hpp>
+#include <wbm/contact/jenkins_disc.hpp>
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/spectral/aft.hpp>
@@ -137,7 +138,33 @@ void period_tables(const Scene& scene, const std::vector<solvers::ContactPoint>&
     for (size_t k = 0; k < contacts.size(); ++k) {
       const auto& c = contacts[k];
       Eigen::VectorXd force(tau.size());
-      if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
+      if (const auto* disc = dynamic_cast<const contact::JenkinsDiscLaw*>(c.law.get())) {
+        // A Jenkins element with two tangents: its loop over both, one diagnostics entry per element.
+        const auto second = static_cast<size_t>(c.second_tangent);
+        const contact::JenkinsDiscLoop loop =
+            solvers::jenkins_disc_contact_loop(contacts, static_cast<int>(k), u, nullptr, false);
+        force = loop.force.row(0).transpose();
+        slip_displacements.emplace_back(k, u.row(static_cast<Eigen::Index>(k)).transpose());
+        if (k < second) {
+          // The slider's path in the plane, the drift's ramps removed; its amplitude is half its diameter.
+          Eigen::MatrixXd slider = u({static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(second)}, Eigen::all) -
+                                   loop.force / disc->parameters().tangential_stiffness;
+          slider.row(0) += c.obstacle.drift * tau.transpose();
+          slider.row(1) += contacts[second].obstacle.drift * tau.transpose();
+          double diameter = 0.0;
+          for (Eigen::Index p = 0; p < slider.cols(); ++p) {
+            diameter = std::max(diameter, (slider.colwise() - slider.col(p)).colwise().norm().maxCoeff());
+          }
+          friction.push_back({{"contact", contact_label(scene, k)},
+                              {"second_tangent", contact_label(scene, second)},
+                              {"stick_fraction", 1.0 - static_cast<double>(loop.slipping_samples) /
+                                                           static_cast<double>(tau.size())},
+                              {"slip_amplitude_m", 0.5 * diameter},
+                              {"dissipated_energy_per_cycle_J", loop.dissipated_energy},
+                              {"dissipated_power_W", loop.dissipated_energy * frequency_hz},
+                              {"output_samples", tau.size()}});
+        }
+      } else if (const auto* jenkins = dynamic_cast<const contact::JenkinsLaw*>(c.law.get())) {
         // The element's periodic loop over the P output samples (tau uniform over one period),
         // under its normal contact's force there, the counter-surface's drift carried over.
         const Eigen::VectorXd w = u.row(static_cast<Eigen::Index>(k)).transpose();

@@ -18,6 +18,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <wbm/contact/friction.hpp>
+#include <wbm/contact/jenkins_disc.hpp>
 #include <wbm/contact/signorini.hpp>
 #include <wbm/fem/calculix.hpp>
 #include <wbm/fem/matrix_market.hpp>
@@ -182,6 +183,12 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
     } else if (c.law == ContactLawKind::Exponential) {
       law = std::make_shared<contact::ExponentialPenalty>(
           contact::ExponentialPenaltyParameters{c.coefficient, c.exponent, c.gap});
+    } else if (c.law == ContactLawKind::Jenkins && c.second_tangent >= 0 &&
+               c.second_tangent < static_cast<int>(points.size())) {
+      law = points[static_cast<size_t>(c.second_tangent)].law;  // the element's first tangent made it
+    } else if (c.law == ContactLawKind::Jenkins && c.second_tangent >= 0) {
+      law = std::make_shared<contact::JenkinsDiscLaw>(
+          contact::JenkinsParameters{c.tangential_stiffness, c.friction_coefficient, c.normal_load});
     } else if (c.law == ContactLawKind::Jenkins) {
       law = std::make_shared<contact::JenkinsLaw>(
           contact::JenkinsParameters{c.tangential_stiffness, c.friction_coefficient, c.normal_load});
@@ -191,6 +198,7 @@ std::vector<solvers::ContactPoint> Scene::contact_points() const {
       law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{c.stiffness, c.gap});
     }
     points.push_back({c.dof, law, c.against, c.along, c.normal_index});
+    points.back().second_tangent = c.second_tangent;
     if (c.counter_surface >= 0) {
       const bool friction = c.law == ContactLawKind::Jenkins || c.law == ContactLawKind::Coulomb;
       points.back().obstacle = counter_surfaces.at(static_cast<size_t>(c.counter_surface)).motion(friction);
@@ -349,6 +357,7 @@ nlohmann::json to_json(const Scene& s) {
         o["friction_coefficient"] = c.friction_coefficient;
         o["normal_load"] = c.normal_load;
         if (c.normal_contact >= 0) o["normal_contact"] = c.normal_contact;
+        if (c.second_tangent >= 0) o["second_tangent_contact"] = c.second_tangent;  // its index in this list
       } else if (c.law == ContactLawKind::Exponential) {
         o["coefficient"] = c.coefficient;
         o["exponent"] = c.exponent;

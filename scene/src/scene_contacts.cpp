@@ -137,15 +137,38 @@ void Parser::contacts(const toml::table& root) {
       }
     }
     if (const toml::node* d = t->get("direction"); d != nullptr && s_.structure) c.along = direction(*d, section, c);
+    std::optional<int> second;  // the DOF of a second tangent
+    if (const toml::node* st = t->get("second_tangent"); st != nullptr && s_.structure) second = second_tangent(*t, *st, section, c);
     if (s_.structure && !dofs.insert({c.dof, c.against}).second && c.along.empty()) {
       r_.error(t->source(), section, "a second contact on " + s_.structure->dof_name(c.dof) +
                                          (c.against >= 0 ? " against " + s_.structure->dof_name(c.against) : std::string()) +
                                          "; one law per DOF (combine them into one)");
     }
     table_contact[table] = static_cast<int>(s_.contacts.size());
+    if (second) {
+      if (!dofs.insert({*second, -1}).second) {
+        r_.error(Reader::source_of(*t, "second_tangent"), section + ".second_tangent",
+                 "a second contact on " + s_.structure->dof_name(*second) + "; one law per DOF");
+      }
+      Contact tangent = c;  // the element's second tangent: the same law, no counter-surface
+      tangent.dof = *second;
+      tangent.counter_surface = -1;
+      const int own = static_cast<int>(s_.contacts.size());
+      c.second_tangent = own + 1;
+      tangent.second_tangent = own;
+      s_.contacts.push_back(c);
+      s_.contacts.push_back(tangent);
+      continue;
+    }
     s_.contacts.push_back(c);
   }
   normal_contacts(tables, table_contact);
+  for (size_t i = 0; i < s_.contacts.size(); ++i) {  // the second tangent shares its element's normal load
+    Contact& c = s_.contacts[i];
+    if (c.second_tangent > static_cast<int>(i)) {
+      s_.contacts[static_cast<size_t>(c.second_tangent)].normal_index = c.normal_index;
+    }
+  }
   if (in_mu && jenkins_section.empty()) {
     r_.error(tables.empty() ? root.source() : tables.front().first->source(), "[contact]",
              "analysis.parameter = \"friction_coefficient\" varies the mu of \"jenkins\" contacts, and there is none; "
@@ -201,6 +224,34 @@ void Parser::normal_contacts(const std::vector<std::pair<const toml::table*, std
     }
     c.normal_index = index;
   }
+}
+
+std::optional<int> Parser::second_tangent(const toml::table& t, const toml::node& st, const std::string& section,
+                                          const Contact& c) {
+  const std::string full = section + ".second_tangent";
+  if (c.law != ContactLawKind::Jenkins) return std::nullopt;  // only_in reports it
+  if (c.against >= 0 || !c.along.empty() || t.contains("nodes")) {
+    r_.error(st.source(), full, "beside against, direction or nodes: a Jenkins element with two tangents acts along "
+                                "two DOFs of one body against a fixed counter-surface (+e_dof and +e_second_tangent); "
+                                "remove them, or give the element one tangent");
+    return std::nullopt;
+  }
+  const bool continuation = s_.analysis.kind == AnalysisKind::Continuation;
+  if (continuation && (s_.analysis.stability || s_.analysis.parameter == BranchParameter::FrictionCoefficient)) {
+    r_.error(st.source(), full, "a continuation of a Jenkins element with two tangents follows the frequency "
+                                "without stability: the monodromy matrix of an element whose slip direction turns is "
+                                "not computed, nor a branch in its mu; set analysis.stability = false and parameter = "
+                                "\"frequency\", or give the element one tangent");
+    return std::nullopt;
+  }
+  const auto other = location_value(st, full);
+  if (!other) return std::nullopt;
+  if (*other == c.dof) {
+    r_.error(st.source(), full, "is the contact's own DOF " + s_.structure->dof_name(c.dof) +
+                                "; give the DOF of the other tangential direction");
+    return std::nullopt;
+  }
+  return other;
 }
 
 void Parser::node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law) {

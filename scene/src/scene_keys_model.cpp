@@ -196,6 +196,14 @@ const std::vector<DeclaredKey<Contact>>& contact_keys() {
                       "with Siconos' fc2d in time stepping): N must be 0, and a static load presses the normal DOF",
                       [](const C& c) { return c.normal_contact >= 0 ? nlohmann::json(c.normal_contact) : nlohmann::json(); })
           .only_in({"jenkins", "coulomb"}),
+      compound_key<C>("second_tangent", kLocation, "none (one tangent)",
+                      "a node (rod) or DOF (matrices) other than the contact's own; not beside `against`, `direction`, "
+                      "`nodes`; not in a continuation with `stability = true` or `parameter = \"friction_coefficient\"`",
+                      "a Jenkins element with two tangents, +e_dof and +e_second_tangent: its slider moves in their "
+                      "plane and slips where \\|f\\| reaches μ (N + n) (an isotropic disc [MY98]). The force along each "
+                      "tangent depends on both displacements; the counter-surface, if any, moves along the first",
+                      [](const C& c) { return c.second_tangent >= 0 ? nlohmann::json(c.second_tangent) : nlohmann::json(); })
+          .only_in({"jenkins"}),
       compound_key<C>("counter_surface", "string", "none (a fixed obstacle)", "the `name` of a `[[counter_surface]]`",
                       "the counter-surface this contact acts against moves: the law sees u_c − s(τ) (below)"),
       compound_key<C>("node", kLocation, "`\"tip\"`", "see Locations", "rod only: the contact node"),

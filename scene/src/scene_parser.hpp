@@ -178,6 +178,12 @@ class Parser {
   // the largest component names the contact.
   void node_contacts(const toml::table& t, const toml::node& nn, const std::string& section, const Contact& law);
 
+  // [contact] second_tangent of a jenkins table: the DOF of the element's second tangent, or
+  // nothing after reporting why (beside against, direction or nodes; stability or a branch in μ;
+  // the contact's own DOF).
+  std::optional<int> second_tangent(const toml::table& t, const toml::node& st, const std::string& section,
+                                    const Contact& c);
+
   // [contact] normal_contact of the jenkins tables: the named table (index in file order) must be
   // another contact located by node or dof with a linear or exponential law; sets normal_index.
   void normal_contacts(const std::vector<std::pair<const toml::table*, std::string>>& tables,

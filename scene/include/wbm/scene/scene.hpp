@@ -169,6 +169,12 @@ struct Contact {
   /// contact's index in Scene::contacts (solvers::ContactPoint::normal); −1 for none.
   int normal_contact = -1;
   int normal_index = -1;
+  /// jenkins with `second_tangent`: a Jenkins element with two tangents (an isotropic slip disc,
+  /// contact::JenkinsDiscLaw), carried by two entries of Scene::contacts, this one at `dof` and
+  /// the other at the second tangent's DOF; the index in Scene::contacts of the other entry
+  /// (solvers::ContactPoint::second_tangent), −1 for one tangent. The entry of the second tangent
+  /// repeats the law's parameters, has no counter-surface, and shares the normal load.
+  int second_tangent = -1;
   double gap = 0.0;          // g0 [m] (not jenkins, coulomb)
   int dof = 0;               // 0-based
   /// The second DOF of a contact between two DOFs (0-based; `against` in the scene): the gap is
