@@ -11,6 +11,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -112,6 +113,51 @@ TEST(FrictionNormalLoad, JacobianMatchesCentralDifferences) {
       const Eigen::VectorXd fd = (w.residual(ap) - w.residual(am)) / (2.0 * h);
       EXPECT_LT((fd - j.col(col)).cwiseAbs().maxCoeff(), 1e-6 * j.cwiseAbs().maxCoeff()) << pair << " column " << col;
     }
+  }
+}
+
+// The condensed Jacobian (I + H N)/s of contact_jacobian, with N's block of the slip force on the
+// normal contact, equals central differences of contact_residual, by the three ways H N is formed
+// (hn_product): Fourier trial functions with B-spline weighting keep H dense without a structured
+// product (H N block by block of N), DB6:B-spline by H's circulant blocks, Fourier:Fourier from
+// the sparse H.
+TEST(FrictionNormalLoad, CondensedJacobianMatchesCentralDifferences) {
+  const Slider2d s;
+  for (const auto& [trial_name, weighting_name] :
+       std::vector<std::pair<std::string, std::string>>{{"fourier", "bspline"}, {"db6", "bspline"}, {"fourier", "fourier"}}) {
+    const int dimension = 16;
+    const TimeBasis trial = TimeBasis::from_name(trial_name, dimension), weighting = TimeBasis::from_name(weighting_name, dimension);
+    const solvers::WeightedResidual w(s.system(), s.forcing(), s.contacts(s.mu), trial, weighting, {.time_samples = 256});
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(dimension, 0.0, (dimension - 1.0) / dimension);
+    const Eigen::MatrixXd v = trial.values(tau, 0);
+    // The state of JacobianMatchesCentralDifferences: stick, slip, and a normal contact that opens.
+    const Eigen::VectorXd ax = v.colPivHouseholderQr().solve(Eigen::VectorXd(3e-3 * (2.0 * kPi * tau.array()).cos()));
+    const Eigen::VectorXd ay = v.colPivHouseholderQr().solve(Eigen::VectorXd(1e-4 * (2.0 * kPi * tau.array()).sin()));
+    Eigen::VectorXd a(2 * dimension);
+    for (int k = 0; k < dimension; ++k) {
+      a(2 * k) = ax(k);
+      a(2 * k + 1) = ay(k);
+    }
+    const Eigen::VectorXd x = w.contact_unknowns(a);
+    const Eigen::MatrixXd j = w.contact_jacobian(x);
+    const std::string what = trial_name + ":" + weighting_name;
+    // Contact 1 (the Jenkins element) on contact 0 (the normal spring): rows 1 + 2k, columns 2l.
+    double coupling = 0.0, off = 0.0;
+    for (int row = 1; row < j.rows(); row += 2) {
+      for (int col = 0; col < j.cols(); col += 2) coupling = std::max(coupling, std::abs(j(row, col)));
+    }
+    const double h = 1e-7 * x.cwiseAbs().maxCoeff();
+    for (Eigen::Index col = 0; col < x.size(); ++col) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp(col) += h;
+      xm(col) -= h;
+      const Eigen::VectorXd fd = (w.contact_residual(xp) - w.contact_residual(xm)) / (2.0 * h);
+      off = std::max(off, (fd - j.col(col)).cwiseAbs().maxCoeff());
+    }
+    std::printf("%s: largest |central difference - Jacobian| %.2e of its largest entry; coupling %.2e\n", what.c_str(),
+                off / j.cwiseAbs().maxCoeff(), coupling / j.cwiseAbs().maxCoeff());
+    EXPECT_GT(coupling, 1e-3 * j.cwiseAbs().maxCoeff()) << what << ": the normal load must reach the friction rows";
+    EXPECT_LT(off, 1e-6 * j.cwiseAbs().maxCoeff()) << what;
   }
 }
 

@@ -425,7 +425,21 @@ Eigen::SparseMatrix<double> WeightedResidual::Impl::sparse_contact_force_jacobia
 Eigen::MatrixXd WeightedResidual::Impl::hn_product(const std::vector<ContactTangent>& tangents) const {
   // With H sparse, H N as a product of two sparse matrices: O(nnz(H) M) instead of O(nnz(H) n_c M).
   if (h_is_sparse) return Eigen::MatrixXd(*h_sparse * sparse_contact_force_jacobian(tangents));
-  return compliance_times(contact_force_jacobian(tangents));
+  if (g->fast_compliance_product()) return compliance_times(contact_force_jacobian(tangents));
+  // Dense H (a Craig–Bampton model, wavelet pairs without a kept structure): N has one M × M block
+  // per contact and one per normal coupling, so H N is Σ over the blocks (c, d) of H's columns of
+  // contact c times the block, into the columns of contact d: O(blocks · n_c M · M²) instead of
+  // the dense product's O((n_c M)³) (32 times fewer multiply-adds on friction_oval_casing's
+  // 48 contacts, 72 blocks, M = 13).
+  const Eigen::Index size = static_cast<Eigen::Index>(nc) * m;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(size, size);
+  std::vector<Eigen::MatrixXd> columns(static_cast<size_t>(nc));  // H(:, j n_c + c), j = 0 … M − 1
+  for (const ForceBlock& fb : contact_force_blocks(tangents)) {
+    Eigen::MatrixXd& hc = columns[static_cast<size_t>(fb.row)];
+    if (hc.size() == 0) hc = h(Eigen::all, Eigen::seqN(fb.row, m, nc));
+    out(Eigen::all, Eigen::seqN(fb.column, m, nc)) += hc * fb.block;
+  }
+  return out;
 }
 
 

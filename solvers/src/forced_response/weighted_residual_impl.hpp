@@ -482,7 +482,8 @@ struct WeightedResidual::Impl {
   // N as a sparse matrix, every entry of contact_force_blocks stored (explicit zeros included).
   [[nodiscard]] Eigen::SparseMatrix<double> sparse_contact_force_jacobian(
       const std::vector<ContactTangent>& tangents) const;
-  // H N (n_c·M square, dense).
+  // H N (n_c·M square, dense): by sparse products where H is sparse, by compliance_product where
+  // it has a kept structure, else block by block of N (contact_force_blocks), never with N dense.
   [[nodiscard]] Eigen::MatrixXd hn_product(const std::vector<ContactTangent>& tangents) const;
   // I + H N (n_c·M square, dense): s_r times the condensed Jacobian.
   [[nodiscard]] Eigen::MatrixXd identity_plus_hn(const std::vector<ContactTangent>& tangents) const;
