@@ -5,11 +5,14 @@
 // (the same scheme in other coordinates: the same multipliers and Φ up to rounding).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
@@ -21,6 +24,7 @@
 #include <wbm/solvers/mechanical_system.hpp>
 
 #include "shipped_scenes.hpp"
+#include "testing.hpp"
 
 namespace {
 
@@ -51,11 +55,12 @@ Eigen::MatrixXd orbit(int contacts, int samples, double gap, double amplitude) {
   return u;
 }
 
-// Both paths on one orbit: the same multipliers (sorted by modulus; matched to the nearest, as a
+// Both paths' stepping on one orbit: the same multipliers (sorted by modulus; matched to the nearest, as a
 // complex pair's order is arbitrary), error estimates and monodromy matrix.
 void expect_paths_agree(const solvers::MechanicalSystem& system, const std::vector<solvers::ContactPoint>& contacts,
                         const Eigen::MatrixXd& u, double hz, double tolerance) {
-  const FloquetAnalysis modal(system, contacts, {.path = FloquetPath::Modal});
+  // The stepping on both paths (exact_flights off: linear stops would take the exact flights).
+  const FloquetAnalysis modal(system, contacts, {.path = FloquetPath::Modal, .exact_flights = false});
   ASSERT_TRUE(modal.modal());
   const auto fast = modal(u, hz);
   const auto slow = solvers::floquet_multipliers(system, contacts, u, hz);
@@ -279,12 +284,37 @@ TEST(FloquetModal, AnUndampedStructureFallsBackToTheFormedMonodromy) {
 
 namespace {
 
+// The exact monodromy of a 1-DOF oscillator (m, c, k) against a linear stop k_c on an orbit in
+// contact for |τ| < τ₁ (symmetric about τ = 0): Φ = F_c(τ₁T) F_f((1 − 2τ₁)T) F_c(τ₁T), each
+// flight of [[0, 1], [−κ/m, −c/m]] from the closed form e^{−ct/2m}(cos νt I + sin νt/ν (A + c/2m I))
+// in long double (Eigen's Padé exponential is off by 1.7e-7 at the stop of the next test: 125 rad
+// of its vibration per contact phase take many squarings). Its spectral radius.
+double piecewise_linear_radius(double m, double c, double k, double kc, double period, double tau1) {
+  using L = long double;
+  using F = std::array<L, 4>;  // (1,1), (1,2), (2,1), (2,2)
+  auto flight = [&](L stiffness, L t) {
+    const L d = c / static_cast<L>(m), w2 = stiffness / m, nu = std::sqrt(w2 - d * d / 4.0L);
+    const L e = std::exp(-d * t / 2.0L), ch = std::cos(nu * t), sh = std::sin(nu * t) / nu;
+    return F{e * (ch + d / 2.0L * sh), e * sh, -e * w2 * sh, e * (ch - d / 2.0L * sh)};
+  };
+  auto times = [](const F& x, const F& y) {
+    return F{x[0] * y[0] + x[1] * y[2], x[0] * y[1] + x[1] * y[3], x[2] * y[0] + x[3] * y[2], x[2] * y[1] + x[3] * y[3]};
+  };
+  const F contact = flight(static_cast<L>(k) + kc, static_cast<L>(tau1) * period);
+  const F phi = times(contact, times(flight(k, (1.0L - 2.0L * tau1) * period), contact));
+  const L half_trace = (phi[0] + phi[3]) / 2.0L, det = phi[0] * phi[3] - phi[1] * phi[2];
+  const L disc = half_trace * half_trace - det;
+  if (disc < 0.0L) return static_cast<double>(std::sqrt(det));
+  return static_cast<double>(std::max(std::abs(half_trace + std::sqrt(disc)), std::abs(half_trace - std::sqrt(disc))));
+}
+
 // A stop 10⁴ times stiffer than its spring (m = 1 kg, k = 4e4 N/m, c = 5 N·s/m, k_c = 4e8 N/m at
 // g0 = 2 mm; ω_c = 2e4 rad/s) on the orbit u = g0 + 1 mm cos 2πτ at 40 Hz, given at P = 64 samples:
-// h ω_c = 7.8, where the kick scheme is unstable. The samples are refined (by 16, to h ω_c = 0.49)
-// and the spectral radius agrees with the exact piecewise-linear monodromy
-//   Φ = e^{A_c T/4} e^{A_f T/2} e^{A_c T/4}  (in contact for |τ| < 1/4, by the orbit's symmetry),
-// within twice its own error estimate, on both paths.
+// h ω_c = 7.8, where the kick scheme is unstable. The stepping refines the samples (by 16, to
+// h ω_c = 0.49) and its spectral radius agrees with the exact piecewise-linear monodromy (in
+// contact for |τ| < 1/4, by the orbit's symmetry) within twice its own error estimate, on both
+// paths. The exact flights (the default for linear stops) take the 64 samples as they are and give
+// the closed form to rounding: the crossings sit at samples here.
 TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
   const double m = 1.0, k = 4e4, c = 5.0, kc = 4e8, g0 = 2e-3, hz = 40.0;
   solvers::MechanicalSystem s;
@@ -299,22 +329,14 @@ TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
     for (int p = 0; p < count; ++p) u(0, p) = g0 + 1e-3 * std::cos(2.0 * M_PI * p / count);
     return u;
   };
-  auto a_matrix = [&](double stiffness) {
-    Eigen::Matrix2d a;
-    a << 0.0, 1.0, -stiffness / m, -c / m;
-    return a;
-  };
-  const double period = 1.0 / hz;
-  const Eigen::Matrix2d contact_quarter = (a_matrix(k + kc) * (period / 4.0)).exp();
-  const Eigen::Matrix2d exact = contact_quarter * (a_matrix(k) * (period / 2.0)).exp() * contact_quarter;
-  const double radius = Eigen::EigenSolver<Eigen::Matrix2d>(exact, false).eigenvalues().cwiseAbs().maxCoeff();
-  const FloquetAnalysis modal(s, stop);
-  ASSERT_TRUE(modal.modal());
+  const double radius = piecewise_linear_radius(m, c, k, kc, 1.0 / hz, 0.25);
+  const FloquetAnalysis stepping(s, stop, {.exact_flights = false}), exact(s, stop);
+  ASSERT_TRUE(stepping.modal());
   // 125 rad of the stop's vibration per contact phase: at h ω_c = 0.49 the phase error is large,
   // and the estimate says so; at 4 times the steps it is below 2 %.
   for (const int count : {64, 4096}) {
     const Eigen::MatrixXd u = samples(count);
-    for (const auto& result : {modal(u, hz), solvers::floquet_multipliers(s, stop, u, hz)}) {
+    for (const auto& result : {stepping(u, hz), solvers::floquet_multipliers(s, stop, u, hz)}) {
       EXPECT_EQ(result.steps, std::max(count, 1024));
       EXPECT_LE(std::abs(result.max_modulus - radius), 2.0 * result.multiplier_errors.maxCoeff())
           << result.max_modulus << " against the exact " << radius << " at P = " << count;
@@ -322,11 +344,48 @@ TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
         EXPECT_LT(std::abs(result.max_modulus - radius), 0.02 * radius) << result.max_modulus << " against " << radius;
       }
     }
+    const auto flights = exact(u, hz);
+    EXPECT_EQ(flights.steps, count);
+    EXPECT_EQ(exact.resolved_steps(u, hz), count);
+    EXPECT_LT(std::abs(flights.max_modulus - radius), 1e-9 * radius) << flights.max_modulus << " against " << radius;
   }
 }
 
-// A stop that would need more than kMaxResolvedSteps steps (k_c = 4e14 N/m: h ω_c = 7.8e3 at
-// P = 64) is refused, with the stiffness named and the way out, rather than answered wrong.
+// The exact flights where the crossings fall between the samples: u = g0 + a (cos 2πτ − 0.3), in
+// contact for |τ| < τ₁ = acos(0.3)/2π, on the stiff stop above. The crossings are located on the
+// cubic through the four nearest samples, so the spectral radius converges at fourth order in
+// 1/P to the closed form, and the error estimate (Richardson's second-order one) bounds the error.
+TEST(FloquetModal, ExactFlightsConvergeAtFourthOrderWhereCrossingsFallBetweenSamples) {
+  const double m = 1.0, k = 4e4, c = 5.0, kc = 4e8, g0 = 2e-3, hz = 40.0;
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix<double, 1, 1> one{1.0};
+  s.mass = (m * one).sparseView();
+  s.stiffness = (k * one).sparseView();
+  s.damping = (c * one).sparseView();
+  const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kc, g0});
+  const FloquetAnalysis exact(s, {{0, law}});
+  const double radius = piecewise_linear_radius(m, c, k, kc, 1.0 / hz, std::acos(0.3) / (2.0 * M_PI));
+  std::vector<double> h, err;
+  for (const int count : {64, 128, 256, 512}) {
+    Eigen::MatrixXd u(1, count);
+    for (int p = 0; p < count; ++p) u(0, p) = g0 + 1e-3 * (std::cos(2.0 * M_PI * p / count) - 0.3);
+    const auto result = exact(u, hz);
+    ASSERT_EQ(result.steps, count);
+    const double e = std::abs(result.max_modulus - radius);
+    std::printf("P = %d: |mu| %.12f, exact %.12f, error %.2e, estimate %.2e\n", count, result.max_modulus, radius, e,
+                result.multiplier_errors.maxCoeff());
+    EXPECT_LE(e, 2.0 * result.multiplier_errors.maxCoeff() + 1e-12) << "P = " << count;
+    h.push_back(1.0 / count);
+    err.push_back(e);
+  }
+  EXPECT_NEAR(wbm::testing::observed_order(h, err), 4.0, 0.5);
+  EXPECT_LT(err.back(), 1e-6 * radius);
+}
+
+// A stop that would need more than kMaxResolvedSteps steps of the stepping (k_c = 4e14 N/m:
+// h ω_c = 7.8e3 at P = 64) is refused there, with the stiffness named and the way out, rather than
+// answered wrong. (The exact flights, the default for linear stops, need no steps: the closed
+// forms of the two tests above.)
 TEST(FloquetModal, AStopTooStiffToResolveIsRefusedWithTheWayOut) {
   solvers::MechanicalSystem s;
   const Eigen::Matrix<double, 1, 1> one{1.0};
@@ -338,7 +397,7 @@ TEST(FloquetModal, AStopTooStiffToResolveIsRefusedWithTheWayOut) {
   for (const bool modal : {true, false}) {
     try {
       if (modal) {
-        (void)FloquetAnalysis(s, {{0, law}})(u, 40.0);
+        (void)FloquetAnalysis(s, {{0, law}}, {.exact_flights = false})(u, 40.0);
       } else {
         (void)solvers::floquet_multipliers(s, {{0, law}}, u, 40.0);
       }

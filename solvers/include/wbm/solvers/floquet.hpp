@@ -39,7 +39,8 @@
 /// interpolation (the interpolant the crossings use) by the smallest power of two that brings
 /// h ω_c to 0.5 (FloquetResult::steps is the P used), and a contact that would need more than
 /// 32 768 steps per period is refused (std::invalid_argument naming its stiffness). Accuracy
-/// then comes from the error estimate, as for any P.
+/// then comes from the error estimate, as for any P. FloquetAnalysis avoids both for linear
+/// penalty stops: their flights between crossings are exact (FloquetOptions::exact_flights).
 ///
 /// Jenkins elements (contact::JenkinsLaw, friction.hpp). The element's force depends on its
 /// slider, so the state carries one more unknown per element, the perturbation φ_j of its force
@@ -143,6 +144,20 @@ struct FloquetOptions {
   /// products Φ v (O(P n n_c) each, Φ never formed), enough that the last lies below 0.9 in
   /// modulus (FloquetResult::dominant_only); it forms Φ where Arnoldi does not converge.
   Eigen::Index dense_states = 64;
+  /// With every contact a contact::LinearPenalty (stiffness k_c in contact, 0 out), on the modal
+  /// path: Φ as the product of the exact flights e^{A_S Δt} of the contact configurations S
+  /// between the crossings, A_S = A₀ + Σ_{c ∈ S} k_c b_c e_cᵀ (a penalty force is continuous at
+  /// its crossing: no saltation matrix), each A_S diagonalized once per branch (V e^{Λ Δt} V⁻¹,
+  /// kept for the next points) and a contact-free interval by the modes' closed form. A crossing
+  /// lies in each step whose samples straddle the gap (the stepping's rule), located on the cubic
+  /// through the four nearest samples (fourth order in T/P where the orbit is smooth; the
+  /// stepping's linear interpolant is second order), and the stiffness sets no step limit: the
+  /// samples are not refined, FloquetResult::steps is the P given, the error estimate is
+  /// Richardson's second-order one between the P and the P/2 even samples (conservative here),
+  /// and resolved_steps returns P. Falls back to the stepping when an A_S has no
+  /// well-conditioned eigenvector basis (κ₁(V) > 1e8: a rigid-body mode the contacts do not hold,
+  /// critical damping). false: always the stepping (the slow reference path).
+  bool exact_flights = true;
 };
 
 /// The stability of the points of one branch (one structure, one set of contacts): what does not
