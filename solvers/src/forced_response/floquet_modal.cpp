@@ -177,7 +177,8 @@ bool piecewise_constant_stiffness(const std::vector<ContactPoint>& contacts) {
 
 // The eigendecomposition of A_S for the configuration `active` (one flag per contact) with the
 // stiffnesses k (n_c, 0 where not in contact; a linear penalty's k_c is the same wherever it is in
-// contact, so the flags name the configuration), cached on the modes; computed outside the lock, so two threads may form the same one (the same bits).
+// contact, so the flags name the configuration), cached on the modes; computed outside the lock,
+// so two threads may form the same one (the same bits).
 // Unusable when Eigen's real Schur iteration fails or κ₁(V) > 1e8: a defective A_S (a rigid-body
 // mode the contacts do not hold, critical damping) has no eigenvector basis to flow in.
 std::shared_ptr<const FloquetAnalysis::Modes::ConfigurationFlight> configuration_flight(
@@ -228,8 +229,9 @@ double cubic_sample(const Eigen::MatrixXd& u, Eigen::Index c, Eigen::Index p, do
 // interval's configuration from the law's stiffness at its midpoint (on the side of the step's
 // crossing, or on the linear interpolant where the step has none); nothing when a
 // configuration's flight is unusable. The cubic makes the crossings, and so Φ, fourth order in
-// the samples' spacing (the linear interpolant the stepping uses is second order: on
-// examples/scenes/stiff_stop_continuation.toml at P = 512 its crossings moved |μ| by 5e-3).
+// the samples' spacing (the linear interpolant the stepping uses is second order: on the
+// oscillator of examples/scenes/stiff_stop_continuation.toml at P = 512 its crossings left |μ|
+// off by 4.9e-3, beyond twice the Richardson estimate).
 std::optional<ConfigurationIntervals> configuration_intervals(const FloquetAnalysis::Modes& m,
                                                               const std::vector<ContactPoint>& contacts,
                                                               const Eigen::MatrixXd& u, double frequency_hz) {
