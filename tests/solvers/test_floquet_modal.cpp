@@ -284,6 +284,16 @@ TEST(FloquetModal, AnUndampedStructureFallsBackToTheFormedMonodromy) {
 
 namespace {
 
+// A 1-DOF oscillator: mass m [kg], damping c [N·s/m], stiffness k [N/m].
+solvers::MechanicalSystem oscillator(double m, double c, double k) {
+  solvers::MechanicalSystem s;
+  const Eigen::Matrix<double, 1, 1> one{1.0};
+  s.mass = (m * one).sparseView();
+  s.stiffness = (k * one).sparseView();
+  s.damping = (c * one).sparseView();
+  return s;
+}
+
 // The exact monodromy of a 1-DOF oscillator (m, c, k) against a linear stop k_c on an orbit in
 // contact for |τ| < τ₁ (symmetric about τ = 0): Φ = F_c(τ₁T) F_f((1 − 2τ₁)T) F_c(τ₁T), each
 // flight of [[0, 1], [−κ/m, −c/m]] from the closed form e^{−ct/2m}(cos νt I + sin νt/ν (A + c/2m I))
@@ -317,11 +327,7 @@ double piecewise_linear_radius(double m, double c, double k, double kc, double p
 // the closed form to rounding: the crossings sit at samples here.
 TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
   const double m = 1.0, k = 4e4, c = 5.0, kc = 4e8, g0 = 2e-3, hz = 40.0;
-  solvers::MechanicalSystem s;
-  const Eigen::Matrix<double, 1, 1> one{1.0};
-  s.mass = (m * one).sparseView();
-  s.stiffness = (k * one).sparseView();
-  s.damping = (c * one).sparseView();
+  const solvers::MechanicalSystem s = oscillator(m, c, k);
   const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kc, g0});
   const std::vector<solvers::ContactPoint> stop = {{0, law}};
   auto samples = [&](int count) {
@@ -357,11 +363,7 @@ TEST(FloquetModal, AStiffStopIsResolvedByRefinedSamplesOnBothPaths) {
 // 1/P to the closed form, and the error estimate (Richardson's second-order one) bounds the error.
 TEST(FloquetModal, ExactFlightsConvergeAtFourthOrderWhereCrossingsFallBetweenSamples) {
   const double m = 1.0, k = 4e4, c = 5.0, kc = 4e8, g0 = 2e-3, hz = 40.0;
-  solvers::MechanicalSystem s;
-  const Eigen::Matrix<double, 1, 1> one{1.0};
-  s.mass = (m * one).sparseView();
-  s.stiffness = (k * one).sparseView();
-  s.damping = (c * one).sparseView();
+  const solvers::MechanicalSystem s = oscillator(m, c, k);
   const auto law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{kc, g0});
   const FloquetAnalysis exact(s, {{0, law}});
   const double radius = piecewise_linear_radius(m, c, k, kc, 1.0 / hz, std::acos(0.3) / (2.0 * M_PI));

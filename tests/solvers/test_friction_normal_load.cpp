@@ -75,6 +75,22 @@ double relative_error(const TimeBasis& basis, const Eigen::MatrixXd& coefficient
   return solvers::rms_relative_error(u, ref.displacement.row(dof).transpose());
 }
 
+// A state with stick, slip and a normal contact that opens, in `trial`'s coefficients interleaved
+// as a(k·n + i): x ≈ 3e-3 cos 2πτ (slips at μN ≤ 0.5 N against k_t x ≤ 59 N), y ≈ 1e-4 sin 2πτ
+// (N = 1 ± 2 N), interpolated at the dimension's equispaced instants.
+Eigen::VectorXd stick_slip_state(const TimeBasis& trial, int dimension) {
+  const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(dimension, 0.0, (dimension - 1.0) / dimension);
+  const auto qr = trial.values(tau, 0).colPivHouseholderQr();
+  const Eigen::VectorXd ax = qr.solve(Eigen::VectorXd(3e-3 * (2.0 * kPi * tau.array()).cos()));
+  const Eigen::VectorXd ay = qr.solve(Eigen::VectorXd(1e-4 * (2.0 * kPi * tau.array()).sin()));
+  Eigen::VectorXd a(2 * dimension);
+  for (int k = 0; k < dimension; ++k) {
+    a(2 * k) = ax(k);
+    a(2 * k + 1) = ay(k);
+  }
+  return a;
+}
+
 }  // namespace
 
 // The Jacobian with the slip force following the normal law (∂f_q/∂u_n at the sample that sets
@@ -86,17 +102,7 @@ TEST(FrictionNormalLoad, JacobianMatchesCentralDifferences) {
     const int dimension = 32;
     const TimeBasis basis = TimeBasis::from_name(pair, dimension);
     const solvers::WeightedResidual w(s.system(), s.forcing(), s.contacts(s.mu), basis, basis, {.time_samples = 512});
-    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(dimension, 0.0, (dimension - 1.0) / dimension);
-    const Eigen::MatrixXd v = basis.values(tau, 0);
-    // x ≈ 3e-3 cos 2πτ (slips at μN ≤ 0.5 N against k_t x ≤ 59 N), y ≈ 1e-4 sin 2πτ (N = 1 ± 2 N:
-    // the contact also opens), interleaved as a(k·n + i).
-    const Eigen::VectorXd ax = v.colPivHouseholderQr().solve(Eigen::VectorXd(3e-3 * (2.0 * kPi * tau.array()).cos()));
-    const Eigen::VectorXd ay = v.colPivHouseholderQr().solve(Eigen::VectorXd(1e-4 * (2.0 * kPi * tau.array()).sin()));
-    Eigen::VectorXd a(2 * dimension);
-    for (int k = 0; k < dimension; ++k) {
-      a(2 * k) = ax(k);
-      a(2 * k + 1) = ay(k);
-    }
+    const Eigen::VectorXd a = stick_slip_state(basis, dimension);
     const Eigen::MatrixXd j = w.jacobian(a);
     const Eigen::MatrixXd j_frictionless =
         solvers::WeightedResidual(s.system(), s.forcing(), s.contacts(0.0), basis, basis, {.time_samples = 512}).jacobian(a);
@@ -128,16 +134,7 @@ TEST(FrictionNormalLoad, CondensedJacobianMatchesCentralDifferences) {
     const int dimension = 16;
     const TimeBasis trial = TimeBasis::from_name(trial_name, dimension), weighting = TimeBasis::from_name(weighting_name, dimension);
     const solvers::WeightedResidual w(s.system(), s.forcing(), s.contacts(s.mu), trial, weighting, {.time_samples = 256});
-    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(dimension, 0.0, (dimension - 1.0) / dimension);
-    const Eigen::MatrixXd v = trial.values(tau, 0);
-    // The state of JacobianMatchesCentralDifferences: stick, slip, and a normal contact that opens.
-    const Eigen::VectorXd ax = v.colPivHouseholderQr().solve(Eigen::VectorXd(3e-3 * (2.0 * kPi * tau.array()).cos()));
-    const Eigen::VectorXd ay = v.colPivHouseholderQr().solve(Eigen::VectorXd(1e-4 * (2.0 * kPi * tau.array()).sin()));
-    Eigen::VectorXd a(2 * dimension);
-    for (int k = 0; k < dimension; ++k) {
-      a(2 * k) = ax(k);
-      a(2 * k + 1) = ay(k);
-    }
+    const Eigen::VectorXd a = stick_slip_state(trial, dimension);
     const Eigen::VectorXd x = w.contact_unknowns(a);
     const Eigen::MatrixXd j = w.contact_jacobian(x);
     const std::string what = trial_name + ":" + weighting_name;
