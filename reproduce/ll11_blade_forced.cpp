@@ -14,11 +14,14 @@
 // displacement of the first tip node to touch, in gaps. The same 24 stops rigid (Signorini at the
 // 2H + 1 impulse instants, Fourier:Fourier at the file's rigid_harmonics), continued piece by
 // piece (solvers::SignoriniResponseFamily, issue #38): the corner continuation stalled on this
-// blade at 0.9806 f1 after 9 points (issue #15). Not computed here: stability. The stops vibrate
-// at h ω_c ≈ 29 per step of P = 512 against their mass, so the monodromy needs P ≈ 16 384 to
-// 32 768 steps (floquet_stepping.hpp; FloquetAnalysis's Arnoldi, about 0.2 s per point on the
-// --quick blade, measured at stop 70); with rigid stops it needs saltation matrices.
-// Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, meta.json, report.md.
+// blade at 0.9806 f1 after 9 points (issue #15). Stability of the penalty curves (the file's
+// response.stability): every point's Floquet multipliers, by the exact flights of the linear
+// penalty stops (FloquetAnalysis's modal path, issue #39: the stops' stiffness sets no step), and
+// each change of stability located and classified (solvers::stability_crossings). The rigid
+// curve's (response.rigid_stability) would shoot each point's exact orbit against the 24 stops
+// (impact_stability): 77 s for the 27 points of the --quick blade (stop 89), so it is off.
+// Writes out/ll11_blade_forced/: branches.csv, backbone.csv, linear.csv, bifurcations.csv (when
+// a curve changes stability), meta.json, report.md.
 // About 3 min on one core, about 60 % of it the two backbones (KKT continuation; stop 62: 229 s
 // before KktSolver took the penalty backbone). --quick: mesh size 5 mm, H = 4, M = 16, coarse steps; run by ctest.
 #include <algorithm>
@@ -30,6 +33,7 @@
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
+#include <tbb/task_arena.h>
 
 #include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
@@ -52,6 +56,7 @@ struct Traced {
   std::string key;    // "fourier_fourier", "bspline_bspline", "fourier_fourier_rigid" (timing keys)
   bool rigid = false; // the stops rigid (Signorini)
   bool compared = true;  // its peak compared with the backbones (the penalty curves at the file's H and M)
+  bool stability = false;  // Floquet multipliers of every point
   solvers::ResponseCurve curve;
   double time_s = 0.0;
   double condition = 0.0;  // 1-norm condition estimate of G at the start
@@ -127,6 +132,8 @@ int main(int argc, char** argv) {
     // unless the parameters set `response.residual_tolerance`.
     const double residual_tolerance =
         parameters.number_or("response.residual_tolerance", solvers::WeightedResidualOptions{}.residual_tolerance);
+    const bool penalty_stability = parameters.boolean("response.stability");
+    const bool rigid_stability = parameters.boolean("response.rigid_stability");
     const models::ScratchFolder scratch("wbm_ll11_blade_forced");
     nlohmann::json timing;
 
@@ -176,12 +183,12 @@ int main(int argc, char** argv) {
       o.parameter_max = to * f1;
       o.max_parameter_step = max_step * f1;
       o.observed_dof = observed;
-      o.stability = false;
+      o.stability = rigid ? rigid_stability : penalty_stability;
       o.max_state = parameters.number("response.max_state");
       if (keep_all) {  // every DOF's trial coefficients: the peak's orbit starts a backbone below
         for (Eigen::Index j = 0; j < n; ++j) o.keep_dofs.push_back(static_cast<int>(j));
       }
-      traced.push_back({label, key, rigid, compared, solvers::trace_response(base, o), 0.0, 0.0});
+      traced.push_back({label, key, rigid, compared, o.stability, solvers::trace_response(base, o), 0.0, 0.0});
       traced.back().time_s = models::seconds_since(t);
       traced.back().condition = base.condition_number();
       const auto& c = traced.back().curve;
@@ -258,9 +265,14 @@ int main(int argc, char** argv) {
     const auto np = static_cast<Eigen::Index>(through.size());
 
     // Files.
-    std::vector<double> id, freq, ratio, amp, umax, umin, fmax, its;
+    std::vector<double> id, freq, ratio, amp, umax, umin, fmax, its, stable, mu;
+    std::vector<std::string> verdict;  // per row: why the stability cells are empty, if they are
     for (size_t k = 0; k < traced.size(); ++k) {
       for (const auto& p : traced[k].curve.points) {
+        const bool has = traced[k].stability && p.stability_available;
+        stable.push_back(has ? (p.stable ? 1.0 : 0.0) : std::nan(""));
+        mu.push_back(has ? p.max_multiplier : std::nan(""));
+        verdict.emplace_back(!traced[k].stability ? "stability not computed" : has ? "verdict" : "no verdict");
         id.push_back(static_cast<double>(k));
         freq.push_back(p.frequency_hz);
         ratio.push_back(p.frequency_hz / f1);
@@ -276,8 +288,37 @@ int main(int argc, char** argv) {
     };
     run.table("branches.csv",
               {"curve [-]", "frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]", "u_max [gap]", "u_min [gap]",
-               "max_contact_force [N]", "corrector_iterations [-]"},
-              {column(id), column(freq), column(ratio), column(amp), column(umax), column(umin), column(fmax), column(its)});
+               "max_contact_force [N]", "corrector_iterations [-]", "stable [-]", "max_floquet_multiplier [-]"},
+              {column(id), column(freq), column(ratio), column(amp), column(umax), column(umin), column(fmax), column(its),
+               column(stable), column(mu)},
+              verdict);
+    // bifurcations.csv: each change of stability of each curve, located where the largest |μ|
+    // passes 1 between two points and classified by the crossing multiplier (fold: +1, period
+    // doubling: −1, Neimark–Sacker: a complex pair).
+    std::vector<std::vector<solvers::StabilityCrossing>> crossings;
+    {
+      std::vector<double> cid, cf, cr, ca, cm, carg, clost;
+      std::vector<std::string> ckind;
+      for (size_t k = 0; k < traced.size(); ++k) {
+        crossings.push_back(solvers::stability_crossings(traced[k].curve));
+        for (const auto& c : crossings.back()) {
+          cid.push_back(static_cast<double>(k));
+          cf.push_back(c.frequency_hz);
+          cr.push_back(c.frequency_hz / f1);
+          ca.push_back(c.amplitude * unit);
+          cm.push_back(std::abs(c.multiplier));
+          carg.push_back(std::arg(c.multiplier));
+          clost.push_back(c.stability_lost ? 1.0 : 0.0);
+          ckind.emplace_back(solvers::to_string(c.kind));
+        }
+      }
+      if (!cid.empty()) {
+        run.table("bifurcations.csv",
+                  {"curve [-]", "frequency [Hz]", "frequency_over_f1 [-]", "amplitude [gap]",
+                   "floquet_multiplier_modulus [-]", "floquet_multiplier_argument [rad]", "stability_lost [-]"},
+                  {column(cid), column(cf), column(cr), column(ca), column(cm), column(carg), column(clost)}, ckind);
+      }
+    }
     {
       const BackboneCurve* parts[] = {&backbone, &peak_branch};
       std::vector<Eigen::VectorXd> cols(9, Eigen::VectorXd(nl + np));
@@ -419,6 +460,66 @@ int main(int argc, char** argv) {
       first_mode_highest = first_mode_levels == 1 ? e : std::max(first_mode_highest, e);
     }
 
+    // Stability of each curve that has it: verdicts, unstable points, the crossings with their
+    // kind, and its cost beside the continuation's.
+    std::ostringstream stability_rows;
+    // Per curve with stability: whether its lowest fold (the jump-up) is confirmed by a crossing,
+    // and how far from its highest fold (the jump-down) the first loss of stability lies [f1]
+    // (NaN: no fold or no loss).
+    std::vector<bool> jump_up_confirmed(traced.size(), false);
+    std::vector<double> loss_before_fold(traced.size(), std::nan(""));
+    std::string jump_up_evidence;
+    for (size_t k = 0; k < traced.size(); ++k) {
+      const auto& tr = traced[k];
+      if (!tr.stability) {
+        stats[k]["stability"] = nullptr;
+        continue;
+      }
+      const auto& c = tr.curve;
+      int unstable = 0, verdicts = 0;
+      for (const auto& p : c.points) {
+        verdicts += p.stability_available ? 1 : 0;
+        unstable += p.stability_available && !p.stable ? 1 : 0;
+      }
+      const int confirmed = static_cast<int>(std::count(c.fold_confirmed.begin(), c.fold_confirmed.end(), true));
+      if (!c.folds.empty()) {
+        size_t lo = 0, hi = 0;
+        for (size_t j = 1; j < c.folds.size(); ++j) {
+          if (c.folds[j].parameter < c.folds[lo].parameter) lo = j;
+          if (c.folds[j].parameter > c.folds[hi].parameter) hi = j;
+        }
+        jump_up_confirmed[k] = c.fold_confirmed[lo];
+        jump_up_evidence += (jump_up_evidence.empty() ? "" : "; ") + tr.label + ": fold at " +
+                            format("%.5f", c.folds[lo].parameter / f1) + " f1 " +
+                            (c.fold_confirmed[lo] ? "confirmed" : "not confirmed");
+        for (const auto& x : crossings[k]) {
+          if (x.stability_lost) {
+            loss_before_fold[k] = (c.folds[hi].parameter - x.frequency_hz) / f1;
+            break;
+          }
+        }
+      } else {
+        jump_up_evidence += (jump_up_evidence.empty() ? "" : "; ") + tr.label + ": no fold";
+      }
+      std::string list;
+      nlohmann::json jc = nlohmann::json::array();
+      for (const auto& x : crossings[k]) {
+        list += (list.empty() ? "" : "; ") + std::string(solvers::to_string(x.kind)) + " at " +
+                format("%.5f", x.frequency_hz / f1) + " f1 (" + (x.stability_lost ? "lost" : "regained") + ")";
+        jc.push_back({{"kind", solvers::to_string(x.kind)}, {"frequency_over_f1", x.frequency_hz / f1},
+                      {"amplitude_gap", x.amplitude * unit}, {"stability", x.stability_lost ? "lost" : "regained"}});
+      }
+      const double branch_s = c.wall_time_s;  // the continuation alone (the monodromies come after)
+      stability_rows << "| " << tr.label << " | " << verdicts << " of " << c.points.size() << " | " << unstable << " | "
+                     << c.unsettled_points << " | " << confirmed << " of " << c.folds.size() << " | "
+                     << (list.empty() ? std::string("none") : list) << " | " << format("%.1f", branch_s) << " | "
+                     << format("%.1f", c.stability_time_s) << " |\n";
+      stats[k]["stability"] = {{"verdicts", verdicts}, {"unstable_points", unstable},
+                               {"unsettled_points", c.unsettled_points}, {"folds_confirmed", confirmed},
+                               {"crossings", jc}, {"continuation_s", branch_s},
+                               {"stability_s", c.stability_time_s}};
+    }
+
     timing["backbone_s"] = backbone.time_s;
     timing["backbone_through_peak_s"] = peak_branch.time_s;
     for (const auto& tr : traced) timing[tr.key + "_s"] = tr.time_s;
@@ -456,8 +557,7 @@ int main(int argc, char** argv) {
        << "). Solves verified by the backward error of their full residual, η ≤ " << format("%g", residual_tolerance)
        << (residual_tolerance == solvers::WeightedResidualOptions{}.residual_tolerance ? " (the default)" : "")
        << ". Parameters: `reproduce/scenes/ll11_blade_forced.toml`. Figure: "
-          "`forced_response.png`. Not computed: "
-          "stability (cost; with rigid stops, saltation matrices).\n\n"
+          "`forced_response.png`.\n\n"
        << "Two backbone branches of the same stops (undamped, unforced; KKT continuation, N = " << mode_harmonics
        << ", m = " << mode_samples << "): (0) from the linear first mode, E = " << format("%g", co.energy_min) << " to " << format("%g", co.energy_max)
        << " (" << nl << " levels); (1) through harmonic balance's resonance peak: the peak's orbit (every DOF's "
@@ -482,12 +582,23 @@ int main(int argc, char** argv) {
        << ". The continuation started downward went down to E = " << format("%.2f", down_lowest) << " and, after "
        << down_folds << " folds in E, ended at " << describe(peak_branch, 0)
        << "; the one started upward ended at " << describe(peak_branch, np - 1) << ".\n\n";
+    md << "Stability (`response.stability`, `response.rigid_stability` in the file): the Floquet multipliers of "
+          "every point (FloquetAnalysis: Arnoldi on the monodromy matrix of the 2 × " << n << " states, the "
+          "linear penalty stops' flights exact between their gap crossings), each change of stability located "
+          "where the largest |μ| passes 1 between two points and classified by the crossing multiplier "
+          "(bifurcations.csv). A fold is confirmed when a multiplier crosses +1 within four points of it. "
+          "The rigid curve's stability (each point's exact orbit shot against the stops) is "
+       << (rigid_stability ? "computed" : "not computed, for its cost") << ". Times are wall times on "
+       << tbb::this_task_arena::max_concurrency() << " oneTBB workers.\n\n"
+       << "| curve | points with a verdict | unstable | unsettled | folds confirmed | stability crossings | "
+          "continuation [s] | stability [s] |\n|---|---|---|---|---|---|---|---|\n"
+       << stability_rows.str() << "\n";
     const auto off = [&](double worst) {
       return std::isfinite(worst) ? "largest |peak − branch| " + format("%.1e", worst) + " f1"
                                   : std::string("a peak's amplitude is not on the branch");
     };
     const std::string within = " (within 2ζ = " + format("%g", 2.0 * zeta) + " f1)";
-    const std::vector<reproduce::Claim> claims = {
+    std::vector<reproduce::Claim> claims = {
         {"the resonance peaks lie on the branch from the linear mode" + within, on_linear_branch, off(worst_off0)},
         {"the resonance peaks lie on the branch through the peak" + within, on_peak_branch, off(worst_offp)},
         {"the branch from the linear mode stays on the first mode (its fundamental holds at least half of the energy) "
@@ -518,6 +629,40 @@ int main(int argc, char** argv) {
          "rigid " + format("%.5f", peak_ratio[3]) + " f1 at " + format("%.3f", peak_amp[3]) + " gaps, penalty " +
              format("%.5f", peak_ratio[2]) + " f1 at " + format("%.3f", peak_amp[2]) + " gaps: " +
              format("%+.2e", rigid_shift) + " f1"}};
+    if (penalty_stability) {
+      // (d) Stability. At a fold of an exact orbit a multiplier passes +1; about a truncated orbit
+      // the crossing may lag its fold, less as the truncation is refined. (e) Two discretizations
+      // of the same orbits lose and regain stability at the same frequencies.
+      bool all_confirmed = true;
+      for (size_t k = 0; k < 3; ++k) all_confirmed = all_confirmed && jump_up_confirmed[k];
+      claims.push_back({"on each penalty curve a Floquet multiplier crosses +1 within four points of the jump-up fold "
+                        "(the lowest turning point)",
+                        all_confirmed, jump_up_evidence});
+      const double lag6 = loss_before_fold[2], lag12 = loss_before_fold[0];
+      claims.push_back({"the first loss of stability lies below the jump-down fold by less at H = " +
+                            std::to_string(harmonics) + " than at H = " + std::to_string(rigid_harmonics) +
+                            " (at an exact orbit's fold a multiplier passes +1: the lag is the truncation's)",
+                        std::isfinite(lag6) && std::isfinite(lag12) && std::abs(lag12) < std::abs(lag6),
+                        "fold − loss = " + format("%.1e", lag6) + " f1 at H = " + std::to_string(rigid_harmonics) +
+                            ", " + format("%.1e", lag12) + " f1 at H = " + std::to_string(harmonics) + ", " +
+                            format("%.1e", loss_before_fold[1]) + " f1 for B-spline:B-spline M = " +
+                            std::to_string(wavelet_m)});
+      const double tolerance = parameters.number("response.max_step_bspline_f1");
+      bool same = crossings[0].size() == crossings[1].size();
+      double worst = 0.0;
+      for (size_t j = 0; same && j < crossings[0].size(); ++j) {
+        const auto &a = crossings[0][j], &b = crossings[1][j];
+        same = a.kind == b.kind && a.stability_lost == b.stability_lost;
+        worst = std::max(worst, std::abs(a.frequency_hz - b.frequency_hz) / f1);
+      }
+      same = same && worst <= tolerance;
+      claims.push_back({"Fourier:Fourier (H = " + std::to_string(harmonics) + ") and B-spline:B-spline (M = " +
+                            std::to_string(wavelet_m) + ") change stability in the same way at the same frequencies "
+                            "(within the B-spline curve's largest step, " + format("%g", tolerance) + " f1)",
+                        same,
+                        std::to_string(crossings[0].size()) + " and " + std::to_string(crossings[1].size()) +
+                            " crossings; largest |Δf| " + format("%.1e", worst) + " f1"});
+    }
     md << reproduce::claims_markdown(claims)
        << "Timings: gmsh " << format("%.1f", blade.gmsh_s) << " s, ccx " << format("%.1f", blade.ccx_s)
        << " s, Craig–Bampton " << format("%.1f", timing["craig_bampton_s"].get<double>()) << " s, backbone from the "

@@ -519,21 +519,39 @@ def blade(folder):
 
 def blade_forced(folder):
     """Beyond LL11: the reduced blade's forced response near its first bending resonance (penalty
-    stops, Fourier:Fourier and B-spline:B-spline; rigid stops, Fourier:Fourier), the linear response,
-    and two backbone branches of
+    stops, Fourier:Fourier and B-spline:B-spline; rigid stops, Fourier:Fourier), their unstable
+    points and changes of stability by kind, the linear response, and two backbone branches of
     the same stops overlaid (from the linear mode; through the resonance peak), their levels marked
     where the first mode holds less than half of the energy; amplitudes in gaps."""
     meta = json.loads((folder / "meta.json").read_text())
     bh, b = read_csv(folder / "branches.csv")
-    curve, ratio, amp = (b[bh.index(k)] for k in ("curve [-]", "frequency_over_f1 [-]", "amplitude [gap]"))
+    curve, ratio, amp, stable = (b[bh.index(k)] for k in ("curve [-]", "frequency_over_f1 [-]", "amplitude [gap]",
+                                                         "stable [-]"))
     fig, ax = plt.subplots(figsize=(7.5, 5.0))
     ax.plot(column(folder, "linear.csv", "frequency_over_f1 [-]"), column(folder, "linear.csv", "amplitude [gap]"),
             color="0.6", lw=0.8, ls=":", label="linear (no casing)")
     styles = ["C0-", "C2--", "C1:", "C3-"]
+    marked = False
     for i, c in enumerate(meta["curves"]):
-        xs = [r for r, j in zip(ratio, curve) if j == i]
-        ys = [a for a, j in zip(amp, curve) if j == i]
-        ax.plot(xs, ys, styles[i % len(styles)], lw=1.2, label=f"{c['curve']} ({c['points']} points)")
+        pts = [(r, a, s) for r, a, s, j in zip(ratio, amp, stable, curve) if j == i]
+        line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], styles[i % len(styles)], lw=1.2,
+                        label=f"{c['curve']} ({c['points']} points)")
+        # Unstable points (stable [-] = 0; empty = not computed) marked on the curve.
+        bad = [(r, a) for r, a, s in pts if s == 0.0]
+        if bad:
+            ax.plot(*zip(*bad), "x", ms=3, color=line.get_color(), label="unstable points" if not marked else None)
+            marked = True
+    # Each change of stability, marked by its kind (bifurcations.csv: fold, period doubling, Neimark-Sacker).
+    if (folder / "bifurcations.csv").exists():
+        ch, cols = read_csv(folder / "bifurcations.csv")
+        kinds = read_status(folder / "bifurcations.csv")
+        markers = {"fold": ("o", "fold (multiplier through +1)"), "period-doubling": ("s", "period doubling (-1)"),
+                   "Neimark-Sacker": ("D", "Neimark-Sacker (complex pair)")}
+        for kind, (marker, name) in markers.items():
+            sel = [(r, a) for r, a, k in zip(cols[ch.index("frequency_over_f1 [-]")], cols[ch.index("amplitude [gap]")],
+                                             kinds) if k == kind]
+            if sel:
+                ax.plot(*zip(*sel), marker, ms=6, mfc="none", color="k", label=f"stability change: {name}")
     kh, k = read_csv(folder / "backbone.csv")
     branch, kr, ka, share = (k[kh.index(c)] for c in ("branch [-]", "frequency_over_f1 [-]", "amplitude [gap]",
                                                       "first_mode_share [-]"))

@@ -94,6 +94,15 @@ int Parameters::integer(const std::string& key) const {
   return j.get<int>();
 }
 
+bool Parameters::boolean(const std::string& key) const {
+  const nlohmann::json& j = at(key, "a boolean");
+  if (!j.is_boolean()) {
+    throw std::invalid_argument(file_ + ": " + key + ": expected true or false, got " + j.dump());
+  }
+  used_[key] = j;
+  return j.get<bool>();
+}
+
 std::vector<double> Parameters::numbers(const std::string& key) const {
   const nlohmann::json& j = at(key, "a list of numbers");
   std::vector<double> out;

@@ -4,7 +4,7 @@
 /// reproduce/scenes/<name>.toml beside the scenes, so that every number of a run comes from a file
 /// under reproduce/scenes/ (issue #41, item 4). Units are SI unless the key names another.
 ///
-/// File: tables of numbers, integers and lists of numbers, read by dotted keys ("mesh.size_m").
+/// File: tables of numbers, integers, booleans and lists of numbers, read by dotted keys ("mesh.size_m").
 /// A table [quick] holds the values of --quick (ctest's small run) by the same dotted keys
 /// ([quick.mesh] size_m = 0.005); a key it does not hold keeps its full value.
 ///
@@ -32,6 +32,8 @@ class Parameters {
   [[nodiscard]] double number_or(const std::string& key, double fallback) const;
   /// An integer.
   [[nodiscard]] int integer(const std::string& key) const;
+  /// A boolean (true or false; a number is refused).
+  [[nodiscard]] bool boolean(const std::string& key) const;
   /// A list of numbers.
   [[nodiscard]] std::vector<double> numbers(const std::string& key) const;
   /// Every value read so far, by dotted key, as used (the [quick] one under --quick): for meta.json.

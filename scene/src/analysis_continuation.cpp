@@ -18,10 +18,10 @@ namespace wbm::scene::detail {
 namespace {
 
 // Each change of stability along the branch (issue #39): between points i − 1 and i the number of
-// Floquet multipliers outside the unit circle changed (ResponsePoint::crossing). Its frequency
-// and amplitude are interpolated linearly where the largest |μ| passes 1 between the two
-// points; the multiplier is the unstable side's largest, whose argument gives the kind
-// (classify_crossing: fold / period doubling / Neimark–Sacker). bifurcations.csv gets a row per
+// Floquet multipliers outside the unit circle changed (ResponsePoint::crossing), located by
+// solvers::stability_crossings: frequency and amplitude interpolated linearly where the largest
+// |μ| passes 1 between the two points; the multiplier is the unstable side's largest, and the kind
+// is classify_crossing's (fold / period doubling / Neimark–Sacker). bifurcations.csv gets a row per
 // crossing (written only when there is one); result.json the same list, empty when none.
 // In a branch in μ the crossing is located in μ instead (friction_coefficient [-] and
 // friction_coefficient, between; the frequency is the branch's).
@@ -30,29 +30,21 @@ nlohmann::json write_bifurcations(const solvers::ResponseCurve& curve, const std
   nlohmann::json list = nlohmann::json::array();
   std::vector<double> hz, before, after, amplitude, modulus, argument, lost;
   std::vector<std::string> kind;
-  size_t last = 0;  // the last point with a verdict before i (rigid stops: some have none)
-  for (size_t i = 1; i < curve.points.size(); ++i) {
-    const solvers::ResponsePoint& b = curve.points[i];
-    if (curve.points[i - 1].stability_available) last = i - 1;
-    if (b.crossing == solvers::Bifurcation::None) continue;
-    const solvers::ResponsePoint& a = curve.points[last];
-    const double span = b.max_multiplier - a.max_multiplier;
-    const double t = std::abs(span) > 0.0 ? std::clamp((1.0 - a.max_multiplier) / span, 0.0, 1.0) : 0.5;
-    const solvers::ResponsePoint& unstable = b.stable ? a : b;
-    hz.push_back(a.parameter + t * (b.parameter - a.parameter));
-    before.push_back(a.parameter);
-    after.push_back(b.parameter);
-    amplitude.push_back(a.amplitude + t * (b.amplitude - a.amplitude));
-    modulus.push_back(std::abs(unstable.leading_multiplier));
-    argument.push_back(std::arg(unstable.leading_multiplier));
-    lost.push_back(b.stable ? 0.0 : 1.0);
-    kind.emplace_back(solvers::to_string(b.crossing));
+  for (const solvers::StabilityCrossing& c : solvers::stability_crossings(curve)) {
+    hz.push_back(c.parameter);
+    before.push_back(curve.points[c.before].parameter);
+    after.push_back(curve.points[c.after].parameter);
+    amplitude.push_back(c.amplitude);
+    modulus.push_back(std::abs(c.multiplier));
+    argument.push_back(std::arg(c.multiplier));
+    lost.push_back(c.stability_lost ? 1.0 : 0.0);
+    kind.emplace_back(solvers::to_string(c.kind));
     list.push_back({{"kind", kind.back()},
                     {in_mu ? "friction_coefficient" : "frequency_hz", hz.back()},
                     {in_mu ? "between" : "between_hz", {before.back(), after.back()}},
                     {"amplitude_m", {{dof, amplitude.back()}}},
                     {"multiplier", {{"modulus", modulus.back()}, {"argument_rad", argument.back()}}},
-                    {"stability", lost.back() == 1.0 ? "lost" : "regained"}});
+                    {"stability", c.stability_lost ? "lost" : "regained"}});
   }
   if (!hz.empty()) {
     const auto column = [](const std::vector<double>& v) {

@@ -1,6 +1,7 @@
 // Pseudo-arclength continuation, forced-response curves and Floquet multipliers, against closed
 // forms: the single-harmonic Duffing response (folds, middle branch unstable), the linear rod's
 // direct frequency response, the multipliers e^{sT} of a linear system; and finite differences.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
@@ -266,6 +267,57 @@ TEST(Continuation, DuffingMiddleBranchIsUnstable) {
   EXPECT_EQ(crossings, 2);
   ASSERT_EQ(curve.fold_confirmed.size(), 2u);
   EXPECT_TRUE(curve.fold_confirmed[0] && curve.fold_confirmed[1]);
+  // stability_crossings locates both between their two points, at the continuation's folds (found
+  // by the tangent's sign, not by the multipliers) to within two steps of the curve in λ: the
+  // jump-down fold is met first going up in frequency, so stability is lost at the first and
+  // regained at the second.
+  const auto located = solvers::stability_crossings(curve);
+  ASSERT_EQ(located.size(), 2u);
+  for (size_t j = 0; j < 2; ++j) {
+    const auto& c = located[j];
+    EXPECT_EQ(c.kind, solvers::Bifurcation::Fold);
+    EXPECT_EQ(c.stability_lost, j == 0);
+    const double lo = std::min(curve.points[c.before].parameter, curve.points[c.after].parameter);
+    const double hi = std::max(curve.points[c.before].parameter, curve.points[c.after].parameter);
+    EXPECT_GE(c.parameter, lo);
+    EXPECT_LE(c.parameter, hi);
+    const double step = std::abs(curve.points[c.after].parameter - curve.points[c.before].parameter);
+    EXPECT_NEAR(c.parameter, curve.folds[j].parameter, 2.0 * step) << j;  // 1e-5 and 1e-4 Hz of 11.17 and 10.44
+    EXPECT_NEAR(std::abs(c.multiplier), 1.0, 0.02) << j;                  // 1.002 and 1.006
+  }
+}
+
+// stability_crossings' interpolation, on a curve written by hand: |μ| 0.9 -> 1.3 between λ = 10
+// and 12 passes 1 at t = 1/4, λ = 10.5; a point without a verdict between them is skipped.
+TEST(Continuation, StabilityCrossingsInterpolateTheSpectralRadius) {
+  solvers::ResponseCurve curve;
+  auto point = [](double lambda, double mu, bool available) {
+    solvers::ResponsePoint p;
+    p.parameter = p.frequency_hz = lambda;
+    p.amplitude = 2.0 * lambda;
+    p.max_multiplier = mu;
+    p.leading_multiplier = {-mu, 0.0};
+    p.stable = mu < 1.0;
+    p.stability_available = available;
+    return p;
+  };
+  curve.points = {point(10.0, 0.9, true), point(11.0, 0.0, false), point(12.0, 1.3, true), point(13.0, 0.5, true)};
+  curve.points[2].crossing = solvers::Bifurcation::PeriodDoubling;
+  curve.points[3].crossing = solvers::Bifurcation::PeriodDoubling;
+  const auto c = solvers::stability_crossings(curve);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0].before, 0u);
+  EXPECT_EQ(c[0].after, 2u);
+  EXPECT_DOUBLE_EQ(c[0].t, 0.25);
+  EXPECT_DOUBLE_EQ(c[0].parameter, 10.5);
+  EXPECT_DOUBLE_EQ(c[0].amplitude, 21.0);
+  EXPECT_TRUE(c[0].stability_lost);
+  EXPECT_EQ(c[0].multiplier, std::complex<double>(-1.3, 0.0));
+  // 1.3 -> 0.5 passes 1 at t = 0.3/0.8.
+  EXPECT_DOUBLE_EQ(c[1].parameter, 12.0 + 0.375);
+  EXPECT_FALSE(c[1].stability_lost);
+  EXPECT_EQ(c[1].multiplier, std::complex<double>(-1.3, 0.0));
+  EXPECT_EQ(c[1].kind, solvers::Bifurcation::PeriodDoubling);
 }
 
 // The stability of the points runs on threads: the multipliers, their error estimates, the

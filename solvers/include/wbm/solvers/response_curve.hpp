@@ -299,4 +299,27 @@ struct ResponseCurveOptions {
 /// message says where each part ended.
 [[nodiscard]] ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOptions& options);
 
+/// One change of stability along a traced curve: the number of Floquet multipliers outside the
+/// unit circle differs between `before` and `after` (ResponsePoint::crossing of point `after`).
+struct StabilityCrossing {
+  size_t before = 0, after = 0;  // indices into ResponseCurve::points; `before` is the last point
+                                 // with a verdict before `after` (rigid stops: some have none)
+  double t = 0.5;                // where the largest |μ| passes 1 on the segment: (1 − |μ|_b)/(|μ|_a − |μ|_b)
+                                 // clamped to [0, 1]; ½ if both are equal
+  double parameter = 0.0;        // λ_b + t (λ_a − λ_b) (λ units: Hz, N or the friction coefficient)
+  double frequency_hz = 0.0;     // the same interpolation of the forcing frequency [Hz]
+  double amplitude = 0.0;        // the same interpolation of ResponsePoint::amplitude [m]
+  /// The leading multiplier (ResponsePoint::leading_multiplier) of the unstable one of the two points.
+  std::complex<double> multiplier = 0.0;
+  Bifurcation kind = Bifurcation::None;  // classify_crossing: fold, period doubling or Neimark–Sacker
+  bool stability_lost = false;   // true when `after` is the unstable one (in the curve's order)
+};
+
+/// The curve's stability crossings in its order, one per point whose ResponsePoint::crossing is
+/// not None, each located by linear interpolation of the spectral radius between the two points
+/// (StabilityCrossing::t): first order in the step, so the located λ lies within one step of the
+/// point where the exact multiplier passes 1. Empty for a curve traced without stability. No
+/// errors (a curve of fewer than two points has none).
+[[nodiscard]] std::vector<StabilityCrossing> stability_crossings(const ResponseCurve& curve);
+
 }  // namespace wbm::solvers
