@@ -5,7 +5,8 @@
 // under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17). And a rod
 // branch against the number of elements (issue #39: its cost should grow like n), and NLvib's
 // unit rod as `wbm run` traces examples/scenes/nlvib_rod.toml (issue #39, item 7), and Fig. 12
-// with its stop rigid, with the stability of the exact orbits (issue #38).
+// with its stop rigid, with the stability of the exact orbits (issue #38), and one point's
+// stability with a linear penalty stop by both methods (exact flights and the stepping).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <wbm/contact/penalty.hpp>
 #include <wbm/contact/signorini.hpp>
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/floquet.hpp>
@@ -171,6 +173,36 @@ void BM_Continuation_Fig12RigidStop(benchmark::State& state) {
   state.counters["stability_ms_per_point"] = 1e3 * curve.stability_time_s / points;
 }
 
+
+// One point's stability by both methods (issue #39, item 2): the Case 2 rod with its tip stop a
+// linear penalty of range(1) times the exponential law's tangent at the gap (a_c α = 2e9 N/m),
+// the orbit of Fourier:Fourier M = 64 at 1300 Hz (in contact). range(0) = 1: the exact flights of
+// the contact configurations (FloquetOptions::exact_flights) from 512 samples; 0: the stepping,
+// from as many samples as resolved_steps asks for (the stop resolved, h ω_c <= 0.5), the slow
+// reference. Counters: the steps used and the largest |μ|.
+void BM_Floquet_LinearStopOnePoint(benchmark::State& state) {
+  const auto& s = case2();
+  std::vector<wbm::solvers::ContactPoint> stops;
+  for (const auto& c : s.contact_points()) {
+    stops.push_back({c.dof, std::make_shared<wbm::contact::LinearPenalty>(
+                                wbm::contact::LinearPenaltyParameters{2e9 * static_cast<double>(state.range(1)), c.law->gap()})});
+  }
+  const auto fourier = wbm::solvers::TimeBasis::fourier(64);
+  const auto sol = wbm::solvers::solve_weighted_residual(s.system(), s.harmonic_forcing(1300.0), stops, fourier, fourier);
+  const bool exact = state.range(0) != 0;
+  state.SetLabel(exact ? "exact flights" : "stepping (slow reference)");
+  const wbm::solvers::FloquetAnalysis floquet(s.system(), stops, {.monodromy = false, .exact_flights = exact});
+  auto samples = [&](Eigen::Index p) {
+    const Eigen::VectorXd tau = Eigen::VectorXd::LinSpaced(p, 0.0, 1.0 - 1.0 / static_cast<double>(p));
+    return Eigen::MatrixXd((fourier.values(tau, 0) * sol.coefficients.row(stops.front().dof).transpose()).transpose());
+  };
+  Eigen::MatrixXd uc = samples(512);
+  if (!exact) uc = samples(floquet.resolved_steps(uc, 1300.0));
+  wbm::solvers::FloquetResult r;
+  for (auto _ : state) r = floquet(uc, 1300.0);
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.counters["max_multiplier"] = r.max_modulus;
+}
 }  // namespace
 
 // Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
@@ -186,4 +218,5 @@ BENCHMARK(BM_Continuation_RodElements)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_NLvibRod)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_Fig12RigidStop)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Floquet_LinearStopOnePoint)->ArgsProduct({{1, 0}, {1, 100}})->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();
