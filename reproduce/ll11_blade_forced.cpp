@@ -634,7 +634,9 @@ int main(int argc, char** argv) {
       // the crossing may lag its fold, less as the truncation is refined. (e) Two discretizations
       // of the same orbits lose and regain stability at the same frequencies.
       bool all_confirmed = true;
-      for (size_t k = 0; k < 3; ++k) all_confirmed = all_confirmed && jump_up_confirmed[k];
+      for (size_t k = 0; k < traced.size(); ++k) {
+        if (traced[k].stability && !traced[k].rigid) all_confirmed = all_confirmed && jump_up_confirmed[k];
+      }
       claims.push_back({"on each penalty curve a Floquet multiplier crosses +1 within four points of the jump-up fold "
                         "(the lowest turning point)",
                         all_confirmed, jump_up_evidence});

@@ -304,9 +304,10 @@ struct ResponseCurveOptions {
 struct StabilityCrossing {
   size_t before = 0, after = 0;  // indices into ResponseCurve::points; `before` is the last point
                                  // with a verdict before `after` (rigid stops: some have none)
-  double t = 0.5;                // where the largest |μ| passes 1 on the segment: (1 − |μ|_b)/(|μ|_a − |μ|_b)
-                                 // clamped to [0, 1]; ½ if both are equal
-  double parameter = 0.0;        // λ_b + t (λ_a − λ_b) (λ units: Hz, N or the friction coefficient)
+  /// Where the largest |μ| passes 1 on the segment from `before` (0) to `after` (1):
+  /// t = (1 − |μ|_before)/(|μ|_after − |μ|_before) clamped to [0, 1]; ½ if both are equal.
+  double t = 0.5;
+  double parameter = 0.0;        // λ_before + t (λ_after − λ_before) (λ units: Hz, N or the friction coefficient)
   double frequency_hz = 0.0;     // the same interpolation of the forcing frequency [Hz]
   double amplitude = 0.0;        // the same interpolation of ResponsePoint::amplitude [m]
   /// The leading multiplier (ResponsePoint::leading_multiplier) of the unstable one of the two points.
