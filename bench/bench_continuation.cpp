@@ -5,9 +5,11 @@
 // under 1 s on one core (issue #6); 0.15 s, and 0.3 s with stability (issue #17). And a rod
 // branch against the number of elements (issue #39: its cost should grow like n), and NLvib's
 // unit rod as `wbm run` traces examples/scenes/nlvib_rod.toml (issue #39, item 7), and Fig. 12
-// with its stop rigid, with the stability of the exact orbits (issue #38), and one point's
-// stability with a linear penalty stop by both methods (exact flights and the stepping).
+// with its stop rigid, with the stability of the exact orbits (issue #38), one point's
+// stability with a linear penalty stop by both methods (exact flights and the stepping), and the
+// forced response of the reduced LL11 blade as ll11_blade_forced traces it (issue #39, item 4).
 #include <benchmark/benchmark.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +23,7 @@
 #include <wbm/solvers/floquet.hpp>
 #include <wbm/solvers/response_curve.hpp>
 
+#include "blade_forced.hpp"
 #include "shipped_scenes.hpp"
 
 namespace {
@@ -203,6 +206,57 @@ void BM_Floquet_LinearStopOnePoint(benchmark::State& state) {
   state.counters["steps"] = static_cast<double>(r.steps);
   state.counters["max_multiplier"] = r.max_modulus;
 }
+// The reduced LL11 blade against its 24 radial penalty stops, built and continued as
+// ll11_blade_forced does (its parameters read from reproduce/scenes/ll11_blade_forced.toml, the
+// full mesh: gmsh, CalculiX and the Craig–Bampton reduction once per process, about 30 s before
+// the first run): Fourier:Fourier at response.harmonics (range(0) = 0) or B-spline:B-spline at
+// response.wavelet_dimension (1), over the response range with its largest steps, without or
+// with the stability of every point (range(1)). Goals (issue #39, item 4): Fourier:Fourier in
+// 5 s, B-spline:B-spline in 10 s. Counters: points, the continuation's and the stability's wall
+// times [s].
+struct BladeForcedBench {
+  toml::table parameters;
+  wbm::models::BladeForcedModel model;
+  std::vector<wbm::solvers::ContactPoint> contacts;
+  double number(const char* key) const { return parameters.at_path(key).value<double>().value(); }
+  int integer(const char* key) const { return static_cast<int>(parameters.at_path(key).value<int64_t>().value()); }
+  BladeForcedBench() : parameters(toml::parse_file((wbm::models::scene_directory() / "ll11_blade_forced.toml").string())) {
+    const wbm::models::ScratchFolder scratch("wbm_bench_blade_forced");
+    const auto blade = wbm::models::build_blade(scratch.dir, number("mesh.size_m"), integer("interface.tip_nodes"));
+    const auto cb = wbm::fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, integer("interface.modes"));
+    model = wbm::models::blade_forced_model(
+        blade, cb,
+        {.gap = number("contact.gap_m"), .zeta = number("damping.zeta"), .overload = number("forcing.overload_gaps"),
+         .stiffness_ratio = number("contact.stiffness_ratio"), .from_f1 = number("response.from_f1"),
+         .mode_harmonics = integer("nnm.harmonics"), .mode_samples = integer("nnm.samples")});
+    const auto law = std::make_shared<wbm::contact::LinearPenalty>(
+        wbm::contact::LinearPenaltyParameters{model.penalty_stiffness, number("contact.gap_m")});
+    for (const auto& st : model.stops) contacts.push_back({st.dof, law, -1, st.along});
+  }
+};
+
+void BM_Continuation_BladeForced(benchmark::State& state) {
+  static const BladeForcedBench b;
+  const bool bspline = state.range(0) != 0;
+  const int harmonics = b.integer("response.harmonics"), m = b.integer("response.wavelet_dimension");
+  const auto basis = bspline ? wbm::solvers::TimeBasis::from_name("bspline", m) : wbm::solvers::TimeBasis::fourier_harmonics(harmonics);
+  state.SetLabel(std::string(bspline ? "B-spline:B-spline M = " + std::to_string(m) : "Fourier:Fourier H = " + std::to_string(harmonics)) +
+                 (state.range(1) != 0 ? ", with Floquet stability" : ""));
+  const wbm::solvers::WeightedResidual base(b.model.reduced, b.model.forcing, b.contacts, basis, basis,
+                                            {.formulation = wbm::solvers::Formulation::Distributional});
+  wbm::solvers::ResponseCurveOptions o;
+  o.parameter_min = b.number("response.from_f1") * b.model.f1;
+  o.parameter_max = b.number("response.to_f1") * b.model.f1;
+  o.max_parameter_step = b.number(bspline ? "response.max_step_bspline_f1" : "response.max_step_fourier_f1") * b.model.f1;
+  o.observed_dof = b.model.observed;
+  o.max_state = b.number("response.max_state");
+  o.stability = state.range(1) != 0;
+  wbm::solvers::ResponseCurve curve;
+  for (auto _ : state) curve = trace(state, base, o);
+  state.counters["points"] = static_cast<double>(curve.points.size());
+  state.counters["continuation_s"] = curve.wall_time_s;
+  state.counters["stability_s"] = curve.stability_time_s;
+}
 }  // namespace
 
 // Not Fourier:Fourier at M = 32: its undamped top function cos 32πτ resonates with mode 8 at
@@ -219,4 +273,5 @@ BENCHMARK(BM_Continuation_RodElements)
 BENCHMARK(BM_Continuation_NLvibRod)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Continuation_Fig12RigidStop)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Floquet_LinearStopOnePoint)->ArgsProduct({{1, 0}, {1, 100}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Continuation_BladeForced)->ArgsProduct({{0, 1}, {0, 1}})->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK_MAIN();

@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
                                        parameters.integer("interface.modes"));
     // The forced model of ll11_blade_forced (scaled coordinates, radial stops, C = β K̂); its load
     // is not used: the casing is the only excitation.
-    const auto model = reproduce::blade_forced_model(blade, cb,
+    const auto model = models::blade_forced_model(blade, cb,
                                                      {.gap = gap,
                                                       .zeta = zeta,
                                                       .overload = 1.0,

@@ -144,11 +144,11 @@ int main(int argc, char** argv) {
     auto t = std::chrono::steady_clock::now();
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary, modes);
     timing["craig_bampton_s"] = models::seconds_since(t);
-    // The forced model (reproduce/common/blade_forced.hpp): coordinates scaled to unit diagonal
+    // The forced model (models/blade_forced.hpp): coordinates scaled to unit diagonal
     // mass, q = D q̂ (the condition estimate of G from 1.1e9 to 3.1e7 on the --quick mesh; 1.0e7
     // scaled on the full one, meta.json), the radial stops, C = β K̂, the load along the first
     // mode and the penalty stiffness. Every number written is physical.
-    auto model = reproduce::blade_forced_model(
+    auto model = models::blade_forced_model(
         blade, cb,
         {.gap = gap, .zeta = zeta, .overload = overload, .stiffness_ratio = stiffness_ratio, .from_f1 = from,
          .mode_harmonics = mode_harmonics, .mode_samples = mode_samples});

@@ -5,7 +5,7 @@
 // reaches `overload` nominal gaps).
 //
 // The run builds the blade and its Craig–Bampton model exactly as ll11_blade_forced
-// (reproduce/common/blade_forced.hpp), writes it as a wbm scene in physical coordinates (K_r,
+// (models/blade_forced.hpp), writes it as a wbm scene in physical coordinates (K_r,
 // M_r as Matrix Market files, C = β K_r, the load f = D⁻¹ s M̂ φ₁ as [[forcing.loads]], one
 // linear penalty [[contact]] per tip node along its radial unit vector, continuation over
 // [from, to] f1 without stability), and a study file over `contact.gap`. `wbm study` runs it
@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
     const auto blade = models::build_blade(scratch.dir, mesh_size, parameters.integer("interface.tip_nodes"));
     const auto cb = fem::craig_bampton(blade.model.stiffness, blade.model.mass, blade.boundary,
                                        parameters.integer("interface.modes"));
-    const auto model = reproduce::blade_forced_model(
+    const auto model = models::blade_forced_model(
         blade, cb,
         {.gap = gap, .zeta = parameters.number("damping.zeta"), .overload = parameters.number("forcing.overload_gaps"),
          .stiffness_ratio = parameters.number("contact.stiffness_ratio"), .from_f1 = from,

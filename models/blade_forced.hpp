@@ -1,6 +1,7 @@
 #pragma once
 /// The forced model of the reduced LL11 blade against the casing (beyond LL11 Sec. 5.2, issue
-/// #15), shared by ll11_blade_forced and ll11_blade_gap_study (issue #37): the Craig–Bampton
+/// #15), shared by ll11_blade_forced, ll11_blade_gap_study (issue #37), friction_oval_casing and
+/// bench_continuation's blade benchmarks (issue #39): the Craig–Bampton
 /// model in coordinates scaled to unit diagonal mass, the tip's radial stops, the damping
 /// C = β K̂ (β = 2ζ/ω₁), the load s M̂ φ₁ along the first mode and the penalty stiffness. SI units.
 ///
@@ -21,7 +22,7 @@
 
 #include "blade.hpp"
 
-namespace wbm::reproduce {
+namespace wbm::models {
 
 struct BladeForcedInputs {
   double gap = 0.0;              // g0 of every radial stop [m]
@@ -52,7 +53,7 @@ struct BladeForcedModel {
 
 /// Builds the model from the blade and its Craig–Bampton model (blade.boundary first). Throws
 /// as solvers::NonlinearModes for bad inputs.
-[[nodiscard]] BladeForcedModel blade_forced_model(const models::Blade& blade, const fem::CraigBamptonModel& cb,
+[[nodiscard]] BladeForcedModel blade_forced_model(const Blade& blade, const fem::CraigBamptonModel& cb,
                                                   const BladeForcedInputs& in);
 
-}  // namespace wbm::reproduce
+}  // namespace wbm::models

@@ -5,9 +5,9 @@
 
 #include <Eigen/Cholesky>
 
-namespace wbm::reproduce {
+namespace wbm::models {
 
-BladeForcedModel blade_forced_model(const models::Blade& blade, const fem::CraigBamptonModel& cb,
+BladeForcedModel blade_forced_model(const Blade& blade, const fem::CraigBamptonModel& cb,
                                     const BladeForcedInputs& in) {
   BladeForcedModel m;
   const Eigen::MatrixXd k_r = 0.5 * (cb.stiffness + cb.stiffness.transpose()), m_r = 0.5 * (cb.mass + cb.mass.transpose());
@@ -17,7 +17,7 @@ BladeForcedModel blade_forced_model(const models::Blade& blade, const fem::Craig
   reduced.stiffness = (d.asDiagonal() * k_r * d.asDiagonal()).sparseView();
   reduced.mass = (d.asDiagonal() * m_r * d.asDiagonal()).sparseView();
   const auto n = static_cast<Eigen::Index>(reduced.mass.rows());
-  m.stops = models::radial_stops(blade, in.gap);
+  m.stops = radial_stops(blade, in.gap);
   for (auto& st : m.stops) {
     for (auto& [j, w] : st.along) w *= d(j);
   }
@@ -56,4 +56,4 @@ BladeForcedModel blade_forced_model(const models::Blade& blade, const fem::Craig
   return m;
 }
 
-}  // namespace wbm::reproduce
+}  // namespace wbm::models
