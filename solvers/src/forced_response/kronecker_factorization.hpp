@@ -86,10 +86,12 @@ class KroneckerFactorization {
   [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
                                            const std::vector<StackedTerms>& rows);
   /// True when the last compliance() kept a structured form: compliance_product() then costs
-  /// O(n_c² · columns · M log M) instead of the O(n_c² M² · columns) dense product with H.
+  /// O(n_c · columns · M log M + n_c² · columns · M) (circulant) or O(n_c² · columns · M log M)
+  /// instead of the O(n_c² M² · columns) dense product with H.
   [[nodiscard]] bool fast_compliance_product() const { return compliance_structure_ != nullptr; }
-  /// H v for v with n_c·M rows (contact ordering), by the blocks kept by compliance(): each
-  /// circulant H_cd by FFT, or A_K⁻¹ (Σ_d S_cd v_d) by one inverse real DFT per column.
+  /// H v for v with n_c·M rows (contact ordering), by the blocks kept by compliance(): circulant
+  /// blocks as Σ_d ĉ_cd DFT(v_d), bin by bin, with one real DFT per contact d and one inverse per
+  /// contact c; or A_K⁻¹ (Σ_d S_cd v_d) by one inverse real DFT per column.
   /// Requires fast_compliance_product().
   [[nodiscard]] Eigen::MatrixXd compliance_product(const Eigen::MatrixXd& v) const;
   /// The modal path solved mode by mode (modal(), without the Fourier-weighting form), in pieces
