@@ -206,6 +206,7 @@ void BM_Floquet_LinearStopOnePoint(benchmark::State& state) {
   state.counters["steps"] = static_cast<double>(r.steps);
   state.counters["max_multiplier"] = r.max_modulus;
 }
+
 // The reduced LL11 blade against its 24 radial penalty stops, built and continued as
 // ll11_blade_forced does (its parameters read from reproduce/scenes/ll11_blade_forced.toml, the
 // full mesh: gmsh, CalculiX and the Craig–Bampton reduction once per process, about 30 s before
