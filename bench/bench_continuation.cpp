@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -219,8 +220,15 @@ struct BladeForcedBench {
   toml::table parameters;
   wbm::models::BladeForcedModel model;
   std::vector<wbm::solvers::ContactPoint> contacts;
-  double number(const char* key) const { return parameters.at_path(key).value<double>().value(); }
-  int integer(const char* key) const { return static_cast<int>(parameters.at_path(key).value<int64_t>().value()); }
+  // A key the reproduction's file must hold (std::runtime_error naming it otherwise).
+  template <class T>
+  T read(const char* key) const {
+    const auto v = parameters.at_path(key).value<T>();
+    if (!v) throw std::runtime_error(std::string("ll11_blade_forced.toml: no number at key ") + key);
+    return *v;
+  }
+  double number(const char* key) const { return read<double>(key); }
+  int integer(const char* key) const { return static_cast<int>(read<int64_t>(key)); }
   BladeForcedBench() : parameters(toml::parse_file((wbm::models::scene_directory() / "ll11_blade_forced.toml").string())) {
     const wbm::models::ScratchFolder scratch("wbm_bench_blade_forced");
     const auto blade = wbm::models::build_blade(scratch.dir, number("mesh.size_m"), integer("interface.tip_nodes"));

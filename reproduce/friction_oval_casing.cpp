@@ -82,13 +82,13 @@ int main(int argc, char** argv) {
     // The forced model of ll11_blade_forced (scaled coordinates, radial stops, C = β K̂); its load
     // is not used: the casing is the only excitation.
     const auto model = models::blade_forced_model(blade, cb,
-                                                     {.gap = gap,
-                                                      .zeta = zeta,
-                                                      .overload = 1.0,
-                                                      .stiffness_ratio = parameters.number("contact.stiffness_ratio"),
-                                                      .from_f1 = from,
-                                                      .mode_harmonics = 3,
-                                                      .mode_samples = 24});
+                                                  {.gap = gap,
+                                                   .zeta = zeta,
+                                                   .overload = 1.0,
+                                                   .stiffness_ratio = parameters.number("contact.stiffness_ratio"),
+                                                   .from_f1 = from,
+                                                   .mode_harmonics = 3,
+                                                   .mode_samples = 24});
     const double f1 = model.f1, k_pen = model.penalty_stiffness;
     const double k_t = parameters.number("contact.tangential_stiffness_ratio") * k_pen;
     const auto radial_law = std::make_shared<contact::LinearPenalty>(contact::LinearPenaltyParameters{k_pen, gap});
