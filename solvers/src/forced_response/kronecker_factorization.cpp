@@ -493,8 +493,9 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
                                                    const std::vector<StackedTerms>& rows) {
   const int nc = static_cast<int>(directions.size());
   const auto m = static_cast<Eigen::Index>(rows.size()) / std::max(nc, 1);
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(nc * m, nc * m);
   const Setup& su = *setup_;
+  Eigen::MatrixXd h(nc * m, nc * m);  // the circulant path writes every entry
+  if (!(su.modal && su.circulant && !su.fourier_weighting)) h.setZero();
   // H_cd = Σ_i φ_i(c) φ_i(d) (A + λ_i B)⁻¹ (M × M) scattered into h(k·n_c + c, l·n_c + d).
   const auto scatter = [&](int c, int d, const Eigen::MatrixXd& hcd) {
     for (Eigen::Index l = 0; l < m; ++l) {
@@ -534,15 +535,26 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     for (int c = 0; c < nc; ++c) {
       for (Eigen::Index i = 0; i < psi.cols(); ++i) psi(c, i) = shape(c, i);
     }
+    // The modes' bins gathered once (column i), each pair's sum in the modes' order as before.
+    const Eigen::Index nb = m / 2 + 1;
+    Eigen::MatrixXcd eig(nb, psi.cols());
+    for (Eigen::Index i = 0; i < psi.cols(); ++i) eig.col(i) = blocks_[static_cast<size_t>(i)]->circulant_inverse()->eigenvalues();
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
-        Eigen::VectorXcd bins = Eigen::VectorXcd::Zero(m / 2 + 1);
-        for (size_t i = 0; i < blocks_.size(); ++i) {
-          const auto mode = static_cast<Eigen::Index>(i);
-          bins += (psi(c, mode) * psi(d, mode)) * blocks_[i]->circulant_inverse()->eigenvalues();
-        }
+        Eigen::VectorXcd bins = Eigen::VectorXcd::Zero(nb);
+        for (Eigen::Index i = 0; i < psi.cols(); ++i) bins += (psi(c, i) * psi(d, i)) * eig.col(i);
         structure->circulant.push_back(spectral::Circulant::from_eigenvalues(bins, static_cast<int>(m)));
-        scatter(c, d, structure->circulant.back().dense());
+      }
+    }
+    // h(k·n_c + c, l·n_c + d) = c_cd((k − l) mod M), column by column of h.
+    for (Eigen::Index l = 0; l < m; ++l) {
+      for (int d = 0; d < nc; ++d) {
+        double* column = h.col(l * nc + d).data();
+        for (int c = 0; c < nc; ++c) {
+          const Eigen::VectorXd& first = structure->circulant[static_cast<size_t>(c * nc + d)].first_column();
+          for (Eigen::Index k = 0; k < l; ++k) column[k * nc + c] = first(k - l + m);
+          for (Eigen::Index k = l; k < m; ++k) column[k * nc + c] = first(k - l);
+        }
       }
     }
     compliance_structure_ = std::move(structure);

@@ -126,10 +126,21 @@ std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift
   k.kappa.resize(static_cast<size_t>(nc) * nc);
   k.top = Eigen::MatrixXd::Zero(nc, nc);
   k.g = Eigen::VectorXd::Zero(q);
+  // cos(2π h s/Q) and sin at column h, from one table of Q angles (h·s mod Q): the sums below run
+  // over whole columns (vectorized; the same products and sums as a loop over s, issue #39).
   Eigen::VectorXd cos_table(q), sin_table(q);
   for (int i = 0; i < q; ++i) {
     cos_table(i) = std::cos(2.0 * std::numbers::pi * i / q);
     sin_table(i) = std::sin(2.0 * std::numbers::pi * i / q);
+  }
+  Eigen::MatrixXd cos_h(q, paired + 1), sin_h(q, paired + 1);
+  for (int hh = 1; hh <= paired; ++hh) {
+    for (int sft = 0, index = 0; sft < q; ++sft) {  // index = h·s mod Q
+      cos_h(sft, hh) = cos_table(index);
+      sin_h(sft, hh) = sin_table(index);
+      index += hh;
+      if (index >= q) index -= q;
+    }
   }
   if (top) {
     for (int r = 0; r < q; ++r) k.g(r) = basis.value(m - 1, sampling->tau(r));
@@ -147,11 +158,7 @@ std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift
         const int ci = cos_index[static_cast<size_t>(hh)], si = sin_index[static_cast<size_t>(hh)];
         const double a = at(ci, c, ci, d), b = at(ci, c, si, d);
         if (std::abs(a - at(si, c, si, d)) > tol || std::abs(b + at(si, c, ci, d)) > tol) return std::nullopt;
-        for (int sft = 0, index = 0; sft < q; ++sft) {  // index = h·s mod Q
-          kappa(sft) += a * cos_table(index) - b * sin_table(index);
-          index += hh;
-          if (index >= q) index -= q;
-        }
+        kappa.array() += a * cos_h.col(hh).array() - b * sin_h.col(hh).array();
       }
       if (top && kept(m - 1)) k.top(c, d) = at(m - 1, c, m - 1, d);
       k.kappa[static_cast<size_t>(c) * nc + d] = std::move(kappa);
