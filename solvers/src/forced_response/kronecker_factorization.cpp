@@ -538,7 +538,9 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     // The modes' bins gathered once (column i), each pair's sum in the modes' order as before.
     const Eigen::Index nb = m / 2 + 1;
     Eigen::MatrixXcd eig(nb, psi.cols());
-    for (Eigen::Index i = 0; i < psi.cols(); ++i) eig.col(i) = blocks_[static_cast<size_t>(i)]->circulant_inverse()->eigenvalues();
+    for (Eigen::Index i = 0; i < psi.cols(); ++i) {
+      eig.col(i) = blocks_[static_cast<size_t>(i)]->circulant_inverse()->eigenvalues();
+    }
     for (int c = 0; c < nc; ++c) {
       for (int d = 0; d < nc; ++d) {
         Eigen::VectorXcd bins = Eigen::VectorXcd::Zero(nb);
