@@ -116,6 +116,8 @@ CraigBamptonModel craig_bampton(const Eigen::SparseMatrix<double>& stiffness, co
                                std::to_string(modes) + " modes (status " + std::to_string(static_cast<int>(eigs.info())) +
                                "); try fewer modes");
     }
+    r.eigensolve_operations = static_cast<long>(eigs.num_operations());
+    r.eigensolve_passes = static_cast<long>(eigs.num_iterations());
     Eigen::VectorXd lambda = eigs.eigenvalues();
     Eigen::MatrixXd phi = eigs.eigenvectors();
     std::vector<Eigen::Index> order(static_cast<size_t>(lambda.size()));

@@ -227,6 +227,7 @@ ReducedModel reduce_model(const ReductionRequest& request) {
       {"fixed_interface_frequencies_hz", as_vector(cb.normal_frequencies_hz)},
       {"reduced_frequencies_hz", as_vector(reduced)},
       {"check", check},
+      {"lanczos", {{"operations", cb.eigensolve_operations}, {"passes", cb.eigensolve_passes}}},
       {"symmetry_defect", {{"stiffness", k_defect}, {"mass", m_defect}}},
       {"timings_s", {{"ccx_and_reading", ccx_s}, {"factorization", cb.factorization_s},
                      {"constraint_modes", cb.constraint_modes_s}, {"eigensolve", cb.eigensolve_s},

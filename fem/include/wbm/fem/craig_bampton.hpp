@@ -29,6 +29,10 @@ struct CraigBamptonModel {
   /// Wall time [s] of the stages: Cholesky of K_ii, the |b| solves for Ψ, the Lanczos for Φ,
   /// the assembly of K_r and M_r.
   double factorization_s = 0.0, constraint_modes_s = 0.0, eigensolve_s = 0.0, assembly_s = 0.0;
+  /// Applications of the shift-invert operator K_ii⁻¹ M_ii by the Lanczos (one triangular solve
+  /// pair with the Cholesky factor each, Spectra's num_operations), and the passes of its
+  /// implicitly restarted loop (num_iterations; 1: converged without a restart).
+  long eigensolve_operations = 0, eigensolve_passes = 0;
   /// Full displacements (n × k, rows of the full model) from reduced coordinates (|b| + m) × k.
   [[nodiscard]] Eigen::MatrixXd expand(const Eigen::MatrixXd& reduced) const;
 };
