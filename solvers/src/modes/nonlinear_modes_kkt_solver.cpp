@@ -28,6 +28,8 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   std::vector<Eigen::Index> local_of;       // … and its index inside the block
   std::vector<Eigen::MatrixXd> dirs;        // N_k (length_k × nc): the stop directions in block k
   Eigen::MatrixXd dir_norm2;                // nc × f: ‖N_k(:, c)‖²
+  Eigen::MatrixXd dir_norm2_divisor;        // f × nc: ‖N_k(:, c)‖², 1 where it is not > 0 …
+  std::vector<std::vector<int>> no_direction;  // … per stop, those k (the multiples there are 0)
   std::vector<std::vector<int>> stop_at;    // per block, per local index: the stop whose direction holds it (−1: none)
   bool disjoint_stops = true;               // no DOF in two stops' directions (the penalty path needs it)
 
@@ -128,6 +130,15 @@ NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& syste
     }
     s.stop_at.push_back(std::move(at));
     s.dirs.push_back(std::move(dk));
+  }
+  s.dir_norm2_divisor = s.dir_norm2.transpose();
+  s.no_direction.assign(static_cast<size_t>(s.nc), {});
+  for (int c = 0; c < s.nc; ++c) {
+    for (int k = 0; k < s.f; ++k) {
+      if (s.dir_norm2(c, k) > 0.0) continue;
+      s.dir_norm2_divisor(k, c) = 1.0;
+      s.no_direction[static_cast<size_t>(c)].push_back(k);
+    }
   }
 }
 
@@ -231,16 +242,22 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   norm_inf = row_sum.maxCoeff();
   // β_k, γ_k: the least-squares multiples of N_c (a column or row of another shape leaves a
   // residual that the verified solves catch).
-  for (Eigen::Index l = 0; l < nl; ++l) {  // in storage order: β by multiplier, γ by harmonic
-    for (int k = 0; k < f; ++k) {
-      const double d2 = dir_norm2(stop_of(l), k);
-      beta_t(k, l) = d2 > 0.0 ? beta_t(k, l) / d2 : 0.0;
-    }
+  // In storage order, whole columns at a time (the same divisions, vectorized): β by multiplier,
+  // γ by harmonic and stop (stop c's multipliers are c·m_s … (c + 1)·m_s − 1).
+  for (Eigen::Index l = 0; l < nl; ++l) {
+    const Eigen::Index st = stop_of(l);
+    beta_t.col(l).array() /= dir_norm2_divisor.col(st).array();
+    for (const int k : no_direction[static_cast<size_t>(st)]) beta_t(k, l) = 0.0;
   }
   for (int k = 0; k < f; ++k) {
-    for (Eigen::Index l = 0; l < nl; ++l) {
-      const double d2 = dir_norm2(stop_of(l), k);
-      gamma(l, k) = d2 > 0.0 ? gamma(l, k) / d2 : 0.0;
+    for (int c = 0; c < nc; ++c) {
+      auto samples = gamma.col(k).segment(static_cast<Eigen::Index>(c) * ms, ms);
+      const double d2 = dir_norm2(c, k);
+      if (d2 > 0.0) {
+        samples /= d2;
+      } else {
+        samples.setZero();
+      }
     }
   }
   inactive.clear();
