@@ -1,4 +1,5 @@
 #include "kronecker_factorization.hpp"
+#include "kronecker_compliance.hpp"
 #include "fourier_weighting_factor.hpp"
 #include "modal_damping_structure.hpp"
 #include "core/one_norm_estimate.hpp"
@@ -258,16 +259,6 @@ struct KroneckerFactorization::Setup {
   std::optional<FourierWeighting> fourier_weighting;  // distributional form, Fourier weighting
 };
 
-// The blocks H_cd (n_c × n_c, pair (c, d) at c·n_c + d) in a structured form, kept by
-// compliance() for compliance_product(): circulant, or the core sums Σ_i w_i S_i whose product
-// with the shift-structured A_K⁻¹ is H_cd.
-struct KroneckerFactorization::ComplianceStructure {
-  int contacts = 0;
-  std::vector<spectral::Circulant> circulant;
-  std::vector<FourierCore> cores;
-  const FourierWeighting* fourier_weighting = nullptr;  // owned by Setup
-};
-
 KroneckerFactorization::KroneckerFactorization(std::shared_ptr<const Setup> setup) : setup_(std::move(setup)) {}
 
 KroneckerFactorization::KroneckerFactorization(const MechanicalSystem& system, const TimeOperators& ops,
@@ -490,12 +481,13 @@ Eigen::VectorXd KroneckerFactorization::modal_damping() const {
 }
 
 Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
-                                                   const std::vector<StackedTerms>& rows) {
+                                                   const std::vector<StackedTerms>& rows, bool dense) {
   const int nc = static_cast<int>(directions.size());
   const auto m = static_cast<Eigen::Index>(rows.size()) / std::max(nc, 1);
   const Setup& su = *setup_;
-  Eigen::MatrixXd h(nc * m, nc * m);  // the circulant path writes every entry
-  if (!(su.modal && su.circulant && !su.fourier_weighting)) h.setZero();
+  const bool circulant_path = su.modal && su.circulant && !su.fourier_weighting;
+  Eigen::MatrixXd h;
+  if (!circulant_path) h.setZero(nc * m, nc * m);
   // H_cd = Σ_i φ_i(c) φ_i(d) (A + λ_i B)⁻¹ (M × M) scattered into h(k·n_c + c, l·n_c + d).
   const auto scatter = [&](int c, int d, const Eigen::MatrixXd& hcd) {
     for (Eigen::Index l = 0; l < m; ++l) {
@@ -548,19 +540,8 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
         structure->circulant.push_back(spectral::Circulant::from_eigenvalues(bins, static_cast<int>(m)));
       }
     }
-    // h(k·n_c + c, l·n_c + d) = c_cd((k − l) mod M), column by column of h.
-    for (Eigen::Index l = 0; l < m; ++l) {
-      for (int d = 0; d < nc; ++d) {
-        double* column = h.col(l * nc + d).data();
-        for (int c = 0; c < nc; ++c) {
-          const Eigen::VectorXd& first = structure->circulant[static_cast<size_t>(c * nc + d)].first_column();
-          for (Eigen::Index k = 0; k < l; ++k) column[k * nc + c] = first(k - l + m);
-          for (Eigen::Index k = l; k < m; ++k) column[k * nc + c] = first(k - l);
-        }
-      }
-    }
     compliance_structure_ = std::move(structure);
-    return h;
+    return dense && nc > 0 ? dense_circulant_compliance() : Eigen::MatrixXd(nc * m, nc * m);
   }
   // Ψ (n_c × modes), Ψ(c, i) = ψ_c(i): H_cd(k, l) = Σ_i Ψ(c, i) s_i(k, l) Ψ(d, i), so for each entry (k, l)
   // of the blocks the n_c × n_c matrix Ψ diag(s_·(k, l)) Ψᵀ is one matrix product instead of a scalar
@@ -617,53 +598,6 @@ Eigen::MatrixXd KroneckerFactorization::compliance(const std::vector<std::vector
     for (const auto& [row, w] : rows[static_cast<size_t>(i)]) h.row(i) += w * z.row(row);
   }
   return h;
-}
-
-Eigen::MatrixXd KroneckerFactorization::compliance_product(const Eigen::MatrixXd& v) const {
-  const ComplianceStructure& cs = *compliance_structure_;
-  const int nc = cs.contacts;
-  const Eigen::Index m = v.rows() / std::max(nc, 1);
-  // Rows of contact d (k·n_c + d), M × columns; with one contact, v itself.
-  const auto rows_of = [&](int d) {
-    if (nc == 1) return Eigen::MatrixXd(v);
-    Eigen::MatrixXd vd(m, v.cols());
-    for (Eigen::Index k = 0; k < m; ++k) vd.row(k) = v.row(k * nc + d);
-    return vd;
-  };
-  std::vector<Eigen::MatrixXd> vd;
-  for (int d = 0; d < nc; ++d) vd.push_back(rows_of(d));
-  Eigen::MatrixXd out(v.rows(), v.cols());
-  if (!cs.circulant.empty()) {
-    // H_c v = Σ_d C_cd v_d with every C_cd circulant: one real DFT per input contact, the sums
-    // over d bin by bin (ĉ_cd,k DFT(v_d)_k), one inverse DFT per output contact: 2 n_c transforms
-    // instead of 2 n_c² (the 24 stops of ll11_blade_forced's B-spline:B-spline curve: 1 152 → 48).
-    std::vector<Eigen::MatrixXcd> spectra;
-    spectra.reserve(static_cast<size_t>(nc));
-    for (int d = 0; d < nc; ++d) spectra.push_back(spectral::real_dft_columns(vd[static_cast<size_t>(d)]));
-    const Eigen::Index bins = m / 2 + 1;
-    for (int c = 0; c < nc; ++c) {
-      Eigen::MatrixXcd sum = Eigen::MatrixXcd::Zero(bins, v.cols());
-      for (int d = 0; d < nc; ++d) {
-        const Eigen::VectorXcd& eig = cs.circulant[static_cast<size_t>(c * nc + d)].eigenvalues();
-        sum += eig.asDiagonal() * spectra[static_cast<size_t>(d)];
-      }
-      const Eigen::MatrixXd hc = spectral::inverse_real_dft_columns(sum, static_cast<int>(m));
-      if (nc == 1) return hc;
-      for (Eigen::Index k = 0; k < m; ++k) out.row(k * nc + c) = hc.row(k);
-    }
-    return out;
-  }
-  for (int c = 0; c < nc; ++c) {
-    Eigen::MatrixXd hc = Eigen::MatrixXd::Zero(m, v.cols());
-    for (int d = 0; d < nc; ++d) {
-      const auto pair = static_cast<size_t>(c * nc + d);
-      hc += cs.cores[pair].apply(vd[d], false);
-    }
-    hc = cs.fourier_weighting->shift_inverse(hc);  // A_K⁻¹ Σ_d S_cd v_d
-    if (nc == 1) return hc;
-    for (Eigen::Index k = 0; k < m; ++k) out.row(k * nc + c) = hc.row(k);
-  }
-  return out;
 }
 
 double KroneckerFactorization::norm1() const {

@@ -83,8 +83,17 @@ class KroneckerFactorization {
   /// until the next factorize(), the per-pair blocks H_cd in the form compliance_product() uses:
   /// circulant (wavelet Galerkin pairs, Haar:B-spline) or A_K⁻¹ Σ_i w_i S_i with a
   /// shift-structured A_K (wavelet trial, Fourier weighting). Requires factorized().
+  /// With dense = false and circulant blocks kept (circulant_compliance()), H itself is not
+  /// formed and the result is 0 × 0: dense_circulant_compliance() forms it where it is read.
   [[nodiscard]] Eigen::MatrixXd compliance(const std::vector<std::vector<std::pair<int, double>>>& directions,
-                                           const std::vector<StackedTerms>& rows);
+                                           const std::vector<StackedTerms>& rows, bool dense = true);
+  /// True when the last compliance() kept circulant blocks H_cd.
+  [[nodiscard]] bool circulant_compliance() const;
+  /// H (n_c·M square, h(k·n_c + c, l·n_c + d) = c_cd((k − l) mod M)) from the kept circulant
+  /// blocks, and its number of nonzero entries (M times those of the blocks' first columns)
+  /// without forming it. Require circulant_compliance(); std::logic_error otherwise.
+  [[nodiscard]] Eigen::MatrixXd dense_circulant_compliance() const;
+  [[nodiscard]] Eigen::Index circulant_compliance_nonzeros() const;
   /// True when the last compliance() kept a structured form: compliance_product() then costs
   /// O(n_c · columns · M log M + n_c² · columns · M) (circulant) or O(n_c² · columns · M log M)
   /// instead of the O(n_c² M² · columns) dense product with H.

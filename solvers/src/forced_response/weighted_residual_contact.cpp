@@ -58,11 +58,14 @@ Eigen::MatrixXd WeightedResidual::Impl::TrialRows::operator()(const Eigen::Matri
 
 
 void WeightedResidual::Impl::set_compliance() {
-  h = g->compliance(contact_directions(), contact_terms);
-  const auto nonzeros = (h.array() != 0.0).count();
-  h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * static_cast<double>(h.size());
+  h = g->compliance(contact_directions(), contact_terms, false);
+  h_deferred = g->circulant_compliance();
+  h_once = std::make_unique<std::once_flag>();  // H of this frequency, formed on first read
+  const auto size = static_cast<double>(nc) * m;
+  const auto nonzeros = h_deferred ? g->circulant_compliance_nonzeros() : (h.array() != 0.0).count();
+  h_is_sparse = static_cast<double>(nonzeros) <= 0.25 * size * size;
   h_sparse.reset();
-  if (h_is_sparse) h_sparse = std::make_shared<const Eigen::SparseMatrix<double>>(h.sparseView());
+  if (h_is_sparse) h_sparse = std::make_shared<const Eigen::SparseMatrix<double>>(dense_h().sparseView());
 }
 
 
@@ -70,7 +73,7 @@ Eigen::MatrixXd WeightedResidual::Impl::compliance_times(const Eigen::MatrixXd& 
   if (v.cols() == 0) return Eigen::MatrixXd(v.rows(), 0);
   if (h_is_sparse) return *h_sparse * v;
   if (g->fast_compliance_product()) return g->compliance_product(v);
-  return h * v;
+  return dense_h() * v;
 }
 
 
@@ -94,6 +97,7 @@ bool WeightedResidual::Impl::couples_only_within_harmonics(double tol) const {
 
 bool WeightedResidual::Impl::commutes_with_shifts() const {
   if (!fourier_sparse_compliance()) return false;
+  const Eigen::MatrixXd& h = dense_h();
   const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
   if (!couples_only_within_harmonics(tol)) return false;
   const spectral::FourierBasis basis(m);
@@ -114,6 +118,7 @@ bool WeightedResidual::Impl::commutes_with_shifts() const {
 
 std::optional<WeightedResidual::Impl::ShiftKernel> WeightedResidual::Impl::shift_kernel() const {
   if (!fourier_sparse_compliance() || cell_average_rule) return std::nullopt;
+  const Eigen::MatrixXd& h = dense_h();
   const double tol = 1e-12 * h.cwiseAbs().maxCoeff();
   if (!couples_only_within_harmonics(tol)) return std::nullopt;
   const spectral::FourierBasis basis(m);
@@ -443,7 +448,7 @@ Eigen::MatrixXd WeightedResidual::Impl::hn_product(const std::vector<ContactTang
   std::vector<Eigen::MatrixXd> columns(static_cast<size_t>(nc));  // H(:, j n_c + c), j = 0 … M − 1
   for (const ForceBlock& fb : contact_force_blocks(tangents)) {
     Eigen::MatrixXd& hc = columns[static_cast<size_t>(fb.row)];
-    if (hc.size() == 0) hc = h(Eigen::all, Eigen::seqN(fb.row, m, nc));
+    if (hc.size() == 0) hc = dense_h()(Eigen::all, Eigen::seqN(fb.row, m, nc));
     out(Eigen::all, Eigen::seqN(fb.column, m, nc)) += hc * fb.block;
   }
   return out;
@@ -650,7 +655,7 @@ const WeightedResidual::Impl::AssembledOperator& WeightedResidual::Impl::assembl
     auto p = std::make_shared<Eigen::SparseMatrix<double>>(nc * m, n * m);
     p->setFromTriplets(terms.begin(), terms.end());
     assembled.p = std::move(p);
-    if (!h_is_sparse) assembled.h = std::make_shared<const Eigen::MatrixXd>(h);
+    if (!h_is_sparse) assembled.h = std::make_shared<const Eigen::MatrixXd>(dense_h());
   });
   return assembled;
 }

@@ -137,7 +137,16 @@ struct WeightedResidual::Impl {
   // Otherwise the structured blocks the factorization kept (circulant, or A_K⁻¹ Σ S with a
   // shift-structured A_K: KroneckerFactorization::compliance_product) when there are any, else
   // the dense product.
-  Eigen::MatrixXd h;
+  // With circulant blocks kept, H is formed on first read (dense_h(), once per set_compliance()
+  // even if several threads ask; set_compliance() gives it a fresh flag): the continuation's
+  // structured products never read it (issue #39).
+  mutable Eigen::MatrixXd h;
+  bool h_deferred = false;
+  std::unique_ptr<std::once_flag> h_once = std::make_unique<std::once_flag>();
+  [[nodiscard]] const Eigen::MatrixXd& dense_h() const {
+    if (h_deferred) std::call_once(*h_once, [this] { h = g->dense_circulant_compliance(); });
+    return h;
+  }
   std::shared_ptr<const Eigen::SparseMatrix<double>> h_sparse;  // shared with the Jacobians' products
   bool h_is_sparse = false;
   // Fourier:Fourier: H's blocks commute with time shifts (ShiftKernel), detected per frequency

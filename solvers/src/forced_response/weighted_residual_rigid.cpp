@@ -76,7 +76,7 @@ void WeightedResidual::Impl::set_delassus(bool set_force_compliance) {
     hw.resize(size, size);
     for (int d = 0; d < nc; ++d) {
       const auto cols = Eigen::seq(d, Eigen::last, nc);
-      hw(Eigen::all, cols) = Eigen::MatrixXd(h(Eigen::all, cols)) * col.weights;
+      hw(Eigen::all, cols) = Eigen::MatrixXd(dense_h()(Eigen::all, cols)) * col.weights;
     }
   }
   if (!circulant) delassus = kinematic(hw);
