@@ -484,6 +484,7 @@ arrays coefficients (n × M: row = DOF, column = trial function), contact_force_
         out["fold_confirmed"] = curve.fold_confirmed;
         out["wall_time_s"] = curve.wall_time_s;
         out["stability_time_s"] = curve.stability_time_s;
+        out["stability_work_s"] = curve.stability_work_s;
         out["events"] = curve.events;
         return out;
       },
@@ -515,7 +516,8 @@ is false: no exact orbit found near a point with rigid stops), with rigid stops 
 branch in mu folds_friction_coefficient instead, and friction_coefficient per point),
 fold_amplitudes [m] (the forced DOF's amplitude at each fold's own state, Hermite-interpolated on
 its step: on a multivalued curve not the nearest point's), fold_confirmed (a multiplier crosses +1 near it), converged (the range was reached), stop,
-message, wall_time_s, stability_time_s, events (stick/slip or impulse switches located and
+message, wall_time_s, stability_time_s (the wait for the multipliers after the continuation: with
+two threads or more they are computed during it), stability_work_s (their thread time), events (stick/slip or impulse switches located and
 crossed); with harmonics (a selection, as in solve()):
 dropped_harmonics_residual per point. Non-convergence is returned, not raised.)");
   m.def(

@@ -275,6 +275,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                      {"corrector_iterations", curve.corrector_iterations},
                                      {"continuation_time_s", curve.wall_time_s},
                                      {"stability_time_s", curve.stability_time_s},
+                                     {"stability_work_s", curve.stability_work_s},
                                      {"unsettled_stability_points", curve.unsettled_points},
                                      {"unavailable_stability_points", curve.unavailable_points}};
   if (o.stability) out.diagnostics["continuation"]["bifurcations"] = bifurcations;

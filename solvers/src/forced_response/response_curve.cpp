@@ -17,6 +17,8 @@
 #include <wbm/solvers/post_processing.hpp>
 #include <wbm/spectral/layout.hpp>
 
+#include "point_stability.hpp"
+
 namespace wbm::solvers {
 
 ForcedResponseFamily::ForcedResponseFamily(const WeightedResidual& base, ContinuationParameter parameter)
@@ -387,6 +389,19 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.corrector_tolerance = o.corrector_tolerance;
   pa.initial_newton.tolerance = o.corrector_tolerance;
   pa.on_point = o.on_point;
+  // Penalty laws and Jenkins elements: each accepted point's multipliers start on a worker while
+  // the continuation goes on (point_stability.hpp; the same multipliers as computed afterwards).
+  std::optional<detail::PointStability> penalty_stability;
+  if (o.stability && !rigid) {
+    penalty_stability.emplace(base, o.samples, friction, o.threads);
+    if (penalty_stability->pipelined()) {
+      pa.on_point = [user = o.on_point, ps = &*penalty_stability, frequency,
+                     f0 = base.frequency_hz()](size_t index, const BranchPoint& p) {
+        ps->queue(p.parameter, frequency ? p.parameter : f0, p.x);
+        if (user) user(index, p);
+      };
+    }
+  }
   // The ends of the range are landed on by the continuation (an end the branch starts on is
   // landed on at its first step, and not again).
   pa.land_on = {o.parameter_min, o.parameter_max};
@@ -542,22 +557,9 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   }
   for (const auto& fold : branch.folds) curve.fold_points.push_back(response_at(fold.parameter, fold.x, 0));
   if (o.stability) {
-    // The monodromy matrix of each point, on oneTBB's workers (at most `threads`, in a task
-    // arena), one point a task: the refined points cost up to 16 times more, and TBB's work
-    // stealing balances them. Each point's computation does not depend on the others, so the
-    // results are the same for any thread count. An exception in any task cancels the others and
-    // is rethrown here (TBB's exception propagation).
-    //
-    // The modes of a classical C are set up once for the branch (FloquetAnalysis); the points
-    // read the multipliers only.
     const auto t0 = std::chrono::steady_clock::now();
-    // Rigid stops: the exact orbit near each point, by shooting, and its saltation monodromy
-    // (impact_stability). The flow is set up per point (its frequency and load).
-    // In a continuation in μ each point's Jenkins elements differ: each has its own analysis.
-    std::optional<FloquetAnalysis> floquet;
-    if (!rigid && !friction) floquet.emplace(base.system(), contacts, FloquetOptions{.monodromy = false});
-    std::vector<FloquetResult> results(curve.points.size());
-    // Per point what the curve keeps of it (not its orbit and monodromy: 2n × 2n each).
+    std::vector<FloquetResult> results;
+    // Per point what the curve keeps of its exact orbit (not the orbit and monodromy: 2n × 2n each).
     struct Exact {
       bool available = false;
       std::string message;
@@ -565,60 +567,42 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
       int impacts = 0;
     };
     std::vector<Exact> exact(rigid ? curve.points.size() : 0);
-    auto impact_stability_of = [&](size_t i) {
-      const ResponsePoint& r = curve.points[i];
-      HarmonicForcing forcing = base.forcing();
-      const double load = family.load(r.parameter);
-      forcing.frequency_hz = r.frequency_hz;
-      forcing.amplitude *= load;
-      for (auto& more : forcing.more) more.amplitude *= load;
-      ImpactStability s = impact_stability(base.system(), forcing, contacts, base.trial(), rigid_coefficients[i],
-                                           o.samples, o.impact_stability);
-      exact[i] = {s.available, std::move(s.message), s.distance, s.impacts};
-      results[i] = std::move(s.floquet);
-      results[i].monodromy.resize(0, 0);  // the multipliers suffice
-      rigid_coefficients[i].resize(0, 0);
-    };
-    auto stability_of = [&](size_t i) {
-      if (rigid) {
-        impact_stability_of(i);
-        return;
-      }
-      const ResponsePoint& r = curve.points[i];
-      std::optional<FloquetAnalysis> own;
-      if (friction) {
-        own.emplace(base.system(), with_friction_coefficient(contacts, r.parameter), FloquetOptions{.monodromy = false});
-      }
-      const FloquetAnalysis& analysis = friction ? *own : *floquet;
-      Eigen::MatrixXd uc = relative(q * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), tau);
-      // A contact stiff against its mass needs more steps (floquet.hpp): the orbit is evaluated
-      // there from the trial functions, rather than interpolated between the P samples.
-      const Eigen::Index resolved = analysis.resolved_steps(uc.transpose(), r.frequency_hz);
-      if (resolved > uc.rows()) {
-        const double last = 1.0 - 1.0 / static_cast<double>(resolved);
-        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(resolved, 0.0, last);
-        uc = relative(base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(),
-                      fine);
-      }
-      FloquetResult fl = analysis(uc.transpose(), r.frequency_hz);
-      // Refine where the error estimate could overturn the verdict (near a collision of two
-      // multipliers, or |μ| near 1), at most twice, ×4 steps each time.
-      for (int refinement = 0; refinement < 2 && !fl.settled(); ++refinement) {
-        const int steps = 4 * fl.steps;
-        const Eigen::VectorXd fine = Eigen::VectorXd::LinSpaced(steps, 0.0, 1.0 - 1.0 / steps);
-        const Eigen::MatrixXd ucf = relative(
-            base.trial().values(fine, 0) * spectral::as_coefficients(r.contact_unknowns, nc).transpose(), fine);
-        fl = analysis(ucf.transpose(), r.frequency_hz);
-      }
-      results[i] = std::move(fl);
-    };
-    const int workers = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
-    tbb::task_arena arena(std::max(1, workers));
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, results.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t i = range.begin(); i != range.end(); ++i) stability_of(i);
+    if (rigid) {
+      // The exact orbit near each point, by shooting, and its saltation monodromy
+      // (impact_stability), on oneTBB's workers (at most `threads`, in a task arena), one point a
+      // task; the flow is set up per point (its frequency and load). Each point's computation does
+      // not depend on the others, so the results are the same for any thread count. An exception
+      // in any task cancels the others and is rethrown here.
+      results.resize(curve.points.size());
+      std::vector<double> seconds(curve.points.size(), 0.0);
+      auto impact_stability_of = [&](size_t i) {
+        const auto ti = std::chrono::steady_clock::now();
+        const ResponsePoint& r = curve.points[i];
+        HarmonicForcing forcing = base.forcing();
+        const double load = family.load(r.parameter);
+        forcing.frequency_hz = r.frequency_hz;
+        forcing.amplitude *= load;
+        for (auto& more : forcing.more) more.amplitude *= load;
+        ImpactStability s = impact_stability(base.system(), forcing, contacts, base.trial(), rigid_coefficients[i],
+                                             o.samples, o.impact_stability);
+        exact[i] = {s.available, std::move(s.message), s.distance, s.impacts};
+        results[i] = std::move(s.floquet);
+        results[i].monodromy.resize(0, 0);  // the multipliers suffice
+        rigid_coefficients[i].resize(0, 0);
+        seconds[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - ti).count();
+      };
+      const int workers = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+      tbb::task_arena arena(std::max(1, workers));
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, results.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t i = range.begin(); i != range.end(); ++i) impact_stability_of(i);
+        });
       });
-    });
+      for (double s : seconds) curve.stability_work_s += s;
+    } else {
+      results = penalty_stability->results(curve.points);
+      curve.stability_work_s = penalty_stability->work_s;
+    }
     const FloquetResult* previous = nullptr;  // the last point with a verdict
     for (size_t i = 0; i < results.size(); ++i) {
       ResponsePoint& r = curve.points[i];

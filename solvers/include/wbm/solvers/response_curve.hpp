@@ -196,7 +196,12 @@ struct ResponseCurve {
   int switches = 0;                    // impulses or stick/slip samples that switched there
   long corrector_iterations = 0;
   double wall_time_s = 0.0;            // continuation only (post-processing excluded)
-  double stability_time_s = 0.0;       // monodromy matrices of every point (wall time, all threads)
+  /// Wall time spent on the points' monodromy matrices after the continuation. For penalty laws
+  /// and Jenkins elements with two threads or more, each point's multipliers are computed on a
+  /// worker while the continuation goes on (the same multipliers as computed afterwards), and
+  /// this is only the wait that remained; stability_work_s is the thread time of them all.
+  double stability_time_s = 0.0;
+  double stability_work_s = 0.0;       // thread time summed over every point's multipliers [s]
   int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
   int unavailable_points = 0;          // points without a verdict (ResponsePoint::stability_available)
   /// branch_status(stop): Converged when the range was reached (its last point on the range end).
@@ -250,8 +255,9 @@ struct ResponseCurveOptions {
   ImpactStabilityOptions impact_stability = {};
   /// Threads for the stability of the points: a oneTBB task arena of this many (each point's
   /// monodromy matrix is independent, so the multipliers are bit-identical for any count);
-  /// 0: oneTBB's default concurrency (the cores this process may use).
-  /// stability_time_s is then wall time. Throws std::invalid_argument (trace_response) if < 0.
+  /// 0: oneTBB's default concurrency (the cores this process may use). With two or more, the
+  /// points of penalty laws and Jenkins elements start on one of them during the continuation.
+  /// Throws std::invalid_argument (trace_response) if < 0.
   int threads = 0;
   /// DOFs whose trial coefficients every point keeps (ResponsePoint::kept_coefficients), e.g. to
   /// report their amplitudes or harmonics along the branch; each costs nothing more than the
