@@ -33,6 +33,7 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   std::vector<int> block_of;                // per harmonic-balance index: its block
   std::vector<Eigen::Index> local_of;       // … and its index inside the block
   std::vector<Eigen::MatrixXd> dirs;        // N_k (length_k × nc): the stop directions in block k
+  std::vector<double> dir_at;               // ny × nc, row-major: dirs[block_of[i]](local_of[i], c) at i·nc + c
   Eigen::MatrixXd dir_norm2;                // nc × f: ‖N_k(:, c)‖²
   Eigen::MatrixXd dir_norm2_divisor;        // f × nc: ‖N_k(:, c)‖², 1 where it is not > 0 …
   std::vector<std::vector<int>> no_direction;  // … per stop, those k (the multiples there are 0)
@@ -137,6 +138,14 @@ NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& syste
     s.stop_at.push_back(std::move(at));
     s.dirs.push_back(std::move(dk));
   }
+  s.dir_at.assign(static_cast<size_t>(s.ny) * static_cast<size_t>(s.nc), 0.0);
+  for (Eigen::Index i = 0; i < s.ny; ++i) {
+    const auto& dk = s.dirs[static_cast<size_t>(s.block_of[static_cast<size_t>(i)])];
+    for (int c = 0; c < s.nc; ++c) {
+      s.dir_at[static_cast<size_t>(i) * static_cast<size_t>(s.nc) + static_cast<size_t>(c)] =
+          dk(s.local_of[static_cast<size_t>(i)], c);
+    }
+  }
   s.dir_norm2_divisor = s.dir_norm2.transpose();
   s.no_direction.assign(static_cast<size_t>(s.nc), {});
   for (int c = 0; c < s.nc; ++c) {
@@ -197,49 +206,65 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   beta_t.setZero(f, nl);
   gamma.setZero(nl, f);
   diag.setZero(nl);
-  std::vector<char> has_hb(static_cast<size_t>(nl), 0), off_diagonal(static_cast<size_t>(nl), 0);
+  // Flags as int, not char: a char store may alias anything, and would make the compiler reload
+  // every member below after each one.
+  std::vector<int> has_hb(static_cast<size_t>(nl), 0), off_diagonal(static_cast<size_t>(nl), 0);
   std::vector<Eigen::Triplet<double>> tail;  // entries with row and column outside the harmonic balance
   Eigen::VectorXd row_sum = Eigen::VectorXd::Zero(rows);
   auto multiplier = [&](Eigen::Index i) { return i > ny && i != border; };
+  // The loop's arrays through local pointers (one load each, not one per entry); dir_at[i·nc + c]
+  // is dirs[block_of[i]](local_of[i], c), the same value read without two indirections.
+  double* const sum = row_sum.data();
+  double* const gam = gamma.data();  // gamma(l, k) at k·nl + l
+  double* const bet = beta_t.data();  // beta_t(k, l) at l·f + k
+  const int* const blocks = block_of.data();
+  const Eigen::Index* const locals = local_of.data();
+  const int* const stops = stop_index.data();
+  const double* const dir = dir_at.data();
+  const Eigen::Index ncs = nc, fs = f, hb_rows = ny, border_row = border;
+  const int* const outer = jac.outerIndexPtr();
+  const int* const inner = jac.innerIndexPtr();
+  const double* const values = jac.valuePtr();
+  const int* const nnz = jac.innerNonZeroPtr();  // null when compressed
   for (Eigen::Index c = 0; c < jac.outerSize(); ++c) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(jac, c); it; ++it) {
-      const Eigen::Index i = it.row();
-      const double val = it.value();
+    const Eigen::Index begin = outer[c], end = nnz != nullptr ? begin + nnz[c] : outer[c + 1];
+    for (Eigen::Index e = begin; e < end; ++e) {
+      const Eigen::Index i = inner[e];
+      const double val = values[e];
       if (!std::isfinite(val)) return false;
       if (val == 0.0) continue;  // stored zeros (the border's column is stored in full)
-      row_sum(i) += std::abs(val);
-      if (c < ny) {
-        const int kc = block_of[static_cast<size_t>(c)];
-        const Eigen::Index lc = local_of[static_cast<size_t>(c)];
-        if (i < ny) {
-          if (block_of[static_cast<size_t>(i)] != kc) return factorize_sparse(jac);  // harmonics coupled
-          a[static_cast<size_t>(kc)](local_of[static_cast<size_t>(i)], lc) = val;
-        } else if (i == ny) {
+      sum[i] += std::abs(val);
+      if (c < hb_rows) {
+        const int kc = blocks[c];
+        const Eigen::Index lc = locals[c];
+        if (i < hb_rows) {
+          if (blocks[i] != kc) return factorize_sparse(jac);  // harmonics coupled
+          a[static_cast<size_t>(kc)](locals[i], lc) = val;
+        } else if (i == hb_rows) {
           cd(c, 0) = val;
-        } else if (i == border) {
+        } else if (i == border_row) {
           cd(c, 1) = val;
         } else {
-          const Eigen::Index l = i - ny - 1;
-          gamma(l, kc) += dirs[static_cast<size_t>(kc)](lc, stop_of(l)) * val;
+          const Eigen::Index l = i - hb_rows - 1;
+          gam[kc * nl + l] += dir[c * ncs + stops[l]] * val;
           has_hb[static_cast<size_t>(l)] = 1;
         }
-      } else if (i < ny) {
-        if (c == ny) {
+      } else if (i < hb_rows) {
+        if (c == hb_rows) {
           bd(i, 0) = val;
-        } else if (c == border) {
+        } else if (c == border_row) {
           bd(i, 1) = val;
         } else {
-          const Eigen::Index l = c - ny - 1;
-          const int k = block_of[static_cast<size_t>(i)];
-          beta_t(k, l) += dirs[static_cast<size_t>(k)](local_of[static_cast<size_t>(i)], stop_of(l)) * val;
+          const Eigen::Index l = c - hb_rows - 1;
+          bet[l * fs + blocks[i]] += dir[i * ncs + stops[l]] * val;
         }
       } else {
         tail.emplace_back(i, c, val);
         if (multiplier(i)) {
           if (c == i) {
-            diag(i - ny - 1) = val;
+            diag(i - hb_rows - 1) = val;
           } else {
-            off_diagonal[static_cast<size_t>(i - ny - 1)] = 1;
+            off_diagonal[static_cast<size_t>(i - hb_rows - 1)] = 1;
           }
         }
       }
@@ -342,7 +367,8 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize_blocks() {
     lu[kk].compute(a[kk]);
     // The Hager–Higham estimate of rcond() was 17 % of the LL11 rod's backbone at N = 32 (its
     // up to 10 solves per block); the bound costs two triangular solves and decides the same.
-    const double a_norm = a[kk].cwiseAbs().colwise().sum().maxCoeff();
+    // ‖A_k‖₁; the block that holds the phase is empty for one DOF (the bound is then 0).
+    const double a_norm = a[kk].size() > 0 ? a[kk].cwiseAbs().colwise().sum().maxCoeff() : 0.0;
     if (!(detail::rcond_lower_bound(lu[kk], a_norm) >= kCertifiedRcond) && !(lu[kk].rcond() >= kMinRcond)) {
       return false;
     }
