@@ -195,6 +195,17 @@ TEST(FrictionContinuation, StabilityAlongTheBranchInMuReachesTheFullStickClosedF
   EXPECT_NEAR(std::abs(std::arg(last.leading_multiplier)), std::abs(std::arg(exact)), 1e-5);
   // The start slips: its multipliers are not those of the stuck oscillator.
   EXPECT_GT(std::abs(std::abs(curve.points.front().leading_multiplier) - std::abs(exact)), 1e-3);
+  // On two threads each point's own analysis at its μ runs beside the continuation
+  // (point_stability.hpp); on one, after it: the same multipliers to the bit.
+  o.threads = 1;
+  const ResponseCurve serial = trace_response(base, o);
+  o.threads = 2;
+  const ResponseCurve beside = trace_response(base, o);
+  ASSERT_EQ(serial.points.size(), beside.points.size());
+  for (size_t i = 0; i < serial.points.size(); ++i) {
+    EXPECT_EQ(serial.points[i].leading_multiplier, beside.points[i].leading_multiplier) << i;
+    EXPECT_EQ(serial.points[i].max_multiplier_error, beside.points[i].max_multiplier_error) << i;
+  }
 }
 
 // What the parameter cannot vary is refused by name, with the way out.
