@@ -25,9 +25,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <future>
 #include <memory>
 #include <numbers>
-#include <future>
 #include <optional>
 #include <sstream>
 #include <wbm/contact/friction.hpp>

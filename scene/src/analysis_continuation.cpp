@@ -276,6 +276,7 @@ void continuation(const Scene& scene, const Progress& progress, AnalysisResult& 
                                      {"continuation_time_s", curve.wall_time_s},
                                      {"stability_time_s", curve.stability_time_s},
                                      {"stability_work_s", curve.stability_work_s},
+                                     {"stability_points_beside_continuation", curve.stability_points_beside},
                                      {"unsettled_stability_points", curve.unsettled_points},
                                      {"unavailable_stability_points", curve.unavailable_points}};
   if (o.stability) out.diagnostics["continuation"]["bifurcations"] = bifurcations;

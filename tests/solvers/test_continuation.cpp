@@ -333,6 +333,7 @@ TEST(Continuation, StabilityOnThreadsIsBitIdenticalToTheSerialRun) {
   const auto serial = solvers::trace_response(d.problem(8.0, 16), o);
   ASSERT_GT(serial.points.size(), 20u);
   ASSERT_EQ(serial.points.back().parameter, o.parameter_max);  // the landing, not a queued point
+  EXPECT_EQ(serial.stability_points_beside, 0);
   for (int threads : {2, 3}) {
     o.threads = threads;
     const auto parallel = solvers::trace_response(d.problem(8.0, 16), o);
@@ -347,6 +348,8 @@ TEST(Continuation, StabilityOnThreadsIsBitIdenticalToTheSerialRun) {
       EXPECT_EQ(a.leading_multiplier, b.leading_multiplier) << i;
     }
     EXPECT_GT(parallel.stability_work_s, 0.0);
+    // Every accepted point was taken from the worker; the landed end alone was computed after.
+    EXPECT_EQ(parallel.stability_points_beside, static_cast<int>(parallel.points.size()) - 1);
     EXPECT_EQ(parallel.fold_confirmed, serial.fold_confirmed);
     EXPECT_EQ(parallel.unsettled_points, serial.unsettled_points);
   }

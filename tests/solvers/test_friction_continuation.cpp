@@ -202,6 +202,8 @@ TEST(FrictionContinuation, StabilityAlongTheBranchInMuReachesTheFullStickClosedF
   o.threads = 2;
   const ResponseCurve beside = trace_response(base, o);
   ASSERT_EQ(serial.points.size(), beside.points.size());
+  EXPECT_EQ(serial.stability_points_beside, 0);
+  EXPECT_GT(beside.stability_points_beside, static_cast<int>(beside.points.size()) / 2);  // most beside it
   for (size_t i = 0; i < serial.points.size(); ++i) {
     EXPECT_EQ(serial.points[i].leading_multiplier, beside.points[i].leading_multiplier) << i;
     EXPECT_EQ(serial.points[i].max_multiplier_error, beside.points[i].max_multiplier_error) << i;

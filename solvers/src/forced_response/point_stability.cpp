@@ -118,6 +118,7 @@ std::vector<FloquetResult> PointStability::results(const std::vector<ResponsePoi
   for (Queued& q : queued_) by_parameter.emplace(std::bit_cast<std::uint64_t>(q.parameter), &q);
   std::vector<FloquetResult> out(points.size());
   std::vector<size_t> missing;
+  taken = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const ResponsePoint& r = points[i];
     Queued* found = nullptr;
@@ -131,6 +132,7 @@ std::vector<FloquetResult> PointStability::results(const std::vector<ResponsePoi
       continue;
     }
     found->taken = true;
+    ++taken;
     out[i] = std::move(found->result);
   }
   work_s = 0.0;

@@ -8,7 +8,7 @@
 // the last points' monodromy matrices (issue #39). A point's computation does not depend on any
 // other, nor on the thread that runs it: a queued result is used only for a final point whose
 // parameter, frequency and unknowns are the queued ones bit for bit, and every other final point
-// (the branch's cut or replaced end, a fold's restart) is computed afterwards, in parallel. So the
+// (the landed end that replaces the last one) is computed afterwards, in parallel. So the
 // multipliers are the same as those of computing every point after the continuation, for any
 // thread count.
 
@@ -54,6 +54,8 @@ class PointStability {
   [[nodiscard]] std::vector<FloquetResult> results(const std::vector<ResponsePoint>& points);
   /// Thread time summed over the points computed (queued or not) [s], after results().
   double work_s = 0.0;
+  /// Final points whose queued result results() took, after results().
+  int taken = 0;
 
  private:
   struct Queued {

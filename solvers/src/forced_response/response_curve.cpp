@@ -391,13 +391,16 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
   pa.on_point = o.on_point;
   // Penalty laws and Jenkins elements: each accepted point's multipliers start on a worker while
   // the continuation goes on (point_stability.hpp; the same multipliers as computed afterwards).
+  // A point's frequency: λ in a frequency continuation, else the base problem's.
+  const auto frequency_at = [frequency, f0 = base.frequency_hz()](double parameter) {
+    return frequency ? parameter : f0;
+  };
   std::optional<detail::PointStability> penalty_stability;
   if (o.stability && !rigid) {
     penalty_stability.emplace(base, o.samples, friction, o.threads);
     if (penalty_stability->pipelined()) {
-      pa.on_point = [user = o.on_point, ps = &*penalty_stability, frequency,
-                     f0 = base.frequency_hz()](size_t index, const BranchPoint& p) {
-        ps->queue(p.parameter, frequency ? p.parameter : f0, p.x);
+      pa.on_point = [user = o.on_point, ps = &*penalty_stability, frequency_at](size_t index, const BranchPoint& p) {
+        ps->queue(p.parameter, frequency_at(p.parameter), p.x);
         if (user) user(index, p);
       };
     }
@@ -491,7 +494,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
                          Eigen::MatrixXd* coefficients = nullptr) {
     ResponsePoint r;
     r.parameter = parameter;
-    r.frequency_hz = frequency ? parameter : base.frequency_hz();
+    r.frequency_hz = frequency_at(parameter);
     r.amplitude_n = family.load(parameter) * base.forcing().amplitude;
     r.contact_unknowns = x;
     Eigen::VectorXd u;
@@ -602,6 +605,7 @@ ResponseCurve trace_response(const WeightedResidual& base, const ResponseCurveOp
     } else {
       results = penalty_stability->results(curve.points);
       curve.stability_work_s = penalty_stability->work_s;
+      curve.stability_points_beside = penalty_stability->taken;
     }
     const FloquetResult* previous = nullptr;  // the last point with a verdict
     for (size_t i = 0; i < results.size(); ++i) {

@@ -202,6 +202,9 @@ struct ResponseCurve {
   /// this is only the wait that remained; stability_work_s is the thread time of them all.
   double stability_time_s = 0.0;
   double stability_work_s = 0.0;       // thread time summed over every point's multipliers [s]
+  /// Points whose multipliers were computed during the continuation and kept (0 on one thread,
+  /// and for rigid stops); the others were computed after it.
+  int stability_points_beside = 0;
   int unsettled_points = 0;            // verdicts the error estimate could still overturn at 16 P
   int unavailable_points = 0;          // points without a verdict (ResponsePoint::stability_available)
   /// branch_status(stop): Converged when the range was reached (its last point on the range end).
