@@ -300,6 +300,39 @@ def penalty_limit(folder):
     save(fig, folder, "penalty_limit")
 
 
+def backbone_stability(folder):
+    """Issue #38: the LL11 rod's backbone marked stable / unstable by its exact orbits' multipliers."""
+    meta = json.loads((folder / "meta.json").read_text())
+    e = column(folder, "stability.csv", "energy [-]")
+    f = column(folder, "stability.csv", "frequency [Hz]")
+    mu = column(folder, "stability.csv", "max_multiplier [-]")
+    stable = column(folder, "stability.csv", "stable [-]")
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    ax = axes[0]
+    ax.plot(e, f, "-", color="0.6", lw=0.8, label=f"KKT backbone, N = {meta['harmonics']}")
+    for value, style, name in ((1.0, "o", "stable"), (0.0, "x", "unstable")):
+        pts = [(x, y) for x, y, s in zip(e, f, stable) if s == value]
+        if pts:
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, ms=3, mfc="none", label=name)
+    missing = [(x, y) for x, y, s in zip(e, f, stable) if math.isnan(s)]
+    if missing:
+        ax.plot([p[0] for p in missing], [p[1] for p in missing], ".", color="0.3", ms=2, label="no verdict")
+    ax.axvline(1.0, color="0.5", lw=0.6, ls=":")
+    ax.set_xlabel("normalized modal energy E [-] (1: contact onset)")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title("first nonlinear mode, exact orbits with elastic impacts", fontsize=9)
+    ax.legend(loc="lower right")
+    ax = axes[1]
+    ax.semilogy(e, mu, "k.", ms=2)
+    ax.axhline(1.0, color="0.5", lw=0.6, ls=":")
+    ax.set_xlabel("normalized modal energy E [-]")
+    ax.set_ylabel("largest nontrivial |μ| [-]")
+    ax.set_title(f"{meta['stable']} stable, {meta['unstable']} unstable, {meta['unavailable']} without verdict",
+                 fontsize=9)
+    fig.tight_layout()
+    save(fig, folder, "backbone_stability")
+
+
 def free_vibration(folder):
     """Issue #7: deviation of a free time simulation from the computed modes, period by period."""
     meta = json.loads((folder / "meta.json").read_text())

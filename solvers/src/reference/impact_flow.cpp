@@ -328,6 +328,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
   ImpactFlowResult out;
   out.monodromy = Eigen::MatrixXd::Identity(2 * n, 2 * n);
   out.contact_displacement.resize(nc, samples);
+  out.state_samples.resize(2 * n, samples);
   const double t_end = t0 + duration, h_period = s.period / s.options.steps_per_period;
   const double tolerance = 1e-14 * s.period;
   int next_sample = 0;
@@ -359,7 +360,8 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     // The samples of e_cᵀu at times before `limit`, on this flight.
     auto fill_samples = [&](double limit) {
       for (; next_sample < samples && sample_time(next_sample) < limit; ++next_sample) {
-        out.contact_displacement.col(next_sample) = s.e.transpose() * at(sample_time(next_sample)).head(n);
+        out.state_samples.col(next_sample) = at(sample_time(next_sample));
+        out.contact_displacement.col(next_sample) = s.e.transpose() * out.state_samples.col(next_sample).head(n);
       }
     };
     for (int i = 0; i < nc; ++i) {

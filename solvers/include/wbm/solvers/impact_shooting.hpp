@@ -76,6 +76,7 @@ struct ImpactFlowResult {
   std::vector<ImpactEvent> events;     // in time order
   std::vector<char> active;            // per stop at the end: 1 if in a contact phase
   Eigen::MatrixXd contact_displacement;  // n_c × S: e_cᵀ u at t₀ + s duration/S (S = samples asked)
+  Eigen::MatrixXd state_samples;         // 2n × S: x = (u, u̇) at the same instants (u̇ after an event there)
 };
 
 /// The event-driven flow of one structure, load and set of rigid stops (set-up once: the
@@ -94,8 +95,9 @@ class ImpactFlow {
 
   /// Flows x₀ = (u₀, u̇₀) (2n) from t₀ [s] over `duration` [s] (> 0), starting with the stops of
   /// `active` (n_c entries, or empty: none) in a contact phase (x₀ must then satisfy their
-  /// constraints). samples > 0 fills contact_displacement. Throws std::invalid_argument for a
-  /// wrong size, non-finite values or duration ≤ 0, and std::domain_error when x₀ penetrates a stop
+  /// constraints). samples > 0 fills contact_displacement and state_samples. Throws
+  /// std::invalid_argument for a wrong size, non-finite values or duration ≤ 0, and
+  /// std::domain_error when x₀ penetrates a stop
   /// not in `active` (h_c < −1e-12 (1 + |g_c|)), at a grazing impact (e_cᵀ u̇⁻ ≤ 0), at an impact
   /// whose impulse would pull on a closed stop, at chatter (above), and beyond max_events.
   [[nodiscard]] ImpactFlowResult flow(const Eigen::VectorXd& x0, double t0, double duration,

@@ -60,6 +60,7 @@
 #include <wbm/contact/augmented_lagrangian.hpp>
 #include <wbm/contact/penalty.hpp>
 #include <wbm/solvers/continuation.hpp>
+#include <wbm/solvers/impact_modes.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/newton.hpp>
 #include <wbm/solvers/status.hpp>
@@ -251,6 +252,33 @@ struct BackboneOptions {
   void validate() const;
 };
 
+/// Options of NonlinearModes::stability.
+struct ModeStabilityOptions {
+  ConservativeOrbitOptions orbit = {};  // the autonomous shooting and the verdict's tolerance
+  int samples = 1024;                   // P instants per period: the seed's search, H̄, the distance, m̂ (≥ 64)
+  /// The exact orbit must lie within this rms distance of the level's (relative, over the samples
+  /// of every stop's displacement e_cᵀu, aligned at the seed): farther, it is another orbit, and
+  /// the level's stability is unavailable.
+  double max_distance = 0.1;
+  /// Throws std::invalid_argument naming the field, its value and the range.
+  void validate() const;
+};
+
+/// The stability of one backbone level through the exact conservative orbit near it.
+struct ModeStability {
+  bool available = false;             // false: no verdict; `message` says why
+  std::string message;
+  bool stable = false;                // every nontrivial multiplier within 1 + tolerance of the unit circle
+  double max_modulus = std::numeric_limits<double>::quiet_NaN();  // max |μ| of the nontrivial multipliers
+  Eigen::VectorXcd multipliers;       // the nontrivial multipliers (2n − 2), by decreasing modulus
+  double frequency_hz = std::numeric_limits<double>::quiet_NaN();  // 1/T of the exact orbit [Hz]
+  double energy = std::numeric_limits<double>::quiet_NaN();  // its E = m̂/m̂_c (ConservativeOrbit::mean_square_rate)
+  double distance = std::numeric_limits<double>::quiet_NaN();  // rms distance to the level (above)
+  int impacts = 0;                    // impacts per period of the exact orbit
+  double symplectic_defect = std::numeric_limits<double>::quiet_NaN();
+  ConservativeOrbit orbit;            // the exact orbit and its monodromy
+};
+
 /// The modal problem of a structure (M, K; damping is ignored) against rigid stops.
 /// Throws std::invalid_argument for invalid options, stops on invalid DOFs (or directions with
 /// repeated, out-of-range or non-finite entries, zero norm, or not containing `dof`), gap ≤ 0, or
@@ -379,6 +407,27 @@ class NonlinearModes {
   /// ModeLevel::coefficients; columns beyond F are ignored) [LL11 Eq. (12)]: 1 for the onset mode.
   /// Throws std::invalid_argument for a Y without n rows.
   [[nodiscard]] double energy(const Eigen::MatrixXd& coefficients) const;
+
+  /// The stability of a level (issue #38, item 4) through the exact orbit near it: with elastic
+  /// impacts (e = 1, the only law under which a free orbit can be periodic, impact_modes.hpp),
+  ///  1. the level's u and u̇ at τ_p = p/P, and the seed at the sample where the onset stop's
+  ///     displacement is farthest from its gap (a turning point, in free flight); the phase
+  ///     DOF's velocity is set to 0 there;
+  ///  2. shoot_conservative_orbit at the level's mean Hamiltonian H̄ = (1/P) Σ_p H(x_p) (H is
+  ///     conserved on the exact orbit, not on a truncated one), from the period 1/f of the level;
+  ///  3. the distance: the rms of e_cᵀu of the exact orbit minus the level's at the same P
+  ///     instants from the seed (each over its own period), relative to the level's rms;
+  ///  4. the verdict from the nontrivial multipliers (ConservativeOrbit).
+  /// The energy axis of a backbone is m̂ (LL11 Eq. 11), not H, so the exact orbit's E is
+  /// reported beside the level's: they agree to the truncation. Unavailable (no throw): a level
+  /// not converged, a shooting that does not converge (a graze, chatter), an orbit farther than
+  /// max_distance. Throws std::invalid_argument for coefficients not n × (2N + 1), invalid
+  /// options. `previous`: an exact orbit of a neighbouring level (ModeStability::orbit), tried as
+  /// the seed (its state and period, at this level's H̄) when the level's own seed does not
+  /// converge: along a backbone the exact family is then followed where a truncated seed is too
+  /// far from it (the distance check still applies).
+  [[nodiscard]] ModeStability stability(const ModeLevel& level, const ModeStabilityOptions& options = {},
+                                        const ConservativeOrbit* previous = nullptr) const;
 
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
   [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
