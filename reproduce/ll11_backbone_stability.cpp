@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
     // The energy range: past the first turning points of the backbone (E ≈ 1.3) and the level
     // E = 1.8 of [LL11 Fig. 5], where issue #38 quotes an unstable exact orbit (|μ| = 2.02).
     constexpr double kEnergyMax = 2.0, kIssueEnergy = 1.8, kIssueModulus = 2.02;
+    // Relative: the issue does not say how its orbit was seeded, and the exact orbits near one level
+    // differ by their impacts per period and their multipliers (docs/design.md).
+    constexpr double kIssueModulusTolerance = 0.05;
     // Frequencies of the exact orbits and of the levels: the truncation of the Fourier backbone.
     constexpr double kFrequencyAgreement = 1e-4;
     const double energy_max = run.quick() ? 1.5 : kEnergyMax;
@@ -105,7 +108,8 @@ int main(int argc, char** argv) {
     }
     const bool issue_available = at_issue && at_issue->available;
     std::vector<reproduce::Claim> claims = {
-        {"below contact onset (E < 1) every level is the linear mode, a stable orbit (all multipliers on the unit circle)",
+        {"below contact onset (E < 1) every level is the linear mode, a stable orbit (all multipliers on the unit "
+         "circle)",
          below_onset > 0 ? std::optional<bool>(below_onset_stable == below_onset) : std::nullopt,
          std::to_string(below_onset_stable) + " of " + std::to_string(below_onset) + " levels stable"},
         {"the exact orbits' frequencies agree with the Fourier backbone's within " + format("%g", kFrequencyAgreement) +
@@ -118,9 +122,10 @@ int main(int argc, char** argv) {
     if (!run.quick()) {
       claims.push_back(
           {"issue #38: an exact shooting orbit of the LL11 rod at E = " + format("%g", kIssueEnergy) +
-               " is unstable with |μ| = " + format("%g", kIssueModulus),
-           issue_available ? std::optional<bool>(!at_issue->stable &&
-                                                 std::abs(at_issue->max_modulus - kIssueModulus) <= 0.05 * kIssueModulus)
+               " is unstable with |μ| = " + format("%g", kIssueModulus) + " (within " +
+               format("%g", 100.0 * kIssueModulusTolerance) + " %)",
+           issue_available ? std::optional<bool>(!at_issue->stable && std::abs(at_issue->max_modulus - kIssueModulus) <=
+                                                                         kIssueModulusTolerance * kIssueModulus)
                            : std::nullopt,
            issue_available ? (at_issue->stable ? std::string("stable") : std::string("unstable")) + ", |μ| = " +
                                  format("%.4g", at_issue->max_modulus) + " (" + std::to_string(at_issue->impacts) +

@@ -54,11 +54,9 @@ class AutonomousMap {
                 int phase_row, int dropped, OrbitLevel level, double value)
       : flow_(flow), system_(system), scale_(std::move(scale)), t_ref_(period_guess), phase_row_(phase_row),
         dropped_(dropped), level_(level), value_(value) {
-    const Eigen::Index n = system.mass.rows();
     m_ = Eigen::MatrixXd(system.mass);
     k_ = Eigen::MatrixXd(system.stiffness);
     m_llt_.compute(m_);
-    (void)n;
   }
 
   // x₀ (unscaled, 2n) and T [s] of an unknown vector z.
@@ -201,7 +199,9 @@ ConservativeOrbit shoot_conservative_orbit(const MechanicalSystem& system, const
     throw std::invalid_argument("shoot_conservative_orbit: phase_dof = " + std::to_string(phase_dof) +
                                 ": must lie in [0, " + std::to_string(n) + ")");
   }
-  if (samples < 0) throw std::invalid_argument("shoot_conservative_orbit: samples = " + std::to_string(samples) + " < 0");
+  if (samples < 0) {
+    throw std::invalid_argument("shoot_conservative_orbit: samples = " + std::to_string(samples) + ": must be >= 0");
+  }
   // The undamped structure, elastic impacts, no load (the forcing's frequency only sizes the
   // event search's brackets: T/steps_per_period).
   MechanicalSystem free = system;
