@@ -18,7 +18,8 @@ them with the rest of the old result. Figures (each only when its CSV is listed)
                        mu for a branch in the friction coefficient), stable solid, unstable dashed,
                        folds marked (a fold of the dynamics filled, of the truncation open),
                        and bifurcations.csv's changes of stability by kind
-  backbone.png         frequency against energy of an nnm backbone, folds marked
+  backbone.png         frequency against energy of an nnm backbone, folds marked (and each level's
+                       stability with analysis.stability)
   mode_E<E>.png        displacement of the output DOFs over one period at each written level
   basis_functions.png  the functions of a basis-plot
 Exit status: 0 drawn (possibly nothing, if the run wrote no curve), 2 DIR holds no result.json,
@@ -255,6 +256,11 @@ def backbone(folder, title, written):
     e, f = table["energy [-]"], table["frequency [Hz]"]
     fig, ax = plt.subplots()
     ax.plot(e, f, ".-", label="nonlinear mode")
+    if "stable [-]" in table:  # analysis.stability: each level's verdict (empty: no exact orbit near it)
+        for value, style, name in ((1.0, "o", "stable"), (0.0, "x", "unstable")):
+            pts = [(x, y) for x, y, v in zip(e, f, table["stable [-]"]) if v == value]
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], style, ms=4, mfc="none", label=name)
     if listed(folder, "folds.csv"):
         folds = read_csv(folder / "folds.csv")
         for k, energy in enumerate(folds["energy [-]"]):

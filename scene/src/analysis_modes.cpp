@@ -15,6 +15,56 @@
 
 namespace wbm::scene::detail {
 
+namespace {
+
+// analysis.stability: every level's stability through the exact orbit with elastic impacts near it
+// (NonlinearModes::stability, seeded from the level, else from the last exact orbit found), as
+// backbone.csv's columns stable, max_multiplier, exact_frequency, orbit_distance and impacts (empty
+// where a level has no verdict, its status saying why) and diagnostics.nnm.stability.
+void level_stability(const solvers::NonlinearModes& modes, const solvers::Backbone& b, const Progress& progress,
+                     std::vector<std::string>& header, std::vector<Eigen::VectorXd>& columns,
+                     std::vector<std::string>& status, AnalysisResult& out) {
+  const auto n = static_cast<Eigen::Index>(b.levels.size());
+  Eigen::VectorXd stable(n), modulus(n), frequency(n), distance(n), impacts(n);
+  const solvers::ModeStabilityOptions options;
+  const solvers::ConservativeOrbit* previous = nullptr;
+  std::vector<solvers::ModeStability> results;
+  results.reserve(b.levels.size());
+  int counts[3] = {0, 0, 0};  // stable, unstable, no verdict
+  const auto start = std::chrono::steady_clock::now();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    results.push_back(modes.stability(b.levels[static_cast<size_t>(i)], options, previous));
+    const solvers::ModeStability& r = results.back();
+    if (r.orbit.converged()) previous = &r.orbit;
+    stable(i) = r.available ? (r.stable ? 1.0 : 0.0) : NAN;
+    modulus(i) = r.available ? r.max_modulus : NAN;
+    frequency(i) = r.available ? r.frequency_hz : NAN;
+    distance(i) = r.available ? r.distance : NAN;
+    impacts(i) = r.available ? r.impacts : NAN;
+    status.push_back(r.available        ? (r.stable ? "stable" : "unstable")
+                     : r.orbit.converged() ? "no verdict: the exact orbit found is beyond max_distance"
+                                           : "no verdict: no exact orbit found near the level");
+    ++counts[r.available ? (r.stable ? 0 : 1) : 2];
+    if (progress) {
+      progress(static_cast<double>(i + 1) / static_cast<double>(n),
+               "stability of level " + std::to_string(i + 1) + " of " + std::to_string(n));
+    }
+  }
+  header.insert(header.end(), {"stable [-]", "max_multiplier [-]", "exact_frequency [Hz]", "orbit_distance [-]",
+                               "impacts [-]"});
+  columns.insert(columns.end(), {stable, modulus, frequency, distance, impacts});
+  out.diagnostics["nnm_stability"] = {
+      {"stable", counts[0]},
+      {"unstable", counts[1]},
+      {"no_verdict", counts[2]},
+      {"max_distance", options.max_distance},
+      {"stability_tolerance", options.orbit.stability_tolerance},
+      {"shooting_tolerance", options.orbit.newton.tolerance},
+      {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
+}
+
+}  // namespace
+
 void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResult& out) {
   const ModeProblem problem = mode_problem(scene);
   const Analysis& a = scene.analysis;
@@ -75,7 +125,9 @@ void nonlinear_modes(const Scene& scene, const Progress& progress, AnalysisResul
     }
     header.insert(header.end(), {"first_mode_share [-]", "other_mode [-]", "other_harmonic [-]", "other_share [-]"});
     columns.insert(columns.end(), {c.first_mode_share, c.other_mode, c.other_harmonic, c.other_share});
-    out.tables.push_back({"backbone.csv", header, columns});
+    std::vector<std::string> status;
+    if (a.stability) level_stability(modes, b, progress, header, columns, status, out);
+    out.tables.push_back({"backbone.csv", header, columns, status});
   }
   if (!b.folds.empty()) {  // each fold at its own frequency (the backbone can be multivalued in E)
     Eigen::VectorXd fold_hz(static_cast<Eigen::Index>(b.fold_levels.size()));

@@ -60,6 +60,11 @@ void Parser::contacts(const toml::table& root) {
                                      "forced response takes all exact or none (give the rigid ones a stiff \"linear\" "
                                      "law and the \"coulomb\" ones a stiff \"jenkins\" law)");
     }
+    if (c.law == ContactLawKind::Linear && modes && s_.analysis.stability) {
+      r_.error(Reader::source_of(*t, "law"), section + ".law",
+               "\"linear\" with analysis.stability = true: a backbone's stability is computed for rigid stops only "
+               "(through the exact orbits with elastic impacts); set stability = false, or law = \"rigid\"");
+    }
     if (c.law == ContactLawKind::Exponential && modes) {
       r_.error(Reader::source_of(*t, "law"), section + ".law",
                "analysis \"nnm\" takes law = \"rigid\" (exact contact) or \"linear\" (penalty spring)");

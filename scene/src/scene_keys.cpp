@@ -114,13 +114,17 @@ const std::vector<DeclaredKey<Analysis>>& analysis_keys() {
                     "runaway branch (e.g. an undamped resonance) long before the point limit")
           .only_in({"continuation"}),
       boolean_key<A>("stability", [](auto& a) -> auto& { return a.stability; },
-                     "Floquet multipliers of every point (monodromy matrix; with rigid stops that of the exact "
-                     "orbit with plastic impacts near the point, by shooting, through saltation matrices; with "
-                     "\"jenkins\" contacts one more state per element, its force perturbation; \"coulomb\" "
-                     "refuses `true`)")
-          .documented_default("`true`")
+                     "continuation: Floquet multipliers of every point (monodromy matrix; with rigid stops that of "
+                     "the exact orbit with plastic impacts near the point, by shooting, through saltation matrices; "
+                     "with \"jenkins\" contacts one more state per element, its force perturbation; \"coulomb\" "
+                     "refuses `true`). nnm: every level's stability through the exact orbit with elastic impacts "
+                     "near it (autonomous shooting at the level's mean energy, its nontrivial multipliers through "
+                     "saltation matrices; columns stable, max_multiplier, exact_frequency, orbit_distance and "
+                     "impacts of backbone.csv, a level without an exact orbit near it left empty with its status; "
+                     "rigid stops only: \"linear\" refuses `true`)")
+          .documented_default("`true` (continuation), `false` (nnm)")
           .read_by_section()
-          .only_in({"continuation"}),
+          .only_in({"continuation", "nnm"}),
       choice_key<A>("parameter", {"frequency", "friction_coefficient"},
                     [](const A& a) {
                       return a.parameter == BranchParameter::Frequency ? "frequency" : "friction_coefficient";

@@ -170,6 +170,7 @@ void Parser::nnm(const toml::table& t) {
   // N = 512 ran for minutes, issue #40, docs/scenes.md "Sizes"), algorithm, max_step,
   // max_energy_step, max_points.
   read_values(r_, t, "analysis", analysis_keys(), a, "nnm");
+  a.stability = r_.boolean(t, "analysis", "stability", false);  // the levels' stability costs a shooting each
   a.samples = static_cast<int>(r_.integer(t, "analysis", "samples", 3, 1 << 16, std::max(a.samples, 8 * a.harmonics)));
   if (a.samples <= 2 * a.harmonics) {
     r_.error(Reader::source_of(t, "samples"), "analysis.samples",

@@ -34,18 +34,6 @@ solvers::MechanicalSystem two_mass_chain_undamped() {
   return s;
 }
 
-// (u, u̇) of a level at the sample where the phase DOF is farthest from its stop, and that
-// sample's index.
-Eigen::VectorXd level_state(const solvers::NonlinearModes& modes, const solvers::ModeLevel& level, int dof,
-                            int samples) {
-  const Eigen::MatrixXd u = modes.displacement(level, samples), v = modes.velocity(level, samples);
-  Eigen::Index p = 0;
-  u.row(dof).minCoeff(&p);
-  Eigen::VectorXd x(2 * u.rows());
-  x << u.col(p), v.col(p);
-  return x;
-}
-
 }  // namespace
 
 // u = −A cos ω_n t between impacts at u = g (A > g): T = 2θ/ω_n with θ = π − arccos(g/A), and
@@ -172,4 +160,49 @@ TEST(ImpactModes, RefusesBadInput) {
   solvers::ConservativeOrbitOptions bad;
   bad.stability_tolerance = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The verdict against the exact flow itself: a perturbation δ of the exact orbit's start on its
+// energy surface (∇Hᵀ δ = 0, so the period does not drift) grows like max|μ|^k over k periods
+// when the orbit is unstable, and stays of its size when it is stable. The 2-DOF chain of
+// examples/scenes/two_dof_nnm.toml (wall–k–a–k–b, a stop on b), at E = 1.5 and 2.8.
+TEST(ImpactModes, PerturbationsGrowAsTheLargestMultiplierSays) {
+  solvers::MechanicalSystem chain;
+  Eigen::MatrixXd k(2, 2);
+  k << 2000.0, -1000.0, -1000.0, 1000.0;
+  chain.mass = Eigen::MatrixXd::Identity(2, 2).sparseView();
+  chain.stiffness = k.sparseView();
+  chain.damping = Eigen::SparseMatrix<double>(2, 2);
+  const double gap = 1e-3;
+  const solvers::NonlinearModes modes(chain, {{1, gap}}, {.harmonics = 8, .samples = 64});
+  auto o = wbm::testing::range(0.5, 3.0);
+  o.include = {1.5, 2.8};
+  const auto b = modes.continue_backbone(o);
+  solvers::ImpactFlowOptions fo;
+  fo.restitution = 1.0;
+  for (double e : {1.5, 2.8}) {
+    const auto* level = wbm::testing::included(b, e);
+    ASSERT_NE(level, nullptr) << e;
+    const auto st = modes.stability(*level);
+    ASSERT_TRUE(st.available) << st.message;
+    const Eigen::VectorXd x0 = st.orbit.state;
+    Eigen::VectorXd grad(4);
+    grad << k * x0.head(2), x0.tail(2);  // ∇H = (K u, M u̇)
+    Eigen::VectorXd delta(4);
+    delta << 0.3, -0.7, 0.5 * st.orbit.frequency_hz, 0.2 * st.orbit.frequency_hz;  // m, m/s of like size
+    delta -= grad * (grad.dot(delta) / grad.squaredNorm());
+    delta *= 1e-9 * x0.norm() / delta.norm();
+    const solvers::ImpactFlow flow(chain, {0, 0.0, st.orbit.frequency_hz}, stop_at(1, gap), fo);
+    auto deviation = [&](int periods) {
+      const double t = periods * st.orbit.period_s;
+      return (flow.flow(x0 + delta, 0.0, t).state - flow.flow(x0, 0.0, t).state).norm() / delta.norm();
+    };
+    const double d8 = deviation(8), d16 = deviation(16);
+    if (st.stable) {
+      EXPECT_LT(d16, 20.0) << "E = " << e << ": a stable orbit's perturbation grew by " << d16;
+    } else {
+      const double rate = std::pow(d16 / d8, 1.0 / 8.0);
+      EXPECT_NEAR(rate, st.max_modulus, 0.05 * st.max_modulus) << "E = " << e;
+    }
+  }
 }

@@ -255,7 +255,7 @@ struct Analysis {
   double max_frequency_step_hz = 0; // > 0: |Δf| per step at most this [Hz]
   int max_points = 5000;
   double max_state = 100.0;         // > 0: stop once ‖x‖∞ > max_state · s_r (s_r = max(largest gap, ‖x_lin‖∞)); 0: no bound
-  bool stability = true;            // Floquet multipliers of every point
+  bool stability = true;            // Floquet multipliers of every point (nnm: of every level; false unless asked)
   BranchParameter parameter = BranchParameter::Frequency;
   double friction_from = 0.0, friction_to = 0.0;  // parameter = friction_coefficient: μ from → to [-]
   StickSlipEvents stick_slip_events = StickSlipEvents::OnStall;  // "jenkins" contacts: how switches are crossed
