@@ -302,7 +302,8 @@ TEST(Scene, ACorrectorAtItsRoundingFloorNamesTheTolerance) {
 // Progress of an nnm backbone: one report per accepted point of the energy continuation, the
 // fraction of the energy range covered, and a label with the point, its energy and the step.
 TEST(Scene, BackboneReportsProgressPerPoint) {
-  const Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  Scene s = wbm::scene::load_scene(std::filesystem::path(WBM_EXAMPLES) / "two_dof_nnm.toml");
+  s.analysis.stability = false;  // the levels' stability reports its own progress after the branch
   std::vector<std::pair<double, std::string>> reports;
   const auto r = wbm::scene::run_analysis(s, [&](double f, const std::string& label) { reports.emplace_back(f, label); });
   ASSERT_TRUE(r.converged());
