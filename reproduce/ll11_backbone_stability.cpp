@@ -59,18 +59,15 @@ int main(int argc, char** argv) {
     Eigen::VectorXd energy(n), frequency(n), exact_frequency(n), exact_energy(n), distance(n), impacts(n), modulus(n),
         stable(n), defect(n);
     std::vector<std::string> status;
-    const solvers::ConservativeOrbit* previous = nullptr;
-    std::vector<solvers::ModeStability> results;
-    results.reserve(b.levels.size());
     const auto start = std::chrono::steady_clock::now();
+    const std::vector<solvers::ModeStability> results = modes.stability(b, so);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     int n_stable = 0, n_unstable = 0, n_far = 0, n_failed = 0, below_onset = 0, below_onset_stable = 0;
     double worst_frequency = 0.0, worst_energy = 0.0, first_stable_above = NAN, first_unstable = NAN;
     double mu_min = INFINITY, mu_max = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
       const solvers::ModeLevel& l = b.levels[static_cast<size_t>(i)];
-      results.push_back(modes.stability(l, so, previous));
-      const solvers::ModeStability& r = results.back();
-      if (r.orbit.converged()) previous = &r.orbit;
+      const solvers::ModeStability& r = results[static_cast<size_t>(i)];
       energy(i) = l.energy;
       frequency(i) = l.frequency_hz;
       exact_frequency(i) = r.available ? r.frequency_hz : NAN;
@@ -101,7 +98,6 @@ int main(int argc, char** argv) {
       worst_frequency = std::max(worst_frequency, std::abs(r.frequency_hz / l.frequency_hz - 1.0));
       worst_energy = std::max(worst_energy, std::abs(r.energy - l.energy));
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     run.table("stability.csv",
               {"energy [-]", "frequency [Hz]", "exact_frequency [Hz]", "exact_energy [-]", "distance [-]",
                "impacts [-]", "max_multiplier [-]", "stable [-]", "symplectic_defect [-]"},

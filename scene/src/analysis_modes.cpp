@@ -18,7 +18,8 @@ namespace wbm::scene::detail {
 namespace {
 
 // analysis.stability: every level's stability through the exact orbit with elastic impacts near it
-// (NonlinearModes::stability, seeded from the level, else from the last exact orbit found), as
+// (NonlinearModes::stability of the backbone: seeded from the level, else from the last exact orbit
+// found), as
 // backbone.csv's columns stable, max_multiplier, exact_frequency, orbit_distance and impacts (empty
 // where a level has no verdict, its status saying why) and diagnostics.nnm.stability.
 void level_stability(const solvers::NonlinearModes& modes, const solvers::Backbone& b, const Progress& progress,
@@ -27,15 +28,16 @@ void level_stability(const solvers::NonlinearModes& modes, const solvers::Backbo
   const auto n = static_cast<Eigen::Index>(b.levels.size());
   Eigen::VectorXd stable(n), modulus(n), frequency(n), distance(n), impacts(n);
   const solvers::ModeStabilityOptions options;
-  const solvers::ConservativeOrbit* previous = nullptr;
-  std::vector<solvers::ModeStability> results;
-  results.reserve(b.levels.size());
   int counts[3] = {0, 0, 0};  // stable, unstable, no verdict
   const auto start = std::chrono::steady_clock::now();
+  const auto results = modes.stability(b, options, [&](size_t i, size_t count) {
+    if (progress) {
+      progress(static_cast<double>(i + 1) / static_cast<double>(count),
+               "stability of level " + std::to_string(i + 1) + " of " + std::to_string(count));
+    }
+  });
   for (Eigen::Index i = 0; i < n; ++i) {
-    results.push_back(modes.stability(b.levels[static_cast<size_t>(i)], options, previous));
-    const solvers::ModeStability& r = results.back();
-    if (r.orbit.converged()) previous = &r.orbit;
+    const solvers::ModeStability& r = results[static_cast<size_t>(i)];
     stable(i) = r.available ? (r.stable ? 1.0 : 0.0) : NAN;
     modulus(i) = r.available ? r.max_modulus : NAN;
     frequency(i) = r.available ? r.frequency_hz : NAN;
@@ -45,10 +47,6 @@ void level_stability(const solvers::NonlinearModes& modes, const solvers::Backbo
                      : r.orbit.converged() ? "no verdict: the exact orbit found is beyond max_distance"
                                            : "no verdict: no exact orbit found near the level");
     ++counts[r.available ? (r.stable ? 0 : 1) : 2];
-    if (progress) {
-      progress(static_cast<double>(i + 1) / static_cast<double>(n),
-               "stability of level " + std::to_string(i + 1) + " of " + std::to_string(n));
-    }
   }
   header.insert(header.end(), {"stable [-]", "max_multiplier [-]", "exact_frequency [Hz]", "orbit_distance [-]",
                                "impacts [-]"});

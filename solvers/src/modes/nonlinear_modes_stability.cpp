@@ -3,6 +3,7 @@
 #include <wbm/solvers/nonlinear_modes.hpp>
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -47,8 +48,15 @@ ModeStability NonlinearModes::stability(const ModeLevel& level, const ModeStabil
     for (const auto& [j, w] : stops_[c].terms()) directions(j, static_cast<Eigen::Index>(c)) = w;
   }
   const Eigen::MatrixXd stop_u = directions.transpose() * u;  // n_c × P
+  // The seed: a turning point of the phase DOF (its velocity is then set to 0), in free flight for
+  // the default phase DOF, the onset stop's: where that stop is farthest from its gap.
+  const int phase_dof = phase_index_ - 2 * n_;
   Eigen::Index seed = 0;
-  stop_u.row(onset_stop_).minCoeff(&seed);
+  if (options_.phase_dof >= 0) {
+    u.row(phase_dof).minCoeff(&seed);
+  } else {
+    stop_u.row(onset_stop_).minCoeff(&seed);
+  }
   double mean_h = 0.0;
   Eigen::VectorXd x(2 * n_);
   for (int j = 0; j < p; ++j) {
@@ -56,7 +64,6 @@ ModeStability NonlinearModes::stability(const ModeLevel& level, const ModeStabil
     mean_h += hamiltonian(system_, x) / p;
   }
   x << u.col(seed), v.col(seed);
-  const int phase_dof = phase_index_ - 2 * n_;
   out.orbit = shoot_conservative_orbit(system_, contacts, x, 1.0 / level.frequency_hz, phase_dof, OrbitLevel::Energy,
                                        mean_h, options.orbit, p);
   if (!out.orbit.converged() && previous != nullptr && previous->converged() &&
@@ -94,6 +101,19 @@ ModeStability NonlinearModes::stability(const ModeLevel& level, const ModeStabil
   }
   out.available = true;
   out.stable = o.stable;
+  return out;
+}
+
+std::vector<ModeStability> NonlinearModes::stability(const Backbone& backbone, const ModeStabilityOptions& options,
+                                                     const std::function<void(size_t, size_t)>& on_level) const {
+  std::vector<ModeStability> out;
+  out.reserve(backbone.levels.size());
+  const ConservativeOrbit* previous = nullptr;
+  for (size_t i = 0; i < backbone.levels.size(); ++i) {
+    out.push_back(stability(backbone.levels[i], options, previous));
+    if (out.back().orbit.converged()) previous = &out.back().orbit;  // reserve(): the address is kept
+    if (on_level) on_level(i, backbone.levels.size());
+  }
   return out;
 }
 

@@ -286,6 +286,11 @@ ConservativeOrbit shoot_conservative_orbit(const MechanicalSystem& system, const
     orbit.nontrivial_multipliers.resize(0);
     orbit.max_modulus = 1.0;  // one DOF: only the trivial pair
   }
+  if (!std::isfinite(orbit.max_modulus)) {  // no verdict from a monodromy that is not finite
+    orbit.report.status = SolveStatus::NonFinite;
+    orbit.report.message = "the monodromy's nontrivial multipliers are not finite";
+    return orbit;
+  }
   orbit.stable = orbit.max_modulus <= 1.0 + options.stability_tolerance;
   // Symplecticity in the scaled coordinates: Ω̂ = D⁻¹ Ω D⁻¹ with Ω = [[0, M], [−M, 0]].
   Eigen::MatrixXd omega_form = Eigen::MatrixXd::Zero(2 * n, 2 * n);

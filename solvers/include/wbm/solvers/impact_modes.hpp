@@ -80,7 +80,8 @@ struct ConservativeOrbit {
   /// ‖Φ̂ᵀ Ω̂ Φ̂ − Ω̂‖_F / ‖Ω̂‖_F in the scaled coordinates: 0 up to rounding for an exact monodromy.
   double symplectic_defect = std::numeric_limits<double>::quiet_NaN();
   double periodicity_residual = std::numeric_limits<double>::quiet_NaN();  // ‖D (x(T) − x₀)‖₂, every row
-  NewtonReport report;                // converged only if periodicity_residual ≤ the tolerance too
+  NewtonReport report;                // converged only if periodicity_residual ≤ the tolerance too and
+                                      // the multipliers are finite (NonFinite otherwise)
   [[nodiscard]] bool converged() const { return report.converged(); }
 };
 

@@ -414,8 +414,9 @@ class NonlinearModes {
   /// The stability of a level (issue #38, item 4) through the exact orbit near it: with elastic
   /// impacts (e = 1, the only law under which a free orbit can be periodic, impact_modes.hpp),
   ///  1. the level's u and u̇ at τ_p = p/P, and the seed at the sample where the onset stop's
-  ///     displacement is farthest from its gap (a turning point, in free flight); the phase
-  ///     DOF's velocity is set to 0 there;
+  ///     displacement is farthest from its gap (a turning point, in free flight; with
+  ///     NonlinearModeOptions::phase_dof given, where that DOF is lowest); the phase DOF's
+  ///     velocity is set to 0 there;
   ///  2. shoot_conservative_orbit at the level's mean Hamiltonian H̄ = (1/P) Σ_p H(x_p) (H is
   ///     conserved on the exact orbit, not on a truncated one), from the period 1/f of the level;
   ///  3. the distance: the rms of e_cᵀu of the exact orbit minus the level's at the same P
@@ -431,6 +432,13 @@ class NonlinearModes {
   /// far from it (the distance check still applies).
   [[nodiscard]] ModeStability stability(const ModeLevel& level, const ModeStabilityOptions& options = {},
                                         const ConservativeOrbit* previous = nullptr) const;
+  /// The stability of every level of a backbone, in branch order (one entry per
+  /// Backbone::levels): each level seeded from itself, else from the last exact orbit found along
+  /// the branch (`previous` above). `on_level(i, count)` is called after level i (0-based) of
+  /// `count`, e.g. for progress; may be empty. Throws as stability(level).
+  [[nodiscard]] std::vector<ModeStability> stability(
+      const Backbone& backbone, const ModeStabilityOptions& options = {},
+      const std::function<void(size_t index, size_t count)>& on_level = nullptr) const;
 
   /// u (n × P) and du/dt (n × P, [m/s]) at τ_p = p/P of a level.
   [[nodiscard]] Eigen::MatrixXd displacement(const ModeLevel& level, int samples) const;
