@@ -19,9 +19,8 @@ namespace {
 
 // analysis.stability: every level's stability through the exact orbit with elastic impacts near it
 // (NonlinearModes::stability of the backbone: seeded from the level, else from the last exact orbit
-// found), as
-// backbone.csv's columns stable, max_multiplier, exact_frequency, orbit_distance and impacts (empty
-// where a level has no verdict, its status saying why) and diagnostics.nnm.stability.
+// found), as backbone.csv's columns stable, max_multiplier, exact_frequency, orbit_distance and
+// impacts (empty where a level has no verdict, its status saying why) and diagnostics.nnm_stability.
 void level_stability(const solvers::NonlinearModes& modes, const solvers::Backbone& b, const Progress& progress,
                      std::vector<std::string>& header, std::vector<Eigen::VectorXd>& columns,
                      std::vector<std::string>& status, AnalysisResult& out) {
