@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <tuple>
@@ -523,7 +524,15 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
   m.def(
       "nonlinear_mode",
       [](const solvers::MechanicalSystem& system, const std::vector<std::pair<int, double>>& stops,
-         std::pair<double, double> energy, int harmonics, int samples, double penalty_stiffness, double max_energy_step) {
+         std::pair<double, double> energy, int harmonics, int samples, double penalty_stiffness, double max_energy_step,
+         bool stability) {
+        if (stability && penalty_stiffness > 0.0) {
+          throw std::invalid_argument("nonlinear_mode: stability=True with penalty_stiffness = " +
+                                      solvers::format_number(penalty_stiffness) +
+                                      " N/m: a backbone's stability is computed for rigid stops only (through the "
+                                      "exact orbits with elastic impacts); pass stability=False or "
+                                      "penalty_stiffness=0");
+        }
         std::vector<solvers::RigidStop> rigid;
         for (const auto& [dof, gap] : stops) rigid.push_back({dof, gap});
         solvers::NonlinearModeOptions options;
@@ -555,10 +564,35 @@ dropped_harmonics_residual per point. Non-convergence is returned, not raised.)"
         for (const auto& l : b.fold_levels) fold_hz.push_back(l.frequency_hz);
         out["fold_frequencies_hz"] = fold_hz;
         out["wall_time_s"] = b.wall_time_s;
+        if (stability) {  // NonlinearModes::stability of every level (NaN where no verdict)
+          const auto results = modes.stability(b);
+          const auto n = static_cast<Eigen::Index>(results.size());
+          const double nan = std::numeric_limits<double>::quiet_NaN();
+          Eigen::VectorXd mu(n), exact(n), distance(n), impacts(n);
+          std::vector<bool> stable, available;
+          std::vector<std::string> why;
+          for (Eigen::Index i = 0; i < n; ++i) {
+            const auto& r = results[static_cast<size_t>(i)];
+            available.push_back(r.available);
+            stable.push_back(r.available && r.stable);
+            mu(i) = r.available ? r.max_modulus : nan;
+            exact(i) = r.available ? r.frequency_hz : nan;
+            distance(i) = r.available ? r.distance : nan;
+            impacts(i) = r.available ? r.impacts : nan;
+            why.push_back(r.message);
+          }
+          out["stability_available"] = available;
+          out["stable"] = stable;
+          out["max_floquet_multiplier"] = py::cast(mu);
+          out["exact_frequency_hz"] = py::cast(exact);
+          out["orbit_distance"] = py::cast(distance);
+          out["impacts"] = py::cast(impacts);
+          out["stability_message"] = why;
+        }
         return out;
       },
       py::arg("system"), py::arg("stops"), py::arg("energy"), py::arg("harmonics") = 16, py::arg("samples") = 256,
-      py::arg("penalty_stiffness") = 0.0, py::arg("max_energy_step") = 0.05,
+      py::arg("penalty_stiffness") = 0.0, py::arg("max_energy_step") = 0.05, py::arg("stability") = false,
       R"(First nonlinear normal mode of the undamped system (damping ignored) against rigid stops
 [LL11], by pseudo-arclength continuation in energy over energy = (min, max) (normalized: 1 at
 contact onset). stops: list of (dof, gap [m] > 0). harmonics N, samples m > 2N of the contact
@@ -568,7 +602,13 @@ rayleigh_frequency_hz, max_penetration and complementarity [gap], first_mode_sha
 held by linear mode 1 at the fundamental) and the largest other component other_mode, other_harmonic
 (1-based), other_share (NonlinearModes::modal_components: an internal resonance shows as a large
 other_share with f_j ≈ h f); and linear_frequency_hz, folds
-(energies where the branch turns back) and fold_frequencies_hz (the frequency at each), converged (Backbone::converged: the energy range covered, as wbm run), message, wall_time_s.)");
+(energies where the branch turns back) and fold_frequencies_hz (the frequency at each), converged (Backbone::converged: the energy range covered, as wbm run), message, wall_time_s.
+stability=True (rigid stops only; a ValueError with penalty_stiffness > 0): each level's stability
+through the exact orbit with elastic impacts near it (NonlinearModes::stability: autonomous
+shooting at the level's mean energy, the nontrivial multipliers of its saltation monodromy), as
+stability_available (bool), stable (bool), max_floquet_multiplier, exact_frequency_hz [Hz],
+orbit_distance (relative rms of the stops' displacements) and impacts per period (NaN where no
+verdict), and stability_message (why a level has none).)");
   m.def(
       "evaluate",
       [](const solvers::TimeBasis& trial, const py::object& coefficients, const py::object& tau) -> Eigen::MatrixXd {

@@ -199,6 +199,26 @@ def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
     assert mode["first_mode_share"][-1] < 1.0 - 1e-3
 
 
+def test_nonlinear_mode_stability_is_the_linear_modes_below_contact():
+    # The same chain with stability=True: below contact every level is the linear mode, an exact orbit
+    # without impacts, stable with |mu| = 1 at the linear frequency (closed form); above it every level
+    # has a verdict on this chain (test_impact_modes checks the verdicts against the flow).
+    s = wbm.MechanicalSystem(mass=np.eye(2), damping=np.zeros((2, 2)),
+                             stiffness=np.array([[2000.0, -1000.0], [-1000.0, 1000.0]]))
+    mode = wbm.nonlinear_mode(s, [(1, 1e-3)], (0.5, 1.5), harmonics=8, samples=64, stability=True)
+    assert mode["converged"], mode["message"]
+    linear = math.sqrt(1000.0 * (3.0 - math.sqrt(5.0)) / 2.0) / (2.0 * math.pi)
+    below = np.flatnonzero(np.asarray(mode["impacts"]) == 0)
+    assert below.size >= 5
+    assert all(mode["stable"][i] for i in below)
+    np.testing.assert_allclose(np.asarray(mode["max_floquet_multiplier"])[below], 1.0, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(np.asarray(mode["exact_frequency_hz"])[below], linear, rtol=1e-9)
+    assert len(mode["stable"]) == len(mode["energy"])
+    with pytest.raises(ValueError, match="stability=True with penalty_stiffness"):
+        wbm.nonlinear_mode(s, [(1, 1e-3)], (0.5, 1.5), harmonics=8, samples=64, penalty_stiffness=1e6,
+                           stability=True)
+
+
 def test_solve_with_several_loads_superposes_closed_forms():
     # 10 N cos ωt + 4 N cos(2ωt + π/4) + a constant 3 N on one oscillator (docs: loads).
     s = wbm.MechanicalSystem(mass=np.array([[2.0]]), damping=np.array([[6.0]]), stiffness=np.array([[8e4]]))
