@@ -55,8 +55,9 @@ struct ConservativeOrbitOptions {
   NewtonOptions newton = {.tolerance = 1e-10, .max_iterations = 30};
   int steps_per_period = 512;         // ImpactFlowOptions::steps_per_period (event brackets, ≥ 8)
   int max_events = 1000;              // ImpactFlowOptions::max_events (impacts per period)
-  /// Unstable when the largest nontrivial |μ| exceeds 1 + this (≥ 0; the multipliers of the
-  /// reduced map are accurate to about 1e-9 on the LL11 rod: test_impact_modes).
+  /// Unstable when the largest nontrivial |μ| exceeds 1 + this (≥ 0; on the LL11 rod's linear mode,
+  /// whose multipliers lie on the unit circle, every computed |μ| is 1 within 1e-8:
+  /// test_impact_modes).
   double stability_tolerance = 1e-6;
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
