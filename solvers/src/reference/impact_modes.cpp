@@ -45,19 +45,26 @@ double hamiltonian(const MechanicalSystem& system, const Eigen::VectorXd& x) {
 
 namespace {
 
+// ∇H(x) = (K u, M u̇) for x = (u, u̇), with the dense M and K.
+Eigen::VectorXd energy_gradient(const Eigen::MatrixXd& m, const Eigen::MatrixXd& k, const Eigen::VectorXd& x) {
+  const Eigen::Index n = m.rows();
+  Eigen::VectorXd g(2 * n);
+  g.head(n) = k * x.head(n);
+  g.tail(n) = m * x.tail(n);
+  return g;
+}
+
 // The scaled shooting map z ↦ (D (x(T) − x₀) without row `dropped`; level equation), with
 // z = (D x₀ without the phase velocity; T/T_guess), and its Jacobian. The last flow is kept, so
 // that the residual and the Jacobian at one iterate cost one flow.
 class AutonomousMap {
  public:
-  AutonomousMap(const ImpactFlow& flow, const MechanicalSystem& system, Eigen::VectorXd scale, double period_guess,
-                int phase_row, int dropped, OrbitLevel level, double value)
-      : flow_(flow), system_(system), scale_(std::move(scale)), t_ref_(period_guess), phase_row_(phase_row),
-        dropped_(dropped), level_(level), value_(value) {
-    m_ = Eigen::MatrixXd(system.mass);
-    k_ = Eigen::MatrixXd(system.stiffness);
-    m_llt_.compute(m_);
-  }
+  // m, k: the dense M and K, kept by the caller for the map's lifetime.
+  AutonomousMap(const ImpactFlow& flow, const MechanicalSystem& system, const Eigen::MatrixXd& m,
+                const Eigen::MatrixXd& k, Eigen::VectorXd scale, double period_guess, int phase_row, int dropped,
+                OrbitLevel level, double value)
+      : flow_(flow), system_(system), m_(m), k_(k), m_llt_(m), scale_(std::move(scale)), t_ref_(period_guess),
+        phase_row_(phase_row), dropped_(dropped), level_(level), value_(value) {}
 
   // x₀ (unscaled, 2n) and T [s] of an unknown vector z.
   [[nodiscard]] Eigen::VectorXd state_of(const Eigen::VectorXd& z) const {
@@ -95,7 +102,7 @@ class AutonomousMap {
 
   [[nodiscard]] Eigen::MatrixXd jacobian(const Eigen::VectorXd& z) const {
     const ImpactFlowResult* r = run(z);
-    const Eigen::Index nx = scale_.size(), n = nx / 2;
+    const Eigen::Index nx = scale_.size();
     if (r == nullptr) return Eigen::MatrixXd::Constant(nx, nx, std::numeric_limits<double>::quiet_NaN());
     const Eigen::VectorXd x0 = state_of(z);
     // ∂(D (x(T) − x₀))/∂(D x₀) = D Φ D⁻¹ − I; ∂/∂(T/T_ref) = T_ref D f(x(T)).
@@ -106,8 +113,7 @@ class AutonomousMap {
     // The level row: ∂H/∂(D x₀) = D⁻¹ ∇H, ∇H = (K u₀, M u̇₀); or ∂(T/T*)/∂(T/T_ref) = T_ref/T*.
     Eigen::RowVectorXd level = Eigen::RowVectorXd::Zero(nx + 1);
     if (level_ == OrbitLevel::Energy) {
-      level.head(n) = (k_ * x0.head(n)).transpose().cwiseQuotient(scale_.head(n).transpose()) / value_;
-      level.segment(n, n) = (m_ * x0.tail(n)).transpose().cwiseQuotient(scale_.tail(n).transpose()) / value_;
+      level.head(nx) = energy_gradient(m_, k_, x0).cwiseQuotient(scale_).transpose() / value_;
     } else {
       level(nx) = t_ref_ / value_;
     }
@@ -155,13 +161,14 @@ class AutonomousMap {
  private:
   const ImpactFlow& flow_;
   const MechanicalSystem& system_;
+  const Eigen::MatrixXd& m_;
+  const Eigen::MatrixXd& k_;
+  Eigen::LLT<Eigen::MatrixXd> m_llt_;
   Eigen::VectorXd scale_;
   double t_ref_;
   int phase_row_, dropped_;
   OrbitLevel level_;
   double value_;
-  Eigen::MatrixXd m_, k_;
-  Eigen::LLT<Eigen::MatrixXd> m_llt_;
   mutable Eigen::VectorXd last_z_;
   mutable std::optional<ImpactFlowResult> last_;
   mutable std::string last_error_;
@@ -220,13 +227,11 @@ ConservativeOrbit shoot_conservative_orbit(const MechanicalSystem& system, const
   scale.tail(n).setConstant(1.0 / (omega * s));
   // The periodicity row to drop: the largest |∂Ĥ/∂x̂_i| = |∇H_i|/D_i at the guess.
   const Eigen::MatrixXd m = Eigen::MatrixXd(system.mass), k = Eigen::MatrixXd(system.stiffness);
-  Eigen::VectorXd grad(2 * n);
-  grad.head(n) = k * guess.head(n);
-  grad.tail(n) = m * guess.tail(n);
   Eigen::Index dropped = 0;
-  grad.cwiseQuotient(scale).cwiseAbs().maxCoeff(&dropped);
+  energy_gradient(m, k, guess).cwiseQuotient(scale).cwiseAbs().maxCoeff(&dropped);
 
-  const AutonomousMap map(flow, free, scale, period_guess_s, n + phase_dof, static_cast<int>(dropped), level, value);
+  const AutonomousMap map(flow, free, m, k, scale, period_guess_s, n + phase_dof, static_cast<int>(dropped), level,
+                          value);
   ConservativeOrbit orbit;
   const NewtonResult solved = newton(map, map.unknowns(guess, period_guess_s), options.newton);
   orbit.report = solved.report;
@@ -270,9 +275,7 @@ ConservativeOrbit shoot_conservative_orbit(const MechanicalSystem& system, const
   const Eigen::MatrixXd phi = scale.asDiagonal() * orbit.period.monodromy * scale.cwiseInverse().asDiagonal();
   orbit.multipliers = by_decreasing_modulus(Eigen::EigenSolver<Eigen::MatrixXd>(phi, false).eigenvalues());
   Eigen::MatrixXd span(2 * n, 2);
-  span.col(0).head(n) = k * orbit.state.head(n);
-  span.col(0).tail(n) = m * orbit.state.tail(n);
-  span.col(0) = span.col(0).cwiseQuotient(scale);
+  span.col(0) = energy_gradient(m, k, orbit.state).cwiseQuotient(scale);
   span.col(1) = map.field(orbit.state).cwiseProduct(scale);
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(span);
   const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(2 * n, 2 * n);
