@@ -333,6 +333,31 @@ def backbone_stability(folder):
     save(fig, folder, "backbone_stability")
 
 
+def wavelet_modes(folder):
+    """Issue #38, item 5: the frequency error of the LL11 rod's nonlinear mode per basis against exact orbits."""
+    meta = json.loads((folder / "meta.json").read_text())
+    energies = meta["energies"]
+    fig, axes = plt.subplots(1, len(energies), figsize=(5.0 * len(energies), 4.0), squeeze=False)
+    for ax, energy in zip(axes[0], energies):
+        for key, label, marker in (("fourier", "Fourier", "o"), ("bspline", "B-spline", "s"), ("db6", "DB6", "^"),
+                                   ("haar", "Haar (delta-pair velocity)", "v")):
+            path = folder / f"{key}.csv"
+            if not path.exists():
+                continue
+            unknowns = column(folder, f"{key}.csv", "unknowns [-]")
+            error = column(folder, f"{key}.csv", f"error_E{energy:g} [-]")
+            pts = [(u, abs(e)) for u, e in zip(unknowns, error) if not math.isnan(e) and e != 0.0]
+            if pts:
+                ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker + "-", ms=4, mfc="none", label=label)
+        ax.axhline(meta["target"], color="0.5", lw=0.6, ls=":", label=f"target {meta['target']:g}")
+        ax.set_xlabel("unknowns of the KKT system [-]")
+        ax.set_ylabel("|f / f_exact − 1| [-]")
+        ax.set_title(f"first nonlinear mode at E = {energy:g}", fontsize=9)
+        ax.legend(loc="upper right", fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "wavelet_modes")
+
+
 def free_vibration(folder):
     """Issue #7: deviation of a free time simulation from the computed modes, period by period."""
     meta = json.loads((folder / "meta.json").read_text())

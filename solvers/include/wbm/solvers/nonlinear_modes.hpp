@@ -301,6 +301,14 @@ class NonlinearModes {
   [[nodiscard]] int onset_stop() const { return onset_stop_; }
   [[nodiscard]] int harmonics() const { return n_harm_; }
   [[nodiscard]] int dofs() const { return n_; }
+  /// The structure (M, K; damping is ignored) and the stops, as given.
+  [[nodiscard]] const MechanicalSystem& system() const { return system_; }
+  [[nodiscard]] const std::vector<RigidStop>& stops() const { return stops_; }
+  /// The DOF whose turning point is the time origin: NonlinearModeOptions::phase_dof, or the
+  /// `dof` of the first stop to touch.
+  [[nodiscard]] int phase_dof() const {
+    return options_.phase_dof >= 0 ? options_.phase_dof : stops_[static_cast<size_t>(onset_stop_)].dof;
+  }
 
   /// The mode at normalized energy E from `start` (a previous level's coefficients, scaled by
   /// √(E/E_start)), or from the linear mode. Never throws for non-convergence. With
