@@ -92,8 +92,8 @@ int main(int argc, char** argv) {
     constexpr int kHarmonics = 32, kSamples = 512;
     const std::vector<int> dimensions = run.quick() ? std::vector<int>{16, 32} : std::vector<int>{16, 32, 64, 128, 256};
     // Largest M run per basis. The periodized orthogonal cubic B-spline has dense time operators
-    // and DB6's Galerkin KKT Jacobian fills in under the sparse LU: both stay within this
-    // reproduction's time only up to M = 128 (docs/design.md gives the times measured at 256).
+    // and DB6's branch at M = 256 has many more switching points: both stay within this
+    // reproduction's time only up to M = 128 (docs/design.md gives what was measured at 256).
     // Haar is also run at 2 × 256, where its second-order convergence reaches the target.
     struct BasisRun {
       std::string name;
