@@ -4,7 +4,10 @@
 // KKT linearization (sparse residual and Jacobian) at the sizes of the extremes (N up to 64,
 // m up to 1024). Alg. 1 also over the first part of the backbone, and its Hessian's solve and
 // Levenberg–Marquardt step by the bordered sparse LU against the dense path they replaced.
-// Counters: levels, corners (events located), time per level.
+// The backbone in a wavelet or Fourier time basis (BasisModes, E from 0.5 to 1.3, the range of
+// reproduce/ll11_wavelet_modes) per basis and M. Counters: levels, corners (events located),
+// time per level.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -12,6 +15,7 @@
 #include <benchmark/benchmark.h>
 
 #include <wbm/scene/analysis.hpp>
+#include <wbm/solvers/basis_modes.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 
 #include "shipped_scenes.hpp"
@@ -143,6 +147,30 @@ void BM_NonlinearModes_KktLinearization(benchmark::State& state) {
   state.counters["unknowns"] = static_cast<double>(system.size());
 }
 
+// Arg 0: basis (0 Fourier, 1 B-spline, 2 DB6, 3 Haar), arg 1: M. Instants as in the reproduction.
+void BM_BasisModes_Backbone(benchmark::State& state) {
+  static const char* const names[] = {"fourier", "bspline", "db6", "haar"};
+  const auto index = static_cast<size_t>(state.range(0));
+  const auto nm = modes(1, 3);
+  const wbm::solvers::BasisModes bm(nm, wbm::solvers::TimeBasis::from_name(names[index], static_cast<int>(state.range(1))),
+                                    {.samples = 0, .sample_offset = index == 3 ? 0.5 : 0.0});
+  size_t levels = 0;
+  int corners = 0;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const auto b = bm.continue_backbone(range(0.5, 1.3));
+    if (!b.complete()) state.SkipWithError(b.message.c_str());
+    levels = b.levels.size();
+    corners = b.kinks;
+    seconds = b.wall_time_s;
+  }
+  state.SetLabel(bm.basis().name());
+  state.counters["unknowns"] = static_cast<double>(bm.unknowns());
+  state.counters["levels"] = static_cast<double>(levels);
+  state.counters["corners"] = static_cast<double>(corners);
+  state.counters["ms_per_level"] = 1e3 * seconds / static_cast<double>(std::max<size_t>(levels, 1));
+}
+
 }  // namespace
 
 BENCHMARK(BM_NonlinearModes_Fig3Backbone)
@@ -160,5 +188,10 @@ BENCHMARK(BM_NonlinearModes_Algorithm1Hessian)
     ->Args({1, 1})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NonlinearModes_KktLinearization)->Args({8, 256})->Args({16, 256})->Args({64, 1024})->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_BasisModes_Backbone)
+    ->ArgsProduct({{0, 1, 2, 3}, {32, 64, 128}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 BENCHMARK_MAIN();

@@ -110,10 +110,11 @@ int main(int argc, char** argv) {
     }
     const auto problem = scene::mode_problem(fine);
     const solvers::NonlinearModes modes(problem.system, problem.stops, problem.options);
+    // Every backbone: from the scene's start to kEnergyMax, the scene's |ΔE| per step, landing on the energies.
     solvers::BackboneContinuationOptions o;
-    o.energy_min = fine.analysis.energy_min;
+    o.energy_min = s.analysis.energy_min;
     o.energy_max = kEnergyMax;
-    o.max_energy_step = fine.analysis.max_energy_step;
+    o.max_energy_step = s.analysis.max_energy_step;
     o.include = energies;
     const solvers::Backbone reference_backbone = modes.continue_backbone(o);
     if (!reference_backbone.complete()) run.fail("the Fourier reference backbone: " + reference_backbone.message);
@@ -181,12 +182,7 @@ int main(int argc, char** argv) {
           table << " | | " << status.back() << " |\n";
           continue;
         }
-        solvers::BackboneContinuationOptions bo;
-        bo.energy_min = s.analysis.energy_min;
-        bo.energy_max = kEnergyMax;
-        bo.max_energy_step = s.analysis.max_energy_step;
-        bo.include = energies;
-        const solvers::BasisBackbone b = bm.continue_backbone(bo);
+        const solvers::BasisBackbone b = bm.continue_backbone(o);
         col_levels(i) = static_cast<double>(b.levels.size());
         col_time(i) = b.levels.empty() ? NAN : 1e3 * b.wall_time_s / static_cast<double>(b.levels.size());
         double worst = 0.0;
@@ -203,8 +199,12 @@ int main(int argc, char** argv) {
           worst = std::max(worst, std::abs(col_err[k](i)));
           table << " " << format("%.6f", col_f[k](i)) << " | " << format("%.1e", col_err[k](i)) << " |";
         }
-        status.push_back(all ? "converged" : b.message);
-        table << " " << b.levels.size() << " | " << format("%.1f", col_time(i)) << " | " << status.back() << " |\n";
+        // The CSV's status is one phrase (no commas); the report's table gives the branch's message.
+        status.push_back(all                ? std::string("converged")
+                         : !b.complete()    ? "branch ended: " + std::string(to_string(b.stop))
+                                            : std::string("a level at the energies did not converge"));
+        table << " " << b.levels.size() << " | " << format("%.1f", col_time(i)) << " | "
+              << (all ? status.back() : b.message) << " |\n";
         if (all && worst <= kTarget && reached.find(key) == reached.end()) reached[key] = {dim, bm.unknowns()};
         if (all && key == "haar") {
           haar_dimensions.push_back(dim);

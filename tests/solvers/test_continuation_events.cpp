@@ -6,7 +6,9 @@
 // (an identity of the corrector) no Jacobian formed that is not factorized.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -300,3 +302,44 @@ TEST(PiecewiseContinuation, EveryJacobianFormedIsFactorized) {
 }
 
 }  // namespace
+
+namespace {
+
+// A closed branch in two pieces: the unit circle x² + λ² = 1, the same residual on both, piece 1
+// where x > 0 (event x) and piece 0 where x ≤ 0 (event −x). Pieces that close a loop.
+struct SplitCircle {
+  [[nodiscard]] Linearization eval(const Eigen::VectorXd& x, double lambda) const {
+    Linearization l;
+    l.residual = Eigen::VectorXd::Constant(1, x(0) * x(0) + lambda * lambda - 1.0);
+    l.jacobian = Eigen::MatrixXd::Constant(1, 1, 2.0 * x(0));
+    l.parameter_derivative = Eigen::VectorXd::Constant(1, 2.0 * lambda);
+    return l;
+  }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double p) const { return eval(x, p).residual; }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double p) const { return eval(x, p); }
+  [[nodiscard]] ActiveSet active_set(const Eigen::VectorXd& x, double /*p*/) const { return {x(0) > 0.0 ? std::uint8_t{1} : std::uint8_t{0}}; }
+  [[nodiscard]] Eigen::VectorXd residual(const Eigen::VectorXd& x, double p, const ActiveSet& /*a*/) const {
+    return eval(x, p).residual;
+  }
+  [[nodiscard]] Linearization linearize(const Eigen::VectorXd& x, double p, const ActiveSet& /*a*/) const { return eval(x, p); }
+  [[nodiscard]] Eigen::VectorXd events(const Eigen::VectorXd& x, double /*p*/, const ActiveSet& a) const {
+    return Eigen::VectorXd::Constant(1, a[0] != 0 ? x(0) : -x(0));
+  }
+};
+
+}  // namespace
+
+// The continuation goes round the circle once, switching at λ = 1 and λ = −1, and stops when it
+// reaches its first switching point again (Retraced), instead of going round until max_points.
+TEST(PiecewiseContinuation, AClosedLoopOfPiecesEndsTheBranchAtItsFirstRepeatedSwitchingPoint) {
+  static_assert(solvers::PiecewiseSmoothSystem<SplitCircle>);
+  const SplitCircle s;
+  auto o = options(-2.0, 2.0);
+  o.max_points = 5000;
+  const auto b = solvers::pseudo_arclength(s, Eigen::VectorXd::Constant(1, 1.0), 0.0, o);
+  EXPECT_EQ(b.stop, solvers::StopReason::Retraced) << b.message;
+  EXPECT_EQ(b.events, 3) << b.message;  // λ = 1, λ = −1, λ = 1 again
+  EXPECT_LT(b.points.size(), 1000U);
+  for (const auto& p : b.points) EXPECT_NEAR(p.x(0) * p.x(0) + p.parameter * p.parameter, 1.0, 1e-8);
+  EXPECT_NE(b.message.find("closed loop"), std::string::npos) << b.message;
+}

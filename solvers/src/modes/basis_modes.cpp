@@ -13,6 +13,8 @@
 
 #include <wbm/solvers/continuation.hpp>
 
+#include "modes/backbone_arclength.hpp"
+
 namespace wbm::solvers {
 
 void BasisModeOptions::validate() const {
@@ -255,8 +257,10 @@ BasisModeLevel BasisModes::level(const Eigen::VectorXd& x, double energy, double
   const double kh = y.dot(stiffness_ * y), mh = y.dot(inertia_ * y);
   l.rayleigh_frequency_hz = std::sqrt(kh / mh) * omega0_ / (2.0 * std::numbers::pi);
   l.normalization_error = std::abs(2.0 * mh - energy);
-  const double floor = 1e-12 * std::max(0.0, u.lambda.maxCoeff());  // rounding on inactive samples
-  u.lambda = (u.lambda.array() > floor).select(u.lambda, 0.0);
+  // An inactive sample (the min picks f_s) has f_s = 0; what Newton left there is rounding.
+  for (Eigen::Index i = 0; i < u.lambda.size(); ++i) {
+    if (u.lambda(i) <= -u.g(i)) u.lambda(i) = 0.0;
+  }
   l.contact_force = u.lambda * (samples_ * omega0_ * omega0_ * m_ref_ * g_ref_);
   l.max_penetration = u.g.maxCoeff();
   const double lmax = u.lambda.maxCoeff();
@@ -283,21 +287,8 @@ BasisBackbone BasisModes::continue_backbone(const BackboneContinuationOptions& o
                                 "set energy_min < 1 (e.g. 0.5)");
   }
   const auto t0 = std::chrono::steady_clock::now();
-  PseudoArclengthOptions pa;
-  pa.parameter_min = 0.5 * o.energy_min;
-  pa.parameter_max = o.energy_max;
-  pa.initial_step = o.initial_step;
-  pa.min_step = o.min_step;
-  pa.max_step = o.max_step;
-  pa.max_parameter_step = o.max_energy_step;
-  pa.max_points = o.max_points;
-  pa.corrector_tolerance = o.tolerance;
-  pa.max_corrector_iterations = 12;
-  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
-  pa.on_point = o.on_point;
-  pa.land_on = o.include;
-  pa.land_on.push_back(o.energy_max);
-  const Branch branch = pseudo_arclength(*this, linear_guess(o.energy_min), o.energy_min, pa);
+  const Branch branch =
+      pseudo_arclength(*this, linear_guess(o.energy_min), o.energy_min, detail::backbone_arclength(o, 0.5 * o.energy_min));
   BasisBackbone b;
   for (const auto& pt : branch.points) {
     if (pt.parameter > o.energy_max) break;  // the landing at energy_max below replaces it
@@ -322,6 +313,10 @@ BasisBackbone BasisModes::continue_backbone(const BackboneContinuationOptions& o
   b.stop = branch.stop;
   b.status = reached_end && branch.stop == StopReason::RangeReached ? SolveStatus::Converged : SolveStatus::PathEnded;
   b.message = std::string(to_string(branch.stop)) + ": " + branch.message;
+  if (branch.stop == StopReason::Retraced) {
+    b.message += "; a corner where two Signorini instants switch almost together can close such a loop: "
+                 "move the instants (BasisModeOptions::sample_offset, 0 for LL11's τ_s = s/m) or change M";
+  }
   b.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return b;
 }

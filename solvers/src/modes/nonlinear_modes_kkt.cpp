@@ -16,6 +16,7 @@
 #include <wbm/spectral/layout.hpp>
 
 #include "core/triplet_pattern.hpp"
+#include "modes/backbone_arclength.hpp"
 
 namespace wbm::solvers {
 
@@ -562,27 +563,10 @@ Backbone NonlinearModes::continue_backbone(const BackboneContinuationOptions& o)
   } else {
     x0 = o.start ? system.state(o.start->coefficients, o.start->frequency_hz) : system.linear_state(std::min(e0, 1.0));
   }
-  PseudoArclengthOptions pa;
-  pa.direction = o.start ? o.direction : +1;
-  pa.parameter_min = o.start ? o.energy_min : 0.5 * e0;
-  pa.parameter_max = o.energy_max;
-  pa.parameter_scale = 1.0;
-  pa.state_scale = 1.0;
-  pa.initial_step = o.initial_step;
-  pa.min_step = o.min_step;
-  pa.max_step = o.max_step;
-  pa.max_parameter_step = o.max_energy_step;
-  pa.max_points = o.max_points;
-  pa.corrector_tolerance = o.tolerance;
-  pa.max_corrector_iterations = 12;
   // BackboneSystem is a PiecewiseSmoothSystem: pseudo_arclength corrects on one piece (active
   // set) at a time and locates and crosses the events where samples switch (continuation.hpp).
-  pa.initial_newton = {.tolerance = o.tolerance, .max_iterations = o.max_newton_iterations};
-  pa.on_point = o.on_point;
-  // The range's end and the energies asked for are landed on by the continuation itself (on the
-  // piece of the step that passes them).
-  pa.land_on = o.include;
-  pa.land_on.push_back(o.energy_max);
+  PseudoArclengthOptions pa = detail::backbone_arclength(o, o.start ? o.energy_min : 0.5 * e0);
+  pa.direction = o.start ? o.direction : +1;
   if (o.start) pa.land_on.push_back(o.energy_min);
   Branch branch = pseudo_arclength(system, x0, e0, pa);
   auto landing = [&](double energy) -> const BranchPoint* {

@@ -41,7 +41,10 @@
 /// for a corrector that fails on a smooth piece; the corner options (kink_step, corner_restart,
 /// corner_bisection) are not used, and every accepted point is verified on the nonsmooth residual.
 /// Branch::events and switches count the events and the entries flipped; a switching point where
-/// no piece continues the branch ends it with StopReason::DegenerateEvent and the reason.
+/// no piece continues the branch ends it with StopReason::DegenerateEvent and the reason, and a
+/// switching point reached again on the same piece, in the same direction (within 1e-6 in the
+/// scaled metric), with StopReason::Retraced: the pieces close a loop (DB6 nonlinear modes with
+/// midpoint samples at M = 128 went round one between E = 1.0007 and 1.066 until max_points).
 /// A fold (turning point) is a sign change of the λ-component of the tangent between two points;
 /// its parameter is the extremum of the cubic Hermite interpolant of λ(s) on that step, and its
 /// state (Fold::x) the interpolant of x(s) there; at a switching point where the new piece turns
@@ -293,6 +296,10 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
   ActiveSet piece;
   if constexpr (kPiecewise) piece = system.active_set(p0.x, lambda0);
   size_t standing_events = 0;
+  // Piecewise-smooth systems: each switching point's index and the piece it continued on. A
+  // switching point reached again, on the same piece, in the same direction, closes a loop of
+  // pieces that the branch would go round until max_points: it ends the branch (Retraced).
+  std::vector<std::pair<size_t, ActiveSet>> switching_points;
   // On a piece the corrector aims at half the tolerance, and an event function counts as crossed
   // below −tolerance/4 (the nonsmooth residual of every point accepted is verified against the
   // tolerance). Event functions within the tolerance of 0 are at their surface (zero band): the
@@ -466,6 +473,32 @@ Branch pseudo_arclength(const S& system, Eigen::VectorXd x0, double lambda0, con
     }
     branch.points.push_back(std::move(p));
     if (o.on_point) o.on_point(branch.points.size() - 1, branch.points.back());
+    if constexpr (kPiecewise) {
+      if (branch.points.back().event) {
+        const BranchPoint& q = branch.points.back();
+        for (const auto& [k, k_piece] : switching_points) {
+          const BranchPoint& r = branch.points[k];
+          if (k_piece != piece) continue;
+          Eigen::VectorXd d(n + 1);
+          d << (q.x - r.x) / xs, (q.parameter - r.parameter) / ls;
+          // Within 1e-6 in the scaled metric (steps are 1e-7 … 5e-2 of it; a located switching
+          // point is known to the zero band): the same point.
+          if (std::sqrt(detail::inner(d, d)) <= 1e-6 && detail::inner(q.tangent, r.tangent) > 0.0) {
+            double low = q.parameter, high = q.parameter;
+            for (size_t j = k; j < branch.points.size(); ++j) {
+              low = std::min(low, branch.points[j].parameter);
+              high = std::max(high, branch.points[j].parameter);
+            }
+            return finish(StopReason::Retraced,
+                          "the branch came back to its switching point at λ = " + format_number(r.parameter) +
+                              " (point " + std::to_string(k) + ") on the same piece and in the same direction: it "
+                              "goes round a closed loop of pieces between λ = " + format_number(low) + " and " +
+                              format_number(high));
+          }
+        }
+        switching_points.emplace_back(branch.points.size() - 1, piece);
+      }
+    }
     const double lambda = branch.points.back().parameter;
     if (o.max_state > 0.0 && branch.points.back().x.lpNorm<Eigen::Infinity>() / xs > o.max_state) {
       return finish(StopReason::StateBound, "‖x‖∞/state_scale > " + format_number(o.max_state) + " at λ = " +

@@ -51,7 +51,9 @@ enum class SolveStatus {
 
 /// Why a branch ended. Retraced: the branch came back along a piece it had already traced
 /// (detected by the caller that knows the problem, e.g. a backbone falling back below contact
-/// onset after a corner) and was cut where it turned back. UndampedResonance: a forced response
+/// onset after a corner) and was cut where it turned back; or, for a piecewise-smooth system,
+/// pseudo_arclength reached one of its switching points again, on the same piece and in the same
+/// direction (a closed loop of pieces it would go round until max_points). UndampedResonance: a forced response
 /// with the M = 2^J Fourier basis followed the undamped resonance of its top function cos πMτ
 /// (response_curve.hpp) and was cut where that function took over.
 enum class StopReason {
