@@ -32,6 +32,7 @@
 #include <wbm/scene/scene.hpp>
 #include <wbm/solvers/mechanical_system.hpp>
 #include <wbm/solvers/model_checks.hpp>
+#include <wbm/solvers/basis_modes.hpp>
 #include <wbm/solvers/nonlinear_modes.hpp>
 #include <wbm/solvers/response_curve.hpp>
 #include <wbm/solvers/time_basis.hpp>
@@ -609,6 +610,65 @@ shooting at the level's mean energy, the nontrivial multipliers of its saltation
 stability_available (bool), stable (bool), max_floquet_multiplier, exact_frequency_hz [Hz],
 orbit_distance (relative rms of the stops' displacements) and impacts per period (NaN where no
 verdict), and stability_message (why a level has none).)");
+  m.def(
+      "basis_mode",
+      [](const solvers::MechanicalSystem& system, const std::vector<std::pair<int, double>>& stops,
+         std::pair<double, double> energy, const solvers::TimeBasis& basis, int samples,
+         std::optional<double> sample_offset, double max_energy_step) {
+        std::vector<solvers::RigidStop> rigid;
+        for (const auto& [dof, gap] : stops) rigid.push_back({dof, gap});
+        // The problem (structure, stops, onset normalization); its harmonics are not used.
+        const solvers::NonlinearModes problem(system, rigid, {.harmonics = 1, .samples = 3});
+        const solvers::BasisModes modes(problem, basis, {.samples = samples, .sample_offset = sample_offset});
+        solvers::BackboneContinuationOptions o;
+        o.energy_min = energy.first;
+        o.energy_max = energy.second;
+        o.max_energy_step = max_energy_step;
+        const auto b = modes.continue_backbone(o);
+        const auto n = static_cast<Eigen::Index>(b.levels.size());
+        Eigen::VectorXd e(n), f(n), r(n), pen(n), comp(n), sigma(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const auto& l = b.levels[static_cast<size_t>(i)];
+          e(i) = l.level.energy;
+          f(i) = l.level.frequency_hz;
+          r(i) = l.level.rayleigh_frequency_hz;
+          pen(i) = l.level.max_penetration;
+          comp(i) = l.level.complementarity;
+          sigma(i) = l.phase_multiplier;
+        }
+        py::dict out;
+        out["converged"] = b.complete();
+        out["stop"] = std::string(solvers::to_string(b.stop));
+        out["message"] = b.message;
+        out["linear_frequency_hz"] = problem.linear_frequency_hz();
+        out["basis"] = modes.basis().name();
+        out["unknowns"] = modes.unknowns();
+        out["samples"] = modes.samples();
+        out["sample_offset"] = modes.sample_offset();
+        out["energy"] = py::cast(e);
+        out["frequency_hz"] = py::cast(f);
+        out["rayleigh_frequency_hz"] = py::cast(r);
+        out["max_penetration"] = py::cast(pen);
+        out["complementarity"] = py::cast(comp);
+        out["phase_multiplier"] = py::cast(sigma);
+        out["events"] = b.kinks;
+        out["wall_time_s"] = b.wall_time_s;
+        return out;
+      },
+      py::arg("system"), py::arg("stops"), py::arg("energy"), py::arg("basis"), py::arg("samples") = 0,
+      py::arg("sample_offset") = py::none(), py::arg("max_energy_step") = 0.05,
+      R"(First nonlinear normal mode against rigid stops in any time basis (solvers::BasisModes,
+issue #38): LL11's KKT conditions (Signorini at m instants, energy normalization) in the Galerkin
+form of basis (a TimeBasis: Fourier, B-spline, DB6, or Haar with the delta-pair velocity, its
+Galerkin system then the central-difference scheme in time), continued in energy from energy[0] < 1
+(below contact onset) to energy[1]. stops: list of (dof, gap [m] > 0). samples: m instants τ_s =
+(s + o)/m, 0 for m = M; sample_offset: o in [0, 1), None for ½ with Haar and 0 otherwise.
+Returns a dict: arrays per level energy, frequency_hz, rayleigh_frequency_hz, max_penetration and
+complementarity [gap], phase_multiplier (the phase condition's multiplier: 0 for Fourier, of the
+order of the discretization otherwise); converged (the range was reached), stop, message,
+linear_frequency_hz, basis, unknowns, samples, sample_offset (as used), events, wall_time_s.
+Raises ValueError for a basis without a velocity (DB4), samples < M, bad stops or energies.
+Non-convergence is returned, not raised.)");
   m.def(
       "evaluate",
       [](const solvers::TimeBasis& trial, const py::object& coefficients, const py::object& tau) -> Eigen::MatrixXd {

@@ -230,6 +230,20 @@ def test_nonlinear_mode(dof, gap, energy, harmonics, samples, penalty, step):
         assert np.isfinite(r["energy"]).all() and np.isfinite(r["frequency_hz"]).all()
 
 
+@FEW
+@given(name=st.sampled_from(["fourier", "bspline", "db6", "db4", "haar"]), level=st.integers(0, 6),
+       energy=st.tuples(REALS, REALS), samples=st.integers(-1, 80), offset=st.one_of(st.none(), REALS),
+       step=REALS)
+def test_basis_mode(name, level, energy, samples, offset, step):
+    undamped = wbm.MechanicalSystem(np.diag([1.0, 2.0]), np.zeros((2, 2)), np.array([[3e4, -1e4], [-1e4, 2e4]]))
+    e = (min(max(energy[0], -1.0), 0.9) if math.isfinite(energy[0]) else energy[0],
+         min(max(energy[1], -1.0), 1.5) if math.isfinite(energy[1]) else energy[1])  # a short branch
+    r = allowed(lambda: wbm.basis_mode(undamped, [(1, 1e-3)], e, wbm.TimeBasis(name, 2 ** level), samples, offset,
+                                       max(step, 2e-2) if math.isfinite(step) else step))
+    if r is not None:
+        finite_arrays(r)
+
+
 SCENE_VALUES = st.one_of(REALS, st.integers(-10, 10), st.text(max_size=4), st.booleans(), st.none(),
                          arrays(max_dims=1, side=3), st.lists(REALS, max_size=3))
 

@@ -199,6 +199,32 @@ def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
     assert mode["first_mode_share"][-1] < 1.0 - 1e-3
 
 
+def test_basis_mode_is_the_linear_mode_below_contact_in_each_basis():
+    # The 2-DOF chain of examples/scenes/two_dof_nnm.toml. Below contact onset Fourier gives the
+    # linear frequency (closed form) and Haar the central-difference scheme's, f (pi/M)/sin(pi/M);
+    # above onset the stop stiffens the mode in both.
+    s = wbm.MechanicalSystem(mass=np.eye(2), damping=np.zeros((2, 2)),
+                             stiffness=np.array([[2000.0, -1000.0], [-1000.0, 1000.0]]))
+    linear = math.sqrt(1000.0 * (3.0 - math.sqrt(5.0)) / 2.0) / (2.0 * math.pi)
+    for name, factor, offset in (("fourier", 1.0, 0.0), ("haar", (math.pi / 32) / math.sin(math.pi / 32), 0.5)):
+        mode = wbm.basis_mode(s, [(1, 1e-3)], (0.5, 1.5), wbm.TimeBasis(name, 32))
+        assert mode["converged"], mode["message"]
+        assert mode["sample_offset"] == offset and mode["samples"] == 32
+        assert mode["unknowns"] == 2 * 32 + 1 + 32 + 1
+        assert mode["linear_frequency_hz"] == pytest.approx(linear, rel=1e-12)
+        # The levels before the branch first turns back in energy (its first fold, at contact onset).
+        before = np.arange(np.argmax(np.diff(mode["energy"]) < 0.0) + 1)
+        below = before[mode["energy"][before] < 1.0]
+        assert below.size >= 5
+        np.testing.assert_allclose(mode["frequency_hz"][below], linear * factor, rtol=1e-10)
+        assert mode["frequency_hz"][-1] > 1.01 * linear * factor
+        assert (mode["max_penetration"] <= 1e-9).all()
+    with pytest.raises(ValueError, match="DB4"):
+        wbm.basis_mode(s, [(1, 1e-3)], (0.5, 1.5), wbm.TimeBasis("db4", 32))
+    with pytest.raises(ValueError, match="samples = 8"):
+        wbm.basis_mode(s, [(1, 1e-3)], (0.5, 1.5), wbm.TimeBasis("haar", 32), samples=8)
+
+
 def test_nonlinear_mode_stability_is_the_linear_modes_below_contact():
     # The same chain with stability=True: below contact every level is the linear mode, an exact orbit
     # without impacts, stable with |mu| = 1 at the linear frequency (closed form); above it every level

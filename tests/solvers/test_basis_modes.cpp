@@ -166,6 +166,7 @@ TEST(BasisModes, JacobianMatchesFiniteDifferences) {
 TEST(BasisModes, RefusesBadInput) {
   const auto problem = wbm::testing::modes(1e-3, 1, 3);
   expect_refused([&] { (void)solvers::BasisModes(problem, basis("db4", 16)); }, {"DB4", "Haar"});
+  expect_refused([&] { (void)solvers::BasisModes(problem, basis("haar", 1)); }, {"M = 1", "M >= 2"});
   expect_refused(
       [&] { (void)solvers::BasisModes(problem, basis("haar", 16), {.samples = 8, .sample_offset = 0.5}); },
       {"samples = 8", "M = 16"});

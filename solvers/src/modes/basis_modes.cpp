@@ -22,9 +22,9 @@ void BasisModeOptions::validate() const {
     throw std::invalid_argument("BasisModeOptions.samples = " + std::to_string(samples) +
                                 ": must be >= 0 (0: one instant per basis function, m = M)");
   }
-  if (!(sample_offset >= 0.0 && sample_offset < 1.0)) {
-    throw std::invalid_argument("BasisModeOptions.sample_offset = " + format_number(sample_offset) +
-                                ": must lie in [0, 1) (0.5: midpoints)");
+  if (sample_offset && !(*sample_offset >= 0.0 && *sample_offset < 1.0)) {
+    throw std::invalid_argument("BasisModeOptions.sample_offset = " + format_number(*sample_offset) +
+                                ": must lie in [0, 1) (0.5: midpoints), or be unset");
   }
 }
 
@@ -71,9 +71,17 @@ BasisModes::BasisModes(const NonlinearModes& problem, TimeBasis basis, BasisMode
   n_ = problem.dofs();
   dim_ = basis_.dimension();
   samples_ = options.samples == 0 ? dim_ : options.samples;
+  if (dim_ < 2) {
+    throw std::invalid_argument("BasisModes: the basis " + basis_.name() + " has M = " + std::to_string(dim_) +
+                                " function: a periodic orbit needs M >= 2 (use 16 or more)");
+  }
   if (samples_ < dim_) {
     throw std::invalid_argument("BasisModeOptions.samples = " + std::to_string(samples_) + ": must be >= M = " +
                                 std::to_string(dim_) + " (the basis' functions), or 0 for m = M");
+  }
+  if (static_cast<double>(samples_) * dim_ > 16777216.0) {
+    throw std::invalid_argument("BasisModes: m × M = " + std::to_string(samples_) + " × " + std::to_string(dim_) +
+                                " exceeds 2^24 (the instants' values, 128 MiB); use a smaller M or samples = 0");
   }
   phase_dof_ = problem.phase_dof();
   omega0_ = 2.0 * std::numbers::pi * problem.linear_frequency_hz();
@@ -90,7 +98,8 @@ BasisModes::BasisModes(const NonlinearModes& problem, TimeBasis basis, BasisMode
   stiffness_.makeCompressed();
   inertia_.makeCompressed();
   Eigen::VectorXd tau(samples_);
-  for (int s = 0; s < samples_; ++s) tau(s) = (s + options.sample_offset) / samples_;
+  offset_ = options.sample_offset.value_or(is_haar(basis_) ? 0.5 : 0.0);
+  for (int s = 0; s < samples_; ++s) tau(s) = (s + offset_) / samples_;
   theta_ = basis_.values(tau, 0);
   const int p = 16 * dim_;
   const Eigen::MatrixXd v = basis_.grid_values(p, true);

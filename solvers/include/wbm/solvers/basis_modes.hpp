@@ -5,7 +5,7 @@
 ///
 /// Unknowns: u(τ) = Σ_k Y(:, k) q_k(τ), τ = t/T, q_k the M functions of a TimeBasis (n × M
 /// coefficients, column k = function k of the basis' ordering); ω²; contact forces f_s at the m
-/// Signorini instants τ_s = (s + o)/m of every stop (o = BasisModeOptions::sample_offset); and σ,
+/// Signorini instants τ_s = (s + o)/m of every stop (o: BasisModeOptions::sample_offset); and σ,
 /// the multiplier of the phase condition. With the basis' time operators (M × M)
 ///   A₀(j, k) = ∫₀¹ q_j q_k dτ,   B(j, k) = (1/4π²) ∫₀¹ q̇_j q̇_k dτ   (q̇ = dq/dτ),
 /// the conditions are the Galerkin form of M ü + K u + Σ_c e_c f_c = 0 with the Signorini
@@ -42,6 +42,7 @@
 /// and sample_offset 0 the system is that of NonlinearModes::continue_backbone, solved by an
 /// independent code (the test compares them).
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,7 +59,10 @@ struct BasisModeOptions {
   /// m Signorini instants per stop; 0: M (one per function: Haar is constant on each of its M
   /// cells, so more instants than cells repeat constraints and their multipliers are not unique).
   int samples = 0;
-  double sample_offset = 0.5;  // o in τ_s = (s + o)/m, in [0, 1): ½ keeps Haar's instants off its jumps
+  /// o in τ_s = (s + o)/m, in [0, 1). Unset: ½ for Haar (its instants off its jumps at k/M), 0
+  /// otherwise (LL11's τ_s = s/m: an instant at the turning point τ = 0; at midpoints two instants
+  /// straddle it and enter contact almost together, docs/design.md).
+  std::optional<double> sample_offset = std::nullopt;
   /// Throws std::invalid_argument naming the field, its value and the range.
   void validate() const;
 };
@@ -86,7 +90,8 @@ struct BasisBackbone {
 /// The nonlinear modes of the problem of a NonlinearModes (structure, stops, phase DOF, onset
 /// normalization; its harmonics and samples are not used) in `basis`. Throws
 /// std::invalid_argument for a basis without a velocity representation (message names the basis
-/// and the families that work), invalid options, or m < M (fewer instants than functions).
+/// and the families that work), invalid options, M < 2, m < M (fewer instants than functions), or
+/// m M > 2²⁴ (the dense instants' values Θ, 128 MiB).
 class BasisModes {
  public:
   BasisModes(const NonlinearModes& problem, TimeBasis basis, BasisModeOptions options = {});
@@ -126,6 +131,7 @@ class BasisModes {
   [[nodiscard]] Eigen::MatrixXd displacement(const BasisModeLevel& level, int samples) const;
   [[nodiscard]] const TimeBasis& basis() const { return basis_; }
   [[nodiscard]] int samples() const { return samples_; }
+  [[nodiscard]] double sample_offset() const { return offset_; }  // o, as used
   /// Unknowns of the KKT system: n M + 1 + stops × m + 1.
   [[nodiscard]] Eigen::Index unknowns() const { return size_; }
 
@@ -143,7 +149,7 @@ class BasisModes {
   std::vector<RigidStop> stops_;
   TimeBasis basis_;
   int n_ = 0, dim_ = 0, samples_ = 0, phase_dof_ = 0;
-  double omega0_ = 0.0, g_ref_ = 1.0, m_ref_ = 1.0;
+  double omega0_ = 0.0, g_ref_ = 1.0, m_ref_ = 1.0, offset_ = 0.0;
   Eigen::VectorXd onset_;
   Eigen::SparseMatrix<double> a0_, b_;             // A₀, B (M × M)
   Eigen::SparseMatrix<double> stiffness_, inertia_;  // A₀ ⊗ K̂, B ⊗ M̂ (n M × n M)
