@@ -272,6 +272,45 @@ def space_time(folder):
     save(fig, folder, "space_time")
 
 
+def point_mass_impacts(folder):
+    """Issue #38, item 3: the Haar weighted residual with Newton's impact law against the exact orbit."""
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    ax = axes[0]
+    e = column(folder, "convergence.csv", "restitution [-]")
+    m = column(folder, "convergence.csv", "cells [-]")
+    err = column(folder, "convergence.csv", "error [-]")
+    mj = column(folder, "convergence.csv", "moreau_jean_error [-]")
+    for value, marker in sorted({(v, "o" if v == 0.0 else "s") for v in e}):
+        pts = [(x, y) for x, y, r in zip(m, err, e) if r == value and not math.isnan(y)]
+        ref = [(x, y) for x, y, r in zip(m, mj, e) if r == value and not math.isnan(y)]
+        if pts:
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker + "-", ms=4, label=f"Haar, impact law, e = {value:g}")
+        if ref:
+            ax.loglog([p[0] for p in ref], [p[1] for p in ref], marker + "--", ms=4, mfc="none",
+                      label=f"Moreau–Jean, M steps, e = {value:g}")
+    ax.set_xlabel("cells (steps) per period M [-]")
+    ax.set_ylabel("rms error against the exact orbit [-]")
+    ax.set_title("1-DOF impact oscillator", fontsize=9)
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    for name, style in (("plastic", "-"), ("restitution", "--")):
+        path = folder / f"orbit_{name}.csv"
+        if not path.exists():
+            continue
+        tau = column(folder, path.name, "tau [-]")
+        exact = column(folder, path.name, "u_exact [m]")
+        haar = column(folder, path.name, "u_haar [m]")
+        scale = max(abs(x) for x in exact)
+        ax.plot(tau, [x / scale for x in exact], "k" + style, lw=1.2, label=f"exact orbit ({name})")
+        ax.plot(tau, [x / scale for x in haar], style, lw=0.7, label=f"Haar cells ({name})")
+    ax.set_xlabel("τ = t/T [-]")
+    ax.set_ylabel("u / max|u_exact| [-]")
+    ax.set_title("the orbits at the finest M", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, folder, "point_mass_impacts")
+
+
 def penalty_limit(folder):
     """Issue #7: penalty backbones approach the exact-contact one as the stiffness grows."""
     meta = json.loads((folder / "meta.json").read_text())
