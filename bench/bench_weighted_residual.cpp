@@ -9,11 +9,14 @@
 // damping), whose factorization is the SparseLu policy (KLU) since issue #41.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <memory>
+#include <numbers>
 #include <string>
 #include <vector>
 
 #include <wbm/contact/signorini.hpp>
+#include <wbm/solvers/haar_impact.hpp>
 #include <wbm/solvers/weighted_residual.hpp>
 
 #include "shipped_scenes.hpp"
@@ -153,6 +156,29 @@ void BM_WeightedResidual_DelassusAtFrequency(benchmark::State& state) {
   state.SetLabel(p.first + ":" + p.second);
 }
 
+// The Haar weighted residual with Newton's impact law (haar_impact.hpp) on issue #16's point mass:
+// 1 kg, 10 Hz, ζ = 0.05, forced at 8 Hz with k g0/F = ½ (plastic) — the transient's sweeps and the
+// fixed point, O(M) per sweep. range(0) = M, range(1) = 10 e.
+void BM_WeightedResidual_HaarImpactPointMass(benchmark::State& state) {
+  const double k = std::pow(2.0 * std::numbers::pi * 10.0, 2);
+  wbm::solvers::MechanicalSystem sys;
+  sys.mass = Eigen::MatrixXd::Constant(1, 1, 1.0).sparseView();
+  sys.damping = Eigen::MatrixXd::Constant(1, 1, 0.1 * std::sqrt(k)).sparseView();
+  sys.stiffness = Eigen::MatrixXd::Constant(1, 1, k).sparseView();
+  const std::vector<wbm::solvers::ContactPoint> stop{{0, std::make_shared<wbm::contact::RigidStop>(5.0 / k)}};
+  wbm::solvers::HaarImpactOptions o;
+  o.cells = static_cast<int>(state.range(0));
+  o.restitution = 0.1 * static_cast<double>(state.range(1));
+  int converged = 0;
+  for (auto _ : state) {
+    const auto s = wbm::solvers::solve_haar_impact(sys, {0, 10.0, 8.0}, stop, o);
+    converged = s.converged() ? 1 : 0;
+    benchmark::DoNotOptimize(s.displacement.data());
+  }
+  state.counters["converged"] = converged;
+  state.SetComplexityN(state.range(0));
+}
+
 void delassus_arguments(benchmark::internal::Benchmark* b) {
   for (int pair : {0, 1, 2}) {
     for (int m : {64, 256, 1024}) {
@@ -195,4 +221,7 @@ BENCHMARK(BM_WeightedResidual_ResidualAndJacobian)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolve)->Apply(arguments);
 BENCHMARK(BM_WeightedResidual_FullSolveRigidVsPenalty)->Apply(rigid_arguments);
 BENCHMARK(BM_WeightedResidual_DelassusAtFrequency)->Apply(delassus_arguments);
+BENCHMARK(BM_WeightedResidual_HaarImpactPointMass)
+    ->ArgsProduct({{64, 256, 1024, 4096}, {0, 5}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();
