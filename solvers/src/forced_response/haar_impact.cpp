@@ -15,7 +15,7 @@
 
 #include <wbm/contact/signorini.hpp>
 
-#include "reference/lcp_step.hpp"
+#include "core/lcp_step.hpp"
 
 namespace wbm::solvers {
 namespace {

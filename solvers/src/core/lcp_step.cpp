@@ -1,4 +1,4 @@
-#include "reference/lcp_step.hpp"
+#include "core/lcp_step.hpp"
 
 #include <algorithm>
 #include <cstdlib>

@@ -1,6 +1,6 @@
 #pragma once
 // The small linear complementarity problem of one step of a time-discrete impact law, solved by
-// Siconos Numerics (Lemke). Private to solvers/src.
+// Siconos Numerics (Lemke). Private to solvers/src (core/: forced_response/ includes it).
 
 #include <memory>
 
