@@ -40,6 +40,7 @@
 #include <wbm/wavelets/connection_coefficients.hpp>
 
 #include "arguments.hpp"
+#include "bindings.hpp"
 
 namespace py = pybind11;
 using namespace wbm;
@@ -683,6 +684,7 @@ Non-convergence is returned, not raised.)");
       "reals) at the finite normalized times tau (1-D). Raises ValueError for another shape or dtype, or a "
       "non-finite entry.");
 
+  python::bind_haar_impact(m);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

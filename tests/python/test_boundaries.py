@@ -231,6 +231,22 @@ def test_nonlinear_mode(dof, gap, energy, harmonics, samples, penalty, step):
 
 
 @FEW
+@given(mass=REALS, stiffness=REALS, amplitude=REALS, frequency=REALS, gap=REALS, e=REALS,
+       cells=st.integers(-2, 600), dof=st.integers(-1, 2))
+def test_haar_impact(mass, stiffness, amplitude, frequency, gap, e, cells, dof):
+    def system():
+        return wbm.MechanicalSystem(np.array([[mass]]), np.array([[0.1]]), np.array([[stiffness]]))
+    s = allowed(system)
+    if s is None:
+        return
+    r = allowed(lambda: wbm.haar_impact(s, 0, amplitude, frequency, [(dof, gap)], e, cells, [], 3))
+    if r is not None:
+        finite_arrays(r)
+        for key in ("residual", "complementarity", "penetration", "reference_displacement"):
+            assert math.isfinite(r[key]), key
+
+
+@FEW
 @given(name=st.sampled_from(["fourier", "bspline", "db6", "db4", "haar"]), level=st.integers(0, 6),
        energy=st.tuples(REALS, REALS), samples=st.integers(-1, 80), offset=st.one_of(st.none(), REALS),
        step=REALS)

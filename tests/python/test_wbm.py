@@ -199,6 +199,54 @@ def test_nonlinear_mode_equals_the_scene_backbone_and_the_linear_mode():
     assert mode["first_mode_share"][-1] < 1.0 - 1e-3
 
 
+def plastic_impact_orbit(tau, m, k, c, amplitude, f, gap):
+    """Issue #16's closed form: the mass rests on the stop while F cos(wt) >= k g0, leaves it at
+    w t1 = arccos(k g0 / F) and flies freely until its first return to g0 (bisection), u(tau)."""
+    w, wn = 2.0 * math.pi * f, math.sqrt(k / m)
+    zeta = c / (2.0 * math.sqrt(k * m))
+    wd = wn * math.sqrt(1.0 - zeta ** 2)
+    amp = amplitude / complex(k - m * w ** 2, w * c)
+    t1 = math.acos(k * gap / amplitude) / w
+    a = gap - (amp * np.exp(1j * w * t1)).real
+    b = (zeta * wn * a - (1j * w * amp * np.exp(1j * w * t1)).real) / wd
+
+    def flight(t):
+        s = t - t1
+        return (amp * np.exp(1j * w * t)).real + np.exp(-zeta * wn * s) * (a * np.cos(wd * s) + b * np.sin(wd * s))
+
+    grid = t1 + np.linspace(1e-2, 1.25, 200001) / f  # the mass leaves tangentially: skip rounding at t1
+    above = np.flatnonzero(flight(grid) > gap)
+    lo, hi = grid[above[0] - 1], grid[above[0]]
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if flight(mid) < gap else (lo, mid)
+    t = np.asarray(tau) / f
+    t = np.where(t < t1, t + 1.0 / f, t)
+    return np.where(t <= lo, flight(t), gap)
+
+
+def test_haar_impact_converges_to_the_plastic_impact_orbit_in_closed_form():
+    # Issue #16's point mass (1 kg, 10 Hz, zeta = 0.05, 8 Hz, k g0 / F = 1/2) with e = 0: the cell
+    # values at the cells' midpoints converge to the closed form at second order.
+    k = (2.0 * math.pi * 10.0) ** 2
+    c = 0.1 * math.sqrt(k)
+    s = wbm.MechanicalSystem(mass=np.eye(1), damping=np.array([[c]]), stiffness=np.array([[k]]))
+    errors = []
+    for cells in (64, 256):
+        r = wbm.haar_impact(s, 0, 10.0, 8.0, [(0, 5.0 / k)], cells=cells)
+        assert r["converged"], r["message"]
+        assert r["displacement"].shape == (1, cells) and r["impulses"].shape == (1, cells)
+        exact = plastic_impact_orbit(r["tau"], 1.0, k, c, 10.0, 8.0, 5.0 / k)
+        errors.append(np.sqrt(np.mean((r["displacement"][0] - exact) ** 2) / np.mean(exact ** 2)))
+        assert r["penetration"] <= 1e-12 and (r["impulses"] >= 0.0).all()
+    assert errors[1] < 1e-4
+    assert math.log(errors[0] / errors[1], 4.0) == pytest.approx(2.0, abs=0.3)
+    with pytest.raises(ValueError, match="restitution"):
+        wbm.haar_impact(s, 0, 10.0, 8.0, [(0, 5.0 / k)], restitution=1.5)
+    with pytest.raises(ValueError, match="cells"):
+        wbm.haar_impact(s, 0, 10.0, 8.0, [(0, 5.0 / k)], cells=4)
+
+
 def test_basis_mode_is_the_linear_mode_below_contact_in_each_basis():
     # The 2-DOF chain of examples/scenes/two_dof_nnm.toml. Below contact onset Fourier gives the
     # linear frequency (closed form) and Haar the central-difference scheme's, f (pi/M)/sin(pi/M);
