@@ -197,13 +197,26 @@ TEST(HaarImpact, RefusesBadInputNamingTheKey) {
   }
   opt.cells = 4096;
   EXPECT_NO_THROW((void)solvers::solve_haar_impact(stiff, forcing, stops, opt));
+  solvers::MechanicalSystem many;
+  Eigen::SparseMatrix<double> eye(401, 401);
+  eye.setIdentity();
+  many.mass = eye;
+  many.damping = 0.0 * eye;
+  many.stiffness = eye;
+  try {
+    (void)solvers::solve_haar_impact(many, forcing, stops, {});
+    ADD_FAILURE() << "401 DOFs were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("401 DOFs"), std::string::npos) << e.what();
+  }
   EXPECT_THROW((void)solvers::solve_haar_impact(o.system(), forcing, stops, {}, Eigen::MatrixXd::Zero(2, 2)),
                std::invalid_argument);
 }
 
 // A two-DOF chain (10.3 and 16.2 Hz) whose lighter mass hits a stop plastically, forced at 8 Hz on
-// the other: the lighter mass' cell values converge to the exact orbit of the event-driven flow (impact_shooting.hpp, closed-form flights between events),
-// which shares nothing with the sweep but the equations of motion.
+// the other: the lighter mass' cell values converge to the exact orbit of the event-driven flow
+// (impact_shooting.hpp: closed-form flights between events), which shares nothing with the sweep
+// but the equations of motion.
 TEST(HaarImpact, TwoDofChainConvergesToTheEventDrivenOrbit) {
   const auto sys = two_dof_chain();
   const solvers::HarmonicForcing forcing{0, 400.0, 8.0};

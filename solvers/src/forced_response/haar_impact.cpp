@@ -22,6 +22,10 @@ namespace {
 
 std::string num(double v) { return format_number(v); }
 
+// The largest model solve_haar_impact takes: its matrices are dense and a step's sensitivities
+// cost O(n³).
+constexpr int kMaxDofs = 400;
+
 // The boxes' matrices and loads of one problem (haar_impact.hpp's notation).
 struct Scheme {
   int n = 0, nc = 0, cells = 0;
@@ -149,6 +153,11 @@ Scheme build(const MechanicalSystem& system, const HarmonicForcing& forcing, con
              const HaarImpactOptions& options) {
   system.validate();
   const int n = static_cast<int>(system.mass.rows());
+  if (n > kMaxDofs) {
+    throw std::invalid_argument("solve_haar_impact: the model has " + std::to_string(n) + " DOFs, more than " +
+                                std::to_string(kMaxDofs) + ": its sweep is dense, for point-mass models; reduce "
+                                "the model (wbm reduce, Craig–Bampton) or use the weighted residual with a penalty law");
+  }
   forcing.validate(n);
   forcing.require_resolved(options.cells, "the Haar weighted residual's M = " + std::to_string(options.cells) + " cells",
                            "raise HaarImpactOptions.cells");

@@ -11,11 +11,12 @@
 /// the states before it, as in a time stepping, and the periodicity is imposed on the period's
 /// first state.
 ///
-/// The discretization. Trial and weighting functions are the M Haar scaling functions at level
-/// log₂M (boxes χ_k on the cells [k h, (k + 1) h), h = T/M, T = 1/f), u(t) = Σ_k u_k χ_k(t) with
-/// u_k ∈ ℝⁿ the cell values. The velocity of a box is JL14's delta pair [JL14 Sec. 5.2] in the box
-/// form of BasisModes (basis_modes.hpp): u̇ = Σ_k (u_k − u_{k−1}) δ(t − k h), whose value at a jump
-/// of a box is the mean of its two sides. Galerkin on each box, divided by h:
+/// The discretization. Trial and weighting functions are M boxes χ_k on the cells [k h, (k + 1) h),
+/// h = T/M, T = 1/f (for M = 2^J the Haar scaling functions at level J; any M ≥ 8 is accepted),
+/// u(t) = Σ_k u_k χ_k(t) with u_k ∈ ℝⁿ the cell values. The velocity is JL14's delta pair [JL14
+/// Sec. 5.2] in the box form of BasisModes (basis_modes.hpp), u̇ = Σ_k (u_k − u_{k−1}) δ(t − k h);
+/// the damping term ∫ χ_k u̇ takes half of each delta at the box's two edges (the box's mean value
+/// at its jumps). Galerkin on each box, divided by h:
 ///   M (u_{k+1} − 2u_k + u_{k−1})/h² + C (u_{k+1} − u_{k−1})/(2h) + K u_k = f̄_k − W P_k / h,
 /// f̄_k = (1/h) ∫ f_ext over cell k (exact for the harmonic loads), W = [e_1 … e_nc] the stops'
 /// directions (n × n_c), P_k ≥ 0 the impulses of cell k (n_c), indices modulo M (periodicity).
@@ -29,8 +30,8 @@
 ///   0 ≤ P_k ⊥ g − Wᵀ (u_{k+1} + e u_{k−1})/(1 + e) ≥ 0   (componentwise over the stops),
 /// g the gaps (n_c). Where a stop's cell value u_k is on the stop, an active row reads
 /// e_cᵀ(u_{k+1} − u_k)/h = −e e_cᵀ(u_k − u_{k−1})/h: Newton's law v⁺ = −e v⁻ on the discrete
-/// velocities, which tends to Moreau's sweeping process with restitution as h → 0 [Paoli &
-/// Schatzman, Part I, Thm. 5.1]. e = 0 is the plastic impact: the mass stays on the stop while the
+/// velocities; Paoli and Schatzman prove the scheme's convergence to the motion with Moreau's
+/// impact law as h → 0 (Part I: one constraint). e = 0 is the plastic impact: the mass stays on the stop while the
 /// load presses it there. For e > 0 a cell value may pass the stop by O(h |u̇|) (the constraint
 /// holds on the average), which `penetration` reports.
 ///
@@ -44,7 +45,8 @@
 /// `guess`) over `transient_periods` periods, which a stable orbit attracts. u_ref is the larger of
 /// the largest gap and the largest |u| over the last transient period. The central-difference
 /// sweep is stable for h ω_max < 2 (ω_max the largest undamped natural angular frequency), which
-/// is required: a model with stiff modes needs many cells, a point-mass model few.
+/// is required: a model with stiff modes needs many cells, a point-mass model few. The matrices
+/// are dense (n ≤ 400 DOFs; a step's sensitivities cost O(n³)).
 ///
 /// Converged only from a verified residual: Newton's R below newton.tolerance, and then the
 /// periodic Galerkin residual and the complementarity recomputed from the returned cell values
@@ -92,14 +94,14 @@ struct HaarImpactSolution {
 
 /// The periodic response of M ü + C u̇ + K u = f_ext(t) with the rigid stops `stops` (each a
 /// contact::RigidStop along ContactPoint::direction: one DOF, two bodies or a general direction)
-/// under Newton's impact law, by the Haar weighted residual above. `guess`, when given, is the start of the transient (n × 2: u_{−1},
-/// u_0). Non-convergence is returned (status, message), never thrown.
-/// Throws std::invalid_argument for invalid matrices or forcing, a load harmonic that M cells do
-/// not resolve (HarmonicForcing::require_resolved), an empty stop list or a stop that is not a
-/// rigid stop (penalty laws: weighted_residual.hpp; friction: Moreau–Jean), a moving
-/// counter-surface, a guess of the wrong shape or not
-/// finite, invalid options, and for M too small for the sweep's stability (h ω_max ≥ 2: the
-/// message gives the least M).
+/// under Newton's impact law, by the Haar weighted residual above. `guess`, when given, is the
+/// start of the transient (n × 2: u_{−1}, u_0). Non-convergence is returned (status, message),
+/// never thrown. Throws std::invalid_argument for invalid matrices or forcing, more than 400 DOFs
+/// (reduce the model), a load harmonic that M cells do not resolve
+/// (HarmonicForcing::require_resolved), an empty stop list or a stop that is not a rigid stop
+/// (penalty laws: weighted_residual.hpp; friction: Moreau–Jean), a moving counter-surface, a guess
+/// of the wrong shape or not finite, invalid options, and for M too small for the sweep's
+/// stability (h ω_max ≥ 2: the message gives the least M).
 [[nodiscard]] HaarImpactSolution solve_haar_impact(const MechanicalSystem& system, const HarmonicForcing& forcing,
                                                    const std::vector<ContactPoint>& stops,
                                                    const HaarImpactOptions& options = {},
