@@ -1,7 +1,6 @@
 #include "core/lcp_step.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -11,27 +10,20 @@
 #include <siconos/numerics/LinearComplementarityProblem.h>
 #include <siconos/numerics/NonSmoothDrivers.h>
 #include <siconos/numerics/NumericsMatrix.h>
-#include <siconos/numerics/SolverOptions.h>
 #include <siconos/numerics/lcp_cst.h>
 #undef restrict
+
+#include "core/siconos_options.hpp"
 
 namespace wbm::solvers::detail {
 
 struct LcpStep::Siconos {
-  SolverOptions* options = solver_options_create(SICONOS_LCP_LEMKE);
-  // solver_options_delete (Siconos 4.4) frees the members, not the struct itself (see
-  // friction_contact_step.cpp).
-  ~Siconos() {
-    solver_options_delete(options);
-    std::free(options);
-  }
+  SiconosOptions options{SICONOS_LCP_LEMKE, "LCP_LEMKE"};
   Eigen::MatrixXd d;  // the caller's D, copied: Siconos may pivot in place
   Eigen::VectorXd q, w;
 };
 
-LcpStep::LcpStep() : s_(std::make_unique<Siconos>()) {
-  if (s_->options == nullptr) throw std::runtime_error("Siconos Numerics: solver_options_create(LCP_LEMKE) failed");
-}
+LcpStep::LcpStep() : s_(std::make_unique<Siconos>()) {}
 
 LcpStep::~LcpStep() = default;
 
@@ -53,7 +45,7 @@ LcpStep::Outcome LcpStep::solve(const Eigen::MatrixXd& d, const Eigen::VectorXd&
   NumericsMatrix* matrix = NM_create_from_data(NM_DENSE, static_cast<int>(m), static_cast<int>(m), s_->d.data());
   LinearComplementarityProblem problem{static_cast<int>(m), matrix, s_->q.data()};
   Outcome out;
-  out.info = linearComplementarity_driver(&problem, z.data(), s_->w.data(), s_->options);
+  out.info = linearComplementarity_driver(&problem, z.data(), s_->w.data(), s_->options.get());
   lcp_compute_error(&problem, z.data(), s_->w.data(), 1e-14, &out.error);
   // NM_create_from_data keeps our pointer as matrix0: detach it before freeing the wrapper.
   matrix->matrix0 = nullptr;

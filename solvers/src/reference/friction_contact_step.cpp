@@ -1,6 +1,5 @@
 #include "reference/friction_contact_step.hpp"
 
-#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -14,22 +13,16 @@
 #include <siconos/numerics/fc2d_compute_error.h>
 #undef restrict
 
+#include "core/siconos_options.hpp"
+
 namespace wbm::solvers::detail {
 
 struct FrictionContactStep::Siconos {
-  SolverOptions* options = solver_options_create(SICONOS_FRICTION_2D_LEMKE);
-  // solver_options_delete (Siconos 4.4) frees the members, not the struct that
-  // solver_options_create malloc'ed: LeakSanitizer found the 120 bytes of each one left.
-  ~Siconos() {
-    solver_options_delete(options);
-    std::free(options);
-  }
+  SiconosOptions options{SICONOS_FRICTION_2D_LEMKE, "FRICTION_2D_LEMKE"};
   Eigen::VectorXd u;  // the local velocities of the last solve
 };
 
-FrictionContactStep::FrictionContactStep() : s_(std::make_unique<Siconos>()) {
-  if (s_->options == nullptr) throw std::runtime_error("Siconos Numerics: solver_options_create(LEMKE) failed");
-}
+FrictionContactStep::FrictionContactStep() : s_(std::make_unique<Siconos>()) {}
 
 FrictionContactStep::~FrictionContactStep() = default;
 
@@ -48,7 +41,7 @@ FrictionContactStep::Outcome FrictionContactStep::solve(Eigen::MatrixXd& w, Eige
   NumericsMatrix* matrix = NM_create_from_data(NM_DENSE, static_cast<int>(2 * m), static_cast<int>(2 * m), w.data());
   FrictionContactProblem problem{2, static_cast<int>(m), matrix, q.data(), mu.data()};
   Outcome out;
-  out.info = fc2d_driver(&problem, r.data(), s_->u.data(), s_->options);
+  out.info = fc2d_driver(&problem, r.data(), s_->u.data(), s_->options.get());
   fc2d_compute_error(&problem, r.data(), s_->u.data(), 1e-14, norm, &out.error);
   // NM_create_from_data keeps our pointer as matrix0: detach it before freeing the wrapper.
   matrix->matrix0 = nullptr;
