@@ -25,6 +25,9 @@ std::string num(double v) { return format_number(v); }
 // The largest model solve_haar_impact takes: its matrices are dense and a step's sensitivities
 // cost O(n³).
 constexpr int kMaxDofs = 400;
+// The most cells per period: 2^22, far beyond the convergence the error tables need (an M + 1
+// column count and the n × M results stay far from int's range).
+constexpr int kMaxCells = 1 << 22;
 
 // The boxes' matrices and loads of one problem (haar_impact.hpp's notation).
 struct Scheme {
@@ -194,10 +197,11 @@ Scheme build(const MechanicalSystem& system, const HarmonicForcing& forcing, con
   const Eigen::MatrixXd mm(system.mass), cc(system.damping), kk(system.stiffness);
   const double omega_max = largest_natural_angular_frequency(kk, mm);
   if (!(sc.h * omega_max < 2.0)) {
-    const int least = static_cast<int>(std::floor(period * omega_max / 2.0)) + 1;
+    // As a double: T ω_max/2 may exceed any int (a tiny frequency), and its cast would be undefined.
+    const double least = std::floor(period * omega_max / 2.0) + 1.0;
     throw std::invalid_argument("HaarImpactOptions.cells = " + std::to_string(options.cells) + ": the sweep (central "
                                 "differences) needs h ω_max < 2, here h ω_max = " + num(sc.h * omega_max) +
-                                " (ω_max = " + num(omega_max) + " rad/s); use cells > " + std::to_string(least - 1) +
+                                " (ω_max = " + num(omega_max) + " rad/s); use cells ≥ " + num(least) +
                                 ", or a reduced model without its stiff modes");
   }
   const double h2 = sc.h * sc.h;
@@ -261,9 +265,9 @@ void verify(const Scheme& sc, HaarImpactSolution& out) {
 }  // namespace
 
 void HaarImpactOptions::validate() const {
-  if (cells < 8) {
-    throw std::invalid_argument("HaarImpactOptions.cells = " + std::to_string(cells) +
-                                ": must be at least 8 (Haar scaling functions per period); raise it");
+  if (cells < 8 || cells > kMaxCells) {
+    throw std::invalid_argument("HaarImpactOptions.cells = " + std::to_string(cells) + ": must lie in [8, " +
+                                std::to_string(kMaxCells) + "] (Haar scaling functions per period)");
   }
   if (!(restitution >= 0.0 && restitution <= 1.0)) {
     throw std::invalid_argument("HaarImpactOptions.restitution = " + num(restitution) +

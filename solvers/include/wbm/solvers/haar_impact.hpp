@@ -69,7 +69,7 @@
 namespace wbm::solvers {
 
 struct HaarImpactOptions {
-  int cells = 256;                  // M ≥ 8: Haar scaling functions (cells) per period
+  int cells = 256;                  // M ∈ [8, 2^22]: Haar scaling functions (cells) per period
   double restitution = 0.0;         // Newton's coefficient e ∈ [0, 1]
   int transient_periods = 30;       // ≥ 0: periods of time stepping from the start before Newton
   double residual_tolerance = 1e-10;  // on the verified residual and complementarity (above)
