@@ -12,7 +12,7 @@
 /// first state.
 ///
 /// The discretization. Trial and weighting functions are M boxes χ_k on the cells [k h, (k + 1) h),
-/// h = T/M, T = 1/f (for M = 2^J the Haar scaling functions at level J; any M ≥ 8 is accepted),
+/// h = T/M, T = 1/f (for M = 2^J the Haar scaling functions at level J; any M in [8, 2^22]),
 /// u(t) = Σ_k u_k χ_k(t) with u_k ∈ ℝⁿ the cell values. The velocity is JL14's delta pair [JL14
 /// Sec. 5.2] in the box form of BasisModes (basis_modes.hpp), u̇ = Σ_k (u_k − u_{k−1}) δ(t − k h);
 /// the damping term ∫ χ_k u̇ takes half of each delta at the box's two edges (the box's mean value
