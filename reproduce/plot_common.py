@@ -42,3 +42,8 @@ def save(fig, folder, stem):
     for ext in ("png", "pdf"):
         fig.savefig(folder / f"{stem}.{ext}", bbox_inches="tight")
     plt.close(fig)
+
+
+def column(folder, file, name):
+    header, cols = read_csv(folder / file)
+    return cols[header.index(name)]
