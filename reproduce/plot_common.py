@@ -1,6 +1,7 @@
-"""The pieces the reproduction figures share (plot.py, plot_friction.py): the module loader, the
-matplotlib and CSV reader of `wbm run`'s pictures (cli/wbm_plot.py, loaded from the source tree),
-the style, the labels and markers of the Table 2 pairs, and the writer of PNG and PDF."""
+"""The pieces the reproduction figures share (plot.py, plot_friction.py, plot_impacts.py): the module
+loader, the matplotlib and CSV reader of `wbm run`'s pictures (cli/wbm_plot.py, loaded from the
+source tree), the style, the labels and markers of the Table 2 pairs, the writer of PNG and PDF, and
+column(), one named column of a CSV."""
 import importlib.util
 from pathlib import Path
 

@@ -90,7 +90,8 @@ def test_reproductions_list_matches_the_sources():
     """reproductions.txt is the one list (issue #41, item 4): every executable it names has its
     source reproduce/<executable>.cpp writing the section id of the list (the id its
     reproduce::Run::from_args call gives), every source with a main is listed once, and every figure
-    function it names is a function of plot.py (or of plot_friction.py, which it imports)."""
+    function it names is a function of plot.py (or of plot_friction.py or plot_impacts.py, which it
+    imports)."""
     import re
 
     report = load_report_module()
@@ -103,7 +104,7 @@ def test_reproductions_list_matches_the_sources():
         ids = re.findall(r'from_args\(argc, argv, "([a-z0-9_]+)"\)', source)
         assert ids == [fid], f"{exe}.cpp writes {ids}, reproductions.txt says {fid}"
         if figure is not None:
-            modules = "".join((root / m).read_text() for m in ("plot.py", "plot_friction.py"))
+            modules = "".join((root / m).read_text() for m in ("plot.py", "plot_friction.py", "plot_impacts.py"))
             assert re.search(rf"^def {figure}\(folder\)", modules, re.M), figure
     with_main = {p.stem for p in root.glob("*.cpp") if "int main(" in p.read_text()}
     assert with_main - {"bench_scaling"} == set(listed), with_main ^ set(listed)
