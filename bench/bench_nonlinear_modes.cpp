@@ -6,13 +6,19 @@
 // Levenberg–Marquardt step by the bordered sparse LU against the dense path they replaced.
 // The backbone in a wavelet or Fourier time basis (BasisModes, E from 0.5 to 1.3, the range of
 // reproduce/ll11_wavelet_modes) per basis and M. Counters: levels, corners (events located),
-// time per level.
+// time per level. A level's stability (NonlinearModes::stability: the exact orbit with elastic
+// impacts shot near it), and one period of that orbit's event-driven flow with its monodromy in
+// the free phase's eigen-coordinates and by the dense products (ImpactFlowOptions::dense_monodromy).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <vector>
 
 #include <benchmark/benchmark.h>
+
+#include <wbm/contact/signorini.hpp>
+#include <wbm/solvers/impact_shooting.hpp>
 
 #include <wbm/scene/analysis.hpp>
 #include <wbm/solvers/basis_modes.hpp>
@@ -170,8 +176,58 @@ void BM_BasisModes_Backbone(benchmark::State& state) {
   state.counters["ms_per_level"] = 1e3 * seconds / static_cast<double>(std::max<size_t>(levels, 1));
 }
 
+// The rod's level at E = 1.8 (N = 32, m = 512, the backbone of reproduce/ll11_backbone_stability)
+// and its stability, computed once.
+const wbm::solvers::ModeStability& level_1_8() {
+  static const wbm::solvers::ModeStability st = [] {
+    const auto nm = modes(32, 512);
+    auto o = range(0.5, 1.8);
+    o.include = {1.8};
+    const auto b = nm.continue_backbone(o);
+    return nm.stability(b.levels.back());
+  }();
+  return st;
+}
+
+void BM_NonlinearModes_LevelStability(benchmark::State& state) {
+  const auto nm = modes(32, 512);
+  auto o = range(0.5, 1.8);
+  o.include = {1.8};
+  const auto b = nm.continue_backbone(o);
+  for (auto _ : state) {
+    const auto st = nm.stability(b.levels.back());
+    if (!st.available) state.SkipWithError(st.message.c_str());
+    state.counters["impacts"] = st.impacts;
+    state.counters["newton_iterations"] = st.orbit.report.iterations;
+  }
+}
+
+// Arg: 1 for the dense products.
+void BM_NonlinearModes_ExactOrbitFlow(benchmark::State& state) {
+  const auto& st = level_1_8();
+  if (!st.available) {
+    state.SkipWithError(st.message.c_str());
+    return;
+  }
+  const auto& p = ll11();
+  const int n = p.system.dofs();
+  wbm::solvers::MechanicalSystem free = p.system;
+  free.damping = Eigen::SparseMatrix<double>(n, n);
+  std::vector<wbm::solvers::ContactPoint> stops;
+  for (const auto& s : p.stops) stops.push_back({s.dof, std::make_shared<wbm::contact::RigidStop>(s.gap), -1, s.along});
+  const wbm::solvers::ImpactFlow flow(free, {0, 0.0, st.orbit.frequency_hz}, stops,
+                                      {.restitution = 1.0, .dense_monodromy = state.range(0) == 1});
+  for (auto _ : state) {
+    const auto r = flow.flow(st.orbit.state, 0.0, st.orbit.period_s);
+    state.counters["events"] = static_cast<double>(r.events.size());
+  }
+  state.counters["states"] = 2.0 * n;
+}
+
 }  // namespace
 
+BENCHMARK(BM_NonlinearModes_LevelStability)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK(BM_NonlinearModes_ExactOrbitFlow)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_NonlinearModes_Fig3Backbone)
     ->Args({8, 256})
     ->Args({12, 256})

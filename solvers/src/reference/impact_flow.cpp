@@ -62,8 +62,93 @@ struct Phase {
   Eigen::MatrixXd force_rows;         // a × n: L = W⁻¹ E_Aᵀ M⁻¹ (λ_A = L (f − C u̇ − K u))
   double bracket = std::numeric_limits<double>::infinity();  // π / (2 max |Im Λ|) [s]: oscillations
   double fastest = std::numeric_limits<double>::infinity();  // π / (2 max |Λ|) [s]: also decays
+  // The event indicators h (n_c: the gaps of the open stops, λ of the closed ones) and the stops'
+  // rates ρ = −Eᵀu̇ as rows on the flight, so that the event search reads n_c numbers without the
+  // 2n-state: h(t) = h₀ + Σ_j Re(h_j e^{i w_j t}) + Re(H_V (e^{Λ(t − t_a)} ∘ c)), likewise ρ (ρ₀ = 0),
+  // the sum over the particular solution's and the load's harmonics w_j.
+  Eigen::VectorXd h0;                       // n_c
+  Eigen::MatrixXcd h_v, rate_v;             // n_c × 2r: the rows times V
+  std::vector<double> row_w;                // w_j [rad/s]
+  std::vector<Eigen::VectorXcd> h_w, rate_w;  // per w_j: n_c
+  // conjugate(j): Λ_j is bitwise the conjugate of Λ_{j−1} (Eigen's real Schur pairs), so its
+  // exponential is the conjugate of the one before, and one cexp serves the pair.
+  std::vector<char> conjugate;
   [[nodiscard]] Eigen::Index r() const { return z.cols(); }
 };
+
+namespace {
+// e^{Λτ} (2r), one cexp per conjugate pair.
+Eigen::VectorXcd decay(const Phase& p, double tau) {
+  Eigen::VectorXcd d(p.lambda.size());
+  for (Eigen::Index j = 0; j < d.size(); ++j) {
+    d(j) = p.conjugate[static_cast<size_t>(j)] ? std::conj(d(j - 1)) : std::exp(p.lambda(j) * tau);
+  }
+  return d;
+}
+
+// The flight's transition matrix over τ in the full state (2n × 2n): blockdiag(Z, Z) Re(V e^{Λτ} V⁻¹) blockdiag(Zᵀ, Zᵀ).
+Eigen::MatrixXd transition(const Phase& p, double tau, Eigen::Index n) {
+  const Eigen::Index r = p.r();
+  if (r == 0) return Eigen::MatrixXd::Zero(2 * n, 2 * n);  // every DOF held: perturbations vanish
+  const Eigen::MatrixXd tr = (p.v * decay(p, tau).asDiagonal() * p.v_inv).real();
+  Eigen::MatrixXd zz = Eigen::MatrixXd::Zero(2 * n, 2 * r);
+  zz.topLeftCorner(n, r) = p.z;
+  zz.bottomRightCorner(n, r) = p.z;
+  return zz * tr * zz.transpose();
+}
+
+// The monodromy matrix Φ accumulated along a flow. A flight of a phase with no stop closed (Z = I)
+// is diag(e^{Λτ}) in that phase's eigen-coordinates Y = V⁻¹ Φ, and a saltation matrix is the
+// identity plus rank k = n_A + 2 (the impulse's n_A + 1 directions and the field term), so over
+// runs of free flights and impacts Φ is kept as Y: a flight costs O(n²) and an event O(k n²),
+// instead of the dense products' O(n³) each. Φ = Re(V Y) is formed where a phase with closed stops
+// begins and at the end. `dense` keeps the 2n × 2n products (ImpactFlowOptions::dense_monodromy).
+class MonodromyProduct {
+ public:
+  MonodromyProduct(Eigen::Index n, bool dense) : n_(n), phi_(Eigen::MatrixXd::Identity(2 * n, 2 * n)), dense_(dense) {}
+  // Φ ← Φ_flight(τ) Φ.
+  void flight(const Phase& p, double tau) {
+    if (dense_ || p.r() != n_) {
+      phi_ = transition(p, tau, n_) * matrix();
+    } else {
+      if (eig_ != &p) {
+        y_ = identity_ ? p.v_inv : Eigen::MatrixXcd(p.v_inv * matrix().cast<Complex>());
+        eig_ = &p;
+      }
+      y_ = decay(p, tau).asDiagonal() * y_;
+    }
+    identity_ = false;
+  }
+  // Φ ← (I + A Bᵀ) Φ, A and B 2n × k.
+  void saltation(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+    if (eig_ != nullptr) {  // Bᵀ Φ = Re(Bᵀ V Y); Re(V (Y + V⁻¹ A Bᵀ Φ)) = Φ + A Bᵀ Φ
+      const Eigen::MatrixXd bt_phi = ((b.transpose().cast<Complex>() * eig_->v) * y_).real();
+      y_ += (eig_->v_inv * a.cast<Complex>()) * bt_phi.cast<Complex>();
+    } else if (dense_) {
+      Eigen::MatrixXd salt = Eigen::MatrixXd::Identity(2 * n_, 2 * n_);
+      salt += a * b.transpose();
+      phi_ = salt * phi_;
+    } else {
+      phi_ += a * (b.transpose() * phi_);
+    }
+    identity_ = false;
+  }
+  const Eigen::MatrixXd& matrix() {
+    if (eig_ != nullptr) {
+      phi_ = (eig_->v * y_).real();
+      eig_ = nullptr;
+    }
+    return phi_;
+  }
+
+ private:
+  Eigen::Index n_;
+  Eigen::MatrixXd phi_;          // Φ where eig_ is null
+  Eigen::MatrixXcd y_;           // V⁻¹ Φ of the phase eig_
+  const Phase* eig_ = nullptr;
+  bool dense_, identity_ = true;
+};
+}  // namespace
 
 struct ImpactFlow::Impl {
   int n = 0, nc = 0;
@@ -105,9 +190,27 @@ struct ImpactFlow::Impl {
     return x;
   }
   [[nodiscard]] Eigen::VectorXd state(const Phase& p, const Eigen::VectorXcd& coef, double ta, double t) const {
-    const Eigen::VectorXcd decay = (p.lambda * (t - ta)).array().exp().matrix();
-    return full(p, particular(p, t) + (p.v * decay.cwiseProduct(coef)).real());
+    return full(p, particular(p, t) + (p.v * decay(p, t - ta).cwiseProduct(coef)).real());
   }
+  // The indicators h and the rates ρ (n_c each) at t on the flight set at t_a with `coef`, from
+  // the phase's rows: O(n_c r) instead of the state's O(r²).
+  void rows_at(const Phase& p, const Eigen::VectorXcd& coef, double ta, double t, Eigen::VectorXd& h,
+               Eigen::VectorXd& rate) const {
+    rows_at(p, coef, decay(p, t - ta), t, h, rate);
+  }
+  // The same with e^{Λ(t − t_a)} given (`d`, 2r).
+  void rows_at(const Phase& p, const Eigen::VectorXcd& coef, const Eigen::VectorXcd& d, double t, Eigen::VectorXd& h,
+               Eigen::VectorXd& rate) const {
+    const Eigen::VectorXcd dc = d.cwiseProduct(coef);
+    h = p.h0 + (p.h_v * dc).real();
+    rate = (p.rate_v * dc).real();
+    for (size_t j = 0; j < p.row_w.size(); ++j) {
+      const Complex rot = std::exp(Complex(0.0, p.row_w[j] * t));
+      h += (p.h_w[j] * rot).real();
+      rate += (p.rate_w[j] * rot).real();
+    }
+  }
+  void set_rows(Phase& p) const;
   // λ_A at (t, x) for the phase's closed stops.
   [[nodiscard]] Eigen::VectorXd forces(const Phase& p, double t, const Eigen::VectorXd& x) const {
     if (p.closed.empty()) return {};
@@ -130,17 +233,6 @@ struct ImpactFlow::Impl {
     const Eigen::VectorXd lam = forces(p, t, x);
     for (size_t a = 0; a < p.closed.size(); ++a) ind(p.closed[a]) = lam(static_cast<Eigen::Index>(a));
     return ind;
-  }
-  // The flight's transition matrix over τ in the full state: blockdiag(Z, Z) Re(V e^{Λτ} V⁻¹) blockdiag(Zᵀ, Zᵀ).
-  [[nodiscard]] Eigen::MatrixXd transition(const Phase& p, double tau) const {
-    const Eigen::Index r = p.r();
-    if (r == 0) return Eigen::MatrixXd::Zero(2 * n, 2 * n);  // every DOF held: perturbations vanish
-    const Eigen::VectorXcd decay = (p.lambda * tau).array().exp().matrix();
-    const Eigen::MatrixXd tr = (p.v * decay.asDiagonal() * p.v_inv).real();
-    Eigen::MatrixXd zz = Eigen::MatrixXd::Zero(2 * n, 2 * r);
-    zz.topLeftCorner(n, r) = p.z;
-    zz.bottomRightCorner(n, r) = p.z;
-    return zz * tr * zz.transpose();
   }
 };
 
@@ -170,6 +262,7 @@ const Phase& ImpactFlow::Impl::phase(const std::vector<char>& active) const {
   }
   const Eigen::Index r = p->r();
   if (r == 0) {  // every DOF held by the closed stops: nothing moves until a release
+    set_rows(*p);
     const Phase& ref = *p;
     phases.emplace(active, std::move(p));
     return ref;
@@ -192,6 +285,10 @@ const Phase& ImpactFlow::Impl::phase(const std::vector<char>& active) const {
     throw std::invalid_argument("ImpactFlow: the eigendecomposition of the flight failed");
   const Eigen::MatrixXcd& v_balanced = eig.eigenvectors();
   p->lambda = eig.eigenvalues();
+  p->conjugate.assign(static_cast<size_t>(p->lambda.size()), 0);
+  for (Eigen::Index j = 1; j < p->lambda.size(); ++j) {
+    p->conjugate[static_cast<size_t>(j)] = p->lambda(j) == std::conj(p->lambda(j - 1)) ? 1 : 0;
+  }
   const Eigen::PartialPivLU<Eigen::MatrixXcd> v_lu(v_balanced);
   if (!(v_lu.rcond() > 1e-12)) {
     throw std::invalid_argument(
@@ -228,9 +325,52 @@ const Phase& ImpactFlow::Impl::phase(const std::vector<char>& active) const {
     p->harmonics.push_back(hs[j]);
     p->q_h.push_back(d_lu.solve(rhs));
   }
+  set_rows(*p);
   const Phase& ref = *p;
   phases.emplace(active, std::move(p));
   return ref;
+}
+
+void ImpactFlow::Impl::set_rows(Phase& p) const {
+  const Eigen::Index r = p.r();
+  const auto na = static_cast<Eigen::Index>(p.closed.size());
+  Eigen::MatrixXd h_rows = Eigen::MatrixXd::Zero(nc, 2 * r), rate_rows = Eigen::MatrixXd::Zero(nc, 2 * r);
+  const Eigen::MatrixXd ez = e.transpose() * p.z;  // n_c × r
+  h_rows.leftCols(r) = -ez;                        // h_c = g_c − e_cᵀ (Z q + u_A)
+  rate_rows.rightCols(r) = -ez;                    // ρ_c = −e_cᵀ Z q̇
+  p.h0 = g - e.transpose() * p.u_a;
+  if (na > 0) {         // λ_A = L (f − C Z q̇ − K (Z q + u_A))
+    const Eigen::MatrixXd lk = p.force_rows * k, lc = p.force_rows * c;
+    for (Eigen::Index a = 0; a < na; ++a) {
+      const Eigen::Index i = p.closed[static_cast<size_t>(a)];
+      h_rows.row(i).head(r) = -(lk.row(a) * p.z);
+      h_rows.row(i).tail(r) = -(lc.row(a) * p.z);
+      p.h0(i) = -lk.row(a).dot(p.u_a);
+    }
+  }
+  p.h_v = h_rows.cast<Complex>() * p.v;
+  p.rate_v = rate_rows.cast<Complex>() * p.v;
+  auto term = [&](double w) {
+    const auto it = std::find(p.row_w.begin(), p.row_w.end(), w);
+    if (it != p.row_w.end()) return static_cast<size_t>(it - p.row_w.begin());
+    p.row_w.push_back(w);
+    p.h_w.push_back(Eigen::VectorXcd::Zero(nc));
+    p.rate_w.push_back(Eigen::VectorXcd::Zero(nc));
+    return p.row_w.size() - 1;
+  };
+  for (size_t j = 0; j < p.harmonics.size(); ++j) {  // the particular solution (Q_h, i w Q_h)
+    const double w = p.harmonics[j] * omega;
+    Eigen::VectorXcd sj(2 * r);
+    sj << p.q_h[j], Complex(0.0, w) * p.q_h[j];
+    const size_t t = term(w);
+    p.h_w[t] += h_rows.cast<Complex>() * sj;
+    p.rate_w[t] += rate_rows.cast<Complex>() * sj;
+  }
+  for (size_t j = 0; na > 0 && j < harmonics.size(); ++j) {  // the closed stops' L f
+    const Eigen::VectorXcd lfj = p.force_rows.cast<Complex>() * f_h[j];
+    const size_t t = term(harmonics[j] * omega);
+    for (Eigen::Index a = 0; a < na; ++a) p.h_w[t](p.closed[static_cast<size_t>(a)]) += lfj(a);
+  }
 }
 
 ImpactFlow::ImpactFlow(const MechanicalSystem& system, const HarmonicForcing& forcing,
@@ -326,7 +466,7 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     }
   }
   ImpactFlowResult out;
-  out.monodromy = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  MonodromyProduct monodromy(n, s.options.dense_monodromy);
   out.contact_displacement.resize(nc, samples);
   out.state_samples.resize(2 * n, samples);
   const double t_end = t0 + duration, h_period = s.period / s.options.steps_per_period;
@@ -357,6 +497,8 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     double t_left = t;
     Eigen::VectorXd left = s.indicators(p, t_left, x);
     Eigen::VectorXd rate_left = -s.e.transpose() * x.tail(n);
+    Eigen::VectorXd right, rate_right, h_q, rate_q;
+    auto rows = [&](double time, Eigen::VectorXd& h, Eigen::VectorXd& rate) { s.rows_at(p, coef, ta, time, h, rate); };
     // The samples of e_cᵀu at times before `limit`, on this flight.
     auto fill_samples = [&](double limit) {
       for (; next_sample < samples && sample_time(next_sample) < limit; ++next_sample) {
@@ -370,11 +512,25 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     }
     int hit = -1;
     double t_hit = 0.0;
+    // e^{Λ(t − t_a)} at the brackets' ends as products with e^{Λh} (h the bracket's length), exact
+    // at a flight's end and every 32nd bracket (the products' rounding grows like their count).
+    Eigen::VectorXcd d_left = Eigen::VectorXcd::Ones(p.lambda.size()), d_right, d_step;
+    double h_of_step = -1.0;
+    int products = 0;
     while (t_left < t_end && hit < 0) {
       const double t_right = std::min(t_left + h_step, t_end);
-      const Eigen::VectorXd xr = at(t_right);
-      const Eigen::VectorXd right = s.indicators(p, t_right, xr);
-      const Eigen::VectorXd rate_right = -s.e.transpose() * xr.tail(n);
+      if (t_right == t_end || ++products == 32) {
+        d_right = decay(p, t_right - ta);
+        products = 0;
+      } else {
+        if (h_step != h_of_step) {
+          d_step = decay(p, h_step);
+          h_of_step = h_step;
+        }
+        d_right = d_left.cwiseProduct(d_step);
+      }
+      s.rows_at(p, coef, d_right, t_right, right, rate_right);
+      d_left.swap(d_right);
       for (int i = 0; i < nc; ++i) {
         const bool just_left = fresh[static_cast<size_t>(i)] && !active[static_cast<size_t>(i)];
         if (!just_left && !(left(i) > 0.0)) continue;
@@ -394,7 +550,8 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
           lo = -1.0;
           for (int q = 1; q < 16 && lo < 0.0; ++q) {
             const double tq = t_left + (t_right - t_left) * q / 16.0;
-            if (s.indicators(p, tq, at(tq))(i) > noise) lo = tq;
+            rows(tq, h_q, rate_q);
+            if (h_q(i) > noise) lo = tq;
           }
           if (lo < 0.0) {
             throw std::domain_error("ImpactFlow::flow: stop " + std::to_string(i) + " returned within " +
@@ -404,11 +561,18 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
           }
         } else if (right(i) > 0.0) {  // a gap that dips below zero and back inside the bracket
           if (active[static_cast<size_t>(i)] || !(rate_left(i) < 0.0 && rate_right(i) > 0.0)) continue;
-          auto falling = [&](double time) { return s.e.col(i).dot(at(time).tail(n)); };  // −rate
+          auto falling = [&](double time) {  // −ρ_c
+            rows(time, h_q, rate_q);
+            return -rate_q(i);
+          };
           hi = locate(falling, t_left, t_right, std::max(tolerance, 4e-16 * std::abs(t_right)));
-          if (!(s.indicators(p, hi, at(hi))(i) <= 0.0)) continue;
+          rows(hi, h_q, rate_q);
+          if (!(h_q(i) <= 0.0)) continue;
         }
-        auto indicator = [&](double time) { return s.indicators(p, time, at(time))(i); };
+        auto indicator = [&](double time) {
+          rows(time, h_q, rate_q);
+          return h_q(i);
+        };
         const double te = locate(indicator, lo, hi, std::max(tolerance, 4e-16 * std::abs(hi)));
         if (hit < 0 || te < t_hit) {
           hit = i;
@@ -424,10 +588,11 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
     }
     const double t_stop = hit >= 0 ? t_hit : t_end;
     const Eigen::VectorXd x_minus = at(t_stop);
-    out.monodromy = s.transition(p, t_stop - ta) * out.monodromy;
+    monodromy.flight(p, t_stop - ta);
     std::fill(fresh.begin(), fresh.end(), 0);
     if (hit < 0) {
       out.state = x_minus;
+      out.monodromy = monodromy.matrix();
       out.active = active;
       fill_samples(std::numeric_limits<double>::infinity());
       return out;
@@ -488,10 +653,14 @@ ImpactFlowResult ImpactFlow::flow(const Eigen::VectorXd& x0, double t0, double d
       }
     }
     const Eigen::VectorXd f_plus = s.field(s.phase(active), t_stop, x);
-    // S = R + (f⁺ − R f⁻) ∇hᵀ / (∇hᵀ f⁻), ∇h = (−e_c, 0): ∇hᵀ f⁻ = −e_cᵀ u̇⁻.
-    Eigen::MatrixXd salt = rmap;
-    salt.leftCols(n) += (f_plus - rmap * f_minus) * s.e.col(hit).transpose() / ev.normal_velocity;
-    out.monodromy = salt * out.monodromy;
+    // S = R + (f⁺ − R f⁻) ∇hᵀ / (∇hᵀ f⁻), ∇h = (−e_c, 0): ∇hᵀ f⁻ = −e_cᵀ u̇⁻. As I + A Bᵀ: R = I + Σ_j
+    // (0, M⁻¹ e′_j)(0, −W′⁻¹D E′ᵀ)_j, and the field term (f⁺ − R f⁻)(e_c/(e_cᵀu̇⁻), 0)ᵀ.
+    Eigen::MatrixXd low_a = Eigen::MatrixXd::Zero(2 * n, nn + 1), low_b = Eigen::MatrixXd::Zero(2 * n, nn + 1);
+    low_a.bottomLeftCorner(n, nn) = minv_ep;
+    low_b.bottomLeftCorner(n, nn) = -w_inv_dt.transpose();
+    low_a.col(nn) = f_plus - rmap * f_minus;
+    low_b.col(nn).head(n) = s.e.col(hit) / ev.normal_velocity;
+    monodromy.saltation(low_a, low_b);
     out.events.push_back(ev);
   }
 }

@@ -37,6 +37,12 @@
 /// and no contact phase, det S = e² and det Φ = e^{2k} exp(−tr(M⁻¹ C) T) for k impacts (Liouville).
 /// A plastic impact (e = 0) into a contact phase maps every perturbation onto the constraint, so
 /// Φ then has two zero multipliers per stop that closes.
+/// Cost: with no stop closed (Z = I) a flight is diag(e^{Λτ}) in the eigen-coordinates Y = V⁻¹ Φ and
+/// S is the identity plus rank n_A + 2, so Φ is carried as Y over runs of free flights and impacts:
+/// O(n²) per flight and O((n_A + 2) n²) per event instead of O(n³) (Φ = Re(V Y) where a contact
+/// phase begins and at the end; `ImpactFlowOptions::dense_monodromy` keeps the dense products).
+/// The event search reads the indicators and rates through their rows times V (O(n_c n) per
+/// instant) and one complex exponential per conjugate pair of Λ.
 
 #include <limits>
 #include <memory>
@@ -56,6 +62,9 @@ struct ImpactFlowOptions {
   double restitution = 0.0;       // Newton's coefficient e ∈ [0, 1]
   int steps_per_period = 512;     // P: brackets per period for the event search, at least (≥ 8)
   int max_events = 1000;          // per flow; more (an accumulation of impacts, chatter) is refused
+  // true: Φ by dense 2n × 2n products of every flight's transition and event's saltation matrix,
+  // the slow reference; false (default): in the free phase's eigen-coordinates (see ImpactFlow).
+  bool dense_monodromy = false;
   void validate() const;          // throws std::invalid_argument naming the field, value and range
 };
 
