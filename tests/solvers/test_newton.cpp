@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <random>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -125,31 +126,81 @@ struct Switching {
 };
 }  // namespace
 
-// The sparse policy reaches the same root, 2, and analyses the (constant) pattern once for the
-// whole solve, and once for a second solve with the same solver object.
-TEST(Newton, SparseLuKeepsItsSymbolicAnalysisWhileThePatternHolds) {
-  SparseLu solver;
+// The sparse policies (KLU, and Eigen's SparseLU) reach the same root, 2, and analyse the
+// (constant) pattern once for the whole solve, and once for a second solve with the same object.
+template <class Policy>
+void expect_analysis_kept_while_the_pattern_holds(const char* name) {
+  Policy solver;
   const auto r = newton(SparseCubic{}, Eigen::VectorXd::Constant(5, 3.0), {.tolerance = 1e-13}, solver);
-  ASSERT_TRUE(r.report.converged()) << r.report.message;
-  EXPECT_LT((r.x.array() - 2.0).abs().maxCoeff(), 1e-14);
-  EXPECT_GE(r.report.iterations, 4);
-  EXPECT_EQ(solver.symbolic_analyses(), 1);
-  EXPECT_FALSE(r.report.jacobian_rcond.has_value());  // sparse LU estimates no condition number
+  ASSERT_TRUE(r.report.converged()) << name << ": " << r.report.message;
+  EXPECT_LT((r.x.array() - 2.0).abs().maxCoeff(), 1e-14) << name;
+  EXPECT_GE(r.report.iterations, 4) << name;
+  EXPECT_EQ(solver.symbolic_analyses(), 1) << name;
+  EXPECT_FALSE(r.report.jacobian_rcond.has_value()) << name;  // sparse LU estimates no condition number
   const auto again = newton(SparseCubic{}, Eigen::VectorXd::Constant(5, 5.0), {.tolerance = 1e-13}, solver);
-  ASSERT_TRUE(again.report.converged());
-  EXPECT_EQ(solver.symbolic_analyses(), 1);
+  ASSERT_TRUE(again.report.converged()) << name;
+  EXPECT_EQ(solver.symbolic_analyses(), 1) << name;
+}
+
+TEST(Newton, SparseLuKeepsItsSymbolicAnalysisWhileThePatternHolds) {
+  expect_analysis_kept_while_the_pattern_holds<SparseLu>("SparseLu (KLU)");
+  expect_analysis_kept_while_the_pattern_holds<wbm::solvers::SupernodalLu>("SupernodalLu");
 }
 
 // A semismooth Newton whose active set changes: the pattern changes, a new analysis is made,
 // and the root (2, 0) is found in two steps.
-TEST(Newton, SparseLuReanalysesWhenThePatternChanges) {
-  SparseLu solver;
+template <class Policy>
+void expect_reanalysis_when_the_pattern_changes(const char* name) {
+  Policy solver;
   const auto r = newton(Switching{}, Eigen::Vector2d(-1.0, 1.0), {.line_search = false}, solver);
-  ASSERT_TRUE(r.report.converged()) << r.report.message;
-  EXPECT_EQ(r.report.iterations, 2);
-  EXPECT_NEAR(r.x(0), 2.0, 1e-12);
-  EXPECT_NEAR(r.x(1), 0.0, 1e-12);
-  EXPECT_EQ(solver.symbolic_analyses(), 2);
+  ASSERT_TRUE(r.report.converged()) << name << ": " << r.report.message;
+  EXPECT_EQ(r.report.iterations, 2) << name;
+  EXPECT_NEAR(r.x(0), 2.0, 1e-12) << name;
+  EXPECT_NEAR(r.x(1), 0.0, 1e-12) << name;
+  EXPECT_EQ(solver.symbolic_analyses(), 2) << name;
+}
+
+TEST(Newton, SparseLuReanalysesWhenThePatternChanges) {
+  expect_reanalysis_when_the_pattern_changes<SparseLu>("SparseLu (KLU)");
+  expect_reanalysis_when_the_pattern_changes<wbm::solvers::SupernodalLu>("SupernodalLu");
+}
+
+// The kept analysis depends on the pattern only: a reused SupernodalLu solves a second matrix of
+// the same pattern (other values, pivots in other rows) to the same bits as a fresh one, and
+// after a change of pattern as a dense LU does.
+TEST(Newton, SupernodalLuReusedAnalysisGivesTheFreshFactorsBits) {
+  const int n = 60;
+  auto matrix = [n](unsigned seed, int band) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<double> value(-0.5, 0.5);
+    std::vector<Eigen::Triplet<double>> t;
+    for (int i = 0; i < n; ++i) {
+      for (int j = std::max(0, i - band); j < std::min(n, i + band + 1); ++j) {
+        t.emplace_back(i, j, value(random));
+      }
+      t.emplace_back(i, (7 * i + 3) % n, 1.0);  // off the band: fill-in that the ordering must handle
+    }
+    Eigen::SparseMatrix<double> a(n, n);
+    a.setFromTriplets(t.begin(), t.end());
+    a.makeCompressed();
+    return a;
+  };
+  const Eigen::SparseMatrix<double> a = matrix(1, 2), b = matrix(2, 2), c = matrix(3, 4);
+  ASSERT_TRUE(a.nonZeros() == b.nonZeros());
+  const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  wbm::solvers::SupernodalLu reused, fresh;
+  ASSERT_TRUE(reused.factorize(a));
+  ASSERT_TRUE(reused.factorize(b));
+  ASSERT_TRUE(fresh.factorize(b));
+  EXPECT_EQ(reused.symbolic_analyses(), 1);
+  const Eigen::VectorXd x = reused.solve(rhs);
+  EXPECT_EQ(x, fresh.solve(rhs));
+  EXPECT_EQ(reused.solve_transposed(rhs), fresh.solve_transposed(rhs));
+  EXPECT_LT((Eigen::MatrixXd(b) * x - rhs).norm(), 1e-12 * rhs.norm());
+  ASSERT_TRUE(reused.factorize(c));
+  EXPECT_EQ(reused.symbolic_analyses(), 2);
+  const Eigen::VectorXd xc = Eigen::MatrixXd(c).partialPivLu().solve(rhs);
+  EXPECT_LT((reused.solve(rhs) - xc).norm(), 1e-12 * xc.norm());
 }
 
 // The sparse policy (KLU) refuses a singular Jacobian: SparseCubic at x = (2, 0, 2) has a zero

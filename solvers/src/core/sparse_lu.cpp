@@ -30,6 +30,27 @@ class KluWithTranspose : public Eigen::KLU<Eigen::SparseMatrix<double>> {
   }
 };
 
+// The sparsity pattern of the last symbolic analysis (ordering, blocks, elimination tree: they
+// depend on the pattern only), so that a matrix with the same stored pattern, explicit zeros
+// included, is factorized on it again: every Newton iteration of an unchanged active set, every
+// step of a continuation that passes the same object.
+struct AnalysedPattern {
+  std::vector<int> outer, inner;
+  Eigen::Index rows = 0;
+  int analyses = 0;
+  [[nodiscard]] bool same(const Eigen::SparseMatrix<double>& j) const {
+    if (analyses == 0 || j.rows() != rows || j.nonZeros() != static_cast<Eigen::Index>(inner.size())) return false;
+    return std::equal(outer.begin(), outer.end(), j.outerIndexPtr()) &&
+           std::equal(inner.begin(), inner.end(), j.innerIndexPtr());
+  }
+  void record(const Eigen::SparseMatrix<double>& j) {
+    outer.assign(j.outerIndexPtr(), j.outerIndexPtr() + j.outerSize() + 1);
+    inner.assign(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros());
+    rows = j.rows();
+    ++analyses;
+  }
+};
+
 }  // namespace detail
 
 namespace {
@@ -48,16 +69,8 @@ std::optional<Eigen::SparseMatrix<double>> factorizable(const Eigen::SparseMatri
 
 struct SparseLu::Impl {
   detail::KluWithTranspose lu;
-  std::vector<int> outer, inner;  // the analysed pattern
-  Eigen::Index rows = 0;
-  int analyses = 0;
+  detail::AnalysedPattern pattern;
   bool factorized = false;
-
-  [[nodiscard]] bool same_pattern(const Eigen::SparseMatrix<double>& j) const {
-    if (analyses == 0 || j.rows() != rows || j.nonZeros() != static_cast<Eigen::Index>(inner.size())) return false;
-    return std::equal(outer.begin(), outer.end(), j.outerIndexPtr()) &&
-           std::equal(inner.begin(), inner.end(), j.innerIndexPtr());
-  }
 };
 
 SparseLu::SparseLu() : impl_(std::make_unique<Impl>()) {}
@@ -71,13 +84,10 @@ bool SparseLu::factorize(const Eigen::SparseMatrix<double>& jacobian) {
   const auto prepared = factorizable(jacobian);
   if (!prepared) return false;
   const Eigen::SparseMatrix<double>& j = *prepared;
-  if (!p.same_pattern(j)) {
+  if (!p.pattern.same(j)) {
     p.lu.analyzePattern(j);
     if (p.lu.info() != Eigen::Success) return false;
-    p.outer.assign(j.outerIndexPtr(), j.outerIndexPtr() + j.outerSize() + 1);
-    p.inner.assign(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros());
-    p.rows = j.rows();
-    ++p.analyses;
+    p.pattern.record(j);
   }
   p.lu.factorize(j);
   p.factorized = p.lu.info() == Eigen::Success;
@@ -86,7 +96,8 @@ bool SparseLu::factorize(const Eigen::SparseMatrix<double>& jacobian) {
 
 Eigen::MatrixXd SparseLu::solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const {
   Eigen::MatrixXd x = rhs;
-  if (!impl_->factorized || rhs.rows() != impl_->rows || rhs.cols() == 0 || !impl_->lu.solve_in_place(x, transposed)) {
+  if (!impl_->factorized || rhs.rows() != impl_->pattern.rows || rhs.cols() == 0 ||
+      !impl_->lu.solve_in_place(x, transposed)) {
     x.setConstant(std::numeric_limits<double>::quiet_NaN());
   }
   return x;
@@ -96,12 +107,12 @@ Eigen::VectorXd SparseLu::solve(const Eigen::VectorXd& rhs) const { return solve
 
 Eigen::VectorXd SparseLu::solve_transposed(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, true); }
 
-int SparseLu::symbolic_analyses() const { return impl_->analyses; }
+int SparseLu::symbolic_analyses() const { return impl_->pattern.analyses; }
 
 struct SupernodalLu::Impl {
   // SparseLU::transpose() is not const in Eigen 3.4 (it only stores a pointer to the factors).
   mutable Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
-  Eigen::Index rows = 0;
+  detail::AnalysedPattern pattern;  // COLAMD's column ordering and the elimination tree
   bool factorized = false;
 };
 
@@ -116,16 +127,18 @@ bool SupernodalLu::factorize(const Eigen::SparseMatrix<double>& matrix) {
   const auto prepared = factorizable(matrix);
   if (!prepared) return false;
   const Eigen::SparseMatrix<double>& a = *prepared;
-  p.lu.analyzePattern(a);
+  if (!p.pattern.same(a)) {
+    p.lu.analyzePattern(a);
+    p.pattern.record(a);
+  }
   p.lu.factorize(a);
-  p.rows = a.rows();
   p.factorized = p.lu.info() == Eigen::Success;
   return p.factorized;
 }
 
 Eigen::MatrixXd SupernodalLu::solve_columns(const Eigen::MatrixXd& rhs, bool transposed) const {
   const Impl& p = *impl_;
-  if (!p.factorized || rhs.rows() != p.rows) {
+  if (!p.factorized || rhs.rows() != p.pattern.rows) {
     return Eigen::MatrixXd::Constant(rhs.rows(), rhs.cols(), std::numeric_limits<double>::quiet_NaN());
   }
   return transposed ? Eigen::MatrixXd(p.lu.transpose().solve(rhs)) : Eigen::MatrixXd(p.lu.solve(rhs));
@@ -134,5 +147,7 @@ Eigen::MatrixXd SupernodalLu::solve_columns(const Eigen::MatrixXd& rhs, bool tra
 Eigen::VectorXd SupernodalLu::solve(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, false); }
 
 Eigen::VectorXd SupernodalLu::solve_transposed(const Eigen::VectorXd& rhs) const { return solve_columns(rhs, true); }
+
+int SupernodalLu::symbolic_analyses() const { return impl_->pattern.analyses; }
 
 }  // namespace wbm::solvers
