@@ -18,8 +18,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # plot_common, plot_friction, plot_impacts beside this file
-from plot_common import (LABELS, MARKERS, METHODS, STYLE, _load, column, plt, read_csv, read_status,  # noqa: E402
-                         save, wbm_plot)
+from plot_common import (LABELS, MARKERS, METHODS, STYLE, _load, column, label_grid_panel, plt, read_csv,  # noqa: E402
+                         read_status, save, wbm_plot)
 from plot_friction import (friction_coulomb_exact, friction_den_hartog, friction_normal_load,  # noqa: E402,F401
                            friction_oval_casing, friction_rigid_normal)
 from plot_impacts import point_mass_impacts, rigid_stop  # noqa: E402,F401
@@ -51,12 +51,7 @@ def history(folder):
                     transform=ax.transAxes, ha="center", va="center", fontsize=8)
         if quantity == "displacement":
             ax.axhline(1e3 * meta["gap_m"], color="r", ls=":", lw=1.0, label="gap $g_0$")
-        ax.set_title(f"({'abcdef'[i]}) {LABELS[key]}", fontsize=9)
-        ax.legend(loc="best", fontsize=6)
-        if i >= 3:
-            ax.set_xlabel("normalized time τ [-]")
-        if i % 3 == 0:
-            ax.set_ylabel(ylabel)
+        label_grid_panel(ax, i, key, ylabel)
     fig.suptitle(f"{meta['figure']}: {meta['scene']['title']}", fontsize=10)
     save(fig, folder, stem)
 

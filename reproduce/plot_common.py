@@ -48,3 +48,14 @@ def save(fig, folder, stem):
 def column(folder, file, name):
     header, cols = read_csv(folder / file)
     return cols[header.index(name)]
+
+
+def label_grid_panel(ax, i, key, ylabel):
+    """Panel i of a 2 x 3 grid of the Table 2 combinations: "(a) Fourier:Fourier" as its title,
+    its legend, the time axis' label on the bottom row and `ylabel` on the left column."""
+    ax.set_title(f"({'abcdef'[i]}) {LABELS[key]}", fontsize=9)
+    ax.legend(loc="best", fontsize=6)
+    if i >= 3:
+        ax.set_xlabel("normalized time τ [-]")
+    if i % 3 == 0:
+        ax.set_ylabel(ylabel)

@@ -4,7 +4,7 @@ in the Haar weighted residual (issue #38)."""
 import json
 import math
 
-from plot_common import LABELS, MARKERS, METHODS, column, plt, read_csv, save
+from plot_common import LABELS, MARKERS, METHODS, column, label_grid_panel, plt, read_csv, save
 
 
 def rigid_stop(folder):
@@ -40,12 +40,7 @@ def rigid_stop(folder):
                             va="center", fontsize=8)
                 if stem == "tip_displacement":
                     ax.axhline(1e3 * meta[case]["gap_m"], color="r", ls=":", lw=1.0, label="rigid stop $g_0$")
-                ax.set_title(f"({'abcdef'[i]}) {LABELS[key]}", fontsize=9)
-                ax.legend(loc="best", fontsize=6)
-                if i >= 3:
-                    ax.set_xlabel("normalized time τ [-]")
-                if i % 3 == 0:
-                    ax.set_ylabel(ylabel)
+                label_grid_panel(ax, i, key, ylabel)
             fig.suptitle(f"Rigid stop: {title}", fontsize=10)
             save(fig, folder, f"{stem}_{case}")
     for metric, ylabel in (("tip_error", "rms relative tip error [-]"), ("energy_norm", "energy norm / reference [-]")):
