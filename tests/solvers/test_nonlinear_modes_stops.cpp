@@ -142,6 +142,61 @@ TEST(NonlinearModes, DirectionalStopJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The exact-contact KKT Jacobian, built column by column in compressed storage
+// (nonlinear_modes_kkt_jacobian.cpp), on the rotated rod with two stops whose directions span
+// every DOF (each DOF in both), on a piece whose active set alternates:
+//  - its values match central differences of the piece's residual;
+//  - at Y = 0, λ = 0 (the ∂/∂s column and the normalization row then vanish) the stored pattern is
+//    that of the generic state, explicit zeros kept: it depends on the piece only, which the
+//    reuse of SparseLu's symbolic analysis relies on;
+//  - KKT symmetry: an active sample's row is minus its multiplier's column over the harmonic
+//    balance (−∂g_s/∂Y = −(∂HB/∂λ_s)ᵀ, both Θ e_c), bit for bit, with nothing else in it; an inactive
+//    sample's row is the unit row.
+TEST(NonlinearModes, ExactBackboneJacobianHasTheKktStructure) {
+  const auto r = rotated_rod(1e-3);
+  const int n = static_cast<int>(r.system.dofs()), ms = 24;
+  solvers::RigidStop mid{0, 2e-3, {}};
+  Eigen::Index big = 0;
+  r.q.row(tip_dof() - 6).cwiseAbs().maxCoeff(&big);
+  mid.dof = static_cast<int>(big);
+  for (int j = 0; j < n; ++j) mid.along.emplace_back(j, r.q(tip_dof() - 6, j));
+  const solvers::NonlinearModes nm(r.system, {r.stop, mid}, {.harmonics = 3, .samples = ms});
+  const solvers::NonlinearModes::BackboneSystem system(nm, 0.0);
+  const Eigen::Index nl = 2 * ms, ny = system.size() - 1 - nl;
+  Eigen::VectorXd x = system.linear_state(1.0) * 1.3;
+  x(ny) = 1.01;
+  x.head(40) += 1e-2 * Eigen::VectorXd::LinSpaced(40, -1.0, 1.0);
+  x.tail(nl) = Eigen::VectorXd::LinSpaced(nl, 0.01, 0.05);
+  const double energy = 1.4;
+  solvers::ActiveSet piece(static_cast<size_t>(nl));
+  for (size_t i = 0; i < piece.size(); ++i) piece[i] = static_cast<std::uint8_t>(i % 3 != 0);
+  const Eigen::SparseMatrix<double> j = system.linearize(x, energy, piece).jacobian;
+  const Eigen::MatrixXd fd = wbm::testing::fd_jacobian(
+      [&](const Eigen::VectorXd& y) { return Eigen::VectorXd(system.residual(y, energy, piece)); }, x, 1e-7, 1.0);
+  const Eigen::MatrixXd dense(j);
+  EXPECT_LT((dense - fd).cwiseAbs().maxCoeff(), 1e-6 * dense.cwiseAbs().maxCoeff());
+  Eigen::VectorXd zero = x;
+  zero.head(ny).setZero();
+  zero.tail(nl).setZero();
+  const Eigen::SparseMatrix<double> j0 = system.linearize(zero, energy, piece).jacobian;
+  ASSERT_EQ(j0.nonZeros(), j.nonZeros());
+  for (Eigen::Index c = 0; c <= j.cols(); ++c) ASSERT_EQ(j0.outerIndexPtr()[c], j.outerIndexPtr()[c]) << c;
+  for (Eigen::Index e = 0; e < j.nonZeros(); ++e) ASSERT_EQ(j0.innerIndexPtr()[e], j.innerIndexPtr()[e]) << e;
+  EXPECT_EQ(Eigen::MatrixXd(j0).col(ny).cwiseAbs().maxCoeff(), 0.0);  // stored, and zero
+  EXPECT_EQ(Eigen::MatrixXd(j0).row(ny).cwiseAbs().maxCoeff(), 0.0);
+  for (Eigen::Index i = 0; i < nl; ++i) {
+    const Eigen::Index at = ny + 1 + i;
+    if (piece[static_cast<size_t>(i)] != 0) {
+      EXPECT_TRUE(dense.row(at).head(ny) == -dense.col(at).head(ny).transpose()) << "active sample " << i;
+      EXPECT_EQ(dense.row(at).tail(dense.cols() - ny).cwiseAbs().maxCoeff(), 0.0) << "active sample " << i;
+    } else {
+      Eigen::RowVectorXd unit = Eigen::RowVectorXd::Zero(dense.cols());
+      unit(at) = 1.0;
+      EXPECT_TRUE(dense.row(at) == unit) << "inactive sample " << i;
+    }
+  }
+}
+
 // With several stops the energy is normalized by the first stop to touch in the linear mode
 // (LL11 Fig. 7: "contact at 1"): a stop at mid-rod with a gap half the tip's touches first
 // (the first mode moves the mid node by ~0.7 of the tip), whatever the order of the stops; and a

@@ -132,6 +132,7 @@ NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, doub
   if (penalty_ > 0.0) penalty_law_.emplace(contact::LinearPenaltyParameters{.stiffness = penalty_, .gap = 0.0});
   ny_ = static_cast<Eigen::Index>(modes.n_) * modes.f_ - 1;
   size_ = ny_ + 1 + (penalty_ > 0.0 ? 0 : static_cast<Eigen::Index>(modes.stops_.size()) * o.samples);
+  if (penalty_ == 0.0) theta_t_ = modes.theta_.transpose();
 }
 
 Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) const {
@@ -269,8 +270,6 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   auto picks_gap = [&](Eigen::Index i) {
     return active != nullptr ? (*active)[static_cast<size_t>(i)] != 0 : !(lambda(i) <= -g(i));
   };
-  // The map full stacked index -> reduced index (−1: the phase coefficient, removed).
-  auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
   const Eigen::Map<const Eigen::MatrixXd> ym(state.y.data(), n, f);
   const double s = x(ny_);
   const bool exact = penalty_ == 0.0;
@@ -299,100 +298,15 @@ SparseLinearization NonlinearModes::BackboneSystem::evaluate(const Eigen::Vector
   out.parameter_derivative(ny_) = -1.0;
   if (!jacobian) return out;
 
-  // The harmonic-balance blocks w_k (K̂ − ν_k² s M̂), written straight into compressed storage
-  // (column-major: block k's columns in order, each column's rows those of K̂'s and M̂'s patterns
-  // merged, the phase row and column left out). Each entry is fl(w k) + fl(−w ν² s m), the value
-  // a K̂ triplet followed by an M̂ triplet summed to; TripletPattern puts them first at their
-  // positions, before the triplets below.
-  Eigen::SparseMatrix<double> blocks(size_, size_);
-  blocks.resizeNonZeros(static_cast<Eigen::Index>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros()));
-  {
-    int* outer = blocks.outerIndexPtr();
-    int* inner = blocks.innerIndexPtr();
-    double* value = blocks.valuePtr();
-    int q = 0;
-    Eigen::Index column = 0;
-    for (int k = 0; k < f; ++k) {
-      const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
-      const double mass_factor = -w * nu2 * s;
-      const Eigen::Index first = static_cast<Eigen::Index>(k) * n;
-      for (Eigen::Index col = 0; col < n; ++col) {
-        if (first + col == p) continue;
-        outer[column++] = q;
-        Eigen::SparseMatrix<double>::InnerIterator ik(nm.ks_, col), im(nm.ms_, col);
-        while (ik || im) {
-          Eigen::Index row = 0;
-          double v = 0.0;
-          if (ik && (!im || ik.row() < im.row())) {
-            row = ik.row();
-            v = w * ik.value();
-            ++ik;
-          } else if (!ik || im.row() < ik.row()) {
-            row = im.row();
-            v = mass_factor * im.value();
-            ++im;
-          } else {
-            row = ik.row();
-            v = w * ik.value() + mass_factor * im.value();
-            ++ik;
-            ++im;
-          }
-          const Eigen::Index r = reduced(first + row);
-          if (r < 0) continue;
-          inner[q] = static_cast<int>(r);
-          value[q++] = v;
-        }
-      }
-    }
-    while (column <= size_) outer[column++] = q;
-    blocks.resizeNonZeros(q);
-  }
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(static_cast<size_t>(f) * 2 * n + static_cast<size_t>(n_stops * ms) * (f + 2) +
-            static_cast<size_t>(f * f * n_stops));
-  auto add = [&](Eigen::Index row_full, Eigen::Index col_full, double v) {
-    const Eigen::Index r = reduced(row_full), c = reduced(col_full);
-    if (r >= 0 && c >= 0) t.emplace_back(r, c, v);
-  };
-  auto add_row = [&](Eigen::Index row_full, Eigen::Index col, double v) {  // column already in state units
-    const Eigen::Index r = reduced(row_full);
-    if (r >= 0) t.emplace_back(r, col, v);
-  };
-  for (int k = 0; k < f; ++k) {
-    const double w = nm.weight_(k), nu2 = nm.nu_(k) * nm.nu_(k);
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Index row = static_cast<Eigen::Index>(k) * n + i;
-      add_row(row, ny_, -w * nu2 * my(i, k));                                         // ∂/∂s
-      const double dn = 2.0 * w * nu2 * my(i, k) * nm.m_ref_ / nm.m_c_;                // ∂(m̂/m̂_c)/∂Y
-      if (reduced(row) >= 0) t.emplace_back(ny_, reduced(row), dn);
-    }
-  }
+  // J (nonlinear_modes_kkt_jacobian.cpp), built in place and swapped in (Eigen 3.4's SparseMatrix
+  // has no move assignment: operator= would copy it).
+  ActiveSet gap_rows;  // exact contact: sample i's row is −g_s (1) or f_s (0)
   if (exact) {
-    for (Eigen::Index c = 0; c < n_stops; ++c) {
-      const auto terms = nm.stops_[static_cast<size_t>(c)].terms();
-      for (int smp = 0; smp < ms; ++smp) {
-        const Eigen::Index i = c * ms + smp, col = ny_ + 1 + i;
-        for (const auto& [d, w] : terms) {  // ∂HB/∂λ: w θ_sk in row (k, d)
-          for (int k = 0; k < f; ++k) add_row(static_cast<Eigen::Index>(k) * n + d, col, w * nm.theta_(smp, k));
-        }
-        if (!picks_gap(i)) {
-          t.emplace_back(col, col, 1.0);  // the min picks λ_s
-        } else {
-          for (const auto& [d, w] : terms) {  // the min picks −g_s = −Σ_d w θ_s Y_d + g_c
-            for (int k = 0; k < f; ++k) {
-              const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
-              if (r >= 0) t.emplace_back(col, r, -w * nm.theta_(smp, k));
-            }
-          }
-        }
-      }
-    }
-  } else {  // penalty: ∂HB(k, i)/∂Y(l, j) = w_i w_j Σ_s θ_sk f′(g_s) θ_sl, f′ = κ [g_s > 0]
-    for (const auto& e : nm.contact_curvature(state.penalty_stiffness)) add(e.row(), e.col(), e.value());
+    gap_rows.resize(static_cast<size_t>(n_stops * ms));
+    for (Eigen::Index i = 0; i < n_stops * ms; ++i) gap_rows[static_cast<size_t>(i)] = picks_gap(i) ? 1 : 0;
   }
-  // setFromTriplets of the blocks then t, the pattern reused; swapped in (Eigen 3.4's SparseMatrix
-  // has no move assignment: operator= would copy the temporary).
-  Eigen::SparseMatrix<double> jacobian_matrix = pattern_->assemble(blocks, t);
+  Eigen::SparseMatrix<double> jacobian_matrix =
+      exact ? exact_jacobian(my, s, gap_rows) : penalty_jacobian(my, s, state.penalty_stiffness);
   out.jacobian.swap(jacobian_matrix);
   return out;
 }

@@ -387,11 +387,19 @@ class NonlinearModes {
     [[nodiscard]] SparseLinearization evaluate(const Eigen::VectorXd& x, double energy, bool jacobian,
                                                const ActiveSet* active = nullptr) const;
     void check(const ActiveSet& active) const;
+    // evaluate()'s J at M̂Y (my, n × F) and s = ω²/ω₀² (nonlinear_modes_kkt_jacobian.cpp). Exact
+    // contact: built column by column in compressed storage, gap_rows[i] != 0 where sample i's
+    // row is −g_s; penalty: the blocks and the contact curvature (f′ per sample) by pattern_.
+    [[nodiscard]] Eigen::SparseMatrix<double> exact_jacobian(const Eigen::MatrixXd& my, double s,
+                                                             const ActiveSet& gap_rows) const;
+    [[nodiscard]] Eigen::SparseMatrix<double> penalty_jacobian(const Eigen::MatrixXd& my, double s,
+                                                               const Eigen::VectorXd& curvature) const;
     const NonlinearModes* nm_;
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
     std::optional<contact::LinearPenalty> penalty_law_;  // κ (g)₊ on the normalized gap (penalty only)
     Eigen::Index ny_ = 0, size_ = 0;
-    // The Jacobian's sparsity patterns, reused while the active set keeps them (copies share it).
+    Eigen::MatrixXd theta_t_;  // Θᵀ (F × m, exact contact only): a multiplier's column of J reads a column of it
+    // The penalty Jacobian's sparsity patterns, reused while the active set keeps them (copies share it).
     std::shared_ptr<const detail::TripletPattern> pattern_;
   };
   /// The level at exactly `energy` from a converged state x near it: semismooth Newton at fixed E
