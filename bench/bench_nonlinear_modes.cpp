@@ -233,6 +233,7 @@ BENCHMARK(BM_NonlinearModes_Fig3Backbone)
     ->Args({12, 256})
     ->Args({10, 512})  // 689 corners: the event location dominates
     ->Args({24, 512})  // the costliest pair of ll11_robustness's grid but one
+    ->Args({32, 512})  // the costliest: 65 harmonic-balance blocks, J of about 40 000 entries
     ->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_NonlinearModes_Algorithm1Level)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_NonlinearModes_Algorithm1Backbone)->Arg(150)->Arg(190)->Unit(benchmark::kMillisecond)->Iterations(1);

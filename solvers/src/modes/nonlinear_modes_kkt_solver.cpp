@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -22,6 +23,15 @@ constexpr double kMinRcond = 1e-13;          // A_k or S less well conditioned: 
 // rounding of the bound's two triangular solves. Else the estimate decides, as before.
 constexpr double kCertifiedRcond = 1e3 * kMinRcond;
 constexpr double kMaxBackwardError = 1e-11;  // normwise backward error a structured solve must reach
+
+// 1/d where it is exact (d > 0 a power of two, d and 1/d normal), else 0. Then x · (1/d) and x / d
+// are the same bits for every x: both are x 2⁻ᵉ correctly rounded. A unit direction has d = 1.
+double exact_reciprocal_of(double d) {
+  int e = 0;
+  if (!(d > 0.0) || !std::isnormal(d) || std::frexp(d, &e) != 0.5) return 0.0;
+  const double r = 1.0 / d;
+  return std::isnormal(r) ? r : 0.0;
+}
 }  // namespace
 
 struct NonlinearModes::BackboneSystem::KktSolver::Impl {
@@ -37,6 +47,11 @@ struct NonlinearModes::BackboneSystem::KktSolver::Impl {
   Eigen::MatrixXd dir_norm2;                // nc × f: ‖N_k(:, c)‖²
   Eigen::MatrixXd dir_norm2_divisor;        // f × nc: ‖N_k(:, c)‖², 1 where it is not > 0 …
   std::vector<std::vector<int>> no_direction;  // … per stop, those k (the multiples there are 0)
+  // f × nc: 1/‖N_k(:, c)‖² where exact (exact_reciprocal_of), else 0; per stop, whether every k's is
+  // (a unit direction's are 1): its β and γ are then scaled by multiplications, the same bits as
+  // the divisions.
+  Eigen::MatrixXd dir_norm2_reciprocal;
+  std::vector<int> exact_reciprocal;
   std::vector<std::vector<int>> stop_at;    // per block, per local index: the stop whose direction holds it (−1: none)
   bool disjoint_stops = true;               // no DOF in two stops' directions (the penalty path needs it)
 
@@ -154,6 +169,11 @@ NonlinearModes::BackboneSystem::KktSolver::KktSolver(const BackboneSystem& syste
       s.dir_norm2_divisor(k, c) = 1.0;
       s.no_direction[static_cast<size_t>(c)].push_back(k);
     }
+  }
+  s.dir_norm2_reciprocal = s.dir_norm2_divisor.unaryExpr([](double d) { return exact_reciprocal_of(d); });
+  s.exact_reciprocal.assign(static_cast<size_t>(s.nc), 1);
+  for (int c = 0; c < s.nc; ++c) {
+    if (!(s.dir_norm2_reciprocal.col(c).array() > 0.0).all()) s.exact_reciprocal[static_cast<size_t>(c)] = 0;
   }
 }
 
@@ -277,14 +297,20 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize(const Eigen::Spa
   // γ by harmonic and stop (stop c's multipliers are c·m_s … (c + 1)·m_s − 1).
   for (Eigen::Index l = 0; l < nl; ++l) {
     const Eigen::Index st = stop_of(l);
-    beta_t.col(l).array() /= dir_norm2_divisor.col(st).array();
+    if (exact_reciprocal[static_cast<size_t>(st)] != 0) {  // the same bits, without the divisions
+      beta_t.col(l).array() *= dir_norm2_reciprocal.col(st).array();
+    } else {
+      beta_t.col(l).array() /= dir_norm2_divisor.col(st).array();
+    }
     for (const int k : no_direction[static_cast<size_t>(st)]) beta_t(k, l) = 0.0;
   }
   for (int k = 0; k < f; ++k) {
     for (int c = 0; c < nc; ++c) {
       auto samples = gamma.col(k).segment(static_cast<Eigen::Index>(c) * ms, ms);
-      const double d2 = dir_norm2(c, k);
-      if (d2 > 0.0) {
+      const double d2 = dir_norm2(c, k), reciprocal = dir_norm2_reciprocal(k, c);
+      if (reciprocal > 0.0) {  // the same bits, without the divisions
+        samples *= reciprocal;
+      } else if (d2 > 0.0) {
         samples /= d2;
       } else {
         samples.setZero();
@@ -362,8 +388,22 @@ bool NonlinearModes::BackboneSystem::KktSolver::Impl::factorize_blocks() {
   lu.resize(static_cast<size_t>(f));
   v.resize(static_cast<size_t>(f));
   g.resize(static_cast<size_t>(f));
+  // Whether two matrices have the same size and the same bits (±0 told apart, unlike ==).
+  auto same = [](const Eigen::MatrixXd& x, const Eigen::MatrixXd& y) {
+    return x.rows() == y.rows() && x.cols() == y.cols() &&
+           std::memcmp(x.data(), y.data(), static_cast<size_t>(x.size()) * sizeof(double)) == 0;
+  };
   for (int k = 0; k < f; ++k) {
     const auto kk = static_cast<size_t>(k);
+    // The cosine and sine blocks of a harmonic are one matrix (w_k and ν_k are equal) unless one
+    // holds the phase coefficient, or a penalty's curvature differs: then the LU, V_k and G_k are
+    // copied, not recomputed (the same operations on the same bits would give the same bits).
+    if (k > 0 && same(a[kk], a[kk - 1]) && same(dirs[kk], dirs[kk - 1])) {
+      lu[kk] = lu[kk - 1];
+      v[kk] = v[kk - 1];
+      g[kk] = g[kk - 1];
+      continue;
+    }
     lu[kk].compute(a[kk]);
     // The Hager–Higham estimate of rcond() was 17 % of the LL11 rod's backbone at N = 32 (its
     // up to 10 solves per block); the bound costs two triangular solves and decides the same.
