@@ -106,7 +106,8 @@ TEST(NonlinearModes, BackboneSystemJacobianMatchesFiniteDifferences) {
 // (The exact-contact Jacobian is built without a pattern cache: ExactBackboneJacobianHasTheKktStructure.)
 TEST(NonlinearModes, BackboneJacobianReusingItsPatternEqualsSetFromTriplets) {
   const auto nm = modes(1e-3, 4, 32);
-  for (double k : {3e9}) {
+  {
+    const double k = 3e9;
     const solvers::NonlinearModes::BackboneSystem system(nm, k);
     Eigen::VectorXd x = wbm::testing::backbone_trial_state(system, k);
     const double energy = 1.4;

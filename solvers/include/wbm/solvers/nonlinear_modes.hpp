@@ -509,7 +509,9 @@ class NonlinearModes {
 /// active Signorini row, γ_k N_cᵀ; an inactive row is the identity (the min picks f_s). So
 ///  1. inactive multipliers are read off their rows and moved to the right-hand side;
 ///  2. each A_k is factorized (dense LU, n × n) and its receptances at the stop directions,
-///     V_k = A_k⁻¹ N (n × c, c stops) and G_k = Nᵀ V_k (c × c), are formed: F (n³ + 2n²c) flops;
+///     V_k = A_k⁻¹ N (n × c, c stops) and G_k = Nᵀ V_k (c × c), are formed: F (n³ + 2n²c) flops
+///     (for exact contact about half of it: a harmonic's sine block, equal to its cosine block
+///     bit for bit unless it holds the phase coefficient, takes that block's LU, V_k and G_k);
 ///  3. the Schur complement on the r remaining unknowns (a active samples, ω², and E when
 ///     bordered: r = a + 1 or a + 2), S = D − C A⁻¹ B, is formed from G_k (S_ij = −Σ_k γ_ik β_jk G_k(c_i, c_j) for
 ///     two active samples: F a² flops) and factorized (dense LU, r³);
