@@ -145,7 +145,8 @@ TEST(NonlinearModes, DirectionalStopJacobianMatchesFiniteDifferences) {
 // The exact-contact KKT Jacobian, built column by column in compressed storage
 // (nonlinear_modes_kkt_jacobian.cpp), on the rotated rod with two stops whose directions span
 // every DOF (each DOF in both), on a piece whose active set alternates:
-//  - its values match central differences of the piece's residual;
+//  - its values match central differences of the piece's residual, and each column's rows are
+//    stored strictly ascending (what Eigen, KLU and the KKT solver's scan assume);
 //  - at Y = 0, λ = 0 (the ∂/∂s column and the normalization row then vanish) the stored pattern is
 //    that of the generic state, explicit zeros kept: it depends on the piece only, which the
 //    reuse of SparseLu's symbolic analysis relies on;
@@ -175,6 +176,12 @@ TEST(NonlinearModes, ExactBackboneJacobianHasTheKktStructure) {
       [&](const Eigen::VectorXd& y) { return Eigen::VectorXd(system.residual(y, energy, piece)); }, x, 1e-7, 1.0);
   const Eigen::MatrixXd dense(j);
   EXPECT_LT((dense - fd).cwiseAbs().maxCoeff(), 1e-6 * dense.cwiseAbs().maxCoeff());
+  ASSERT_TRUE(j.isCompressed());  // a valid compressed matrix: each column's rows strictly ascending
+  for (Eigen::Index c = 0; c < j.cols(); ++c) {
+    for (int e = j.outerIndexPtr()[c] + 1; e < j.outerIndexPtr()[c + 1]; ++e) {
+      ASSERT_LT(j.innerIndexPtr()[e - 1], j.innerIndexPtr()[e]) << "column " << c;
+    }
+  }
   Eigen::VectorXd zero = x;
   zero.head(ny).setZero();
   zero.tail(nl).setZero();

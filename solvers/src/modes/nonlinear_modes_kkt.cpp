@@ -132,7 +132,7 @@ NonlinearModes::BackboneSystem::BackboneSystem(const NonlinearModes& modes, doub
   if (penalty_ > 0.0) penalty_law_.emplace(contact::LinearPenaltyParameters{.stiffness = penalty_, .gap = 0.0});
   ny_ = static_cast<Eigen::Index>(modes.n_) * modes.f_ - 1;
   size_ = ny_ + 1 + (penalty_ > 0.0 ? 0 : static_cast<Eigen::Index>(modes.stops_.size()) * o.samples);
-  if (penalty_ == 0.0) theta_t_ = modes.theta_.transpose();
+  if (penalty_ == 0.0) exact_layout_ = make_exact_layout();
 }
 
 Eigen::VectorXd NonlinearModes::BackboneSystem::linear_state(double energy) const {

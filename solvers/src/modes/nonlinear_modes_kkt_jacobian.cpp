@@ -22,6 +22,9 @@ namespace wbm::solvers {
 
 namespace {
 
+// Full stacked index → reduced (state) index, −1 for the phase coefficient p (removed).
+Eigen::Index reduced_index(Eigen::Index i, Eigen::Index p) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); }
+
 // The entries of column `col` of w (K̂ − ν² s M̂) = w K̂ + mass_factor M̂, rows in ascending order,
 // as fl(w k) + fl(mass_factor m) where both patterns hold the row: emit(row, value).
 template <class Emit>
@@ -43,38 +46,47 @@ void block_column(const Eigen::SparseMatrix<double>& ks, const Eigen::SparseMatr
   }
 }
 
-// A stop's direction as (DOF, weight) in ascending DOF order (the order of J's rows); its DOFs are
-// distinct (NonlinearModes' validation refuses a DOF given twice), so no entry sums two terms.
-std::vector<std::pair<int, double>> sorted_direction(const std::vector<std::pair<int, double>>& terms) {
-  std::vector<std::pair<int, double>> t = terms;
-  std::sort(t.begin(), t.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  return t;
-}
-
 }  // namespace
+
+struct NonlinearModes::BackboneSystem::ExactLayout {
+  Eigen::MatrixXd theta_t;  // Θᵀ (F × m): a multiplier's column of J reads a column of it
+  // Per stop: its direction as (DOF, weight) in ascending DOF order (the order of J's rows); its
+  // DOFs are distinct (NonlinearModes' validation refuses a DOF given twice), so no entry sums
+  // two terms.
+  std::vector<std::vector<std::pair<int, double>>> dirs;
+  // Per DOF: the stops whose direction holds it (ascending), each with the DOF's weight there.
+  std::vector<std::vector<std::pair<int, double>>> stops_at;
+  Eigen::Index terms = 0;  // the most terms of a direction
+};
+
+std::shared_ptr<const NonlinearModes::BackboneSystem::ExactLayout> NonlinearModes::BackboneSystem::make_exact_layout()
+    const {
+  const auto& nm = *nm_;
+  auto out = std::make_shared<ExactLayout>();
+  out->theta_t = nm.theta_.transpose();
+  out->stops_at.resize(static_cast<size_t>(nm.n_));
+  for (size_t c = 0; c < nm.stops_.size(); ++c) {
+    auto d = nm.stops_[c].terms();
+    std::sort(d.begin(), d.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [dof, w] : d) out->stops_at[static_cast<size_t>(dof)].emplace_back(static_cast<int>(c), w);
+    out->terms = std::max(out->terms, static_cast<Eigen::Index>(d.size()));
+    out->dirs.push_back(std::move(d));
+  }
+  return out;
+}
 
 Eigen::SparseMatrix<double> NonlinearModes::BackboneSystem::exact_jacobian(const Eigen::MatrixXd& my, double s,
                                                                            const ActiveSet& gap_rows) const {
   const auto& nm = *nm_;
+  const ExactLayout& layout = *exact_layout_;
   const int n = nm.n_, f = nm.f_, ms = nm.options_.samples;
   const Eigen::Index p = nm.phase_index_;
-  auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
+  auto reduced = [p](Eigen::Index i) { return reduced_index(i, p); };
   const auto n_stops = static_cast<int>(nm.stops_.size());
-  std::vector<std::vector<std::pair<int, double>>> dirs;
-  dirs.reserve(static_cast<size_t>(n_stops));
-  // Per DOF: the stops whose direction holds it (ascending) and the DOF's place in that direction.
-  std::vector<std::vector<std::pair<int, int>>> stops_at(static_cast<size_t>(n));
-  size_t terms = 0;
-  for (int c = 0; c < n_stops; ++c) {
-    dirs.push_back(sorted_direction(nm.stops_[static_cast<size_t>(c)].terms()));
-    const auto& d = dirs.back();
-    for (size_t q = 0; q < d.size(); ++q) stops_at[static_cast<size_t>(d[q].first)].emplace_back(c, static_cast<int>(q));
-    terms = std::max(terms, d.size());
-  }
   Eigen::Index gap_count = 0;
   for (const auto a : gap_rows) gap_count += a != 0 ? 1 : 0;
   const Eigen::Index nl = static_cast<Eigen::Index>(n_stops) * ms;
-  const auto ft = static_cast<Eigen::Index>(f) * static_cast<Eigen::Index>(terms);
+  const Eigen::Index ft = static_cast<Eigen::Index>(f) * layout.terms;
   const Eigen::Index bound = static_cast<Eigen::Index>(f) * (nm.ks_.nonZeros() + nm.ms_.nonZeros()) + 2 * ny_ +
                              nl * (ft + 1) + gap_count * ft;
 
@@ -102,8 +114,7 @@ Eigen::SparseMatrix<double> NonlinearModes::BackboneSystem::exact_jacobian(const
         if (r >= 0) put(r, v);
       });
       put(ny_, 2.0 * w * nu2 * my(d, k) * nm.m_ref_ / nm.m_c_);  // ∂(m̂/m̂_c)/∂Y
-      for (const auto& [c, place] : stops_at[static_cast<size_t>(d)]) {
-        const double weight = dirs[static_cast<size_t>(c)][static_cast<size_t>(place)].second;
+      for (const auto& [c, weight] : layout.stops_at[static_cast<size_t>(d)]) {
         for (int smp = 0; smp < ms; ++smp) {
           const Eigen::Index i = static_cast<Eigen::Index>(c) * ms + smp;
           // The min picks −g_s = −Σ_d w θ_s Y_d + g_c.
@@ -123,11 +134,11 @@ Eigen::SparseMatrix<double> NonlinearModes::BackboneSystem::exact_jacobian(const
   }
   // Multiplier columns: w θ_sk in the rows of the stop's direction (∂HB/∂λ), 1 where the min picks f_s.
   for (int c = 0; c < n_stops; ++c) {
-    const auto& dir = dirs[static_cast<size_t>(c)];
+    const auto& dir = layout.dirs[static_cast<size_t>(c)];
     for (int smp = 0; smp < ms; ++smp) {
       const Eigen::Index i = static_cast<Eigen::Index>(c) * ms + smp, col = ny_ + 1 + i;
       outer[column++] = q;
-      const double* theta = theta_t_.col(smp).data();  // θ_sk, k = 0 … F − 1
+      const double* theta = layout.theta_t.col(smp).data();  // θ_sk, k = 0 … F − 1
       for (int k = 0; k < f; ++k) {
         for (const auto& [d, weight] : dir) {
           const Eigen::Index r = reduced(static_cast<Eigen::Index>(k) * n + d);
@@ -147,7 +158,7 @@ Eigen::SparseMatrix<double> NonlinearModes::BackboneSystem::penalty_jacobian(con
   const auto& nm = *nm_;
   const int n = nm.n_, f = nm.f_;
   const Eigen::Index p = nm.phase_index_;
-  auto reduced = [p](Eigen::Index i) { return i < p ? i : (i == p ? Eigen::Index{-1} : i - 1); };
+  auto reduced = [p](Eigen::Index i) { return reduced_index(i, p); };
   // The harmonic-balance blocks, straight into compressed storage (column-major, the phase row
   // and column left out). TripletPattern puts them first at their positions, before the triplets.
   Eigen::SparseMatrix<double> blocks(size_, size_);

@@ -394,11 +394,15 @@ class NonlinearModes {
                                                              const ActiveSet& gap_rows) const;
     [[nodiscard]] Eigen::SparseMatrix<double> penalty_jacobian(const Eigen::MatrixXd& my, double s,
                                                                const Eigen::VectorXd& curvature) const;
+    // What exact_jacobian reads that depends on the model only (Θᵀ, the stops' directions by DOF),
+    // built once by the constructor; null for a penalty.
+    struct ExactLayout;
+    [[nodiscard]] std::shared_ptr<const ExactLayout> make_exact_layout() const;
     const NonlinearModes* nm_;
     double penalty_ = 0.0;  // k/(m ω₀² m_ref), dimensionless, 0 for exact contact
     std::optional<contact::LinearPenalty> penalty_law_;  // κ (g)₊ on the normalized gap (penalty only)
     Eigen::Index ny_ = 0, size_ = 0;
-    Eigen::MatrixXd theta_t_;  // Θᵀ (F × m, exact contact only): a multiplier's column of J reads a column of it
+    std::shared_ptr<const ExactLayout> exact_layout_;  // make_exact_layout(); copies share it
     // The penalty Jacobian's sparsity patterns, reused while the active set keeps them (copies share it).
     std::shared_ptr<const detail::TripletPattern> pattern_;
   };
